@@ -1,0 +1,53 @@
+"""tribojax: rough-surface contact, friction and slip models in JAX.
+
+Importing tribojax switches JAX to float64 (`jax_enable_x64`); see `tribojax._precision`.
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from . import _precision as _precision  # noqa: F401  (float64 switch; must come first)
+from ._asperity import (
+    REGIME_NAMES as REGIME_NAMES,
+)
+from ._asperity import (
+    asperity_load as asperity_load,
+)
+from ._asperity import (
+    asperity_regime as asperity_regime,
+)
+from ._asperity import (
+    critical_areas as critical_areas,
+)
+from ._contact import (
+    ContactParameters as ContactParameters,
+)
+from ._contact import (
+    FractalContact as FractalContact,
+)
+from ._contact import (
+    contact_parameters as contact_parameters,
+)
+from ._materials import (
+    ContactPair as ContactPair,
+)
+from ._materials import (
+    Material as Material,
+)
+from ._materials import (
+    vacuum_to_load as vacuum_to_load,
+)
+from ._materials import (
+    wang2022_chuck as wang2022_chuck,
+)
+from ._materials import (
+    wang2022_pair as wang2022_pair,
+)
+from ._materials import (
+    wang2022_reticle as wang2022_reticle,
+)
+from ._surface import FractalSurface as FractalSurface
+
+try:
+    __version__ = version("tribojax")
+except PackageNotFoundError:  # running from a source tree without installation
+    __version__ = "0.0.0"

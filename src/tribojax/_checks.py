@@ -1,0 +1,71 @@
+"""Input validation that works both at the Python boundary and inside `jax.jit`.
+
+Concrete values are checked with NumPy and rejected with a `ValueError` naming the parameter,
+the offending value and the allowed range. Traced values (inside jit/vmap/grad) are checked with
+`equinox.error_if`, whose return value must be used for the check to survive tracing.
+"""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._precision import ensure_x64
+
+
+def _is_concrete(*xs) -> bool:
+    return not any(isinstance(x, jax.core.Tracer) for x in xs)
+
+
+def as_f64(x, name: str):
+    """Convert to a float64 JAX array (refusing bool/complex/str inputs)."""
+    ensure_x64()
+    if isinstance(x, str):
+        raise ValueError(f"{name} must be a number, got the string {x!r}")
+    if not isinstance(x, jax.core.Tracer):
+        arr = np.asarray(x)
+        if arr.dtype.kind not in "fiu":
+            raise ValueError(f"{name} must be real-valued, got dtype {arr.dtype}")
+    return jnp.asarray(x, dtype=jnp.float64)
+
+
+def _interval(lo, hi, lo_open, hi_open) -> str:
+    left = "(" if lo_open else "["
+    right = ")" if hi_open else "]"
+    lo_s = "-inf" if lo is None else f"{lo:g}"
+    hi_s = "inf" if hi is None else f"{hi:g}"
+    return f"{left}{lo_s}, {hi_s}{right}"
+
+
+def check_range(x, name: str, lo=None, hi=None, *, lo_open=True, hi_open=True, unit=""):
+    """Return `x` as float64, raising if any element lies outside the interval.
+
+    `lo`/`hi` of None mean unbounded. NaN is always rejected.
+    """
+    x = as_f64(x, name)
+    rng = _interval(lo, hi, lo_open, hi_open)
+    unit_s = f" {unit}" if unit else ""
+    bad = jnp.isnan(x)
+    if lo is not None:
+        bad = bad | ((x <= lo) if lo_open else (x < lo))
+    if hi is not None:
+        bad = bad | ((x >= hi) if hi_open else (x > hi))
+    if _is_concrete(x):
+        bad_np = np.asarray(bad)
+        if bad_np.any():
+            value = np.asarray(x)[bad_np].ravel()[0]
+            raise ValueError(f"{name} = {value:g}{unit_s} is outside the allowed range {rng}")
+        return x
+    return eqx.error_if(x, bad, f"{name} is outside the allowed range {rng}{unit_s} (or NaN)")
+
+
+def fail_if(x, bad, message: str):
+    """Attach a check: raise `ValueError(message)` now if `bad` is concretely true, else `error_if`.
+
+    Returns `x` (use the return value so the check is kept under jit).
+    """
+    if _is_concrete(x, bad):
+        if np.asarray(bad).any():
+            raise ValueError(message)
+        return x
+    return eqx.error_if(x, bad, message)

@@ -1,0 +1,287 @@
+"""Contact parameters of a rough interface: F_s, K_τ, C_τ, z_max (wang2022 Sections 2–4).
+
+The asperity truncated areas follow Mandelbrot's island distribution (wang2022 Eq 15),
+
+    n(a') = (D-1)/(2 a'_l) (a'_l/a')^((D+1)/2),   0 < a' <= a'_l,
+
+and every per-asperity law is a power law c·a'^p (see `_asperity`), so each regime integral is
+closed-form:
+
+    ∫_lo^hi c a'^p n(a') da' = c (D-1)/2 a'_l^((D-1)/2) ∫_lo^hi a'^(q-1) da',  q = p - (D-1)/2.
+
+The largest truncated area a'_l follows from the load balance Σ_regimes ∫ P n da' = F, solved for
+log a'_l with an optimistix Newton root find and differentiated by the implicit function theorem.
+"""
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import optimistix as optx
+from jaxtyping import Array, Bool, Float
+
+from ._asperity import (
+    EP1,
+    EP2,
+    PLASTIC,
+    PowerLaw,
+    area_laws,
+    friction_coefficients,
+    load_laws,
+    log_critical_areas,
+    mindlin_factors,
+)
+from ._checks import check_range, fail_if
+from ._materials import ContactPair
+from ._precision import ensure_x64
+from ._surface import FractalSurface
+
+Scalar = Float[Array, ""]
+
+
+def _expm1_over_x(x):
+    """expm1(x)/x for x <= 0, smooth through x = 0 (double-where)."""
+    small = jnp.abs(x) < 1e-6
+    safe = jnp.where(small, -1.0, x)
+    return jnp.where(small, 1.0 + x / 2.0 + x * x / 6.0, jnp.expm1(safe) / safe)
+
+
+def regime_integral(law: PowerLaw, log_lo, log_hi, log_al, D):
+    """∫ law(a') n(a') da' over [lo, hi] ∩ (0, a'_l] in closed form (wang2022 Eq 15 weighting).
+
+    `log_lo=None` means a lower limit of 0 (needs q = p - (D-1)/2 > 0); `log_hi=None` means a'_l.
+    Written as exp(q·base)·L·expm1(-|q| L)/(-|q| L) with L = ln(hi/lo), which has no overflow and
+    no 0/0 at q = 0 (D = 2.5 in the elastic regime).
+    """
+    h = 0.5 * (D - 1.0)
+    q = law.p - h
+    log_pref = law.log_c + jnp.log(h) + h * log_al
+    hi = log_al if log_hi is None else jnp.minimum(log_hi, log_al)
+    if log_lo is None:
+        return jnp.exp(log_pref + q * hi) / q
+    lo = jnp.minimum(log_lo, log_al)
+    span = hi - lo
+    base = jnp.where(q > 0, hi, lo)
+    return jnp.exp(log_pref + q * base) * span * _expm1_over_x(-jnp.abs(q) * span)
+
+
+def _regime_bounds(log_ec, log_epc, log_pc):
+    """(lo, hi) in log a' for each regime, ELASTIC … PLASTIC; None = a'_l above, 0 below."""
+    return ((log_ec, None), (log_epc, log_ec), (log_pc, log_epc), (None, log_pc))
+
+
+def _integrals(laws, bounds, log_al, D):
+    return jnp.stack(
+        [regime_integral(law, lo, hi, log_al, D) for law, (lo, hi) in zip(laws, bounds)]
+    )
+
+
+class ContactParameters(eqx.Module):
+    """Contact parameters at one normal load (all SI units).
+
+    Fields:
+        load:       normal load F, N.
+        F_s:        maximum static friction, N (Eqs 14, 16).
+        K_tau:      tangential stiffness, N/m (Eqs 17–19).
+        C_tau:      tangential damping, N s/m (Eqs 20–24).
+        z_max:      maximum tangential deformation F_s/K_τ, m (Eq 26).
+        a_l:        largest truncated asperity area a'_l, m^2 (load balance).
+        a_ec, a_epc, a_pc: critical truncated areas, m^2 (Eqs 5–7).
+        load_share: share of F carried in each regime (elastic, ep1, ep2, plastic); sums to 1.
+        psi:        tangential-load ratio T/(μ_t P) used in Eqs 18–22.
+        W_d, W_s:   dissipated and stored tangential energy per cycle, J (Eqs 21, 23).
+        converged:  whether the load balance converged.
+    """
+
+    load: Scalar
+    F_s: Scalar
+    K_tau: Scalar
+    C_tau: Scalar
+    z_max: Scalar
+    a_l: Scalar
+    a_ec: Scalar
+    a_epc: Scalar
+    a_pc: Scalar
+    load_share: Float[Array, "4"]
+    psi: Scalar
+    W_d: Scalar
+    W_s: Scalar
+    converged: Bool[Array, ""]
+
+
+class FractalContact(eqx.Module):
+    """The fractal contact model of wang2022 Sections 2–3 for one surface and one material pair.
+
+    Call it with a normal load (N) to get a `ContactParameters` record; batch over loads with
+    `jax.vmap(model)(loads)` and over surfaces with `eqx.filter_vmap`. Every field that is a
+    number is an array leaf, so D, G, M, μ_t, σ_s, the load … can be differentiated or fitted.
+
+    Fields:
+        surface:         `FractalSurface` (D, G, M, γ).
+        pair:            `ContactPair` (E*, G', H, ν, σ_s).
+        mu_t:            friction coefficient in Mindlin's law (Eq 17), > 0. Not published.
+        tangential_load: T in the ratio T/P of Eqs 18–22, N, >= 0. The paper never defines T/P;
+                         a fixed applied tangential load reproduces Table 3's trend, e.g. the
+                         inertial load m·a_max = 0.321 N of the reticle (REPRODUCTION.md).
+        mass:            slider mass m in Eq 24, kg, > 0 (0.321 kg reticle in the paper).
+        area:            "truncated" (a = a', default) or "real" (Eqs 10, 12, Hertz a'/2) for the
+                         contact area in Eqs 14 and 18 (static).
+        throw:           raise if the load balance fails (static). With False, check
+                         `ContactParameters.converged`.
+        max_steps:       Newton steps allowed for the load balance (static).
+    """
+
+    surface: FractalSurface
+    pair: ContactPair
+    mu_t: Scalar
+    tangential_load: Scalar
+    mass: Scalar
+    area: str = eqx.field(static=True)
+    throw: bool = eqx.field(static=True)
+    max_steps: int = eqx.field(static=True)
+
+    def __init__(
+        self,
+        surface: FractalSurface,
+        pair: ContactPair,
+        *,
+        mu_t,
+        tangential_load,
+        mass,
+        area: str = "truncated",
+        throw: bool = True,
+        max_steps: int = 64,
+    ):
+        if not isinstance(surface, FractalSurface):
+            raise TypeError(f"surface must be a FractalSurface, got {type(surface).__name__}")
+        if not isinstance(pair, ContactPair):
+            raise TypeError(f"pair must be a ContactPair, got {type(pair).__name__}")
+        if area not in ("truncated", "real"):
+            raise ValueError(f"area must be 'truncated' or 'real', got {area!r}")
+        self.surface = surface
+        self.pair = pair
+        self.mu_t = check_range(mu_t, "mu_t", 0.0)
+        self.tangential_load = check_range(
+            tangential_load, "tangential_load", 0.0, lo_open=False, unit="N"
+        )
+        self.mass = check_range(mass, "mass", 0.0, unit="kg")
+        self.area = area
+        self.throw = throw
+        self.max_steps = max_steps
+
+    def log_total_load(self, log_al, log_bounds=None):
+        """log of the load carried when the largest area is exp(log_al) (Eqs 8–13, 15)."""
+        s = self.surface
+        if log_bounds is None:
+            log_bounds = log_critical_areas(s, self.pair)
+        laws = load_laws(s, self.pair, log_bounds[0])
+        return jnp.log(jnp.sum(_integrals(laws, _regime_bounds(*log_bounds), log_al, s.D)))
+
+    def solve_load_balance(self, load):
+        """log a'_l such that the asperity loads sum to `load` (N); returns (log a'_l, ok)."""
+        s = self.surface
+        log_bounds = log_critical_areas(s, self.pair)
+        log_f = jnp.log(load)
+
+        def residual(log_al, args):
+            return self.log_total_load(log_al, log_bounds) - log_f
+
+        # All-plastic solution as the start; the true a'_l is never smaller (elastic and
+        # elastic–plastic asperities carry less than H·a').
+        y0 = jnp.log(load * (3.0 - s.D) / (self.pair.H * (s.D - 1.0)))
+        sol = optx.root_find(
+            residual,
+            optx.Newton(rtol=1e-13, atol=1e-13),
+            y0,
+            max_steps=self.max_steps,
+            throw=False,
+        )
+        ok = (sol.result == optx.RESULTS.successful) & jnp.isfinite(sol.value)
+        return sol.value, ok
+
+    def __call__(self, load) -> ContactParameters:
+        """Contact parameters at normal load `load` (N, > 0). wang2022 Eqs 5–26."""
+        ensure_x64()
+        load = check_range(load, "load", 0.0, unit="N")
+        s, pair = self.surface, self.pair
+        D = s.D
+        psi = self.tangential_load / (self.mu_t * load)
+        psi = fail_if(
+            psi,
+            psi >= 1.0,
+            "tangential_load / load must be below mu_t (Mindlin's law, wang2022 Eq 17, needs "
+            "T < mu_t P)"
+            + (
+                ""
+                if isinstance(psi, jax.core.Tracer)
+                else f": T/P = {float(self.tangential_load / load):g}, mu_t = {float(self.mu_t):g}"
+            ),
+        )
+
+        log_al, ok = self.solve_load_balance(load)
+        if self.throw:
+            log_al = eqx.error_if(
+                log_al,
+                ~ok,
+                "load balance for a'_l (wang2022 Eqs 8-15) did not converge: check D, G, M and "
+                "the load for extreme values, or raise max_steps",
+            )
+        log_ec, log_epc, log_pc = log_bounds = log_critical_areas(s, pair)
+        bounds = _regime_bounds(*log_bounds)
+        loads = load_laws(s, pair, log_ec)
+        areas = area_laws(s, log_ec, self.area)
+
+        load_parts = _integrals(loads, bounds, log_al, D)
+        area_parts = _integrals(areas, bounds, log_al, D)
+
+        # Eqs 14, 16: static friction from the elastic and first elastic–plastic asperities.
+        c_a, c_p = friction_coefficients(pair)
+        F_s = c_a * jnp.sum(area_parts[:EP2]) + c_p * jnp.sum(load_parts[:EP2])
+
+        # Eqs 18, 19: stiffness from all but the plastic asperities.
+        s_k, phi_d, phi_s = mindlin_factors(psi)
+        root_area = [a**0.5 for a in areas[:PLASTIC]]
+        K_tau = (
+            8.0 * pair.G_star / math.sqrt(math.pi) * s_k
+            * jnp.sum(_integrals(root_area, bounds[:PLASTIC], log_al, D))
+        )
+
+        # Eqs 20–23: per-asperity energies ∝ P²/r with r = (a/π)^(1/2).
+        p2_over_r = [
+            (P**2 * a**-0.5).scaled(0.5 * math.log(math.pi))
+            for P, a in zip(loads[:PLASTIC], areas[:PLASTIC])
+        ]
+        e_parts = _integrals(p2_over_r, bounds[:PLASTIC], log_al, D)
+        mu2_g = self.mu_t**2 / pair.G_star
+        W_d = 0.9 * mu2_g * phi_d * jnp.sum(e_parts[EP1:])  # Eq 21
+        W_s = 3.0 / 16.0 * mu2_g * phi_s * jnp.sum(e_parts)  # Eq 23
+        C_tau = W_d / W_s * jnp.sqrt(self.mass * K_tau)  # Eq 24
+
+        total = jnp.sum(load_parts)
+        return ContactParameters(
+            load=load,
+            F_s=F_s,
+            K_tau=K_tau,
+            C_tau=C_tau,
+            z_max=F_s / K_tau,  # Eq 26
+            a_l=jnp.exp(log_al),
+            a_ec=jnp.exp(log_ec),
+            a_epc=jnp.exp(log_epc),
+            a_pc=jnp.exp(log_pc),
+            load_share=load_parts / total,
+            psi=psi,
+            W_d=W_d,
+            W_s=W_s,
+            converged=ok,
+        )
+
+
+def contact_parameters(
+    surface: FractalSurface, pair: ContactPair, load, *, mu_t, tangential_load, mass, area="truncated"
+) -> ContactParameters:
+    """Functional form of `FractalContact(surface, pair, ...)(load)`; see there."""
+    model = FractalContact(
+        surface, pair, mu_t=mu_t, tangential_load=tangential_load, mass=mass, area=area
+    )
+    return model(load)
