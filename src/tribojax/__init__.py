@@ -46,6 +46,7 @@ from ._materials import (
     wang2022_reticle as wang2022_reticle,
 )
 from ._surface import FractalSurface as FractalSurface
+from ._surface import wang2022_surface as wang2022_surface
 
 try:
     __version__ = version("tribojax")

@@ -92,6 +92,8 @@ class ContactParameters(eqx.Module):
         psi:        tangential-load ratio T/(μ_t P) used in Eqs 18–22.
         W_d, W_s:   dissipated and stored tangential energy per cycle, J (Eqs 21, 23).
         converged:  whether the load balance converged.
+        all_plastic: every asperity is fully plastic (a'_l <= a'_pc): the model then carries no
+                    tangential load, and F_s, K_τ, C_τ and z_max are returned as 0.
     """
 
     load: Scalar
@@ -108,6 +110,7 @@ class ContactParameters(eqx.Module):
     W_d: Scalar
     W_s: Scalar
     converged: Bool[Array, ""]
+    all_plastic: Bool[Array, ""]
 
 
 class FractalContact(eqx.Module):
@@ -256,7 +259,19 @@ class FractalContact(eqx.Module):
         mu2_g = self.mu_t**2 / pair.G_star
         W_d = 0.9 * mu2_g * phi_d * jnp.sum(e_parts[EP1:])  # Eq 21
         W_s = 3.0 / 16.0 * mu2_g * phi_s * jnp.sum(e_parts)  # Eq 23
-        C_tau = W_d / W_s * jnp.sqrt(self.mass * K_tau)  # Eq 24
+        all_plastic = log_al <= log_pc
+        if self.throw:
+            K_tau = eqx.error_if(
+                K_tau,
+                all_plastic,
+                "every asperity is fully plastic (a'_l <= a'_pc), so the fractal model carries no "
+                "tangential load: check G (too large?), M and the units of the load",
+            )
+        # double-where: an all-plastic contact has K = W_s = 0; return zeros, not 0/0.
+        safe_k = jnp.where(all_plastic, 1.0, K_tau)
+        safe_ws = jnp.where(all_plastic, 1.0, W_s)
+        C_tau = jnp.where(all_plastic, 0.0, W_d / safe_ws * jnp.sqrt(self.mass * safe_k))  # Eq 24
+        z_max = jnp.where(all_plastic, 0.0, F_s / safe_k)  # Eq 26
 
         total = jnp.sum(load_parts)
         return ContactParameters(
@@ -264,7 +279,7 @@ class FractalContact(eqx.Module):
             F_s=F_s,
             K_tau=K_tau,
             C_tau=C_tau,
-            z_max=F_s / K_tau,  # Eq 26
+            z_max=z_max,
             a_l=jnp.exp(log_al),
             a_ec=jnp.exp(log_ec),
             a_epc=jnp.exp(log_epc),
@@ -274,6 +289,7 @@ class FractalContact(eqx.Module):
             W_d=W_d,
             W_s=W_s,
             converged=ok,
+            all_plastic=all_plastic,
         )
 
 

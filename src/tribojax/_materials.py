@@ -89,20 +89,37 @@ class ContactPair(eqx.Module):
         )
 
 
-# wang2022 Table 2. The printed header is garbled; by the values column 1 is the fused-quartz
-# chuck and column 2 the glass-ceramic reticle (see shared REPRODUCTION.md).
+def _wang2022_material(row: int, name: str) -> Material:
+    from ._data import wang2022_table
+
+    t = wang2022_table(2)
+    return Material(
+        E=t["E_Pa"][row],
+        nu=t["nu"][row],
+        G=t["shear_modulus_Pa"][row],
+        H=t["H_Pa"][row],
+        sigma_y=t["yield_strength_Pa"][row],
+        name=name,
+    )
+
+
+# wang2022 Table 2 (bundled as data/wang2022/table2_materials.csv). The printed header is garbled;
+# by the values column 1 is the fused-quartz chuck and column 2 the glass-ceramic reticle.
 def wang2022_chuck() -> Material:
-    """Fused-quartz vacuum chuck, wang2022 Table 2 (column 1)."""
-    return Material(E=70.5e9, nu=0.164, G=30.2e9, H=1.372e9, sigma_y=490e6, name="fused quartz")
+    """Fused-quartz vacuum chuck, wang2022 Table 2: E 70.5 GPa, G 30.2 GPa, H 1.372 GPa."""
+    return _wang2022_material(0, "fused quartz chuck")
 
 
 def wang2022_reticle() -> Material:
-    """Glass-ceramic reticle, wang2022 Table 2 (column 2)."""
-    return Material(E=90.3e9, nu=0.243, G=36.3e9, H=6.5e9, sigma_y=500e6, name="glass ceramic")
+    """Glass-ceramic reticle, wang2022 Table 2: E 90.3 GPa, G 36.3 GPa, H 6.5 GPa."""
+    return _wang2022_material(1, "glass-ceramic reticle")
 
 
 def wang2022_pair(*, sigma_s=None) -> ContactPair:
-    """The reticle/chuck pair of wang2022 Table 2: E* = 41.28 GPa, G' = 9.158 GPa, H = 1.372 GPa."""
+    """The reticle/chuck pair of wang2022 Table 2: E* = 41.28 GPa, G' = 9.158 GPa, H = 1.372 GPa.
+
+    sigma_s defaults to the softer body's tabulated yield strength, 490 MPa.
+    """
     return ContactPair.from_materials(wang2022_chuck(), wang2022_reticle(), sigma_s=sigma_s)
 
 

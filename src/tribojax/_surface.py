@@ -30,6 +30,13 @@ class FractalSurface(eqx.Module):
         self.gamma = check_range(gamma, "gamma", 1.0)
 
 
-# wang2022 Table 1, equivalent surface. M is not published.
-WANG2022_TABLE1_D = 2.8821
-WANG2022_TABLE1_G_M = 7.768e-12
+def wang2022_surface(M, *, gamma=1.5) -> FractalSurface:
+    """The equivalent surface of wang2022 Table 1 (D = 2.8821, G = 7.768e-12 m).
+
+    M is not published; it must be given.
+    """
+    from ._data import wang2022_table
+
+    t = wang2022_table(1)
+    row = list(t["surface"]).index("equivalent")
+    return FractalSurface(D=t["D"][row], G=t["G_m"][row], M=M, gamma=gamma)

@@ -1,0 +1,136 @@
+"""Least squares with uncertainties: optimistix Levenberg–Marquardt plus Jacobian statistics.
+
+Parameters are fitted in unconstrained coordinates θ (log for positive quantities, etc.); a
+`transform` maps θ to the physical parameters, and the covariance is carried over by the delta
+method. Residuals should already be divided by their uncertainty; if `sigma_known` is False the
+common scale is estimated from the residual sum of squares (s² = RSS/(n - p)).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+
+from ._precision import ensure_x64
+
+
+@dataclasses.dataclass(frozen=True)
+class FitResult:
+    """Outcome of `least_squares_fit` (NumPy arrays; physical coordinates unless stated).
+
+    Attributes:
+        names: parameter names.
+        values: fitted parameters.
+        std_errors: standard errors (delta method from θ).
+        covariance, correlation: p×p matrices.
+        theta: the unconstrained optimum.
+        residuals: residuals at the optimum (as returned by the residual function).
+        singular_values: of the Jacobian in θ, largest first (identifiability).
+        converged: optimistix reported success.
+        steps: LM steps taken.
+        message: optimistix's result message ("" on success).
+    """
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    std_errors: np.ndarray
+    covariance: np.ndarray
+    correlation: np.ndarray
+    theta: np.ndarray
+    residuals: np.ndarray
+    singular_values: np.ndarray
+    converged: bool
+    steps: int
+    message: str
+
+    def as_dict(self) -> dict:
+        """JSON-ready summary; non-finite numbers (unidentifiable directions) become None."""
+        fin = lambda a: np.where(np.isfinite(a), a, np.nan).tolist()  # noqa: E731
+        clean = lambda v: [clean(x) for x in v] if isinstance(v, list) else (  # noqa: E731
+            None if v != v else v
+        )
+        return {
+            "parameters": dict(zip(self.names, self.values.tolist())),
+            "std_errors": dict(zip(self.names, clean(fin(self.std_errors)))),
+            "correlation": clean(fin(self.correlation)),
+            "converged": self.converged,
+            "steps": self.steps,
+            "singular_values": self.singular_values.tolist(),
+        }
+
+
+def least_squares_fit(
+    residual_fn,
+    theta0,
+    args=None,
+    *,
+    names,
+    transform=lambda theta: theta,
+    sigma_known: bool = False,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    max_steps: int = 500,
+    jac: str = "bwd",
+) -> FitResult:
+    """Fit θ minimising ½‖residual_fn(θ, args)‖² with optimistix Levenberg–Marquardt.
+
+    Args:
+        residual_fn: (θ, args) -> residual vector (already divided by its uncertainty).
+        theta0: start, 1-D.
+        names: parameter names for the physical vector `transform(θ)`.
+        transform: θ -> physical parameter vector (differentiable).
+        sigma_known: residuals are in units of their standard deviation (else s² is estimated).
+        jac: how LM differentiates the residuals, "bwd" or "fwd" (optimistix option). "bwd" is
+            the default because forward linearisation of a residual that contains an optimistix
+            root find (the contact load balance) makes lineax reject the Jacobian as non-finite
+            in optimistix 0.1.0, although jax.jacfwd of the same residual is finite.
+    Returns:
+        FitResult; `converged` False (and `message` set) when LM did not succeed. Never raises for
+        non-convergence: the caller decides.
+    """
+    ensure_x64()
+    theta0 = jnp.asarray(theta0, dtype=jnp.float64)
+    sol = optx.least_squares(
+        residual_fn,
+        optx.LevenbergMarquardt(rtol=rtol, atol=atol),
+        theta0,
+        args,
+        options=dict(jac=jac),
+        max_steps=max_steps,
+        throw=False,
+    )
+    theta = sol.value
+    r = residual_fn(theta, args)
+    J = jax.jacfwd(residual_fn)(theta, args)
+    n, p = J.shape
+    u, sv, vt = jnp.linalg.svd(J, full_matrices=False)
+    # (JᵀJ)^-1 through the SVD; directions with negligible singular values get infinite variance.
+    tiny = sv <= sv[0] * 1e-14
+    inv_s2 = jnp.where(tiny, jnp.inf, 1.0 / jnp.where(tiny, 1.0, sv) ** 2)
+    cov_theta = (vt.T * inv_s2) @ vt
+    cov_theta = jnp.where(jnp.isnan(cov_theta), jnp.inf, cov_theta)
+    scale2 = 1.0 if sigma_known else float(r @ r) / max(n - p, 1)
+    cov_theta = cov_theta * scale2
+    T = jax.jacfwd(transform)(theta)
+    cov = T @ cov_theta @ T.T
+    std = jnp.sqrt(jnp.diag(cov))
+    corr = cov / jnp.outer(std, std)
+    ok = bool(sol.result == optx.RESULTS.successful)
+    message = "" if ok else optx.RESULTS[sol.result]
+    return FitResult(
+        names=tuple(names),
+        values=np.asarray(transform(theta)),
+        std_errors=np.asarray(std),
+        covariance=np.asarray(cov),
+        correlation=np.asarray(corr),
+        theta=np.asarray(theta),
+        residuals=np.asarray(r),
+        singular_values=np.asarray(sv),
+        converged=ok,
+        steps=int(sol.stats["num_steps"]),
+        message=str(message),
+    )
