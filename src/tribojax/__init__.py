@@ -27,6 +27,11 @@ from ._contact import (
 from ._contact import (
     contact_parameters as contact_parameters,
 )
+from ._data import DataFileError as DataFileError
+from ._data import read_table as read_table
+from ._data import wang2022_table as wang2022_table
+from ._fit import FitResult as FitResult
+from ._fit import least_squares_fit as least_squares_fit
 from ._materials import (
     ContactPair as ContactPair,
 )
@@ -45,6 +50,9 @@ from ._materials import (
 from ._materials import (
     wang2022_reticle as wang2022_reticle,
 )
+from ._reproduce import calibrate_table3 as calibrate_table3
+from ._reproduce import equivalent_G as equivalent_G
+from ._reproduce import reproduce_table3 as reproduce_table3
 from ._surface import FractalSurface as FractalSurface
 from ._surface import wang2022_surface as wang2022_surface
 

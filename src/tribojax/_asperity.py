@@ -96,7 +96,7 @@ def load_laws(surface: FractalSurface, pair: ContactPair, log_a_ec) -> tuple[Pow
         + 0.5 * ln_lng,
         0.5 * (4 - D),
     )
-    # The common factor pi^(4-D) M E (KH/E)^3 / (2^(11-2D) G^(2D-4) ln gamma) of Eqs 9, 11 is K H / X.
+    # Common factor of Eqs 9, 11: pi^(4-D) M E (KH/E)^3 / (2^(11-2D) G^(2D-4) ln gamma) = KH/X.
     log_q = jnp.log(pair.K * H) - _log_x(surface, pair)
     ep1 = PowerLaw(  # Eq 9 (corrected exponent)
         math.log(0.34) + log_q - (2.1375 - 0.7125 * D) * log_a_ec, 1.1375 + 0.2875 * D

@@ -246,7 +246,10 @@ class FractalContact(eqx.Module):
         s_k, phi_d, phi_s = mindlin_factors(psi)
         root_area = [a**0.5 for a in areas[:PLASTIC]]
         K_tau = (
-            8.0 * pair.G_star / math.sqrt(math.pi) * s_k
+            8.0
+            * pair.G_star
+            / math.sqrt(math.pi)
+            * s_k
             * jnp.sum(_integrals(root_area, bounds[:PLASTIC], log_al, D))
         )
 
@@ -294,7 +297,14 @@ class FractalContact(eqx.Module):
 
 
 def contact_parameters(
-    surface: FractalSurface, pair: ContactPair, load, *, mu_t, tangential_load, mass, area="truncated"
+    surface: FractalSurface,
+    pair: ContactPair,
+    load,
+    *,
+    mu_t,
+    tangential_load,
+    mass,
+    area="truncated",
 ) -> ContactParameters:
     """Functional form of `FractalContact(surface, pair, ...)(load)`; see there."""
     model = FractalContact(

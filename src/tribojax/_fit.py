@@ -48,15 +48,11 @@ class FitResult:
     message: str
 
     def as_dict(self) -> dict:
-        """JSON-ready summary; non-finite numbers (unidentifiable directions) become None."""
-        fin = lambda a: np.where(np.isfinite(a), a, np.nan).tolist()  # noqa: E731
-        clean = lambda v: [clean(x) for x in v] if isinstance(v, list) else (  # noqa: E731
-            None if v != v else v
-        )
+        """Summary as plain Python numbers (non-finite entries mark unidentifiable directions)."""
         return {
             "parameters": dict(zip(self.names, self.values.tolist())),
-            "std_errors": dict(zip(self.names, clean(fin(self.std_errors)))),
-            "correlation": clean(fin(self.correlation)),
+            "std_errors": dict(zip(self.names, self.std_errors.tolist())),
+            "correlation": self.correlation.tolist(),
             "converged": self.converged,
             "steps": self.steps,
             "singular_values": self.singular_values.tolist(),

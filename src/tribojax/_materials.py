@@ -43,7 +43,7 @@ class ContactPair(eqx.Module):
     """Two bodies in contact, reduced to the equivalent quantities of wang2022 Sections 2–3.
 
     Fields:
-        E_star:  equivalent modulus, Pa; 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (wang2022, below Eq 4).
+        E_star:  equivalent modulus, Pa; 1/E* = (1-nu1^2)/E1 + (1-nu2^2)/E2 (wang2022, below Eq 4).
         G_star:  equivalent shear modulus G', Pa; 1/G' = (2 - nu1)/G1 + (2 - nu2)/G2 (below Eq 17).
         H:       hardness of the softer body, Pa.
         nu:      Poisson's ratio used in K = 0.454 + 0.41 nu (Eq 4) and in Eq 14; by default the
