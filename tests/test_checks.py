@@ -1,0 +1,124 @@
+"""Bad input: clear errors at the Python boundary (ValueError) and inside jit (error_if)."""
+
+import subprocess
+import sys
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import pytest
+from conftest import make_model
+
+import tribojax as tj
+
+
+@pytest.mark.parametrize(
+    "kwargs, pattern",
+    [
+        (dict(D=2.0, G=1e-9, M=1.0), r"D = 2 is outside the allowed range \(2, 3\)"),
+        (dict(D=3.2, G=1e-9, M=1.0), r"D = 3.2 is outside the allowed range \(2, 3\)"),
+        (dict(D=2.5, G=0.0, M=1.0), r"G = 0 m is outside the allowed range \(0, inf\)"),
+        (dict(D=2.5, G=1e-9, M=0.5), r"M = 0.5 is outside the allowed range \[1, inf\)"),
+        (dict(D=2.5, G=1e-9, M=1.0, gamma=1.0), r"gamma = 1 is outside .* \(1, inf\)"),
+        (dict(D=float("nan"), G=1e-9, M=1.0), r"D = nan is outside"),
+    ],
+)
+def test_surface_rejects(kwargs, pattern):
+    with pytest.raises(ValueError, match=pattern):
+        tj.FractalSurface(**kwargs)
+
+
+@pytest.mark.parametrize(
+    "kwargs, pattern",
+    [
+        (dict(E_star=0.0), r"E_star = 0 Pa is outside the allowed range \(0, inf\)"),
+        (dict(G_star=-1.0), r"G_star = -1 Pa"),
+        (dict(H=-1.0), r"H = -1 Pa"),
+        (dict(nu=0.6), r"nu = 0.6 is outside the allowed range \(-1, 0.5\)"),
+        (dict(sigma_s=0.0), r"sigma_s = 0 Pa"),
+    ],
+)
+def test_pair_rejects(kwargs, pattern):
+    base = dict(E_star=41e9, G_star=9e9, H=1.4e9, nu=0.164, sigma_s=1e9)
+    with pytest.raises(ValueError, match=pattern):
+        tj.ContactPair(**{**base, **kwargs})
+
+
+def test_model_rejects_bad_constants_and_load(model):
+    with pytest.raises(ValueError, match=r"mu_t = -0.1 is outside"):
+        make_model(mu_t=-0.1)
+    with pytest.raises(ValueError, match=r"mass = 0 kg"):
+        make_model(mass=0.0)
+    with pytest.raises(ValueError, match=r"tangential_load = -1 N is outside .* \[0, inf\)"):
+        make_model(tangential_load=-1.0)
+    with pytest.raises(ValueError, match=r"load = 0 N is outside the allowed range \(0, inf\)"):
+        model(0.0)
+    with pytest.raises(ValueError, match=r"load = -3 N"):
+        model(jnp.array(-3.0))
+    with pytest.raises(eqx.EquinoxRuntimeError, match=r"load is outside"):  # traced under vmap
+        jax.vmap(model)(jnp.array([3.0, -3.0]))
+    with pytest.raises(ValueError, match="area must be 'truncated' or 'real'"):
+        make_model(area="apparent")
+    with pytest.raises(ValueError, match="must be a number"):
+        make_model(mu_t="0.1")
+
+
+def test_tangential_ratio_must_stay_below_mu_t():
+    with pytest.raises(ValueError, match=r"T/P = 0.5, mu_t = 0.1416"):
+        make_model(tangential_load=1.0)(2.0)
+
+
+JIT_ERRORS = (eqx.EquinoxRuntimeError, jax.errors.JaxRuntimeError)
+
+
+def test_errors_inside_jit(model):
+    with pytest.raises(JIT_ERRORS, match=r"load is outside the allowed range"):
+        jax.jit(lambda m, F: m(F).K_tau)(model, -1.0)
+    f = eqx.filter_jit(lambda m, F: m(F).K_tau)
+    with pytest.raises(eqx.EquinoxRuntimeError, match=r"load is outside the allowed range"):
+        f(model, -1.0)
+    with pytest.raises(eqx.EquinoxRuntimeError, match="tangential_load / load must be below mu_t"):
+        f(model, 1.0)
+    build = eqx.filter_jit(lambda D: make_model(D=D)(5.0).K_tau)
+    with pytest.raises(eqx.EquinoxRuntimeError, match=r"D is outside the allowed range \(2, 3\)"):
+        build(3.5)
+    grad = eqx.filter_jit(jax.grad(lambda G: make_model(G=G)(5.0).K_tau))
+    with pytest.raises(eqx.EquinoxRuntimeError, match=r"G is outside the allowed range"):
+        grad(-1e-8)
+
+
+def test_failed_load_balance_is_reported(model):
+    # one Newton step cannot converge from the all-plastic start
+    stubborn = make_model(max_steps=1)
+    with pytest.raises(eqx.EquinoxRuntimeError, match="load balance .* did not converge"):
+        stubborn(5.0)
+    quiet = make_model(max_steps=1, throw=False)
+    assert not bool(quiet(5.0).converged)
+    assert bool(model(5.0).converged)
+
+
+def test_all_plastic_contact_is_reported():
+    # a huge G puts every asperity in the plastic regime: no tangential stiffness
+    with pytest.raises(eqx.EquinoxRuntimeError, match="every asperity is fully plastic"):
+        make_model(G=1e-3)(5.0)
+    out = make_model(G=1e-3, throw=False)(5.0)
+    assert bool(out.all_plastic) and float(out.K_tau) == 0.0 and float(out.z_max) == 0.0
+
+
+def test_float32_is_refused():
+    code = (
+        "import jax, tribojax as tj\n"
+        "jax.config.update('jax_enable_x64', False)\n"
+        "try:\n"
+        "    tj.FractalSurface(2.5, 1e-9, 1.0)\n"
+        "except RuntimeError as e:\n"
+        "    print('refused:', e)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert "refused: tribojax needs float64" in out.stdout
+
+
+def test_import_enables_float64():
+    code = "import tribojax, jax.numpy as jnp; print(jnp.asarray(1.0).dtype)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "float64"
