@@ -7,9 +7,9 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import pytest
-from conftest import make_model
 
 import tribojax as tj
+from conftest import make_model
 
 
 @pytest.mark.parametrize(

@@ -77,10 +77,22 @@ def _integrals(laws, bounds, log_al, D):
     )
 
 
-class ContactParameters(eqx.Module):
-    """Contact parameters at one normal load (all SI units).
+_SCALARS = (
+    "load", "F_s", "K_tau", "C_tau", "z_max", "a_l", "a_ec", "a_epc", "a_pc", "psi", "W_d", "W_s"
+)  # fmt: skip
 
-    Fields:
+
+def _packed(name: str) -> property:
+    i = _SCALARS.index(name)
+    return property(lambda self: self.values[..., i], doc=f"{name} (see ContactParameters)")
+
+
+class ContactParameters(eqx.Module):
+    """Contact parameters at one normal load (all SI units); batched under `jax.vmap`.
+
+    The numbers are stored packed in one float array (a single output buffer keeps a jitted call
+    at ~15 µs instead of ~30 µs) and read through these properties:
+
         load:       normal load F, N.
         F_s:        maximum static friction, N (Eqs 14, 16).
         K_tau:      tangential stiffness, N/m (Eqs 17–19).
@@ -88,29 +100,51 @@ class ContactParameters(eqx.Module):
         z_max:      maximum tangential deformation F_s/K_τ, m (Eq 26).
         a_l:        largest truncated asperity area a'_l, m^2 (load balance).
         a_ec, a_epc, a_pc: critical truncated areas, m^2 (Eqs 5–7).
-        load_share: share of F carried in each regime (elastic, ep1, ep2, plastic); sums to 1.
         psi:        tangential-load ratio T/(μ_t P) used in Eqs 18–22.
         W_d, W_s:   dissipated and stored tangential energy per cycle, J (Eqs 21, 23).
+        load_share: share of F carried in each regime (elastic, ep1, ep2, plastic); sums to 1.
         converged:  whether the load balance converged.
         all_plastic: every asperity is fully plastic (a'_l <= a'_pc): the model then carries no
                     tangential load, and F_s, K_τ, C_τ and z_max are returned as 0.
     """
 
-    load: Scalar
-    F_s: Scalar
-    K_tau: Scalar
-    C_tau: Scalar
-    z_max: Scalar
-    a_l: Scalar
-    a_ec: Scalar
-    a_epc: Scalar
-    a_pc: Scalar
-    load_share: Float[Array, "4"]
-    psi: Scalar
-    W_d: Scalar
-    W_s: Scalar
-    converged: Bool[Array, ""]
-    all_plastic: Bool[Array, ""]
+    values: Float[Array, "... 16"]
+    flags: Bool[Array, "... 2"]
+
+    load = _packed("load")
+    F_s = _packed("F_s")
+    K_tau = _packed("K_tau")
+    C_tau = _packed("C_tau")
+    z_max = _packed("z_max")
+    a_l = _packed("a_l")
+    a_ec = _packed("a_ec")
+    a_epc = _packed("a_epc")
+    a_pc = _packed("a_pc")
+    psi = _packed("psi")
+    W_d = _packed("W_d")
+    W_s = _packed("W_s")
+
+    @property
+    def load_share(self):
+        return self.values[..., len(_SCALARS) :]
+
+    @property
+    def converged(self):
+        return self.flags[..., 0]
+
+    @property
+    def all_plastic(self):
+        return self.flags[..., 1]
+
+    def as_dict(self) -> dict:
+        """Plain dict of NumPy values (for printing and JSON)."""
+        import numpy as np
+
+        out = {k: np.asarray(getattr(self, k)) for k in _SCALARS}
+        out["load_share"] = np.asarray(self.load_share)
+        out["converged"] = np.asarray(self.converged)
+        out["all_plastic"] = np.asarray(self.all_plastic)
+        return out
 
 
 class FractalContact(eqx.Module):
@@ -277,7 +311,7 @@ class FractalContact(eqx.Module):
         z_max = jnp.where(all_plastic, 0.0, F_s / safe_k)  # Eq 26
 
         total = jnp.sum(load_parts)
-        return ContactParameters(
+        scalars = dict(
             load=load,
             F_s=F_s,
             K_tau=K_tau,
@@ -287,13 +321,12 @@ class FractalContact(eqx.Module):
             a_ec=jnp.exp(log_ec),
             a_epc=jnp.exp(log_epc),
             a_pc=jnp.exp(log_pc),
-            load_share=load_parts / total,
             psi=psi,
             W_d=W_d,
             W_s=W_s,
-            converged=ok,
-            all_plastic=all_plastic,
         )
+        values = jnp.concatenate([jnp.stack([scalars[k] for k in _SCALARS]), load_parts / total])
+        return ContactParameters(values=values, flags=jnp.stack([ok, all_plastic]))
 
 
 def contact_parameters(

@@ -107,7 +107,7 @@ def least_squares_fit(
     # (JᵀJ)^-1 through the SVD; directions with negligible singular values get infinite variance.
     tiny = sv <= sv[0] * 1e-14
     inv_s2 = jnp.where(tiny, jnp.inf, 1.0 / jnp.where(tiny, 1.0, sv) ** 2)
-    cov_theta = (vt.T * inv_s2) @ vt
+    cov_theta = (vt.T * inv_s2[None, :]) @ vt
     cov_theta = jnp.where(jnp.isnan(cov_theta), jnp.inf, cov_theta)
     scale2 = 1.0 if sigma_known else float(r @ r) / max(n - p, 1)
     cov_theta = cov_theta * scale2
