@@ -7,6 +7,7 @@ notebook tooling (nbclient, nbformat, ipykernel) is not installed.
 """
 
 import os
+import re
 from pathlib import Path
 
 import pytest
@@ -18,6 +19,7 @@ pytest.importorskip("ipykernel")
 NOTEBOOK_DIR = Path(__file__).resolve().parents[1] / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
 CELL_TIMEOUT_S = 600
+ANSI_ESCAPE = re.compile(r"\x1b\[[0-9;]*m")  # IPython colours its tracebacks
 
 
 def test_notebooks_exist():
@@ -38,4 +40,5 @@ def test_notebook_runs(path, monkeypatch):
     try:
         client.execute(cwd=str(NOTEBOOK_DIR), env=dict(os.environ))
     except nbclient.exceptions.CellExecutionError as err:
-        pytest.fail(f"{path.name}: a cell raised\n{err}", pytrace=False)
+        message = ANSI_ESCAPE.sub("", str(err))
+        pytest.fail(f"{path.name}: a cell raised\n{message}", pytrace=False)
