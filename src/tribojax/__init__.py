@@ -53,6 +53,7 @@ from ._materials import (
 from ._reproduce import calibrate_table3 as calibrate_table3
 from ._reproduce import equivalent_G as equivalent_G
 from ._reproduce import reproduce_table3 as reproduce_table3
+from ._reproduce import wang2022_table3_model as wang2022_table3_model
 from ._surface import FractalSurface as FractalSurface
 from ._surface import wang2022_surface as wang2022_surface
 

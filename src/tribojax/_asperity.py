@@ -22,7 +22,7 @@ from ._surface import FractalSurface
 Scalar = Float[Array, ""]
 
 ELASTIC, EP1, EP2, PLASTIC = 0, 1, 2, 3
-REGIME_NAMES = ("elastic", "elastic-plastic 1", "elastic-plastic 2", "plastic")
+REGIME_NAMES = ("elastic", "ep1", "ep2", "plastic")  # ep = elastic–plastic (first, second)
 
 _LN2 = math.log(2.0)
 _LNPI = math.log(math.pi)
@@ -82,7 +82,9 @@ def load_laws(surface: FractalSurface, pair: ContactPair, log_a_ec) -> tuple[Pow
     (δ/δ_c)^1.425 with the paper's ratio (a'/a'_ec)^((3-D)/2)) it is a'^(1.1375 + 0.2875 D) over
     a'_ec^(2.1375 - 0.7125 D). The elastic–plastic laws keep the paper's deformation ratio, which
     is below 1 inside those regimes, so the load jumps at a'_ec by the factor 3·0.34 = 1.02
-    (REPRODUCTION.md says ~3 %, which is Kogut–Etsion's unrounded 1.03).
+    (REPRODUCTION.md says ~3 %, which is Kogut–Etsion's unrounded 1.03). The same reading makes
+    P(a') jump at the other boundaries too: x1.41 at a'_epc (ep2 above ep1 just below it) and
+    ~670x at a'_pc (H·a' above the ep2 law). The load balance stays continuous (integrals).
     """
     D, E, H = surface.D, pair.E_star, pair.H
     ln_lng = jnp.log(jnp.log(surface.gamma))

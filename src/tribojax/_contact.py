@@ -238,23 +238,33 @@ class FractalContact(eqx.Module):
         return sol.value, ok
 
     def __call__(self, load) -> ContactParameters:
-        """Contact parameters at normal load `load` (N, > 0). wang2022 Eqs 5–26."""
+        """Contact parameters at normal load `load` (N, > 0). wang2022 Eqs 5–26.
+
+        Concrete inputs are validated here (ValueError); the computation itself is compiled
+        (`equinox.filter_jit`), so eager calls are fast too and calls inside a user's jit are
+        inlined.
+        """
         ensure_x64()
         load = check_range(load, "load", 0.0, unit="N")
+        psi = self.tangential_load / (self.mu_t * load)
+        fail_if(psi, psi >= 1.0, self._psi_message(load))
+        return _evaluate(self, load)
+
+    def _psi_message(self, load) -> str:
+        msg = (
+            "tangential_load / load must be below mu_t (Mindlin's law, wang2022 Eq 17, needs "
+            "T < mu_t P)"
+        )
+        if isinstance(load, jax.core.Tracer) or isinstance(self.mu_t, jax.core.Tracer):
+            return msg
+        ratio = jnp.max(self.tangential_load / load)
+        return msg + f": T/P = {float(ratio):g}, mu_t = {float(jnp.min(self.mu_t)):g}"
+
+    def _evaluate(self, load) -> ContactParameters:
         s, pair = self.surface, self.pair
         D = s.D
         psi = self.tangential_load / (self.mu_t * load)
-        psi = fail_if(
-            psi,
-            psi >= 1.0,
-            "tangential_load / load must be below mu_t (Mindlin's law, wang2022 Eq 17, needs "
-            "T < mu_t P)"
-            + (
-                ""
-                if isinstance(psi, jax.core.Tracer)
-                else f": T/P = {float(self.tangential_load / load):g}, mu_t = {float(self.mu_t):g}"
-            ),
-        )
+        psi = eqx.error_if(psi, psi >= 1.0, self._psi_message(load))
 
         log_al, ok = self.solve_load_balance(load)
         if self.throw:
@@ -327,6 +337,11 @@ class FractalContact(eqx.Module):
         )
         values = jnp.concatenate([jnp.stack([scalars[k] for k in _SCALARS]), load_parts / total])
         return ContactParameters(values=values, flags=jnp.stack([ok, all_plastic]))
+
+
+@eqx.filter_jit
+def _evaluate(model: FractalContact, load) -> ContactParameters:
+    return model._evaluate(load)
 
 
 def contact_parameters(

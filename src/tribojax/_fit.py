@@ -33,6 +33,7 @@ class FitResult:
         converged: optimistix reported success.
         steps: LM steps taken.
         message: optimistix's result message ("" on success).
+        fixed: constants held fixed in the fit (set by the caller, e.g. {"M": 1.0}).
     """
 
     names: tuple[str, ...]
@@ -46,6 +47,7 @@ class FitResult:
     converged: bool
     steps: int
     message: str
+    fixed: dict = dataclasses.field(default_factory=dict)
 
     def as_dict(self) -> dict:
         """Summary as plain Python numbers (non-finite entries mark unidentifiable directions)."""
@@ -56,6 +58,7 @@ class FitResult:
             "converged": self.converged,
             "steps": self.steps,
             "singular_values": self.singular_values.tolist(),
+            "fixed": dict(self.fixed),
         }
 
 

@@ -19,12 +19,14 @@ inertial load m·a_max over the normal load) and m = 0.321 kg in Eq 24 (see REPR
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._asperity import REGIME_NAMES
 from ._contact import FractalContact
 from ._data import wang2022_table
 from ._fit import FitResult, least_squares_fit
@@ -38,8 +40,13 @@ FIXED_M = 1.0
 _LOG_G_RANGE = (math.log(1e-11), math.log(1e-5))
 
 
-def _model(G, M, mu_t, sigma_s, *, throw=True) -> FractalContact:
-    """The Table 3 contact model with the given unpublished constants (D, γ from Table 1)."""
+def wang2022_table3_model(G, mu_t, sigma_s, *, M=FIXED_M, throw=True) -> FractalContact:
+    """The reticle/chuck contact model behind Table 3, for given unpublished constants.
+
+    D = 2.8821 and γ = 1.5 (Table 1), the Table 2 pair with strength `sigma_s` (Pa), T = 0.321 N
+    (m·a_max) in T/P, m = 0.321 kg in Eq 24, a = a'. G in m; `M` ridges (degenerate with G).
+    `wang2022_table3_model(*fit.values, M=fit.fixed["M"])` rebuilds a calibration's model.
+    """
     base = wang2022_pair()
     pair = ContactPair(base.E_star, base.G_star, base.H, base.nu, sigma_s)
     table1 = wang2022_surface(M)
@@ -88,15 +95,16 @@ def calibrate_table3(start=(1e-8, 0.2, 1e9), *, M=FIXED_M) -> FitResult:
 
     def residuals(theta, args):
         G, mu_t, sigma_s = _physical(theta, mu_min)
-        out = jax.vmap(_model(G, M, mu_t, sigma_s, throw=False))(loads)
+        out = jax.vmap(wang2022_table3_model(G, mu_t, sigma_s, M=M, throw=False))(loads)
         return jnp.concatenate([out.F_s, out.K_tau]) / target - 1.0
 
-    return least_squares_fit(
+    fit = least_squares_fit(
         residuals,
         _theta(*start, mu_min),
         names=CALIBRATED_NAMES,
         transform=lambda th: _physical(th, mu_min),
     )
+    return dataclasses.replace(fit, fixed={"M": float(M)})
 
 
 def _record(out, i) -> dict:
@@ -108,7 +116,7 @@ def _record(out, i) -> dict:
     }
 
 
-def reproduce_table3(fit: FitResult | None = None, *, M=FIXED_M) -> dict:
+def reproduce_table3(fit: FitResult | None = None) -> dict:
     """Table 3 three ways (paper, published inputs, calibrated) as JSON-ready dicts.
 
     Returns a dict with keys "table3", "table3_calibration" and "table3_settings".
@@ -116,6 +124,9 @@ def reproduce_table3(fit: FitResult | None = None, *, M=FIXED_M) -> dict:
     t3 = wang2022_table(3)
     if fit is None:
         fit = calibrate_table3()
+    if fit.names != CALIBRATED_NAMES or "M" not in fit.fixed:
+        raise ValueError("reproduce_table3 needs a FitResult from calibrate_table3")
+    M = fit.fixed["M"]
     G, mu_t, sigma_s = (float(v) for v in fit.values)
     vac = t3["vacuum_kPa"]
     loads = jnp.asarray(vacuum_to_load(jnp.asarray(vac)))
@@ -129,7 +140,7 @@ def reproduce_table3(fit: FitResult | None = None, *, M=FIXED_M) -> dict:
             mass=WANG2022_RETICLE_MASS_KG,
         )
     )(loads)
-    calibrated = jax.vmap(_model(G, M, mu_t, sigma_s))(loads)
+    calibrated = jax.vmap(wang2022_table3_model(G, mu_t, sigma_s, M=M))(loads)
     rows = []
     for i, v in enumerate(vac):
         paper = {
@@ -148,10 +159,10 @@ def reproduce_table3(fit: FitResult | None = None, *, M=FIXED_M) -> dict:
                 "calibrated": cal,
                 "calibrated_rel_error": {k: cal[k] / paper[k] - 1.0 for k in paper},
                 "calibrated_load_share": dict(
-                    zip(("elastic", "ep1", "ep2", "plastic"), calibrated.load_share[i].tolist())
+                    zip(REGIME_NAMES, calibrated.load_share[i].tolist())
                 ),
                 "published_load_share": dict(
-                    zip(("elastic", "ep1", "ep2", "plastic"), published.load_share[i].tolist())
+                    zip(REGIME_NAMES, published.load_share[i].tolist())
                 ),
             }
         )
