@@ -120,7 +120,8 @@ def cmd_reproduce(args) -> int:
         for rng in ((0.6, 10.0), (20.0, 20.0))
     }
     for (key, rng), e in errs.items():
-        print(f"max |calibrated/paper - 1| of {key} at {rng[0]:g}-{rng[1]:g} kPa: {100 * e:.1f} %")
+        where = f"{rng[0]:g} kPa" if rng[0] == rng[1] else f"{rng[0]:g}-{rng[1]:g} kPa"
+        print(f"max |calibrated/paper - 1| of {key} at {where}: {100 * e:.1f} %")
     result["table3_acceptance"] = {
         "Fs_max_rel_error_0p6_to_10kPa": errs[("Fs_N", (0.6, 10.0))],
         "Ktau_max_rel_error_0p6_to_10kPa": errs[("Ktau_N_per_m", (0.6, 10.0))],

@@ -158,12 +158,8 @@ def reproduce_table3(fit: FitResult | None = None) -> dict:
                 "published_inputs": _record(published, i),
                 "calibrated": cal,
                 "calibrated_rel_error": {k: cal[k] / paper[k] - 1.0 for k in paper},
-                "calibrated_load_share": dict(
-                    zip(REGIME_NAMES, calibrated.load_share[i].tolist())
-                ),
-                "published_load_share": dict(
-                    zip(REGIME_NAMES, published.load_share[i].tolist())
-                ),
+                "calibrated_load_share": dict(zip(REGIME_NAMES, calibrated.load_share[i].tolist())),
+                "published_load_share": dict(zip(REGIME_NAMES, published.load_share[i].tolist())),
             }
         )
     calib = fit.as_dict()
