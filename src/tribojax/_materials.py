@@ -74,7 +74,7 @@ class ContactPair(eqx.Module):
     def from_materials(cls, first: Material, second: Material, *, sigma_s=None) -> "ContactPair":
         """Combine two materials; H, nu and sigma_s come from the softer one (lower H).
 
-        Which body is softer is decided with concrete values (outside jit).
+        The softer body is picked with jnp.where, so this also works on traced values.
         """
         inv_e = (1 - first.nu**2) / first.E + (1 - second.nu**2) / second.E
         inv_g = (2 - first.nu) / first.G + (2 - second.nu) / second.G
