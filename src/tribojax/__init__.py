@@ -32,6 +32,7 @@ from ._data import read_table as read_table
 from ._data import wang2022_table as wang2022_table
 from ._fit import FitResult as FitResult
 from ._fit import least_squares_fit as least_squares_fit
+from ._friction import AbstractFrictionElement as AbstractFrictionElement
 from ._materials import (
     ContactPair as ContactPair,
 )
