@@ -42,7 +42,9 @@ METHODS = ("structure", "psd", "rms")
 def sf_constant(D):
     """C(D) of S(τ) = C K G^(2D-4) τ^(6-2D): ∫₀^∞ u^(-1-α)(1 - cos 2πu) du, α = 6 - 2D."""
     a = 6.0 - 2.0 * D
-    return (2.0 * jnp.pi) ** a * jnp.pi / (2.0 * jnp.exp(gammaln(1.0 + a)) * jnp.sin(0.5 * jnp.pi * a))
+    return (
+        (2.0 * jnp.pi) ** a * jnp.pi / (2.0 * jnp.exp(gammaln(1.0 + a)) * jnp.sin(0.5 * jnp.pi * a))
+    )
 
 
 def psd_model(f, D, G, K=1.0):

@@ -137,11 +137,11 @@ def synthesize(
     dx = float(L) / n_points
     x = jnp.arange(n_points) * dx
     y = None if ny is None else (jnp.arange(ny) * dx)[:, None]
-    z = yk_heights(
-        key, D, G, x, y, L=L, M=M, gamma=gamma, n_max=n_max, ridge_weights=ridge_weights
-    )
+    z = yk_heights(key, D, G, x, y, L=L, M=M, gamma=gamma, n_max=n_max, ridge_weights=ridge_weights)
     z = fail_if(z, ~jnp.all(jnp.isfinite(z)), "synthesised heights are not finite")
-    return Topography(z, dx=dx, dy=None if ny is None else dx, source="synthetic YK (wang2022 Eq 1)")
+    return Topography(
+        z, dx=dx, dy=None if ny is None else dx, source="synthetic YK (wang2022 Eq 1)"
+    )
 
 
 def direction_factor(D, M: int = 1, *, ridge_weights="wang2022"):

@@ -18,7 +18,16 @@ from jaxtyping import Array, Float
 
 from ._data import DataFileError
 
-UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "A": 1e-10, "Å": 1e-10}
+UNITS = {
+    "m": 1.0,
+    "mm": 1e-3,
+    "um": 1e-6,
+    "µm": 1e-6,
+    "μm": 1e-6,
+    "nm": 1e-9,
+    "A": 1e-10,
+    "Å": 1e-10,
+}
 PLAIN_SUFFIXES = (".npy", ".txt", ".xyz", ".asc", ".dat", ".csv")
 MIN_POINTS = 64
 
@@ -40,7 +49,7 @@ class Topography(eqx.Module):
         source: where it came from (file name or generator), for reports.
     """
 
-    heights: Float[Array, "..."]
+    heights: Float[Array, ...]
     dx: float = eqx.field(static=True)
     dy: float | None = eqx.field(static=True, default=None)
     source: str = eqx.field(static=True, default="")
@@ -93,7 +102,9 @@ def _read_plain(path: Path, dx, unit: str) -> Topography:
         except (OSError, ValueError) as err:
             raise DataFileError(f"{path}: not a readable .npy file ({err})") from err
         if dx is None:
-            raise ValueError(f"{path}: a .npy file carries no sampling interval; pass dx (in {unit})")
+            raise ValueError(
+                f"{path}: a .npy file carries no sampling interval; pass dx (in {unit})"
+            )
         z = np.asarray(z, dtype=np.float64)
         if z.ndim not in (1, 2):
             raise DataFileError(f"{path}: expected a 1-D or 2-D array, got shape {z.shape}")
@@ -115,7 +126,9 @@ def _read_plain(path: Path, dx, unit: str) -> Topography:
                 continue
             raise DataFileError(f"{path}, line {lineno}: {text[:60]!r} is not a row of numbers")
         if width is not None and len(row) != width:
-            raise DataFileError(f"{path}, line {lineno}: {len(row)} values, earlier rows have {width}")
+            raise DataFileError(
+                f"{path}, line {lineno}: {len(row)} values, earlier rows have {width}"
+            )
         width = len(row)
         rows.append(row)
     if not rows:
@@ -164,7 +177,9 @@ def _read_instrument(path: Path) -> Topography:
     return Topography(z.T * s, dx=dx, dy=dy, source=path.name)
 
 
-def read_topography(path, *, unit: str = "m", dx=None, instrument: bool | None = None) -> Topography:
+def read_topography(
+    path, *, unit: str = "m", dx=None, instrument: bool | None = None
+) -> Topography:
     """Read a profile or height map into a `Topography` in metres.
 
     Args:
