@@ -159,7 +159,7 @@ def psd_points(z, dx, ratio=1.5):
 
 
 def _rms_constant(alpha, n):
-    """Exact E[mean square residual after a line fit over n samples] for S(k) = k^α (k in samples)."""
+    """Exact mean square residual of a line fit over n samples when S(k) = k^α (k in samples)."""
     t = np.arange(n) - 0.5 * (n - 1)
     # projection onto {1, t}: P_ij = 1/n + t_i t_j / Σt²; diagonal sums d_k = Σ_{i-j=k} P_ij
     k = np.arange(1, n)
@@ -272,13 +272,14 @@ def estimate_fractal(
     lx, ly = np.log10(x), np.log10(y)
     # slope → α = 6 - 2D: structure and rms: slope = α; psd (vs wavelength): slope = 1 + α
     shift = 1.0 if method == "psd" else 0.0
-    wins = _choose_band(lx, ly, min_decades, band, (shift, 2.0 + shift))
+    # D within (2.02, 2.98): a slope indistinguishable from white noise (D = 3) is no scaling
+    wins = _choose_band(lx, ly, min_decades, band, (shift + 0.04, 1.96 + shift))
     i, j = wins[0]
     coef, cov, rms, r2 = _fit_line(lx[i:j], ly[i:j])
     slope = float(coef[1])
     alpha = slope - shift
     D = 3.0 - 0.5 * alpha
-    if rms > max_rms or not (2.0 < D < 3.0):
+    if rms > max_rms or not (2.02 < D < 2.98):
         raise ValueError(
             f"{topo.source}: no fractal scaling band found by {method!r}: the best band "
             f"{x[i]:.3g}-{x[j - 1]:.3g} m has slope {slope:.3f} (D = {D:.3f}) and rms log10 "

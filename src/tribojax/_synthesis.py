@@ -80,9 +80,10 @@ def yk_heights(
     phi = jax.random.uniform(key, (M, n_max + 1), maxval=2.0 * jnp.pi, dtype=jnp.float64)
     amp = w[:, None] * gamma ** ((D - 3.0) * n)[None, :]  # (M, n)
     k = 2.0 * jnp.pi * gamma**n / L  # rad/m
-    proj = x[..., None] * jnp.cos(theta) + y[..., None] * jnp.sin(theta)  # (..., M)
-    arg = proj[..., :, None] * k + phi  # (..., M, n)
-    terms = amp * (jnp.cos(phi) - jnp.cos(arg))
+    lead = (1,) * x.ndim  # explicit ranks (tests run with strict rank promotion)
+    proj = jnp.multiply.outer(x, jnp.cos(theta)) + jnp.multiply.outer(y, jnp.sin(theta))
+    arg = jnp.multiply.outer(proj, k) + phi.reshape(lead + phi.shape)  # (..., M, n)
+    terms = amp.reshape(lead + amp.shape) * (jnp.cos(phi).reshape(lead + phi.shape) - jnp.cos(arg))
     pref = L * (G / L) ** (D - 2.0) * jnp.sqrt(jnp.log(gamma) / M)
     return pref * jnp.sum(terms, axis=(-2, -1))
 
@@ -104,8 +105,10 @@ def wm_profile(key, D, G, x, *, L, gamma=1.5, n_max: int = 20) -> Float[Array, "
     x = jnp.asarray(x, dtype=jnp.float64)
     n = jnp.arange(n_max + 1, dtype=jnp.float64)
     phi = jax.random.uniform(key, (n_max + 1,), maxval=2.0 * jnp.pi, dtype=jnp.float64)
-    arg = 2.0 * jnp.pi * gamma**n * x[..., None] / L - phi
-    terms = gamma ** ((D - 2.0) * n) * (jnp.cos(phi) - jnp.cos(arg))
+    lead = (1,) * x.ndim
+    arg = jnp.multiply.outer(x, 2.0 * jnp.pi * gamma**n / L) - phi.reshape(lead + phi.shape)
+    amp = gamma ** ((D - 2.0) * n)
+    terms = amp.reshape(lead + amp.shape) * (jnp.cos(phi).reshape(lead + phi.shape) - jnp.cos(arg))
     return L * (G / L) ** (D - 1.0) * jnp.sqrt(jnp.log(gamma)) * jnp.sum(terms, axis=-1)
 
 

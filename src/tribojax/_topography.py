@@ -143,7 +143,7 @@ def _read_plain(path: Path, dx, unit: str) -> Topography:
         drift = np.max(np.abs(x - x[0] - h * np.arange(len(x))))
         if drift > 0.5 * h:  # rounding of printed x is fine; gaps and resampling are not
             raise DataFileError(f"{path}: x is not evenly spaced (off a regular grid by {drift:g})")
-        return Topography(a[:, 1] * s, dx=h * s, source=path.name)
+        return Topography(a[:, 1] * s, dx=float(h * s), source=path.name)
     if dx is None:
         raise ValueError(f"{path}: a matrix of heights carries no sampling interval; pass dx")
     z = a[:, 0] if width == 1 else a
@@ -193,6 +193,7 @@ def read_topography(
         naming the extra when an instrument file needs SurfaceTopography and it is missing.
     """
     path = Path(path)
+    unit_scale(unit)  # an unknown unit is refused before anything is read
     if not path.is_file():
         raise DataFileError(f"{path}: no such file")
     if instrument is None:
@@ -211,11 +212,11 @@ def _looks_plain(path: Path) -> bool:
     except (OSError, UnicodeDecodeError):
         return False
     lines = [ln for ln in text.splitlines()[:6] if ln.strip() and not ln.lstrip().startswith("#")]
-    ok = 0
-    for ln in lines[1:]:  # the first line may be a header
+    numeric = []
+    for ln in lines[:3]:  # the first line may be a header; later lines are the reader's job
         try:
             [float(f) for f in ln.replace(",", " ").replace(";", " ").split()]
-            ok += 1
+            numeric.append(True)
         except ValueError:
-            return False
-    return ok > 0
+            numeric.append(False)
+    return any(numeric) and all(numeric[1:])
