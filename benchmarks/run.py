@@ -30,6 +30,7 @@ import numpy as np
 import tribojax as tj
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 import scipy_reference as ref  # noqa: E402
 
 D, G, M, GAMMA = 2.8821, 7e-8, 2.0, 1.5
@@ -295,6 +296,9 @@ def run(quick=False):
         "jax": jax.__version__,
         "tribojax": tj.__version__,
     }
+    import topography as _topography  # benchmarks/topography.py (surface characterisation)
+
+    results.extend(_topography.run())
     for r in results:
         r["environment"] = env
     return results, time.perf_counter() - t_start

@@ -55,8 +55,18 @@ from ._reproduce import calibrate_table3 as calibrate_table3
 from ._reproduce import equivalent_G as equivalent_G
 from ._reproduce import reproduce_table3 as reproduce_table3
 from ._reproduce import wang2022_table3_model as wang2022_table3_model
+from ._roughness import RoughnessEstimate as RoughnessEstimate
+from ._roughness import estimate_fractal as estimate_fractal
+from ._roughness import psd_model as psd_model
+from ._roughness import structure_function_model as structure_function_model
 from ._surface import FractalSurface as FractalSurface
 from ._surface import wang2022_surface as wang2022_surface
+from ._synthesis import direction_factor as direction_factor
+from ._synthesis import synthesize as synthesize
+from ._synthesis import wm_profile as wm_profile
+from ._synthesis import yk_heights as yk_heights
+from ._topography import Topography as Topography
+from ._topography import read_topography as read_topography
 
 try:
     __version__ = version("tribojax")

@@ -1,6 +1,7 @@
 """The `tribojax` command line.
 
 tribojax reproduce [--out DIR]   wang2022 Table 3 (published inputs and calibrated), JSON + figure
+tribojax contact (--topography FILE | --D D --G G) --load N [...]   surface → D, G → F_s, K_τ, C_τ
 """
 
 from __future__ import annotations
@@ -142,6 +143,96 @@ def cmd_reproduce(args) -> int:
     return 0 if cal["converged"] else 1
 
 
+CONTACT_DEFAULTS = dict(
+    M=1.0, gamma=1.5, sigma_s=1.893e9, mu_t=0.1416, tangential_load=0.321, mass=0.321
+)  # wang2022 pair, Table-3-calibrated constants (see _reproduce)
+
+
+def cmd_contact(args) -> int:
+    import numpy as np
+
+    import tribojax as tj
+
+    result = {"assumed": {}}
+    if args.topography is not None:
+        if args.D is not None or args.G is not None:
+            raise SystemExit("give either --topography or --D/--G, not both")
+        topo = tj.read_topography(args.topography, unit=args.unit, dx=args.dx)
+        est = tj.estimate_fractal(
+            topo, args.method, band=args.band, M=int(args.M), min_decades=args.min_decades
+        )
+        D, G = est.D, est.G
+        result["surface"] = est.as_dict()
+        print(
+            f"{topo.source}: D = {D:.4f} ± {est.D_std:.4f}, G = {G:.4g} m (± {est.log10G_std:.2f} "
+            f"in log10) by {est.method}, band {est.band[0]:.3g}-{est.band[1]:.3g} m"
+        )
+    elif args.D is not None and args.G is not None:
+        D, G = args.D, args.G
+        result["surface"] = {"D": D, "G": G, "method": "given"}
+    else:
+        raise SystemExit("give --topography FILE, or both --D and --G")
+    for k in CONTACT_DEFAULTS:
+        result["assumed"][k] = getattr(args, k)
+    result["assumed"]["materials"] = (
+        "wang2022 Table 2 pair (E* 41.28 GPa, G' 9.158 GPa, H 1.372 GPa)"
+    )
+    print(
+        "assumed: "
+        + ", ".join(f"{k} = {v:g}" for k, v in result["assumed"].items() if not isinstance(v, str))
+        + "; wang2022 Table 2 materials"
+    )
+    pair = tj.wang2022_pair(sigma_s=args.sigma_s)
+    model = tj.FractalContact(
+        tj.FractalSurface(D, G, args.M, gamma=args.gamma),
+        pair,
+        mu_t=args.mu_t,
+        tangential_load=args.tangential_load,
+        mass=args.mass,
+    )
+    rows = []
+    print(f"{'load/N':>9} {'F_s/N':>10} {'K_tau/(N/m)':>12} {'C_tau/(Ns/m)':>12} {'z_max/nm':>9}")
+    for load in args.load:
+        out = model(load)
+        row = {
+            "load_N": load,
+            "Fs_N": float(out.F_s),
+            "Ktau_N_per_m": float(out.K_tau),
+            "Ctau_Ns_per_m": float(out.C_tau),
+            "zmax_m": float(out.z_max),
+            "load_share": np.asarray(out.load_share).tolist(),
+            "converged": bool(out.converged),
+            "all_plastic": bool(out.all_plastic),
+        }
+        rows.append(row)
+        print(
+            f"{load:9.4g} {row['Fs_N']:10.4g} {row['Ktau_N_per_m']:12.4g} "
+            f"{row['Ctau_Ns_per_m']:12.4g} {1e9 * row['zmax_m']:9.4g}"
+        )
+    result["contact"] = rows
+    if args.json:
+        write_json_atomic(Path(args.json), result)
+        print(f"wrote {args.json}")
+    return 0 if all(r["converged"] for r in rows) else 1
+
+
+def _add_contact_parser(sub) -> None:
+    con = sub.add_parser("contact", help="contact parameters from a topography file or D, G")
+    con.add_argument("--topography", help="profile/height map (.csv, .txt, .npy, instrument files)")
+    con.add_argument("--unit", default="m", help="length unit of a plain file (m, mm, um, nm)")
+    con.add_argument("--dx", type=float, help="sampling interval (in --unit) for .npy/matrices")
+    con.add_argument("--method", default="psd", choices=("psd", "structure", "rms"))
+    con.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"), help="fit band, m")
+    con.add_argument("--min-decades", type=float, default=1.0)
+    con.add_argument("--D", type=float, help="surface fractal dimension (2, 3)")
+    con.add_argument("--G", type=float, help="fractal roughness, m")
+    con.add_argument("--load", type=float, nargs="+", required=True, help="normal load(s), N")
+    for k, v in CONTACT_DEFAULTS.items():
+        con.add_argument("--" + k.replace("_", "-"), dest=k, type=float, default=v)
+    con.add_argument("--json", help="write the results to this JSON file")
+    con.set_defaults(func=cmd_contact)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="tribojax", description="Rough-surface contact and friction models (JAX)."
@@ -150,6 +241,7 @@ def main(argv=None) -> int:
     rep = sub.add_parser("reproduce", help="reproduce wang2022's tables from bundled data")
     rep.add_argument("--out", default="tribojax-out", help="output folder (default tribojax-out)")
     rep.set_defaults(func=cmd_reproduce)
+    _add_contact_parser(sub)
     args = parser.parse_args(argv)
     return args.func(args)
 
