@@ -135,8 +135,9 @@ class Jenkins(AbstractHysteresisElement):
 
 
 def _three_halves(p):
-    """max(p, 0)^(3/2): clamped before the power, whose derivative 1.5·p^(1/2) is finite at 0."""
-    return jnp.maximum(p, 0.0) ** 1.5
+    """max(p, 0)^(3/2), double-where masked so that derivatives of every order are finite at 0."""
+    positive = p > 0.0
+    return jnp.where(positive, jnp.where(positive, p, 1.0) ** 1.5, 0.0)
 
 
 class Mindlin(AbstractHysteresisElement):
