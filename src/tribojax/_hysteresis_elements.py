@@ -1,4 +1,4 @@
-"""Rate-independent friction elements of wu2015: Jenkins macroslip (Eq 1) and Mindlin microslip (Eq 2).
+"""Rate-independent friction elements of wu2015: Jenkins macroslip (Eq 1), Mindlin microslip (Eq 2).
 
 Each element is usable two ways:
 

@@ -56,7 +56,9 @@ class HysteresisLoop:
         steps = np.flatnonzero(np.diff(self.t) <= 0)
         if steps.size:
             i = steps[0] + 1
-            raise ValueError(f"{self.source}: time is not increasing at sample {i} (t = {self.t[i]})")
+            raise ValueError(
+                f"{self.source}: time is not increasing at sample {i} (t = {self.t[i]})"
+            )
         if len(_cycle_starts(self.t, self.u)) < 2:
             raise ValueError(
                 f"{self.source}: fewer than one whole cycle of u (need two upward crossings of "
@@ -76,7 +78,9 @@ def read_loop(path) -> HysteresisLoop:
     steps = np.flatnonzero(np.diff(t) <= 0)
     if steps.size:
         lineno = _data_line_number(path, steps[0] + 1)
-        raise DataFileError(f"{path}, line {lineno}: time t_s = {t[steps[0] + 1]} does not increase")
+        raise DataFileError(
+            f"{path}, line {lineno}: time t_s = {t[steps[0] + 1]} does not increase"
+        )
     try:
         return HysteresisLoop(t, table["u_m"], table["f_N"], source=str(path))
     except ValueError as err:
