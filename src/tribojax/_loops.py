@@ -191,7 +191,7 @@ def analyse_loop(loop: HysteresisLoop, *, window: float = 0.05) -> LoopAnalysis:
         K_bar=K_eq / K_d,
         C_bar=float(np.pi * omega * C_eq / K_d),
         A_bar=A * K_d / mu_N,
-        W=-W,
+        W=W,
     )
 
 
@@ -271,9 +271,10 @@ def synthetic_loop(
 ) -> HysteresisLoop:
     """A steady loop of `element` under u = A sin ωt, with Gaussian force noise (N) from `seed`.
 
-    The record starts at u = 0 on the rising branch and spans `cycles` periods (plus one sample).
+    The record starts at u = 0 on the rising branch and spans `cycles` + 1/4 periods, so that
+    `analyse_loop` finds `cycles` whole cycles.
     """
-    n = cycles * samples_per_cycle + 1
+    n = cycles * samples_per_cycle + samples_per_cycle // 4 + 1
     t = np.arange(n) / samples_per_cycle * (2.0 * np.pi / omega)
     theta = omega * t - 0.5 * np.pi  # u = A cos θ = A sin ωt
     f = np.asarray(jax.vmap(lambda th: element.steady_loop(th, A))(jnp.asarray(theta)))
