@@ -87,7 +87,7 @@ def test_bad_loop_files_are_refused(tmp_path):
     path = _write(tmp_path, rows)
     with pytest.raises(tj.DataFileError, match=re.escape(str(path)) + ", line 13: time t_s"):
         tj.read_loop(path)
-    path = _write(tmp_path, good[:120])  # 1.2 periods from t = 0: one upward crossing only
+    path = _write(tmp_path, good[10:110])  # t = 0.1 .. 1.09: one upward crossing only
     with pytest.raises(tj.DataFileError, match=re.escape(str(path)) + ": fewer than one whole"):
         tj.read_loop(path)
     with pytest.raises(ValueError, match="same length"):
