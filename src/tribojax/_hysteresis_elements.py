@@ -16,6 +16,7 @@ Units: displacement m, force N, stiffness N/m. A0 = μN/K_d (m) is the critical 
 from __future__ import annotations
 
 import abc
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -30,13 +31,17 @@ Scalar = Float[Array, "..."]
 class AbstractHysteresisElement(AbstractFrictionElement):
     """A rate-independent friction element with a closed steady loop under harmonic displacement.
 
-    Concrete elements have the fields `mu` (friction coefficient, > 0), `N` (normal load, N, > 0)
+    Contract used by `harmonic_balance`: the falling branch reaches −μN at u = A − slip_span()
+    and stays there (gross slip). Concrete elements have the fields `mu` (friction coefficient, > 0), `N` (normal load, N, > 0)
     and `K_d` (tangential contact stiffness, N/m, > 0).
     """
 
     mu: eqx.AbstractVar[Scalar]
     N: eqx.AbstractVar[Scalar]
     K_d: eqx.AbstractVar[Scalar]
+    # the branch has a (θ* − θ)^p singularity at the onset of gross slip (quadrature hint)
+    endpoint_singular: ClassVar[bool] = False
+    quadrature_order: ClassVar[int] = 16  # Gauss–Legendre points for `harmonic_balance`
 
     @property
     def slip_force(self) -> Array:
@@ -108,6 +113,7 @@ class Jenkins(AbstractHysteresisElement):
     mu: Scalar
     N: Scalar
     K_d: Scalar
+    quadrature_order: ClassVar[int] = 10  # the stick branch is a trigonometric polynomial
 
     def __init__(self, mu, N, K_d):
         self.mu, self.N, self.K_d = _checked(mu, N, K_d)
@@ -167,6 +173,7 @@ class Mindlin(AbstractHysteresisElement):
     N: Scalar
     K_d: Scalar
     n_iwan: int = eqx.field(static=True)
+    endpoint_singular: ClassVar[bool] = True
 
     def __init__(self, mu, N, K_d, *, n_iwan: int = 256):
         self.mu, self.N, self.K_d = _checked(mu, N, K_d)
