@@ -89,7 +89,7 @@ def run(quick: bool = False) -> list[dict]:
             {
                 "name": f"hysteresis_{name}_1000_amplitudes_vmap",
                 "tribojax_s": tj_s,
-                "baseline": "scipy.integrate.quad loop over the same 1,000 amplitudes (split at θ*)",
+                "baseline": "scipy.integrate.quad loop, same 1,000 amplitudes (split at θ*)",
                 "baseline_s": ref_s,
                 "baseline_note": f"median of {len(ref_times)} full SciPy loops",
                 "ratio": ref_s / tj_s,
