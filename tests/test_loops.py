@@ -94,3 +94,20 @@ def test_bad_loop_files_are_refused(tmp_path):
         tj.HysteresisLoop(t, np.sin(2 * np.pi * t), np.zeros(3))
     with pytest.raises(ValueError, match="element must be one of"):
         tj.fit_loop(tj.HysteresisLoop(t, np.sin(2 * np.pi * t), np.zeros_like(t)), "lugre")
+
+
+def test_history_fit_handles_a_drifting_amplitude():
+    """Driven through the measured history, the element fits a non-periodic record."""
+    el = tj.Jenkins(MU, N, KD)
+    t = np.linspace(0, 3.25, 1301) * 2 * np.pi / OMEGA
+    u = 2.5 * A0 * (1 + 0.3 * t / t[-1]) * np.sin(OMEGA * t)  # amplitude grows by 30 %
+    sigma = 0.01 * MUN
+    rng = np.random.default_rng(11)
+    f = np.asarray(tj.drive(el, u)) + sigma * rng.standard_normal(len(t))
+    loop = tj.HysteresisLoop(t, u, f)
+    fit = tj.fit_loop(loop, "jenkins", sigma=sigma, model="history")
+    assert fit.converged
+    z = (fit.values - np.array([MUN, KD])) / fit.std_errors
+    assert np.all(np.abs(z) < 4), z
+    with pytest.raises(ValueError, match="model must be"):
+        tj.fit_loop(loop, "jenkins", model="transient")

@@ -32,8 +32,8 @@ class AbstractHysteresisElement(AbstractFrictionElement):
     """A rate-independent friction element with a closed steady loop under harmonic displacement.
 
     Contract used by `harmonic_balance`: the falling branch reaches −μN at u = A − slip_span()
-    and stays there (gross slip). Concrete elements have the fields `mu` (friction coefficient, > 0), `N` (normal load, N, > 0)
-    and `K_d` (tangential contact stiffness, N/m, > 0).
+    and stays there (gross slip). Concrete elements have the fields `mu` (friction coefficient,
+    > 0), `N` (normal load, N, > 0) and `K_d` (tangential contact stiffness, N/m, > 0).
     """
 
     mu: eqx.AbstractVar[Scalar]

@@ -219,35 +219,66 @@ def _loop_phase(loop: HysteresisLoop, analysis: LoopAnalysis):
 
 
 def fit_loop(
-    loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, window: float = 0.05
+    loop: HysteresisLoop,
+    element: str = "jenkins",
+    *,
+    sigma=None,
+    window: float = 0.05,
+    model: str = "steady",
 ) -> FitResult:
-    """Least-squares fit of μN (N) and K_d (N/m) of a steady Jenkins or Mindlin loop to the data.
+    """Least-squares fit of μN (N) and K_d (N/m) of a Jenkins or Mindlin element to the data.
 
-    The model force at each sample is the element's steady-loop force (wu2015 Eq 1 or 2) at the
-    measured u, on the branch given by the phase of u's first harmonic, with the loop amplitude
-    A = half the peak-to-peak u. Parameters are fitted as logarithms (optimistix
-    Levenberg–Marquardt via `least_squares_fit`), started from `analyse_loop`'s μN and Eq 6 K_d.
+    model="steady": the model force at each sample is the element's steady-loop force (wu2015
+    Eq 1 or 2) at the measured u, on the branch given by the phase of u's first harmonic, with
+    the loop amplitude A = half the peak-to-peak u. Needs a periodic record.
+    model="history": the element is driven through the measured displacement history
+    (`tribojax.drive`, its rate-independent time-domain form) from rest at the first upward
+    mean-crossing of u; samples before the first reversal after it (the virgin loading) are not
+    fitted. Works for any history (drifting or multi-harmonic amplitude); for Mindlin the
+    time-domain form is the Iwan discretisation (error ~1e-5 μN).
+
+    Parameters are fitted as logarithms (optimistix Levenberg–Marquardt via
+    `least_squares_fit`), started from `analyse_loop`'s μN and Eq 6 K_d. Only the product μN is
+    identifiable from a loop; without gross slip (Jenkins Ā ≤ 1) μN is only bounded below.
 
     Args:
         element: "jenkins" or "mindlin".
         sigma: force noise, N (None: estimated from the residuals).
+        model: "steady" or "history".
     Returns:
         FitResult with names ("mu_N", "K_d"); `converged` says whether LM succeeded.
     """
     if element not in _ELEMENTS:
         raise ValueError(f"element must be one of {sorted(_ELEMENTS)}, got {element!r}")
+    if model not in ("steady", "history"):
+        raise ValueError(f"model must be 'steady' or 'history', got {model!r}")
     cls = _ELEMENTS[element]
     start = analyse_loop(loop, window=window)
-    direction = jnp.asarray(_loop_phase(loop, start))
-    u = jnp.asarray(loop.u)
-    f = jnp.asarray(loop.f)
-    A = 0.5 * (float(loop.u.max()) - float(loop.u.min()))
     scale = 1.0 if sigma is None else float(check_range(sigma, "sigma", 0.0, unit="N"))
+    if model == "steady":
+        direction = jnp.asarray(_loop_phase(loop, start))
+        u, f = jnp.asarray(loop.u), jnp.asarray(loop.f)
+        A = 0.5 * (float(loop.u.max()) - float(loop.u.min()))
+
+        def force(el):
+            return el.steady_force(u, A, direction)
+
+    else:
+        from ._hysteresis import drive
+
+        first = int(np.searchsorted(loop.t, _cycle_starts(loop.t, loop.u)[0]))
+        u_rel = loop.u[first:] - 0.5 * (loop.u.max() + loop.u.min())
+        half = int(np.searchsorted(loop.t[first:], loop.t[first] + np.pi / start.omega))
+        skip = int(np.argmax(u_rel[:half]))  # the first reversal (u_max) after the crossing
+        u = jnp.asarray(u_rel)
+        f = jnp.asarray(loop.f[first + skip :])
+
+        def force(el):
+            return drive(el, u)[skip:]
 
     def residuals(theta, args):
-        mu_N, K_d = jnp.exp(theta[0]), jnp.exp(theta[1])
-        el = cls(mu_N, 1.0, K_d)  # only the product μN enters the loop
-        return (el.steady_force(u, A, direction) - f) / scale
+        el = cls(jnp.exp(theta[0]), 1.0, jnp.exp(theta[1]))  # only the product μN enters
+        return (force(el) - f) / scale
 
     theta0 = jnp.log(jnp.array([start.mu_N, start.K_d]))
     return least_squares_fit(
@@ -256,6 +287,7 @@ def fit_loop(
         names=("mu_N", "K_d"),
         transform=jnp.exp,
         sigma_known=sigma is not None,
+        jac="fwd" if model == "history" else "bwd",  # forward mode: 2 parameters, long scan
     )
 
 
