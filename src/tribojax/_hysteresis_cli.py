@@ -32,6 +32,12 @@ def add_arguments(parser) -> None:
     rng.add_argument("--A", type=float, nargs=2, metavar=("MIN_m", "MAX_m"), default=None)
     parser.add_argument("--n", type=int, default=100, help="number of amplitudes (default 100)")
     parser.add_argument("--loop", default=None, help="CSV (t_s, u_m, f_N) to analyse and fit")
+    parser.add_argument(
+        "--fit-model",
+        choices=("steady", "history"),
+        default="steady",
+        help="fit the steady loop (default) or drive the element through the measured history",
+    )
     parser.add_argument("--out", default="tribojax-out/hysteresis", help="output folder")
 
 
@@ -92,12 +98,13 @@ def _fit_loop(args, out: Path, write_json_atomic) -> int:
     try:
         loop = read_loop(args.loop)
         analysis = analyse_loop(loop)
-        fit = fit_loop(loop, args.element)
+        fit = fit_loop(loop, args.element, model=args.fit_model)
     except (DataFileError, ValueError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     result = {"loop": str(args.loop), "analysis": analysis.as_dict(), "fit": fit.as_dict()}
     result["fit"]["element"] = args.element
+    result["fit"]["model"] = args.fit_model
     write_json_atomic(out / "loop_fit.json", result)
     a = analysis
     print(
