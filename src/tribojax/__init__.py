@@ -75,6 +75,7 @@ from ._wu2015 import cbar_peak as cbar_peak
 from ._wu2015 import dimensionless_curves as dimensionless_curves
 from ._wu2015 import eq7_curves as eq7_curves
 from ._wu2015 import fractal_tangential_stiffness as fractal_tangential_stiffness
+from ._wu2015 import plot_wu2015 as plot_wu2015
 from ._wu2015 import wu2015_comparison as wu2015_comparison
 from ._wu2015 import wu2015_eq5_stiffness as wu2015_eq5_stiffness
 from ._wu2015 import wu2015_eq7 as wu2015_eq7
