@@ -288,6 +288,10 @@ def run(quick=False):
         )
     )
 
+    import hysteresis  # benchmarks/hysteresis.py: wu2015 harmonic balance (issue #4)
+
+    results += hysteresis.run(quick)
+
     device = jax.devices()[0]
     env = {
         "device": f"{device.platform}:{getattr(device, 'device_kind', '')}",

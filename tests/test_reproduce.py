@@ -83,3 +83,7 @@ def test_cli_writes_json_and_figure(tmp_path, capsys):
     assert set(cal) >= {"parameters", "std_errors", "correlation", "converged"}
     assert cal["converged"] is True
     assert (out / "table3.png").stat().st_size > 10_000
+    # wu2015 (issue #4): the key the issue specifies, and its figure
+    assert set(data["wu2015"]) == {"eq7_rms", "cbar_peak"}
+    assert data["wu2015"]["cbar_peak"]["mindlin"]["Abar"] == pytest.approx(2.4, abs=1e-9)
+    assert (out / "wu2015.png").stat().st_size > 10_000

@@ -33,6 +33,20 @@ from ._data import wang2022_table as wang2022_table
 from ._fit import FitResult as FitResult
 from ._fit import least_squares_fit as least_squares_fit
 from ._friction import AbstractFrictionElement as AbstractFrictionElement
+from ._hysteresis import HarmonicCoefficients as HarmonicCoefficients
+from ._hysteresis import drive as drive
+from ._hysteresis import harmonic_balance as harmonic_balance
+from ._hysteresis import harmonic_response as harmonic_response
+from ._hysteresis_elements import AbstractHysteresisElement as AbstractHysteresisElement
+from ._hysteresis_elements import Jenkins as Jenkins
+from ._hysteresis_elements import Mindlin as Mindlin
+from ._loops import HysteresisLoop as HysteresisLoop
+from ._loops import LoopAnalysis as LoopAnalysis
+from ._loops import analyse_loop as analyse_loop
+from ._loops import fit_loop as fit_loop
+from ._loops import read_loop as read_loop
+from ._loops import synthetic_loop as synthetic_loop
+from ._loops import write_loop as write_loop
 from ._materials import (
     ContactPair as ContactPair,
 )
@@ -67,6 +81,14 @@ from ._synthesis import wm_profile as wm_profile
 from ._synthesis import yk_heights as yk_heights
 from ._topography import Topography as Topography
 from ._topography import read_topography as read_topography
+from ._wu2015 import cbar_peak as cbar_peak
+from ._wu2015 import dimensionless_curves as dimensionless_curves
+from ._wu2015 import eq7_curves as eq7_curves
+from ._wu2015 import fractal_tangential_stiffness as fractal_tangential_stiffness
+from ._wu2015 import plot_wu2015 as plot_wu2015
+from ._wu2015 import wu2015_comparison as wu2015_comparison
+from ._wu2015 import wu2015_eq5_stiffness as wu2015_eq5_stiffness
+from ._wu2015 import wu2015_eq7 as wu2015_eq7
 
 try:
     __version__ = version("tribojax")

@@ -2,6 +2,7 @@
 
 tribojax reproduce [--out DIR]   wang2022 Table 3 (published inputs and calibrated), JSON + figure
 tribojax contact (--topography FILE | --D D --G G) --load N [...]   surface → D, G → F_s, K_τ, C_τ
+tribojax hysteresis [...]        K̄, C̄ (and K_eq, C_eq) of a Jenkins/Mindlin element, CSV + figure
 """
 
 from __future__ import annotations
@@ -134,6 +135,7 @@ def cmd_reproduce(args) -> int:
     from . import __version__
 
     result["tribojax_version"] = __version__
+    result["wu2015"] = _reproduce_wu2015(out_dir)
     json_path = out_dir / "reproduction.json"
     write_json_atomic(json_path, result)
     fig_path = out_dir / "table3.png"
@@ -233,6 +235,29 @@ def _add_contact_parser(sub) -> None:
     con.set_defaults(func=cmd_contact)
 
 
+def _reproduce_wu2015(out_dir: Path) -> dict:
+    """wu2015: both elements against Eq 7 (RMS over Ā in [0, 4.5]) and the C̄ peaks, + figure."""
+    from ._wu2015 import plot_wu2015, wu2015_comparison
+
+    comparison = wu2015_comparison()
+    for name in ("jenkins", "mindlin"):
+        rms, peak = comparison["eq7_rms"][name], comparison["cbar_peak"][name]
+        print(
+            f"wu2015 {name}: RMS vs Eq 7 K̄ {rms['K']:.3f}, C̄ {rms['C']:.3f}; "
+            f"C̄ peak {peak['Cbar']:.4f} at Ā = {peak['Abar']:.4f}"
+        )
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if plot_wu2015(comparison, out_dir / "wu2015.png"):
+        print(f"wrote {out_dir / 'wu2015.png'}")
+    return {"eq7_rms": comparison["eq7_rms"], "cbar_peak": comparison["cbar_peak"]}
+
+
+def cmd_hysteresis(args) -> int:
+    from ._hysteresis_cli import run_hysteresis
+
+    return run_hysteresis(args)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="tribojax", description="Rough-surface contact and friction models (JAX)."
@@ -242,6 +267,11 @@ def main(argv=None) -> int:
     rep.add_argument("--out", default="tribojax-out", help="output folder (default tribojax-out)")
     rep.set_defaults(func=cmd_reproduce)
     _add_contact_parser(sub)
+    hys = sub.add_parser("hysteresis", help="K̄, C̄ of a Jenkins or Mindlin element (wu2015)")
+    from ._hysteresis_cli import add_arguments
+
+    add_arguments(hys)
+    hys.set_defaults(func=cmd_hysteresis)
     args = parser.parse_args(argv)
     return args.func(args)
 

@@ -1,4 +1,4 @@
-"""The friction-element interface shared by the slip (LuGre) and hysteresis (Jenkins, Mindlin) models.
+"""The friction-element interface shared by slip (LuGre) and hysteresis (Jenkins, Mindlin).
 
 A friction element is the tangential law of one contact: an internal state (a bristle deflection,
 a stuck spring, a reversal point), how that state evolves with the relative velocity of the two

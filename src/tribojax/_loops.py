@@ -1,0 +1,314 @@
+"""Measured hysteresis loops: a validated record, wu2015's loop analysis and a fit of μN and K_d.
+
+A loop record is a time series (t, u, f) of a contact under periodic tangential displacement
+(wu2015 Section 5: displacement from the vibrometer, force from the piezo sensor). From it:
+
+* whole cycles are located from the upward mean-crossings of u, and ω from their spacing;
+* the first harmonics of u and f over those cycles (linear least squares, exact for whole cycles)
+  give A and K_eq = F_c/A, C_eq = −F_s/(Aω) in the phase of u = A cos θ (wu2015 Section 5.3);
+* K_d by wu2015 Eq 6, (k1 + k2)/2, the mean of the initial loading and unloading slopes at the
+  reversal points;
+* a least-squares fit of μN and K_d of a Jenkins or Mindlin steady loop to the force samples.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._checks import check_range
+from ._data import DataFileError, read_table
+from ._fit import FitResult, least_squares_fit
+from ._hysteresis_elements import Jenkins, Mindlin
+
+LOOP_COLUMNS = ("t_s", "u_m", "f_N")
+_ELEMENTS = {"jenkins": Jenkins, "mindlin": Mindlin}
+
+
+@dataclasses.dataclass(frozen=True)
+class HysteresisLoop:
+    """A measured (or synthetic) loop: times t (s, increasing), displacement u (m), force f (N).
+
+    Construction checks lengths, finiteness, increasing time and that at least one whole cycle
+    of u is present (ValueError). `source` names the file it came from, if any.
+    """
+
+    t: np.ndarray
+    u: np.ndarray
+    f: np.ndarray
+    source: str = "<array>"
+
+    def __post_init__(self):
+        arrays = [np.asarray(x, dtype=np.float64) for x in (self.t, self.u, self.f)]
+        for name, x in zip(("t", "u", "f"), arrays):
+            object.__setattr__(self, name, x)
+            if x.ndim != 1:
+                raise ValueError(f"{self.source}: {name} must be 1-D, got shape {x.shape}")
+            bad = np.flatnonzero(~np.isfinite(x))
+            if bad.size:
+                raise ValueError(f"{self.source}: {name}[{bad[0]}] is {x[bad[0]]}")
+        if not (len(self.t) == len(self.u) == len(self.f)):
+            raise ValueError(f"{self.source}: t, u and f must have the same length")
+        steps = np.flatnonzero(np.diff(self.t) <= 0)
+        if steps.size:
+            i = steps[0] + 1
+            raise ValueError(
+                f"{self.source}: time is not increasing at sample {i} (t = {self.t[i]})"
+            )
+        if len(_cycle_starts(self.t, self.u)) < 2:
+            raise ValueError(
+                f"{self.source}: fewer than one whole cycle of u (need two upward crossings of "
+                "its mean); record a longer stretch"
+            )
+
+
+def read_loop(path) -> HysteresisLoop:
+    """Load a loop from a CSV with columns t_s, u_m, f_N (SI units), `#` comment lines allowed.
+
+    Raises DataFileError naming the file (and the line) for NaN/non-numeric entries, time that
+    does not increase, or fewer than one whole cycle.
+    """
+    path = Path(path)
+    table = read_table(path, columns=LOOP_COLUMNS)
+    t = table["t_s"]
+    steps = np.flatnonzero(np.diff(t) <= 0)
+    if steps.size:
+        lineno = _data_line_number(path, steps[0] + 1)
+        raise DataFileError(
+            f"{path}, line {lineno}: time t_s = {t[steps[0] + 1]} does not increase"
+        )
+    try:
+        return HysteresisLoop(t, table["u_m"], table["f_N"], source=str(path))
+    except ValueError as err:
+        raise DataFileError(str(err)) from None
+
+
+def _data_line_number(path: Path, row: int) -> int:
+    """1-based line number of data row `row` (0-based) in a CSV with comments and a header."""
+    seen = -1  # the header is row -1
+    for lineno, raw in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+        text = raw.strip()
+        if not text or text.startswith("#"):
+            continue
+        if seen == row:
+            return lineno
+        seen += 1
+    return -1
+
+
+def write_loop(loop: HysteresisLoop, path, comment: str = "") -> None:
+    """Write a loop as CSV (t_s, u_m, f_N) with optional `#` comment lines."""
+    lines = [f"# {c}" for c in comment.splitlines()] + [",".join(LOOP_COLUMNS)]
+    lines += [f"{a:.17g},{b:.17g},{c:.17g}" for a, b, c in zip(loop.t, loop.u, loop.f)]
+    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def _cycle_starts(t, u) -> np.ndarray:
+    """Times of the upward crossings of u's mean (linear interpolation between samples)."""
+    x = u - 0.5 * (u.max() + u.min())
+    i = np.flatnonzero((x[:-1] <= 0) & (x[1:] > 0))
+    return t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i])
+
+
+@dataclasses.dataclass(frozen=True)
+class LoopAnalysis:
+    """wu2015's quantities of a loop (SI units): see `analyse_loop`."""
+
+    cycles: int
+    omega: float
+    A: float
+    mu_N: float
+    k1: float
+    k2: float
+    K_d: float
+    K_eq: float
+    C_eq: float
+    K_bar: float
+    C_bar: float
+    A_bar: float
+    W: float
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def analyse_loop(loop: HysteresisLoop, *, window: float = 0.05) -> LoopAnalysis:
+    """Amplitude, μN, K_d (wu2015 Eq 6), K_eq and C_eq (first harmonic) of a measured loop.
+
+    Only whole cycles (between the first and last upward mean-crossing of u) are used.
+    - ω = 2π·cycles/duration; A and the phase φ from the first harmonic of u, u ≈ A cos(ωt − φ).
+    - K_eq = F_c/A, C_eq = −F_s/(Aω) from the force's first harmonic F_c cos θ + F_s sin θ,
+      θ = ωt − φ; K̄ = K_eq/K_d, C̄ = πωC_eq/K_d (wu2015 Section 5.3).
+    - k2 (unloading from u_max) and k1 (loading from u_min): slope at the reversal of a quadratic
+      fitted to the samples within `window`·(peak-to-peak u) after it, averaged over cycles;
+      K_d = (k1 + k2)/2 (wu2015 Eq 6). The quadratic removes the first-order bias of a chord on a
+      curved (Mindlin) branch; the window must stay inside the stick zone (Jenkins: Ā < 1/window).
+    - μN = half the mean peak-to-peak force per cycle (exact in gross slip; f* < μN in partial
+      slip, and noise biases it up by about the noise amplitude).
+    - W = ∮ f du over the whole cycles, per cycle (J).
+    """
+    check_range(window, "window", 0.0, 0.5)
+    starts = _cycle_starts(loop.t, loop.u)
+    cycles = len(starts) - 1
+    omega = 2.0 * np.pi * cycles / (starts[-1] - starts[0])
+    keep = (loop.t >= starts[0]) & (loop.t <= starts[-1])
+    t, u, f = loop.t[keep], loop.u[keep], loop.f[keep]
+    basis = np.stack([np.ones_like(t), np.cos(omega * t), np.sin(omega * t)], axis=1)
+    cu = np.linalg.lstsq(basis, u, rcond=None)[0]
+    cf = np.linalg.lstsq(basis, f, rcond=None)[0]
+    A = float(np.hypot(cu[1], cu[2]))
+    phi = np.arctan2(cu[2], cu[1])
+    F_c = cf[1] * np.cos(phi) + cf[2] * np.sin(phi)
+    F_s = -cf[1] * np.sin(phi) + cf[2] * np.cos(phi)
+    edges = np.searchsorted(loop.t, starts)
+    k1, k2, swings = [], [], []
+    span = window * (u.max() - u.min())
+    for a, b in zip(edges[:-1], edges[1:]):
+        uu, ff = loop.u[a:b], loop.f[a:b]
+        swings.append(ff.max() - ff.min())
+        k2.append(_reversal_slope(loop.u, loop.f, a + int(np.argmax(uu)), span))
+        k1.append(_reversal_slope(loop.u, loop.f, a + int(np.argmin(uu)), span))
+    k1, k2 = float(np.mean(k1)), float(np.mean(k2))
+    K_d = 0.5 * (k1 + k2)
+    mu_N = 0.5 * float(np.mean(swings))
+    K_eq = float(F_c / A)
+    C_eq = float(-F_s / (A * omega))
+    W = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(u))) / cycles
+    return LoopAnalysis(
+        cycles=cycles,
+        omega=float(omega),
+        A=A,
+        mu_N=mu_N,
+        k1=k1,
+        k2=k2,
+        K_d=K_d,
+        K_eq=K_eq,
+        C_eq=C_eq,
+        K_bar=K_eq / K_d,
+        C_bar=float(np.pi * omega * C_eq / K_d),
+        A_bar=A * K_d / mu_N,
+        W=W,
+    )
+
+
+def _reversal_slope(u, f, r, span) -> float:
+    """df/du at the reversal sample r, from a quadratic over the following samples within span."""
+    j = r + 1
+    while j < len(u) and abs(u[j] - u[r]) <= span:
+        j += 1
+    du, df = u[r:j] - u[r], f[r:j]
+    if len(du) < 4:
+        raise ValueError(
+            f"only {len(du)} samples within the slope window after the reversal at sample {r}; "
+            "increase `window` or the sampling rate"
+        )
+    return float(np.polyfit(du, df, 2)[1])
+
+
+def _loop_phase(loop: HysteresisLoop, analysis: LoopAnalysis):
+    """Velocity sign of each sample of the steady loop, from the phase of u's first harmonic."""
+    t = loop.t
+    basis = np.stack([np.ones_like(t), np.cos(analysis.omega * t), np.sin(analysis.omega * t)], 1)
+    cu = np.linalg.lstsq(basis, loop.u, rcond=None)[0]
+    theta = np.mod(analysis.omega * t - np.arctan2(cu[2], cu[1]), 2.0 * np.pi)
+    return np.where(theta < np.pi, -1.0, 1.0)
+
+
+def fit_loop(
+    loop: HysteresisLoop,
+    element: str = "jenkins",
+    *,
+    sigma=None,
+    window: float = 0.05,
+    model: str = "steady",
+) -> FitResult:
+    """Least-squares fit of μN (N) and K_d (N/m) of a Jenkins or Mindlin element to the data.
+
+    model="steady": the model force at each sample is the element's steady-loop force (wu2015
+    Eq 1 or 2) at the measured u, on the branch given by the phase of u's first harmonic, with
+    the loop amplitude A = half the peak-to-peak u. Needs a periodic record.
+    model="history": the element is driven through the measured displacement history
+    (`tribojax.drive`, its rate-independent time-domain form) from rest at the first upward
+    mean-crossing of u; samples before the first reversal after it (the virgin loading) are not
+    fitted. Works for any history (drifting or multi-harmonic amplitude); for Mindlin the
+    time-domain form is the Iwan discretisation (error ~1e-5 μN).
+
+    Parameters are fitted as logarithms (optimistix Levenberg–Marquardt via
+    `least_squares_fit`), started from `analyse_loop`'s μN and Eq 6 K_d. Only the product μN is
+    identifiable from a loop; without gross slip (Jenkins Ā ≤ 1) μN is only bounded below.
+
+    Args:
+        element: "jenkins" or "mindlin".
+        sigma: force noise, N (None: estimated from the residuals).
+        model: "steady" or "history".
+    Returns:
+        FitResult with names ("mu_N", "K_d"); `converged` says whether LM succeeded.
+    """
+    if element not in _ELEMENTS:
+        raise ValueError(f"element must be one of {sorted(_ELEMENTS)}, got {element!r}")
+    if model not in ("steady", "history"):
+        raise ValueError(f"model must be 'steady' or 'history', got {model!r}")
+    cls = _ELEMENTS[element]
+    start = analyse_loop(loop, window=window)
+    scale = 1.0 if sigma is None else float(check_range(sigma, "sigma", 0.0, unit="N"))
+    if model == "steady":
+        direction = jnp.asarray(_loop_phase(loop, start))
+        u, f = jnp.asarray(loop.u), jnp.asarray(loop.f)
+        A = 0.5 * (float(loop.u.max()) - float(loop.u.min()))
+
+        def force(el):
+            return el.steady_force(u, A, direction)
+
+    else:
+        from ._hysteresis import drive
+
+        first = int(np.searchsorted(loop.t, _cycle_starts(loop.t, loop.u)[0]))
+        u_rel = loop.u[first:] - 0.5 * (loop.u.max() + loop.u.min())
+        half = int(np.searchsorted(loop.t[first:], loop.t[first] + np.pi / start.omega))
+        skip = int(np.argmax(u_rel[:half]))  # the first reversal (u_max) after the crossing
+        u = jnp.asarray(u_rel)
+        f = jnp.asarray(loop.f[first + skip :])
+
+        def force(el):
+            return drive(el, u)[skip:]
+
+    def residuals(theta, args):
+        el = cls(jnp.exp(theta[0]), 1.0, jnp.exp(theta[1]))  # only the product μN enters
+        return (force(el) - f) / scale
+
+    theta0 = jnp.log(jnp.array([start.mu_N, start.K_d]))
+    return least_squares_fit(
+        jax.jit(residuals),
+        theta0,
+        names=("mu_N", "K_d"),
+        transform=jnp.exp,
+        sigma_known=sigma is not None,
+        jac="fwd" if model == "history" else "bwd",  # forward mode: 2 parameters, long scan
+    )
+
+
+def synthetic_loop(
+    element,
+    A,
+    omega,
+    *,
+    cycles: int = 3,
+    samples_per_cycle: int = 400,
+    noise: float = 0.0,
+    seed: int = 0,
+) -> HysteresisLoop:
+    """A steady loop of `element` under u = A sin ωt, with Gaussian force noise (N) from `seed`.
+
+    The record starts at u = 0 on the rising branch and spans `cycles` + 1/4 periods, so that
+    `analyse_loop` finds `cycles` whole cycles.
+    """
+    n = cycles * samples_per_cycle + samples_per_cycle // 4 + 1
+    t = np.arange(n) / samples_per_cycle * (2.0 * np.pi / omega)
+    theta = omega * t - 0.5 * np.pi  # u = A cos θ = A sin ωt
+    f = np.asarray(jax.vmap(lambda th: element.steady_loop(th, A))(jnp.asarray(theta)))
+    rng = np.random.default_rng(seed)
+    return HysteresisLoop(t, A * np.sin(omega * t), f + noise * rng.standard_normal(n))
