@@ -33,6 +33,15 @@ from ._data import wang2022_table as wang2022_table
 from ._fit import FitResult as FitResult
 from ._fit import least_squares_fit as least_squares_fit
 from ._friction import AbstractFrictionElement as AbstractFrictionElement
+from ._lugre import LuGre as LuGre
+from ._lugre import PreSlipLuGre as PreSlipLuGre
+from ._profiles import AbstractProfile as AbstractProfile
+from ._profiles import MeasuredProfile as MeasuredProfile
+from ._profiles import PiecewiseLinearProfile as PiecewiseLinearProfile
+from ._profiles import TrapezoidProfile as TrapezoidProfile
+from ._slip import SlipSolution as SlipSolution
+from ._slip import simulate_slip as simulate_slip
+from ._slip import slip_phase_averages as slip_phase_averages
 from ._materials import (
     ContactPair as ContactPair,
 )
