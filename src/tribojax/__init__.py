@@ -35,13 +35,6 @@ from ._fit import least_squares_fit as least_squares_fit
 from ._friction import AbstractFrictionElement as AbstractFrictionElement
 from ._lugre import LuGre as LuGre
 from ._lugre import PreSlipLuGre as PreSlipLuGre
-from ._profiles import AbstractProfile as AbstractProfile
-from ._profiles import MeasuredProfile as MeasuredProfile
-from ._profiles import PiecewiseLinearProfile as PiecewiseLinearProfile
-from ._profiles import TrapezoidProfile as TrapezoidProfile
-from ._slip import SlipSolution as SlipSolution
-from ._slip import simulate_slip as simulate_slip
-from ._slip import slip_phase_averages as slip_phase_averages
 from ._materials import (
     ContactPair as ContactPair,
 )
@@ -60,10 +53,17 @@ from ._materials import (
 from ._materials import (
     wang2022_reticle as wang2022_reticle,
 )
+from ._profiles import AbstractProfile as AbstractProfile
+from ._profiles import MeasuredProfile as MeasuredProfile
+from ._profiles import PiecewiseLinearProfile as PiecewiseLinearProfile
+from ._profiles import TrapezoidProfile as TrapezoidProfile
 from ._reproduce import calibrate_table3 as calibrate_table3
 from ._reproduce import equivalent_G as equivalent_G
 from ._reproduce import reproduce_table3 as reproduce_table3
 from ._reproduce import wang2022_table3_model as wang2022_table3_model
+from ._slip import SlipSolution as SlipSolution
+from ._slip import simulate_slip as simulate_slip
+from ._slip import slip_phase_averages as slip_phase_averages
 from ._surface import FractalSurface as FractalSurface
 from ._surface import wang2022_surface as wang2022_surface
 

@@ -75,7 +75,9 @@ def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjo
     y0 = jnp.concatenate([jnp.zeros(2), z0, jnp.zeros(1)])
     # per-component absolute tolerances: slip/deflection atol (m), velocity atol·1e4 (1/s scale),
     # integral atol·0.1 s.
-    atols = jnp.concatenate([jnp.array([atol, atol * 1e4]), jnp.full(z0.shape, atol), jnp.array([atol * 0.1])])
+    atols = jnp.concatenate(
+        [jnp.array([atol, atol * 1e4]), jnp.full(z0.shape, atol), jnp.array([atol * 0.1])]
+    )
     controller = dfx.PIDController(
         rtol=rtol, atol=atols, pcoeff=0.3, icoeff=0.4, jump_ts=profile.kinks()
     )
@@ -97,6 +99,14 @@ def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjo
     z = jax.vmap(unravel)(sol.ys[:, 2:-1])
     friction = jax.vmap(element.force)(z, v)
     return SlipSolution(sol.ts, dx, z, friction, v, integral, sol.result, sol.stats)
+
+
+def _positive(x, name, unit=""):
+    """A solver setting: a positive Python float (never traced)."""
+    x = float(x)
+    if not x > 0:
+        raise ValueError(f"{name} = {x:g} {unit} is outside the allowed range (0, inf)")
+    return x
 
 
 def simulate_slip(
@@ -147,12 +157,16 @@ def simulate_slip(
     """
     profile = TrapezoidProfile() if profile is None else profile
     mass = check_range(mass, "mass", 0.0, unit="kg")
-    t_end = check_range(t_end, "t_end", 0.0, unit="s")
+    t_end, rtol, atol = (
+        _positive(t_end, "t_end", "s"),
+        _positive(rtol, "rtol"),
+        _positive(atol, "atol", "m"),
+    )
+    if rtol >= 1.0:
+        raise ValueError(f"rtol = {rtol:g} is outside the allowed range (0, 1)")
     ts = jnp.linspace(0.0, t_end, 2301) if ts is None else as_f64(ts, "ts")
     ts = fail_if(ts, jnp.any(jnp.diff(ts) < 0), "ts must be non-decreasing")
     ts = fail_if(ts, jnp.any((ts < 0) | (ts > t_end)), "ts must lie within [0, t_end]")
-    rtol = float(check_range(rtol, "rtol", 0.0, 1.0))
-    atol = float(check_range(atol, "atol", 0.0, unit="m"))
     return _solve(element, profile, mass, ts, t_end, rtol, atol, int(max_steps), throw, adjoint,
                   dt0)  # fmt: skip
 
