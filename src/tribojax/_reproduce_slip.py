@@ -144,3 +144,66 @@ def figure10_curves(alpha=1.0, n_points=1151):
 
     slip, z = run(jnp.asarray(alpha, dtype=jnp.float64))
     return np.asarray(ts), np.asarray(slip), np.asarray(z)
+
+
+def print_tables4to7(result: dict, out=None) -> None:
+    """A compact on-screen table of `reproduce_tables4to7`'s output."""
+    import sys
+
+    out = sys.stdout if out is None else out
+    head = (
+        f"{'table':>5} {'kPa':>5} | {'theory':>8} {'measured':>8} | {'a=1':>8} {'err':>6} | "
+        f"{'a=fit':>8} {'err':>6}"
+    )
+    print(head, file=out)
+    print("-" * len(head), file=out)
+    for r in result["tables4to7"]:
+        print(
+            f"{r['table']:5d} {r['vacuum_kPa']:5.1f} | {r['paper_theory_nm']:8.2f} "
+            f"{r['paper_measured_nm']:8.2f} | {r['model_alpha1_nm']:8.2f} "
+            f"{100 * r['alpha1_rel_error_vs_theory']:5.1f}% | {r['model_fitted_alpha_nm']:8.2f} "
+            f"{100 * r['fitted_rel_error_vs_theory']:5.1f}%",
+            file=out,
+        )
+    fit = result["alpha_fit"]
+    print(
+        f"alpha fitted to Tables 4 and 6 (theory): {fit['alpha']:.4f} ± {fit['std_error']:.4f} "
+        f"(converged: {fit['converged']}, {fit['steps']} steps)",
+        file=out,
+    )
+
+
+def plot_figure10(result: dict, path) -> bool:
+    """Figure-10-like PNG: slip and bristle deflection vs time, six vacuum levels (α = 1).
+
+    The measured phase values of Tables 4–7 are overlaid as window means, accumulated from
+    Δx(0) = 0 (T4 gives the acceleration-window mean, T5 the cruise one, and so on).
+    """
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("matplotlib is not installed: figure skipped (pip install 'tribojax[plot]')")
+        return False
+    t, slip, z = figure10_curves(1.0)
+    vac = wang2022_table(3)["vacuum_kPa"]
+    measured = np.stack([wang2022_table(n)["measured_nm"] for n in TABLES], axis=1)
+    windows = [(0.25, 0.6), (0.73, 1.5), (1.65, 2.0), (2.25, 2.3)]
+    fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True, sharex=True)
+    for i, ax in enumerate(axes.flat):
+        ax.plot(t, slip[i], "C0-", label="slip Δx (model, α = 1)")
+        ax.plot(t, z[i], "C1--", label="bristle deflection z")
+        levels = np.cumsum(measured[i])
+        for (a, b), lev in zip(windows, levels):
+            ax.plot([a, b], [lev, lev], "k-", lw=3, alpha=0.6)
+        ax.set_title(f"{vac[i]:g} kPa")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("nm")
+    axes.flat[0].plot([], [], "k-", lw=3, alpha=0.6, label="measured phase means (Tables 4–7)")
+    axes.flat[0].legend(fontsize=7)
+    fig.suptitle("wang2022 Figure 10: reticle slip and contact deformation (Table 3 parameters)")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
