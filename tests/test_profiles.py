@@ -16,7 +16,9 @@ def test_default_trapezoid_is_reproduction_profile():
         np.asarray(p.kinks()), [0.1, 0.25, 0.6, 0.75, 1.5, 1.65, 2.0, 2.15], atol=1e-14
     )
     t = jnp.array([0.0, 0.175, 0.4, 1.0, 1.575, 1.8, 2.3])
-    np.testing.assert_allclose(np.asarray(p.acceleration(t)), [0, 0.5, 1, 0, -0.5, -1, 0], atol=1e-12)
+    np.testing.assert_allclose(
+        np.asarray(p.acceleration(t)), [0, 0.5, 1, 0, -0.5, -1, 0], atol=1e-12
+    )
     assert float(p.v_max) == pytest.approx(0.5, rel=1e-14)
     np.testing.assert_allclose(np.asarray(p.windows()), [[0.25, 0.6], [0.73, 1.5], [1.65, 2.0]])
 
@@ -76,8 +78,7 @@ def test_measured_profile_from_file(tmp_path):
     t = np.linspace(0, 1, 11)
     good = tmp_path / "acc.csv"
     good.write_text(
-        "# accelerometer\ntime_s,acceleration_m_per_s2\n"
-        + "".join(f"{a},{np.sin(a)}\n" for a in t)
+        "# accelerometer\ntime_s,acceleration_m_per_s2\n" + "".join(f"{a},{np.sin(a)}\n" for a in t)
     )
     p = tj.MeasuredProfile.from_file(good)
     assert float(p.acceleration(0.55)) == pytest.approx(np.interp(0.55, t, np.sin(t)), rel=1e-12)
