@@ -94,12 +94,14 @@ def run(quick=False):
         )  # fmt: skip
         goal = 50 if method == "Radau" else 2
         results.append(entry(
-            f"slip_cycle_vs_scipy_{method.lower()}", one_s, f"scipy solve_ivp {method} rtol {rtol:g}",
+            f"slip_cycle_vs_scipy_{method.lower()}", one_s,
+            f"scipy solve_ivp {method} rtol {rtol:g}",
             base_s, f"ratio >= {goal}", base_s / one_s >= goal,
             scipy_max_rel_err=float(np.max(np.abs(ph / ref - 1))), scipy_nfev=nfev))  # fmt: skip
     results.insert(0, entry(
         "slip_one_cycle", one_s, "target 10 ms", 10e-3, "<= 10 ms warm, phases within 1e-6 rel.",
-        one_s <= 10e-3 and err <= 1e-6, compile_s=compile_s, max_rel_err_vs_radau_tight=err))  # fmt: skip
+        one_s <= 10e-3 and err <= 1e-6, compile_s=compile_s,
+        max_rel_err_vs_radau_tight=err))  # fmt: skip
     # six loads vmapped
     els = jax.vmap(lambda f, k, c: tj.PreSlipLuGre(f, k, c))(
         *(jnp.asarray(T3[k]) for k in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m"))

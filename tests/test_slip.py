@@ -14,7 +14,8 @@ ROW = dict(F_s=0.7372, K_tau=2.1478e7, C_tau=708.8274)  # wang2022 Table 3, 2 kP
 @pytest.mark.parametrize("F_s", [3.21, 6.42])
 def test_steady_acceleration_slip_matches_quasistatic_limit(F_s):
     # alpha = 1, a = const: z = m a / K and dz/dx = 1 - z/z_max give
-    # slip = -z_max ln(1 - m a / F_s); m a / F_s = 0.1 and 0.05 here (at 0.321 the ratchet below is 1.4e-3).
+    # slip = -z_max ln(1 - m a / F_s); m a / F_s = 0.1 and 0.05 here (at 0.321 the ratchet
+    # below is 1.4e-3).
     el = tj.PreSlipLuGre(F_s, 2e7, 700.0, 1.0)
     sol = tj.simulate_slip(el, ts=jnp.array([0.5]))
     zmax = F_s / 2e7
