@@ -343,6 +343,9 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="few repeats (smoke test)")
     args = parser.parse_args(argv)
     results, total_s = run(quick=args.quick)
+    import slip as slip_benchmarks  # benchmarks/slip.py (issue 3)
+
+    results += slip_benchmarks.run(quick=args.quick)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(results, indent=2) + "\n")

@@ -87,3 +87,14 @@ def test_cli_writes_json_and_figure(tmp_path, capsys):
     assert set(data["wu2015"]) == {"eq7_rms", "cbar_peak"}
     assert data["wu2015"]["cbar_peak"]["mindlin"]["Abar"] == pytest.approx(2.4, abs=1e-9)
     assert (out / "wu2015.png").stat().st_size > 10_000
+    # issue 3: Tables 4-7 (slip). Acceptance: fitted alpha within 5 % of the paper's theory in
+    # Tables 4 and 6, alpha = 1 within 15 % (REPRODUCTION.md: ~2 % and ~13 % expected).
+    rows = data["tables4to7"]
+    assert len(rows) == 24 and {r["table"] for r in rows} == {4, 5, 6, 7}
+    keys = {"table", "vacuum_kPa", "paper_theory_nm", "paper_measured_nm", "model_alpha1_nm"}
+    assert all(set(r) >= keys | {"model_fitted_alpha_nm"} for r in rows)
+    t46 = [r for r in rows if r["table"] in (4, 6)]
+    assert max(abs(r["model_fitted_alpha_nm"] / r["paper_theory_nm"] - 1) for r in t46) < 0.05
+    assert max(abs(r["model_alpha1_nm"] / r["paper_theory_nm"] - 1) for r in t46) < 0.15
+    assert 1.1 < data["alpha_fit"]["alpha"] < 1.4 and data["alpha_fit"]["std_error"] > 0
+    assert (out / "figure10.png").stat().st_size > 10_000

@@ -47,6 +47,8 @@ from ._loops import fit_loop as fit_loop
 from ._loops import read_loop as read_loop
 from ._loops import synthetic_loop as synthetic_loop
 from ._loops import write_loop as write_loop
+from ._lugre import LuGre as LuGre
+from ._lugre import PreSlipLuGre as PreSlipLuGre
 from ._materials import (
     ContactPair as ContactPair,
 )
@@ -65,6 +67,10 @@ from ._materials import (
 from ._materials import (
     wang2022_reticle as wang2022_reticle,
 )
+from ._profiles import AbstractProfile as AbstractProfile
+from ._profiles import MeasuredProfile as MeasuredProfile
+from ._profiles import PiecewiseLinearProfile as PiecewiseLinearProfile
+from ._profiles import TrapezoidProfile as TrapezoidProfile
 from ._reproduce import calibrate_table3 as calibrate_table3
 from ._reproduce import equivalent_G as equivalent_G
 from ._reproduce import reproduce_table3 as reproduce_table3
@@ -73,6 +79,9 @@ from ._roughness import RoughnessEstimate as RoughnessEstimate
 from ._roughness import estimate_fractal as estimate_fractal
 from ._roughness import psd_model as psd_model
 from ._roughness import structure_function_model as structure_function_model
+from ._slip import SlipSolution as SlipSolution
+from ._slip import simulate_slip as simulate_slip
+from ._slip import slip_phase_averages as slip_phase_averages
 from ._surface import FractalSurface as FractalSurface
 from ._surface import wang2022_surface as wang2022_surface
 from ._synthesis import direction_factor as direction_factor

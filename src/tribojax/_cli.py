@@ -98,6 +98,19 @@ def _plot_table3(rows, path: Path) -> bool:
     return True
 
 
+def _reproduce_slip_tables(result: dict, out_dir: Path) -> None:
+    """wang2022 Tables 4–7 (slip dynamics) into `result`, a table on screen and table4to7.png."""
+    from ._reproduce_slip import plot_figure10, print_tables4to7, reproduce_tables4to7
+
+    print("wang2022 Tables 4-7: slip simulations, alpha fitted to Tables 4 and 6 ...")
+    slip = reproduce_tables4to7()
+    print_tables4to7(slip)
+    result.update(slip)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if plot_figure10(slip, out_dir / "figure10.png"):
+        print(f"wrote {out_dir / 'figure10.png'}")
+
+
 def cmd_reproduce(args) -> int:
     from ._reproduce import calibrate_table3, max_rel_error, reproduce_table3
 
@@ -132,6 +145,7 @@ def cmd_reproduce(args) -> int:
     }
     if not cal["converged"]:
         print(f"WARNING: the calibration did not converge: {cal['message']}", file=sys.stderr)
+    _reproduce_slip_tables(result, out_dir)
     from . import __version__
 
     result["tribojax_version"] = __version__

@@ -1,0 +1,199 @@
+"""The two-body reticle slip model (wang2022 Eq 27, consistent reading) solved with diffrax.
+
+The stage motion is prescribed by its acceleration a(t); the reticle (mass m) is driven only by
+the friction force F_f of a friction element. With the slip Δx = x_stage − x_reticle and the
+relative velocity v = dΔx/dt:
+
+    dΔx/dt = v,   dv/dt = a(t) − F_f(z, v)/m,   dz/dt = element.state_rate(z, v)
+
+plus I = ∫Δx dt, carried as a fourth state so that window averages of the slip are exact
+differences of I at the window ends (no averaging of a sampled curve).
+"""
+
+from __future__ import annotations
+
+import diffrax as dfx
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import optimistix as optx
+from jax.flatten_util import ravel_pytree
+from jaxtyping import Array
+
+from ._checks import as_f64, check_range, fail_if
+from ._friction import AbstractFrictionElement
+from ._profiles import AbstractProfile, TrapezoidProfile
+
+DEFAULT_T_END = 2.3  # s, wang2022's cycle ends at rest at 2.3 s (Table 7)
+
+
+class SlipSolution(eqx.Module):
+    """A slip simulation sampled at `ts` (SI units).
+
+    ts (s), slip Δx (m), z (bristle deflection, m; the element state), friction F_f (N), velocity
+    v = dΔx/dt (m/s), slip_integral ∫₀ᵗ Δx dt (m s), result (diffrax RESULTS code), stats.
+    """
+
+    ts: Array
+    slip: Array
+    z: Array
+    friction: Array
+    velocity: Array
+    slip_integral: Array
+    result: dfx.RESULTS
+    stats: dict
+
+    @property
+    def ok(self) -> Array:
+        return self.result == dfx.RESULTS.successful
+
+    @property
+    def message(self) -> str:
+        """The solver's message ("" on success); concrete solutions only."""
+        return "" if bool(self.ok) else str(dfx.RESULTS[self.result])
+
+
+def _vector_field(t, y, args):
+    # y = [Δx, v, element state (flattened), ∫Δx dt]: one flat array, so that per-component
+    # tolerances reach the Newton iteration too.
+    element, profile, mass, unravel = args
+    dx, v, z = y[0], y[1], unravel(y[2:-1])
+    force = element.force(z, v)
+    zdot, _ = ravel_pytree(element.state_rate(z, v))
+    acc = profile.acceleration(t) - force / mass
+    return jnp.concatenate([jnp.stack([v, acc]), zdot, dx[None]])
+
+
+def _solver():
+    # Kvaerno5 (L-stable ESDIRK) with a full Newton iteration instead of the default chord one.
+    return dfx.Kvaerno5(root_finder=dfx.with_stepsize_controller_tols(optx.Newton)())
+
+
+@eqx.filter_jit
+def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjoint, dt0):
+    z0, unravel = ravel_pytree(element.initial_state())
+    y0 = jnp.concatenate([jnp.zeros(2), z0, jnp.zeros(1)])
+    # per-component absolute tolerances: slip/deflection atol (m), velocity atol·1e4 (1/s scale),
+    # integral atol·0.1 s.
+    atols = jnp.concatenate(
+        [jnp.array([atol, atol * 1e4]), jnp.full(z0.shape, atol), jnp.array([atol * 0.1])]
+    )
+    controller = dfx.PIDController(
+        rtol=rtol, atol=atols, pcoeff=0.3, icoeff=0.4, jump_ts=profile.kinks()
+    )
+    sol = dfx.diffeqsolve(
+        dfx.ODETerm(_vector_field),
+        _solver(),
+        0.0,
+        t_end,
+        dt0,
+        y0,
+        args=(element, profile, mass, unravel),
+        saveat=dfx.SaveAt(ts=ts),
+        stepsize_controller=controller,
+        max_steps=max_steps,
+        throw=throw,
+        adjoint=adjoint,
+    )
+    dx, v, integral = sol.ys[:, 0], sol.ys[:, 1], sol.ys[:, -1]
+    z = jax.vmap(unravel)(sol.ys[:, 2:-1])
+    friction = jax.vmap(element.force)(z, v)
+    return SlipSolution(sol.ts, dx, z, friction, v, integral, sol.result, sol.stats)
+
+
+def _positive(x, name, unit=""):
+    """A solver setting: a positive Python float (never traced)."""
+    x = float(x)
+    if not x > 0:
+        raise ValueError(f"{name} = {x:g} {unit} is outside the allowed range (0, inf)")
+    return x
+
+
+def simulate_slip(
+    element: AbstractFrictionElement,
+    profile: AbstractProfile | None = None,
+    mass=0.321,
+    *,
+    ts=None,
+    t_end=DEFAULT_T_END,
+    rtol=1e-6,
+    atol=1e-16,
+    max_steps=20_000,
+    dt0=1e-5,
+    throw=True,
+    adjoint=dfx.RecursiveCheckpointAdjoint(),
+) -> SlipSolution:
+    """Slip of a body carried by friction on a stage with prescribed acceleration (wang2022 Eq 27).
+
+    Solves Δx'' = a(t) − F_f/m, with F_f and the bristle law from `element` (LuGre, Eq 25, or
+    PreSlipLuGre, Eq 27), from rest (Δx = v = z = 0) to `t_end`. Eq 27 as printed carries a spurious
+    factor t and two masses; this is the consistent reading of REPRODUCTION.md (stage prescribed,
+    reticle driven by friction alone, Δx = x_stage − x_reticle).
+
+    Numerics. The problem is stiff (√(K_τ/m) ≈ 7e3–2e4 rad/s, C_τ/K_τ ≈ 50 µs, horizon 2.3 s) and
+    tiny (slips of nm): Kvaerno5 (L-stable, order 5) with a PID controller, per-component absolute
+    tolerances (`atol` in m for Δx and z), and steps stopped at the profile's kinks (`jump_ts`).
+    The sgn(v) kink of the bristle law at v = 0 is crossed every half-period of the transients
+    and sits under the equilibria of the hold phases; with the exact sign and diffrax's default
+    chord iteration, Kvaerno5 rejects ~99 % of its steps there and never finishes. Two changes make
+    it robust: the elements' smooth sign v/√(v² + ε²), ε = 1e-12 m/s (C¹ right-hand side; the
+    change in the slip is far below the tolerance), and a full Newton iteration (Jacobian
+    re-evaluated every iteration, cheap for 4 states) in place of the chord one, which roughly
+    halves the rejected steps. Measured at 0.6 and 20 kPa: ~650–1000 accepted steps per cycle,
+    phase averages within ~1e-6 relative of SciPy Radau at rtol 1e-11 (exact sign).
+
+    Args:
+        element: a friction element (its parameters may be traced; batch with jax.vmap).
+        profile: stage acceleration; default `TrapezoidProfile()` (wang2022's cycle).
+        mass: mass of the driven body, kg (> 0); 0.321 kg is wang2022's reticle.
+        ts: save times (s, increasing, within [0, t_end]); default 2301 points over [0, t_end].
+        t_end: end time, s (> 0).
+        rtol, atol: relative tolerance; absolute tolerance of the slip and deflection, m.
+        max_steps: step budget; raise it if the result says it was reached.
+        throw: raise on solver failure (else inspect `result` / `message`).
+        adjoint: diffrax adjoint; `diffrax.ForwardMode()` for forward-mode derivatives.
+    Returns:
+        SlipSolution.
+    """
+    profile = TrapezoidProfile() if profile is None else profile
+    mass = check_range(mass, "mass", 0.0, unit="kg")
+    t_end, rtol, atol = (
+        _positive(t_end, "t_end", "s"),
+        _positive(rtol, "rtol"),
+        _positive(atol, "atol", "m"),
+    )
+    if rtol >= 1.0:
+        raise ValueError(f"rtol = {rtol:g} is outside the allowed range (0, 1)")
+    ts = jnp.linspace(0.0, t_end, 2301) if ts is None else as_f64(ts, "ts")
+    ts = fail_if(ts, jnp.any(jnp.diff(ts) < 0), "ts must be non-decreasing")
+    ts = fail_if(ts, jnp.any((ts < 0) | (ts > t_end)), "ts must lie within [0, t_end]")
+    return _solve(element, profile, mass, ts, t_end, rtol, atol, int(max_steps), throw, adjoint,
+                  dt0)  # fmt: skip
+
+
+def slip_phase_averages(
+    element: AbstractFrictionElement,
+    profile: TrapezoidProfile | None = None,
+    mass=0.321,
+    *,
+    t_end=DEFAULT_T_END,
+    throw=True,
+    **kw,
+) -> Array:
+    """wang2022's four phase slips (m), Tables 4–7, as REPRODUCTION.md defines them.
+
+    With ⟨Δx⟩_w the mean slip over a window (exact, from ∫Δx dt at the window ends):
+        T4 = ⟨Δx⟩[0.25,0.6] − Δx(0)         T5 = ⟨Δx⟩[0.73,1.5] − ⟨Δx⟩[0.25,0.6]
+        T6 = ⟨Δx⟩[1.65,2.0] − ⟨Δx⟩[0.73,1.5]   T7 = Δx(2.3) − ⟨Δx⟩[1.65,2.0]
+    (windows from `profile.windows()`, end at `t_end`). Returns [T4, T5, T6, T7] in m.
+    Other keywords go to `simulate_slip`.
+    """
+    profile = TrapezoidProfile() if profile is None else profile
+    w = profile.windows()
+    ts = jnp.concatenate([jnp.zeros(1), w.ravel(), jnp.full(1, t_end)])
+    sol = simulate_slip(element, profile, mass, ts=ts, t_end=t_end, throw=throw, **kw)
+    integral = sol.slip_integral[1:7].reshape(3, 2)
+    means = (integral[:, 1] - integral[:, 0]) / (w[:, 1] - w[:, 0])
+    return jnp.stack(
+        [means[0] - sol.slip[0], means[1] - means[0], means[2] - means[1], sol.slip[7] - means[2]]
+    )

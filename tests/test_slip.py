@@ -1,0 +1,112 @@
+"""The reticle slip simulation (wang2022 Eq 27): limits, gradients, invariance and bad input."""
+
+import diffrax as dfx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import tribojax as tj
+
+ROW = dict(F_s=0.7372, K_tau=2.1478e7, C_tau=708.8274)  # wang2022 Table 3, 2 kPa
+
+
+@pytest.mark.parametrize("F_s", [3.21, 6.42])
+def test_steady_acceleration_slip_matches_quasistatic_limit(F_s):
+    # alpha = 1, a = const: z = m a / K and dz/dx = 1 - z/z_max give
+    # slip = -z_max ln(1 - m a / F_s); m a / F_s = 0.1 and 0.05 here (at 0.321 the ratchet
+    # below is 1.4e-3).
+    el = tj.PreSlipLuGre(F_s, 2e7, 700.0, 1.0)
+    sol = tj.simulate_slip(el, ts=jnp.array([0.5]))
+    zmax = F_s / 2e7
+    expected = -zmax * np.log(1 - 0.321 / F_s)
+    # the ring-down after the ramp's end ratchets the slip by ~1e-4 of it (hysteresis);
+    # 5e-4 bounds that, the quasi-static formula ignores it.
+    assert float(sol.slip[0]) == pytest.approx(expected, rel=5e-4)
+    assert float(sol.z[0]) == pytest.approx(0.321 / 2e7, rel=1e-6)  # force balance K z = m a
+    assert float(sol.friction[0]) == pytest.approx(0.321, rel=1e-6)
+
+
+def test_symmetric_cycle_and_load_ordering():
+    p = jax.vmap(lambda f, k, c: tj.slip_phase_averages(tj.PreSlipLuGre(f, k, c)))(
+        *(jnp.asarray(tj.wang2022_table(3)[k]) for k in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m"))
+    )
+    p = np.asarray(p)
+    # a -> -a symmetry of the model: T4 ~ -T6 and T5 ~ -T7 (to ~1 %, the first half-cycle
+    # starts from z = 0, the second from the z left after the first)
+    np.testing.assert_allclose(p[:, 0], -p[:, 2], rtol=0.02)
+    np.testing.assert_allclose(p[:, 1], -p[:, 3], rtol=0.02)
+    assert np.all(np.diff(p[:, 0]) < 0)  # slip falls with the vacuum level (Table 4's trend)
+
+
+def test_gradients_of_phase_averages_match_finite_differences():
+    def phases(theta):
+        el = tj.PreSlipLuGre(theta[0], theta[1], theta[2], theta[3])
+        return tj.slip_phase_averages(el, rtol=1e-8, atol=1e-18) * 1e9
+
+    theta = jnp.array([ROW["F_s"], ROW["K_tau"], ROW["C_tau"], 1.2])
+    J = np.asarray(jax.jit(jax.jacrev(phases))(theta))
+    f = jax.jit(phases)
+    for i in range(4):
+        h = 1e-4 * float(theta[i])
+        e = jnp.zeros(4).at[i].set(h)
+        fd = (np.asarray(f(theta + e)) - np.asarray(f(theta - e))) / (2 * h)
+        scale = np.abs(np.asarray(f(theta))) / float(theta[i])  # |T| / |theta|
+        # elasticities d ln T / d ln theta are O(0.1-1); FD truncation (h^2) and the solver
+        # tolerance (rtol 1e-8 over a 1e-4 step) allow ~1e-3 of the scale
+        np.testing.assert_allclose(J[:, i], fd, atol=2e-3 * scale.max())
+    assert np.all(np.isfinite(J))
+
+
+def test_jit_and_vmap_invariance():
+    els = jax.vmap(lambda f: tj.PreSlipLuGre(f, ROW["K_tau"], ROW["C_tau"]))(jnp.array([0.6, 0.9]))
+    batched = np.asarray(jax.vmap(lambda e: tj.slip_phase_averages(e))(els))
+    loop = [np.asarray(tj.slip_phase_averages(tj.PreSlipLuGre(f, ROW["K_tau"], ROW["C_tau"])))
+            for f in (0.6, 0.9)]  # fmt: skip
+    # vmapped adaptive stepping takes the union of the steps: agreement to the tolerance
+    np.testing.assert_allclose(batched, np.stack(loop), rtol=1e-5)
+    el = tj.PreSlipLuGre(**ROW)
+    jitted = jax.jit(lambda e: tj.slip_phase_averages(e))(el)
+    # an outer jit changes XLA's fusion and rounding; the adaptive steps then differ, so the
+    # results agree to the solver tolerance (measured 2e-6), not to rounding
+    np.testing.assert_allclose(
+        np.asarray(jitted), np.asarray(tj.slip_phase_averages(el)), rtol=1e-5
+    )
+
+
+def test_forward_mode_with_forward_adjoint():
+    def t4(alpha):
+        el = tj.PreSlipLuGre(ROW["F_s"], ROW["K_tau"], ROW["C_tau"], alpha)
+        return tj.slip_phase_averages(el, adjoint=dfx.ForwardMode())[0]
+
+    d_fwd = float(jax.jacfwd(t4)(1.2))
+    d_rev = float(
+        jax.grad(lambda a: tj.slip_phase_averages(tj.PreSlipLuGre(**ROW, alpha=a))[0])(1.2)
+    )
+    assert d_fwd == pytest.approx(d_rev, rel=1e-4)
+    assert d_fwd > 0  # a larger alpha softens the bristle law: more slip
+
+
+def test_bad_input():
+    el = tj.PreSlipLuGre(**ROW)
+    with pytest.raises(ValueError, match="mass"):
+        tj.simulate_slip(el, mass=0.0)
+    with pytest.raises(ValueError, match="mass"):
+        tj.simulate_slip(el, mass=-1.0)
+    with pytest.raises(ValueError, match="ts must be non-decreasing"):
+        tj.simulate_slip(el, ts=jnp.array([0.0, 1.0, 0.5]))
+    with pytest.raises(ValueError, match="NaN"):
+        tj.simulate_slip(el, tj.PiecewiseLinearProfile([0.0, 1.0], [0.0, float("nan")]))
+    with pytest.raises(ValueError, match="alpha"):
+        tj.PreSlipLuGre(**ROW, alpha=0.0)
+    with pytest.raises(ValueError, match="rtol"):
+        tj.simulate_slip(el, rtol=0.0)
+
+
+def test_solver_failure_is_reported():
+    el = tj.PreSlipLuGre(**ROW)
+    with pytest.raises(Exception, match="max_steps"):
+        tj.simulate_slip(el, max_steps=20)
+    sol = tj.simulate_slip(el, max_steps=20, throw=False)
+    assert not bool(sol.ok)
+    assert "max_steps" in sol.message
