@@ -29,7 +29,7 @@ def exact_first_harmonic(A, omega=OMEGA, K=K_TAU, C=C_TAU, z_max=Z_MAX):
         return K * z + C * v * (1.0 + z / z_max)
 
     # odd symmetry F(θ + π) = −F(θ): full-cycle integrals are twice the half-cycle ones
-    tol = dict(epsabs=1e-13 * (K + C * omega) * A, epsrel=1e-12, limit=200)
+    tol = dict(epsabs=1e-13 * (K + C * omega) * A, epsrel=1e-10, limit=200)
     f_c = 2 / np.pi * quad(lambda t: force(t) * np.cos(t), 0, np.pi, **tol)[0]
     f_s = 2 / np.pi * quad(lambda t: force(t) * np.sin(t), 0, np.pi, **tol)[0]
     return f_c / A, -f_s / (A * omega)  # K_eq, C_eq
