@@ -30,6 +30,20 @@ def test_psd_recovers_D_and_G(D, kind):
     assert abs(e.D - D) < 4 * e.D_std + 0.01  # the stated uncertainty is not far too small
 
 
+@pytest.mark.parametrize("G", [1e-11, 1e-7])
+@pytest.mark.parametrize("D", [2.2, 2.8])
+def test_psd_recovery_holds_across_G_and_seeds(D, G):
+    # G only scales the heights (by G^(D-2)): the same tolerances must hold four decades apart
+    # and for another seed (map: random phases differ per ridge and row).
+    for topo in (
+        tj.synthesize(jax.random.key(7), D, G, L=L, n_points=4096),
+        tj.synthesize(jax.random.key(8), D, G, L=L, n_points=1024, ny=32),
+    ):
+        e = tj.estimate_fractal(topo, "psd")
+        assert abs(e.D - D) < 0.05
+        assert abs(np.log10(e.G / G)) < 0.3
+
+
 @pytest.mark.parametrize("kind", ["profile", "map"])
 @pytest.mark.parametrize("D", [2.2, 2.5])
 def test_structure_function_recovers_D_and_G(D, kind):
