@@ -21,6 +21,7 @@ import numpy as np
 from scipy import integrate
 
 import tribojax as tj
+from timing import median_time
 
 MU, N, KD = 0.3, 2.94, 1.2e6
 N_AMPLITUDES = 1000
@@ -48,16 +49,6 @@ def _mindlin_branch(t, Ab):
     return max(phi(Ab) - 2 * phi(0.5 * Ab * (1 - math.cos(t))), -1.0)
 
 
-def _median(fn, repeats):
-    jax.block_until_ready(fn())
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn())
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
-
-
 def run(quick: bool = False) -> list[dict]:
     """Benchmark entries in the benchmarks/run.py schema."""
     A_bar = np.linspace(0.05, 10.0, N_AMPLITUDES)
@@ -73,7 +64,7 @@ def run(quick: bool = False) -> list[dict]:
         t0 = time.perf_counter()
         jax.block_until_ready(batch(el, A))
         compile_s = time.perf_counter() - t0
-        tj_s = _median(lambda: batch(el, A), 20 if quick else 200)
+        tj_s = median_time(lambda: batch(el, A), 20 if quick else 200)
         out = batch(el, A)
         ref_times = []
         for _ in range(1 if quick else 3):

@@ -17,7 +17,6 @@ import argparse
 import json
 import os
 import platform
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -32,6 +31,7 @@ import tribojax as tj
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import scipy_reference as ref  # noqa: E402
+from timing import median_time  # noqa: E402
 
 D, G, M, GAMMA = 2.8821, 7e-8, 2.0, 1.5
 SIGMA_S = 1.9e9
@@ -64,21 +64,6 @@ def reference_kwargs(model):
         tangential_load=TANGENTIAL_LOAD,
         mass=MASS,
     )
-
-
-def median_time(fn, repeats, *, block=True):
-    """Median wall time of `fn()` over `repeats` calls (after one untimed call)."""
-    out = fn()
-    if block:
-        jax.block_until_ready(out)
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        if block:
-            jax.block_until_ready(out)
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def compile_time(fn):
@@ -319,9 +304,10 @@ def fmt_s(s):
 def print_table(results, total_s):
     print(f"{'name':34s} {'tribojax':>11s} {'baseline':>11s} {'ratio':>9s}  target met")
     for r in results:
+        met = {None: "-", True: "yes", False: "NO"}[r["meets_target"]]  # None: no target set
         print(
             f"{r['name']:34s} {fmt_s(r['tribojax_s']):>11s} {fmt_s(r['baseline_s']):>11s} "
-            f"{r['ratio']:9.3g}  {'yes' if r['meets_target'] else 'NO'}   ({r['baseline']})"
+            f"{r['ratio']:9.3g}  {met}   ({r['baseline']})"
         )
     for r in results:
         if "baseline_note" in r:

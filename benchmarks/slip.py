@@ -17,6 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import tribojax as tj
+from timing import median_time
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from test_slip_scipy import KINKS, LEVELS, MASS  # noqa: E402
@@ -53,16 +54,6 @@ def scipy_phases(F_s, K, C, method, rtol):
     integral = {t: v[3] for t, v in out.items()}
     m = [(integral[b] - integral[a]) / (b - a) for a, b in [(0.25, 0.6), (0.73, 1.5), (1.65, 2.0)]]
     return np.array([m[0] - x[0.0], m[1] - m[0], m[2] - m[1], x[2.3] - m[2]]), nfev
-
-
-def median_time(fn, n):
-    jax.block_until_ready(fn())
-    ts = []
-    for _ in range(n):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn())
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts)
 
 
 def entry(name, s, baseline, base_s, target, met, **extra):

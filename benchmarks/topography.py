@@ -1,22 +1,11 @@
 """Benchmarks for surface characterisation: YK synthesis (jitted JAX vs a NumPy loop over modes)
 and the PSD estimate (tribojax vs scipy.signal.welch + numpy.polyfit on a fixed band)."""
 
-import time
-
 import jax
 import numpy as np
 
 import tribojax as tj
-
-
-def _median(fn, n=5):
-    fn()
-    ts = []
-    for _ in range(n):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn())
-        ts.append(time.perf_counter() - t0)
-    return float(np.median(ts))
+from timing import median_time
 
 
 def run() -> list[dict]:
@@ -27,7 +16,7 @@ def run() -> list[dict]:
     key = jax.random.key(0)
     n_max = 19
     f = jax.jit(lambda D: tj.yk_heights(key, D, G, x, L=L, n_max=n_max))
-    t_jax = _median(lambda: f(D))
+    t_jax = median_time(lambda: f(D), 5)
     phi = np.asarray(jax.random.uniform(key, (1, n_max + 1), maxval=2 * np.pi))[0]
 
     def numpy_loop():
@@ -37,9 +26,9 @@ def run() -> list[dict]:
             z += 1.5 ** ((D - 3) * n) * (np.cos(phi[n]) - np.cos(-k * x + phi[n]))
         return L * (G / L) ** (D - 2) * np.sqrt(np.log(1.5)) * z
 
-    t_np = _median(numpy_loop)
+    t_np = median_time(numpy_loop, 5)
     topo = tj.synthesize(key, D, G, L=L, n_points=N)
-    t_est = _median(lambda: tj.estimate_fractal(topo, "psd").D)
+    t_est = median_time(lambda: tj.estimate_fractal(topo, "psd").D, 5)
     z = np.asarray(topo.heights)
 
     def welch_fit():
@@ -47,7 +36,7 @@ def run() -> list[dict]:
         sel = (fw > 4 / L) & (fw < N / (8 * L))
         return np.polyfit(np.log10(fw[sel]), np.log10(p[sel]), 1)
 
-    t_welch = _median(welch_fit)
+    t_welch = median_time(welch_fit, 5)
     return [
         dict(
             name="yk_heights profile 4096x20 modes",

@@ -21,9 +21,7 @@ cycle (median), accepted/rejected steps; then the six loads vmapped.
 Run: python benchmarks/experiments/rosenbrock_slip.py [--quick] [--check | --grad] [variants...]
 """
 
-import statistics
 import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import ClassVar
@@ -192,20 +190,12 @@ def Rodas4() -> Rosenbrock:
 
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from test_slip_scipy import reference  # noqa: E402
+from timing import median_time  # noqa: E402
 
 T3 = tj.wang2022_table(3)
 CACHE = Path("/tmp/rosenbrock_slip_ref.npz")
-
-
-def median_time(fn, n):
-    jax.block_until_ready(fn())
-    ts = []
-    for _ in range(n):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn())
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts)
 
 
 def params(row):
