@@ -27,7 +27,6 @@ import dataclasses
 import diffrax as dfx
 import equinox as eqx
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from ._checks import check_range, fail_if
