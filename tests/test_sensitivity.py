@@ -215,3 +215,25 @@ def test_sweep_sharded_over_two_cpu_devices_equals_unsharded():
     # bit differently (measured max 2e-14)
     assert res["max_rel"] < 1e-12
     assert res["odd_len"] == 7 and res["odd_err"] < 1e-15  # padded to 8, cut back to 7
+
+
+def test_sensitivity_study_short_form(tmp_path, capsys):
+    from fitting import sensitivity
+
+    assert sensitivity.main(["--short", "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "sensitivity.json").read_text())
+    (row,) = result["elasticities"]
+    assert row["vacuum_kPa"] == 4.0
+    slip = row["slip"]["elasticity"]
+    # Table 4's trend: more load, less slip; more stage acceleration, more slip
+    assert slip["T4"]["load"] < 0 < slip["T4"]["a_max"]
+    sweep = result["sweep"]
+    assert sweep["members"] == 10_000 and sweep["sharded_over"] == len(jax.devices())
+    assert sweep["max_rel_diff_sharded_vs_one_device"] < 1e-12
+    assert sweep["ranges"]["F_s"][0] > 0 and sweep["ranges"]["C_bar"][1] < 1.0
+    assert "| T4 |" in (tmp_path / "elasticities.md").read_text()
+    # never over earlier output
+    before = (tmp_path / "sensitivity.json").read_bytes()
+    assert sensitivity.main(["--short", "--out", str(tmp_path)]) == 2
+    assert "refusing to overwrite" in capsys.readouterr().err
+    assert (tmp_path / "sensitivity.json").read_bytes() == before
