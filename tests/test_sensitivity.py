@@ -237,3 +237,11 @@ def test_sensitivity_study_short_form(tmp_path, capsys):
     assert sensitivity.main(["--short", "--out", str(tmp_path)]) == 2
     assert "refusing to overwrite" in capsys.readouterr().err
     assert (tmp_path / "sensitivity.json").read_bytes() == before
+
+
+def test_range_checks_of_constants_inside_jit():
+    # A model's array fields closed over inside jax.jit are constants, but comparisons of them
+    # are traced: check_range used to call np.asarray on that traced result and fail.
+    s = tj.FractalSurface(D=2.5, G=1e-9, M=1.0)
+    d = jax.jit(lambda d: tj.FractalSurface(D=d, G=s.G, M=s.M).D)(jnp.asarray(2.6))
+    assert float(d) == 2.6
