@@ -50,7 +50,7 @@ def check_range(x, name: str, lo=None, hi=None, *, lo_open=True, hi_open=True, u
         bad = bad | ((x <= lo) if lo_open else (x < lo))
     if hi is not None:
         bad = bad | ((x >= hi) if hi_open else (x > hi))
-    if _is_concrete(x):
+    if _is_concrete(x, bad):  # under a jit trace, ops on a constant x give a traced `bad`
         bad_np = np.asarray(bad)
         if bad_np.any():
             value = np.asarray(x)[bad_np].ravel()[0]
