@@ -12,19 +12,25 @@ differences of I at the window ends (no averaging of a sampled curve).
 
 from __future__ import annotations
 
+import functools
+
 import diffrax as dfx
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optimistix as optx
+from jax.custom_derivatives import SymbolicZero
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array
 
 from ._checks import as_f64, check_range, fail_if
 from ._friction import AbstractFrictionElement
 from ._profiles import AbstractProfile, TrapezoidProfile
+from ._rosenbrock import Rodas4
 
 DEFAULT_T_END = 2.3  # s, wang2022's cycle ends at rest at 2.3 s (Table 7)
+DEFAULT_ATOL = 3e-16  # m, Rodas4's default absolute tolerance of slip and deflection
 
 
 class SlipSolution(eqx.Module):
@@ -64,16 +70,18 @@ def _vector_field(t, y, args):
     return jnp.concatenate([jnp.stack([v, acc]), zdot, dx[None]])
 
 
-def _default_solver() -> dfx.AbstractSolver:
+def kvaerno5_chord() -> dfx.AbstractSolver:
     """Kvaerno5 (L-stable ESDIRK, order 5) with a chord iteration whose Jacobian (4×4, forward
-    mode) is re-evaluated at every stage: optimistix's `Chord`, not diffrax's `VeryChord`."""
+    mode) is re-evaluated at every stage: optimistix's `Chord`, not diffrax's `VeryChord`.
+    `simulate_slip`'s solver before Rodas4; pass it as `solver=` (with `atol=1e-16`)."""
     return dfx.Kvaerno5(root_finder=dfx.with_stepsize_controller_tols(optx.Chord)())
 
 
-@eqx.filter_jit
-def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjoint, dt0, solver):
-    z0, unravel = ravel_pytree(element.initial_state())
-    y0 = jnp.concatenate([jnp.zeros(2), z0, jnp.zeros(1)])
+def _diffeqsolve(element, profile, mass, ts, unravel, t_end, rtol, atol, max_steps, throw,
+                 adjoint, dt0, solver):
+    """ys (len(ts), n_state), result, stats of one solve."""
+    z0, _ = ravel_pytree(element.initial_state())
+    y0 = jnp.concatenate([jnp.zeros(2, z0.dtype), jnp.zeros_like(z0), jnp.zeros(1, z0.dtype)])
     # per-component absolute tolerances: slip/deflection atol (m), velocity atol·1e3 (1/s),
     # integral atol·0.1 s. The velocity's sets the accuracy (see simulate_slip): 1e4 gave 1e-5.
     atols = jnp.concatenate(
@@ -85,7 +93,7 @@ def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjo
     )
     sol = dfx.diffeqsolve(
         dfx.ODETerm(_vector_field),
-        _default_solver() if solver is None else solver,
+        solver,
         0.0,
         t_end,
         dt0,
@@ -97,10 +105,86 @@ def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjo
         throw=throw,
         adjoint=adjoint,
     )
-    dx, v, integral = sol.ys[:, 0], sol.ys[:, 1], sol.ys[:, -1]
-    z = jax.vmap(unravel)(sol.ys[:, 2:-1])
+    return sol.ys, (sol.result, jax.tree.map(jnp.asarray, sol.stats))
+
+
+def _forward_mode_solve(solve, unravel, dyn, static, adjoint):
+    """`solve(element, profile, mass, ts)` with derivatives from forward mode in every direction.
+
+    A `jax.custom_jvp` whose rule builds the Jacobian of ys w.r.t. the differentiated float
+    leaves of (element, profile, mass) by `jax.jacfwd` through diffrax's `ForwardMode`, and
+    applies it (or, under `jax.grad`/`jacrev`, its transpose) to the tangent; ts enters through
+    dys/dts = f(ts, ys). Reverse mode thus never recomputes the solve (see `Rodas4`): jacrev and
+    jacfwd give the same numbers. Cost per reverse pass: one forward solve carrying as many
+    tangents as there are differentiated scalars (4 for an element's parameters).
+    """
+
+    def primal(d):
+        return solve(*eqx.combine(d, static), adjoint)
+
+    @jax.custom_jvp
+    def run(d):
+        return primal(d)
+
+    @functools.partial(run.defjvp, symbolic_zeros=True)
+    def _jvp(primals, tangents):
+        (d,), (td,) = primals, tangents
+        leaves, treedef = jax.tree.flatten(d)
+        tleaves = treedef.flatten_up_to(td)
+        ts_leaf = len(leaves) - 1 if eqx.is_array(d[3]) else None  # ts is the last leaf
+        active = [
+            i for i, t in enumerate(tleaves)
+            if i != ts_leaf and not isinstance(t, SymbolicZero)
+            and jnp.issubdtype(leaves[i].dtype, jnp.inexact)
+        ]  # fmt: skip
+        if active:
+            flat, unflat = ravel_pytree([leaves[i] for i in active])
+
+            def ys_of(p):
+                new = list(leaves)
+                for i, x in zip(active, unflat(p)):
+                    new[i] = x
+                el, pr, m, ts = eqx.combine(jax.tree.unflatten(treedef, new), static)
+                ys, aux = solve(el, pr, m, ts, dfx.ForwardMode())
+                return ys, (ys, aux)
+
+            jac, (ys, aux) = jax.jacfwd(ys_of, has_aux=True)(flat)
+            dp, _ = ravel_pytree([tleaves[i] for i in active])
+            tys = jac @ dp
+        else:
+            ys, aux = primal(d)
+            tys = jnp.zeros_like(ys)
+        if ts_leaf is not None and not isinstance(tleaves[ts_leaf], SymbolicZero):
+            el, pr, m, ts = eqx.combine(d, static)
+            rate = jax.vmap(lambda t, y: _vector_field(t, y, (el, pr, m, unravel)))(ts, ys)
+            tys = tys + rate * tleaves[ts_leaf][:, None]
+        taux = jax.tree.map(
+            lambda x: np.zeros(np.shape(x), jax.dtypes.float0)
+            if not jnp.issubdtype(x.dtype, jnp.inexact) else jnp.zeros_like(x),
+            aux,
+        )  # fmt: skip
+        return (ys, aux), (tys, taux)
+
+    return run(dyn)
+
+
+@eqx.filter_jit
+def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjoint, dt0, solver):
+    _, unravel = ravel_pytree(element.initial_state())
+    cfg = (t_end, rtol, atol, max_steps, throw)
+
+    def solve(el, pr, m, t, adj):
+        return _diffeqsolve(el, pr, m, t, unravel, *cfg, adj, dt0, solver)
+
+    if isinstance(solver, Rodas4):
+        dyn, static = eqx.partition((element, profile, mass, ts), eqx.is_array)
+        ys, (result, stats) = _forward_mode_solve(solve, unravel, dyn, static, adjoint)
+    else:
+        ys, (result, stats) = solve(element, profile, mass, ts, adjoint)
+    dx, v, integral = ys[:, 0], ys[:, 1], ys[:, -1]
+    z = jax.vmap(unravel)(ys[:, 2:-1])
     friction = jax.vmap(element.force)(z, v)
-    return SlipSolution(sol.ts, dx, z, friction, v, integral, sol.result, sol.stats)
+    return SlipSolution(ts, dx, z, friction, v, integral, result, stats)
 
 
 def _positive(x, name, unit=""):
@@ -119,7 +203,7 @@ def simulate_slip(
     ts=None,
     t_end=DEFAULT_T_END,
     rtol=1e-6,
-    atol=1e-16,
+    atol=None,
     max_steps=20_000,
     dt0=1e-5,
     throw=True,
@@ -178,6 +262,9 @@ def simulate_slip(
     """
     profile = TrapezoidProfile() if profile is None else profile
     mass = check_range(mass, "mass", 0.0, unit="kg")
+    solver = Rodas4() if solver is None else solver
+    if atol is None:
+        atol = DEFAULT_ATOL if isinstance(solver, Rodas4) else 1e-16
     t_end, rtol, atol = (
         _positive(t_end, "t_end", "s"),
         _positive(rtol, "rtol"),
