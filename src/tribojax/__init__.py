@@ -79,6 +79,7 @@ from ._roughness import RoughnessEstimate as RoughnessEstimate
 from ._roughness import estimate_fractal as estimate_fractal
 from ._roughness import psd_model as psd_model
 from ._roughness import structure_function_model as structure_function_model
+from ._rosenbrock import Rodas4 as Rodas4
 from ._slip import SlipSolution as SlipSolution
 from ._slip import simulate_slip as simulate_slip
 from ._slip import slip_phase_averages as slip_phase_averages
