@@ -75,11 +75,11 @@ from ._reproduce import calibrate_table3 as calibrate_table3
 from ._reproduce import equivalent_G as equivalent_G
 from ._reproduce import reproduce_table3 as reproduce_table3
 from ._reproduce import wang2022_table3_model as wang2022_table3_model
+from ._rosenbrock import Rodas4 as Rodas4
 from ._roughness import RoughnessEstimate as RoughnessEstimate
 from ._roughness import estimate_fractal as estimate_fractal
 from ._roughness import psd_model as psd_model
 from ._roughness import structure_function_model as structure_function_model
-from ._rosenbrock import Rodas4 as Rodas4
 from ._slip import SlipSolution as SlipSolution
 from ._slip import simulate_slip as simulate_slip
 from ._slip import slip_phase_averages as slip_phase_averages

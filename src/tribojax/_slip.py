@@ -81,8 +81,9 @@ def _kvaerno5_chord() -> dfx.AbstractSolver:
 _SOLVERS = {"rodas4": Rodas4, "kvaerno5": _kvaerno5_chord}
 
 
-def _diffeqsolve(element, profile, mass, ts, unravel, t_end, rtol, atol, max_steps, throw,
-                 adjoint, dt0, solver):
+def _diffeqsolve(
+    element, profile, mass, ts, unravel, t_end, rtol, atol, max_steps, throw, adjoint, dt0, solver
+):
     """ys (len(ts), n_state), result, stats of one solve."""
     z0, _ = ravel_pytree(element.initial_state())
     y0 = jnp.concatenate([jnp.zeros(2, z0.dtype), jnp.zeros_like(z0), jnp.zeros(1, z0.dtype)])
