@@ -223,33 +223,43 @@ def simulate_slip(
     reticle driven by friction alone, Δx = x_stage − x_reticle).
 
     Numerics. The problem is stiff (√(K_τ/m) ≈ 7e3–2e4 rad/s, C_τ/K_τ ≈ 50 µs, horizon 2.3 s) and
-    tiny (slips of nm): Kvaerno5 (L-stable, order 5) with a PID controller (p 0.3, i 0.4, step
-    growth capped at 3x), per-component absolute tolerances (`atol` in m for Δx and z, atol·1e3
-    for v in m/s, atol·0.1 for ∫Δx dt in m s), and steps stopped at the profile's kinks
-    (`jump_ts`). The sgn(v) kink of the bristle law at v = 0 is crossed every half-period of the
-    transients and sits under the equilibria of the hold phases; with the exact sign and diffrax's
-    default `VeryChord` iteration, Kvaerno5 rejects ~99 % of its steps there and never finishes.
-    The elements' smooth sign v/√(v² + ε²), ε = 1e-12 m/s (C¹ right-hand side), and a chord
-    iteration with the 4×4 Jacobian re-evaluated at every stage (optimistix `Chord`; a full
-    Newton takes the same steps and is ~10 % slower) make it robust.
+    tiny (slips of nm). Default solver: `Rodas4` (Rosenbrock, L-stable, stiffly accurate, order
+    4; one exact 4×4 Jacobian and LU per step, no Newton iteration) with a PID controller (p 0.3,
+    i 0.4, step growth capped at 3x), per-component absolute tolerances (`atol` in m for Δx and z,
+    atol·1e3 for v in m/s, atol·0.1 for ∫Δx dt in m s), and steps stopped at the profile's kinks
+    (`jump_ts`; Rodas4 evaluates ∂f/∂t at the step start, which diffrax then places just after a
+    kink). The sgn(v) kink of the bristle law at v = 0 is crossed every half-period of the
+    transients and sits under the equilibria of the hold phases: the elements' smooth sign
+    v/√(v² + ε²), ε = 1e-12 m/s, makes the right-hand side C¹ (with the exact sign Kvaerno5 and
+    diffrax's `VeryChord` reject ~99 % of their steps there and never finish).
+    `solver="kvaerno5"` selects the earlier default: Kvaerno5 (ESDIRK, order 5) with a chord
+    iteration re-evaluating the Jacobian at every stage (optimistix `Chord`), atol 1e-16.
 
     Where the time goes: every jerk kink starts a ring-down of ~10 ms (damping ratio ~0.2) that
-    is tracked until |v| falls below its absolute tolerance, ~100 steps per kink, and each sign
-    flip of v costs a rejected step. The hysteresis makes a velocity error permanent (a
-    ratchet in Δx that no spring restores), so the velocity tolerance, not `rtol`, sets the
-    accuracy of the phase averages: atol·1e4 gave 1e-5 relative, atol·1e3 gives 1e-6. Measured
-    (2-core CPU, warm, defaults): ~1050–1250 accepted and ~170–210 rejected steps per cycle at
-    ~16 µs each, 19–22 ms per cycle; phase averages within 2e-8–1e-6 relative of SciPy Radau at
-    rtol 1e-11 (exact sign), for Table 3's 0.6, 4 and 20 kPa and α = 1 and 1.26. A larger ε
-    lets the tail go earlier but biases the result (ε = 1e-11: 3e-7, 1e-10: 4e-6 relative);
-    Kvaerno3/4 need 3–6x the steps at equal accuracy.
+    is tracked until |v| falls below its absolute tolerance, and each sign flip of v costs a
+    rejected step. The hysteresis makes a velocity error permanent (a ratchet in Δx that no
+    spring restores), so the velocity tolerance, not `rtol`, sets the accuracy of the phase
+    averages. Measured for Table 3's 0.6, 4 and 20 kPa and α = 1 and 1.26, against SciPy Radau
+    at rtol 1e-11 (exact sign): Rodas4 at the defaults (atol 1e-15) takes ~1150–1250 accepted and
+    ~180–215 rejected steps per cycle, phase averages within 1.5e-8–6.1e-7 relative (atol 3e-16:
+    ~1450–1630 steps, ≤ 2.1e-7); Kvaerno5 ~1050–1250 and 170–210 steps, within 1.9e-7–9.7e-7.
+    Per cycle, in the same runs on a loaded 2-core CPU, Rodas4 is ~3x faster than Kvaerno5
+    (19–20 ms vs 45–59 ms there; Kvaerno5 took 18–19 ms on a quiet machine). A larger ε lets the
+    tail go earlier but biases the result (ε = 1e-11: 3e-7, 1e-10: 4e-6 relative).
 
-    Derivatives: for the few parameters of an element, forward mode is the cheap direction:
-    `jax.jacfwd` with `adjoint=diffrax.ForwardMode()` costs 2.4x a solve for the 4×4 Jacobian
-    of the phase averages w.r.t. (F_s, K_τ, C_τ, α); `jax.jacrev` with the default checkpointed
-    adjoint 5.5x (same values to 1e-14). Batches: `jax.vmap` over loads steps all members
-    together (the union of their steps) and still beats `jax.lax.map` (Table 3's six loads:
-    ~86–95 ms vs ~130 ms).
+    Derivatives. With Rodas4 the solve sits inside a `jax.custom_jvp` whose rule is forward mode
+    (`jax.jacfwd` through `diffrax.ForwardMode`) w.r.t. the differentiated float leaves of
+    `element`, `profile` and `mass` (and dys/dts = f for `ts`); `jax.grad`/`jacrev` transpose
+    that, so every adjoint and both directions give the same numbers (jacrev = jacfwd to 2e-16 of
+    the largest elasticity of the phase averages). Reason: reverse mode through diffrax's
+    `RecursiveCheckpointAdjoint` recomputes the steps in a separately compiled program whose
+    rounding differs (XLA fuses, and contracts multiply-adds, differently); a Rosenbrock step
+    passes that to y and the step controller, the recomputed steps differ from the forward pass
+    and the gradient is wrong by up to 6e-3 (see `Rodas4`). Cost: as many tangents as
+    differentiated scalars, ~2–2.3x a solve for the 4×4 Jacobian w.r.t. (F_s, K_τ, C_τ, α), in
+    either direction. Kvaerno5 uses diffrax's adjoints unchanged (`jax.jacfwd` then needs
+    `adjoint=diffrax.ForwardMode()`). Batches: `jax.vmap` over loads steps all members together
+    (the union of their steps).
 
     Args:
         element: a friction element (its parameters may be traced; batch with jax.vmap).
@@ -260,8 +270,11 @@ def simulate_slip(
         rtol, atol: relative tolerance; absolute tolerance of the slip and deflection, m.
         max_steps: step budget; raise it if the result says it was reached.
         throw: raise on solver failure (else inspect `result` / `message`).
-        adjoint: diffrax adjoint; `diffrax.ForwardMode()` for forward-mode derivatives (`jacfwd`).
-        solver: a diffrax solver in place of the default (Kvaerno5 with a chord iteration).
+        adjoint: diffrax adjoint of the solve. With Rodas4 it only affects the undifferentiated
+            solve (derivatives use forward mode, see above); with other solvers pass
+            `diffrax.ForwardMode()` for `jax.jacfwd`.
+        solver: "rodas4" (default), "kvaerno5" (Kvaerno5 with a chord iteration) or a diffrax
+            solver instance. `atol` defaults to 1e-15 m for Rodas4, 1e-16 m otherwise.
     Returns:
         SlipSolution.
     """
@@ -303,8 +316,10 @@ def slip_phase_averages(
         T4 = ⟨Δx⟩[0.25,0.6] − Δx(0)         T5 = ⟨Δx⟩[0.73,1.5] − ⟨Δx⟩[0.25,0.6]
         T6 = ⟨Δx⟩[1.65,2.0] − ⟨Δx⟩[0.73,1.5]   T7 = Δx(2.3) − ⟨Δx⟩[1.65,2.0]
     (windows from `profile.windows()`, end at `t_end`). Returns [T4, T5, T6, T7] in m.
-    Other keywords go to `simulate_slip`. For derivatives w.r.t. the element's parameters use
-    `jax.jacfwd` with `adjoint=diffrax.ForwardMode()` (2.4x a solve for all four parameters).
+    Other keywords go to `simulate_slip`. Derivatives w.r.t. the element's parameters: with the
+    default solver (Rodas4) `jax.jacfwd` and `jax.jacrev` both run forward mode (~2–2.3x a solve
+    for all four parameters); with `solver="kvaerno5"` use `jax.jacfwd` with
+    `adjoint=diffrax.ForwardMode()`.
     """
     profile = TrapezoidProfile() if profile is None else profile
     w = profile.windows()
