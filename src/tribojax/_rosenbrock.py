@@ -128,7 +128,19 @@ class Rodas4(dfx.AbstractAdaptiveSolver):
         jac = jax.jacfwd(lambda y: f(t0, y))(y0)
         f0, ft = jax.jvp(lambda t: f(t, y0), (t0,), (jnp.ones_like(t0),))
         w = jnp.eye(y0.shape[0], dtype=y0.dtype) / (_GAMMA * h) - jac
-        lu = jax.scipy.linalg.lu_factor(w)
+        # one LU of W per step (of W without its tangent); each solve is a custom_linear_solve, so
+        # that forward mode gives dK = W⁻¹(d rhs − dW K) with the same LU instead of
+        # differentiating the factorisation (as jnp.linalg.solve does)
+        lu = jax.scipy.linalg.lu_factor(jax.lax.stop_gradient(w))
+
+        def solve_w(b):
+            return jax.lax.custom_linear_solve(
+                lambda x: w @ x,
+                b,
+                solve=lambda _, r: jax.scipy.linalg.lu_solve(lu, r),
+                transpose_solve=lambda _, r: jax.scipy.linalg.lu_solve(lu, r, trans=1),
+            )
+
         ks: list[Array] = []
         for i in range(6):
             if i == 0:
@@ -137,7 +149,7 @@ class Rodas4(dfx.AbstractAdaptiveSolver):
                 rhs = f(t0 + _ALPHA[i] * h, y0 + _combine(_A[i], ks)) + _combine(_C[i], ks) / h
             if _GAMMAS[i] != 0.0:
                 rhs = rhs + (_GAMMAS[i] * h) * ft
-            ks.append(jax.scipy.linalg.lu_solve(lu, rhs))
+            ks.append(solve_w(rhs))
         y1 = y0 + _combine(_M, ks)
         err = ks[5]
         dense_info = dict(y0=y0, y1=y1, k1=_combine(_D1, ks), k2=_combine(_D2, ks))
