@@ -243,9 +243,10 @@ def simulate_slip(
     at rtol 1e-11 (exact sign): Rodas4 at the defaults (atol 1e-15) takes ~1150–1250 accepted and
     ~180–215 rejected steps per cycle, phase averages within 1.5e-8–6.1e-7 relative (atol 3e-16:
     ~1450–1630 steps, ≤ 2.1e-7); Kvaerno5 ~1050–1250 and 170–210 steps, within 1.9e-7–9.7e-7.
-    Per cycle, in the same runs on a loaded 2-core CPU, Rodas4 is ~3x faster than Kvaerno5
-    (19–20 ms vs 45–59 ms there; Kvaerno5 took 18–19 ms on a quiet machine). A larger ε lets the
-    tail go earlier but biases the result (ε = 1e-11: 3e-7, 1e-10: 4e-6 relative).
+    Per cycle (0.6 kPa, warm), Rodas4 is ~3x faster than Kvaerno5: 6.3–6.5 ms vs 18.6–19.1 ms of
+    process CPU time, 14–18 ms vs 38–45 ms wall time in the same runs on a loaded 2-core CPU
+    (Kvaerno5 took 18–19 ms wall on a quiet one). A larger ε lets the tail go earlier but biases
+    the result (ε = 1e-11: 3e-7, 1e-10: 4e-6 relative).
 
     Derivatives. With Rodas4 the solve sits inside a `jax.custom_jvp` whose rule is forward mode
     (`jax.jacfwd` through `diffrax.ForwardMode`) w.r.t. the differentiated float leaves of
@@ -255,11 +256,12 @@ def simulate_slip(
     `RecursiveCheckpointAdjoint` recomputes the steps in a separately compiled program whose
     rounding differs (XLA fuses, and contracts multiply-adds, differently); a Rosenbrock step
     passes that to y and the step controller, the recomputed steps differ from the forward pass
-    and the gradient is wrong by up to 6e-3 (see `Rodas4`). Cost: as many tangents as
-    differentiated scalars, ~2–2.3x a solve for the 4×4 Jacobian w.r.t. (F_s, K_τ, C_τ, α), in
-    either direction. Kvaerno5 uses diffrax's adjoints unchanged (`jax.jacfwd` then needs
-    `adjoint=diffrax.ForwardMode()`). Batches: `jax.vmap` over loads steps all members together
-    (the union of their steps).
+    and the gradient is wrong by up to 6e-3 (see `Rodas4`). Cost: one solve carrying as many
+    tangents as differentiated scalars; for the 4×4 Jacobian w.r.t. (F_s, K_τ, C_τ, α) ~5x a
+    solve in CPU time, either direction (Kvaerno5's jacfwd: 4.3x, 2.4x in wall time on a quiet
+    2-core machine; loaded wall-time ratios for Rodas4 4.0–4.7x). Kvaerno5 uses diffrax's
+    adjoints unchanged (`jax.jacfwd` then needs `adjoint=diffrax.ForwardMode()`). Batches:
+    `jax.vmap` over loads steps all members together (the union of their steps).
 
     Args:
         element: a friction element (its parameters may be traced; batch with jax.vmap).
@@ -317,8 +319,8 @@ def slip_phase_averages(
         T6 = ⟨Δx⟩[1.65,2.0] − ⟨Δx⟩[0.73,1.5]   T7 = Δx(2.3) − ⟨Δx⟩[1.65,2.0]
     (windows from `profile.windows()`, end at `t_end`). Returns [T4, T5, T6, T7] in m.
     Other keywords go to `simulate_slip`. Derivatives w.r.t. the element's parameters: with the
-    default solver (Rodas4) `jax.jacfwd` and `jax.jacrev` both run forward mode (~2–2.3x a solve
-    for all four parameters); with `solver="kvaerno5"` use `jax.jacfwd` with
+    default solver (Rodas4) `jax.jacfwd` and `jax.jacrev` both run forward mode (one solve with
+    four tangents for all four parameters); with `solver="kvaerno5"` use `jax.jacfwd` with
     `adjoint=diffrax.ForwardMode()`.
     """
     profile = TrapezoidProfile() if profile is None else profile
