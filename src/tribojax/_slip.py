@@ -213,7 +213,7 @@ def simulate_slip(
     dt0=1e-5,
     throw=True,
     adjoint=dfx.RecursiveCheckpointAdjoint(),
-    solver: str | dfx.AbstractSolver = "rodas4",
+    solver: str | dfx.AbstractSolver | None = "rodas4",
 ) -> SlipSolution:
     """Slip of a body carried by friction on a stage with prescribed acceleration (wang2022 Eq 27).
 
@@ -282,6 +282,7 @@ def simulate_slip(
     """
     profile = TrapezoidProfile() if profile is None else profile
     mass = check_range(mass, "mass", 0.0, unit="kg")
+    solver = "rodas4" if solver is None else solver  # None: the default, as before
     solver = _SOLVERS[solver]() if isinstance(solver, str) and solver in _SOLVERS else solver
     if not isinstance(solver, dfx.AbstractSolver):
         raise ValueError(
