@@ -52,18 +52,26 @@ def reference(F_s, K, C, alpha=1.0):
     return slip, np.array([m[0] - slip(0.0), m[1] - m[0], m[2] - m[1], slip(2.3) - m[2]])
 
 
-@pytest.mark.parametrize("row", [0, 2, 5], ids=["0.6kPa", "4kPa", "20kPa"])
-def test_phase_averages_match_scipy_radau(row):
+CASES = [(0, "rodas4"), (2, "rodas4"), (5, "rodas4"), (2, "kvaerno5")]
+
+
+@pytest.mark.parametrize(
+    "row,solver", CASES, ids=["0.6kPa", "4kPa", "20kPa", "4kPa-kvaerno5"]
+)  # fmt: skip
+def test_phase_averages_match_scipy_radau(row, solver):
     F_s, K, C = (float(T3[k][row]) for k in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m"))
     slip_ref, phases_ref = reference(F_s, K, C)
     el = tj.PreSlipLuGre(F_s, K, C)
-    phases = np.asarray(tj.slip_phase_averages(el)) * 1e9
-    # default tolerances (rtol 1e-6, atol 1e-16 m, velocity atol 1e-13 m/s) and the smooth sign
-    # (eps 1e-12 m/s, bias ~3e-8): measured agreement 1e-7 to 1e-6 relative; 3e-6 bounds it.
-    np.testing.assert_allclose(phases, phases_ref, rtol=3e-6)
+    phases = np.asarray(tj.slip_phase_averages(el, solver=solver)) * 1e9
+    # default tolerances (rtol 1e-6; atol 1e-15 m for Rodas4, 1e-16 m for Kvaerno5; velocity
+    # atol x1e3) and the smooth sign (eps 1e-12 m/s, bias ~3e-8). Measured: Rodas4 1.5e-8 to
+    # 6.1e-7 relative at Table 3's 0.6, 4, 20 kPa and alpha 1, 1.26, jitted or not (the issue's
+    # bound is 1e-6); Kvaerno5 1.9e-7 to 9.7e-7 (3e-6 bounds it).
+    np.testing.assert_allclose(phases, phases_ref, rtol=1e-6 if solver == "rodas4" else 3e-6)
     ts = np.array([0.2, 0.4, 0.7, 1.0, 1.6, 1.9, 2.1, 2.3])
-    sol = tj.simulate_slip(el, ts=ts)
+    sol = tj.simulate_slip(el, ts=ts, solver=solver)
     want = np.array([slip_ref(t) for t in ts])
-    # measured max |difference| 3.1e-5 nm (0.6 kPa) against slips of 2-40 nm, i.e. ~1e-6 of the
-    # slip; 1e-4 nm bounds it (the phase averages above are the accuracy-critical output)
+    # measured max |difference| 2.6e-5 nm (Rodas4), 3.1e-5 nm (Kvaerno5) at 0.6 kPa against slips
+    # of 2-40 nm, i.e. ~1e-6 of the slip; 1e-4 nm bounds it (the phase averages above are the
+    # accuracy-critical output)
     np.testing.assert_allclose(np.asarray(sol.slip) * 1e9, want, atol=1e-4)

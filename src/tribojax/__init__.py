@@ -75,6 +75,7 @@ from ._reproduce import calibrate_table3 as calibrate_table3
 from ._reproduce import equivalent_G as equivalent_G
 from ._reproduce import reproduce_table3 as reproduce_table3
 from ._reproduce import wang2022_table3_model as wang2022_table3_model
+from ._rosenbrock import Rodas4 as Rodas4
 from ._roughness import RoughnessEstimate as RoughnessEstimate
 from ._roughness import estimate_fractal as estimate_fractal
 from ._roughness import psd_model as psd_model
