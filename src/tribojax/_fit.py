@@ -64,12 +64,12 @@ class FitResult:
 
 
 @eqx.filter_jit
-def _solve(residual_fn, theta0, args, rtol, atol, max_steps, jac):
+def _solve(residual_fn, theta0, args, solver, max_steps, jac):
     # jitted here so that a module-level `residual_fn` (hashed by identity) is compiled once and
     # a repeated fit with new data in `args` runs warm
     return optx.least_squares(
         residual_fn,
-        optx.LevenbergMarquardt(rtol=rtol, atol=atol),
+        solver,
         theta0,
         args,
         options=dict(jac=jac),
@@ -95,6 +95,7 @@ def least_squares_fit(
     atol: float = 1e-12,
     max_steps: int = 500,
     jac: str = "bwd",
+    solver=None,
 ) -> FitResult:
     """Fit θ minimising ½‖residual_fn(θ, args)‖² with optimistix Levenberg–Marquardt.
 
@@ -108,6 +109,7 @@ def least_squares_fit(
             the default because forward linearisation of a residual that contains an optimistix
             root find (the contact load balance) makes lineax reject the Jacobian as non-finite
             in optimistix 0.1.0, although jax.jacfwd of the same residual is finite.
+        solver: an optimistix least-squares solver in place of LevenbergMarquardt(rtol, atol).
     The solve is compiled per `residual_fn` object: pass a module-level function (data in
     `args`) and repeated fits run warm.
     Returns:
@@ -116,7 +118,9 @@ def least_squares_fit(
     """
     ensure_x64()
     theta0 = jnp.asarray(theta0, dtype=jnp.float64)
-    sol = _solve(residual_fn, theta0, args, float(rtol), float(atol), int(max_steps), jac)
+    if solver is None:
+        solver = optx.LevenbergMarquardt(rtol=float(rtol), atol=float(atol))
+    sol = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
     theta = sol.value
     r, J = _value_and_jacobian(residual_fn, theta, args)
     n, p = J.shape
