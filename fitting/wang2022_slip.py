@@ -27,7 +27,7 @@ STARTS = (
     {"D": 2.95, "G_m": 1e-8, "mu_t": 0.12},
     {"D": 2.8, "G_m": 2e-8, "mu_t": 0.1},
 )
-# short form (CI): two loads (0.6 and 20 kPa), G and μ_t free
+# short form (CI): two loads (0.6 and 7 kPa), G and μ_t free
 SHORT_FREE = ("G_m", "mu_t")
 
 
@@ -48,29 +48,19 @@ def agreement(fits) -> dict:
 
 
 def run(starts=STARTS, free=fc.DEFAULT_FREE, loads=None, target=None, progress=True) -> dict:
-    fits = []
+    fits, records = [], []
     for i, start in enumerate(starts):
         print(f"start {i + 1}/{len(starts)}: {start}", file=sys.stderr, flush=True)
-        fits.append(fc.fit_measured_slips(start, free=free, loads=loads, target=target,
-                                    progress=progress))  # fmt: skip
-        f = fits[-1]
-        print(
-            f"  -> {', '.join(f'{k} = {v:.5g}' for k, v in zip(f.free, f.fit.values))}; "
-            f"RMS rel. {f.rms_relative_residual:.4f}; converged {f.converged}; "
-            f"{f.fit.steps} steps; {f.wall_s:.1f} s",
-            file=sys.stderr,
-            flush=True,
-        )
-    best = min(fits, key=lambda f: float(f.fit.residuals @ f.fit.residuals))
-    measured = fc.measured_slips() if target is None else np.asarray(target)
-    out = {
-        "study": "wang2022 Tables 4-7 (measured): full-chain fit from several starts",
-        "uncertainty_model": (
-            "equal relative uncertainty per cell, estimated from the fit; residual = "
-            "model/measured - 1"
-        ),
-        "best": best.as_dict(),
-        "starts": [
+        try:
+            f = fc.fit_measured_slips(
+                start, free=free, loads=loads, target=target, progress=progress
+            )
+        except fc.ChainFitError as err:
+            print(f"  -> FAILED: {err}", file=sys.stderr, flush=True)
+            records.append({"start": start, "converged": False, "error": str(err)})
+            continue
+        fits.append(f)
+        records.append(
             {
                 "start": f.start,
                 "end": f.parameters,
@@ -80,10 +70,29 @@ def run(starts=STARTS, free=fc.DEFAULT_FREE, loads=None, target=None, progress=T
                 "message": f.fit.message,
                 "steps": f.fit.steps,
                 "residual_evaluations": f.evaluations,
+                "gauss_newton_step_over_std_error": f.gauss_newton_step,
                 "wall_s": f.wall_s,
             }
-            for f in fits
-        ],
+        )
+        print(
+            f"  -> {', '.join(f'{k} = {v:.5g}' for k, v in zip(f.free, f.fit.values))}; "
+            f"RMS rel. {f.rms_relative_residual:.4f}; converged {f.converged}; "
+            f"{f.fit.steps} steps; {f.wall_s:.1f} s",
+            file=sys.stderr,
+            flush=True,
+        )
+    if not fits:
+        return {"starts": records, "agreement": agreement(fits)}
+    best = min(fits, key=lambda f: float(f.fit.residuals @ f.fit.residuals))
+    measured = fc.measured_slips() if target is None else np.asarray(target)
+    out = {
+        "study": "wang2022 Tables 4-7 (measured): full-chain fit from several starts",
+        "uncertainty_model": (
+            "equal relative uncertainty per cell, estimated from the fit; residual = "
+            "model/measured - 1"
+        ),
+        "best": best.as_dict(),
+        "starts": records,
         "agreement": agreement(fits),
     }
     if target is None:
@@ -106,14 +115,17 @@ def main(argv=None) -> int:
         print(f"{path} exists: refusing to overwrite it (choose another --out)", file=sys.stderr)
         return 2
     if args.short:
-        # two loads (0.6 and 20 kPa), measured cells, (G, μ_t) free: same code path, ~1/3 cost
-        loads = fc.wang2022_loads()[np.array([0, 5])]
-        target = fc.measured_slips()[[0, 5]]
+        # two loads (0.6 and 7 kPa), measured cells, (G, μ_t) free: same code path, less cost
+        loads = fc.wang2022_loads()[np.array([0, 3])]
+        target = fc.measured_slips()[[0, 3]]
         result = run(starts=STARTS[:3], free=SHORT_FREE, loads=loads, target=target)
     else:
         result = run(free=tuple(args.free.split(",")))
     out.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(result, indent=2))
+    if "best" not in result:
+        print("no start converged", file=sys.stderr)
+        return 1
     best, agree = result["best"], result["agreement"]
     print(f"best: {best['parameters']} (converged {best['converged']})")
     print(f"std errors: {best['std_errors']}")
@@ -125,7 +137,8 @@ def main(argv=None) -> int:
         )
     print(f"starts agree: {agree}")
     print(f"wrote {path}")
-    return 0 if all(s["converged"] for s in result["starts"]) else 1
+    n_ok = result["agreement"]["n_converged"]
+    return 0 if n_ok >= 3 or (args.short and n_ok >= 2) else 1
 
 
 if __name__ == "__main__":

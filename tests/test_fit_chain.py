@@ -1,7 +1,7 @@
 """The full-chain fit (D, G, μ_t → F_s, K_τ, C_τ → slip phase averages) of wang2022 Tables 4–7.
 
 Costly pieces are shared: one load (0.6 kPa, the best-damped row: fewest ODE steps) for the
-derivative checks, two loads (0.6 and 20 kPa) for the fits.
+derivative checks, two loads (0.6 and 7 kPa) for the fits.
 """
 
 import diffrax as dfx
@@ -15,7 +15,7 @@ from tribojax._data import wang2022_table
 
 P0 = np.array([fc.DEFAULTS[k] for k in fc.PARAMETERS])  # D, G, μ_t, σ_s, α
 ONE_LOAD = jnp.array([3.6912])  # N, 0.6 kPa
-TWO_LOADS = jnp.array([3.6912, 21.3258])  # N, 0.6 and 20 kPa
+TWO_LOADS = jnp.array([3.6912, 9.5088])  # N, 0.6 and 7 kPa
 TIGHT = dict(atol=1e-17, rtol=1e-9, max_steps=200_000)  # FD needs smooth, accurate slips
 
 
@@ -141,7 +141,8 @@ def synthetic():
 
 @pytest.fixture(scope="module")
 def two_fits(synthetic):
-    starts = ({"D": 2.86, "G_m": 3e-8, "mu_t": 0.2}, {"D": 2.86, "G_m": 1.5e-7, "mu_t": 0.12})
+    # both starts keep F_s > m·a_max (no gross sliding) at both loads
+    starts = ({"D": 2.86, "G_m": 3e-8, "mu_t": 0.2}, {"D": 2.86, "G_m": 2e-8, "mu_t": 0.12})
     return [fc.fit_measured_slips(s, free=FREE, target=synthetic, loads=TWO_LOADS) for s in starts]
 
 
@@ -177,6 +178,10 @@ def test_report_keys(two_fits):
 @pytest.mark.slow
 def test_non_convergence_is_reported(synthetic):
     fit = fc.fit_measured_slips(
-        {"G_m": 1e-6, "mu_t": 0.5}, free=FREE, target=synthetic, loads=TWO_LOADS, max_steps=2
+        {"D": 2.86, "G_m": 2e-8, "mu_t": 0.3},
+        free=FREE,
+        target=synthetic,
+        loads=TWO_LOADS,
+        max_steps=2,
     )
     assert not fit.converged and "maximum number of steps" in fit.fit.message

@@ -108,10 +108,12 @@ def least_squares_fit(
         jac: how LM differentiates the residuals, "bwd" or "fwd" (optimistix option). "bwd" is
             the default because forward linearisation of a residual that contains an optimistix
             root find (the contact load balance) makes lineax reject the Jacobian as non-finite
-            in optimistix 0.1.0, although jax.jacfwd of the same residual is finite.
+            in optimistix 0.1.0, although jax.jacfwd of the same residual is finite (a
+            `jax.custom_jvp` around the root find avoids it, see `_fit_chain`).
         solver: an optimistix least-squares solver in place of LevenbergMarquardt(rtol, atol).
-    The solve is compiled per `residual_fn` object: pass a module-level function (data in
+    The solve is compiled once per `residual_fn` object: pass a module-level function (data in
     `args`) and repeated fits run warm.
+
     Returns:
         FitResult; `converged` False (and `message` set) when LM did not succeed. Never raises for
         non-convergence: the caller decides.

@@ -60,9 +60,9 @@ _LOG_G_RANGE = (math.log(1e-11), math.log(1e-5))
 SLIP_ATOL = 1e-15
 SLIP_RTOL = 1e-6
 SLIP_MAX_STEPS = 40_000
-_BAD_RESIDUAL = 1e3
+_BAD_RESIDUAL = 1e3  # residual of a cell where the chain fails (all-plastic, ODE budget)
 _A_MAX = 1.0  # m/s², the stage's peak acceleration (TrapezoidProfile, REPRODUCTION.md)
-GN_STEP_TOL = 0.1  # converged: the remaining Gauss–Newton step < 0.1 standard errors  # residual of a cell where the chain fails (all-plastic, ODE budget)
+GN_STEP_TOL = 0.1  # converged: the remaining Gauss–Newton step < 0.1 standard errors
 
 
 def wang2022_loads() -> jnp.ndarray:
@@ -249,6 +249,10 @@ def _to_theta(phys, mu_min) -> np.ndarray:
 # --- the fit -----------------------------------------------------------------------------------
 
 
+class ChainFitError(RuntimeError):
+    """The full-chain fit could not be carried out (names the trial point and the cause)."""
+
+
 class NoiseFloorLM(optx.AbstractGaussNewton):
     """Levenberg–Marquardt (optimistix's, same descent and trust region) that also stops after
     `max_rejections` consecutive rejected steps.
@@ -299,9 +303,14 @@ def _report(rss, phys):
         )
 
 
+def _announce(phys):
+    _PROGRESS["last"] = phys.tolist()  # the trial point, for messages if the chain raises
+
+
 def _residuals(theta, args, adjoint):
     theta_full0, idx, mu_min, y, loads = args
     phys = _to_physical(theta_full0.at[idx].set(theta), mu_min)
+    jax.debug.callback(_announce, jax.lax.stop_gradient(phys))
     slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
     r = jnp.where(ok[:, None], slips / y - 1.0, _BAD_RESIDUAL).ravel()
     jax.debug.callback(_report, jax.lax.stop_gradient(r @ r), jax.lax.stop_gradient(phys))
@@ -484,18 +493,29 @@ def fit_measured_slips(
 
     _PROGRESS.update(on=bool(progress), n=0, t0=time.perf_counter(), size=target.size)
     t0 = time.perf_counter()
-    fit = least_squares_fit(
-        residuals,
-        theta_full0[idx],
-        args,
-        names=free,
-        transform=transform,
-        rtol=rtol,
-        atol=atol,
-        max_steps=max_steps,
-        jac=jac,
-        solver=NoiseFloorLM(float(rtol), float(atol)),
-    )
+    try:
+        fit = least_squares_fit(
+            residuals,
+            theta_full0[idx],
+            args,
+            names=free,
+            transform=transform,
+            rtol=rtol,
+            atol=atol,
+            max_steps=max_steps,
+            jac=jac,
+            solver=NoiseFloorLM(float(rtol), float(atol)),
+        )
+    except RuntimeError as err:  # equinox runtime errors inside the compiled fit
+        _PROGRESS["on"] = False
+        last = dict(zip(PARAMETERS, _PROGRESS.get("last", [])))
+        lines = str(err).splitlines() or [type(err).__name__]
+        cause = next((ln for ln in lines if "EquinoxRuntimeError:" in ln), lines[0])
+        raise ChainFitError(
+            f"the full-chain fit failed at the trial point {last}: {cause.strip()} "
+            "(a known failure: forward-mode derivatives through the slip solver's implicit "
+            "stage solve raise when its Newton iteration diverges; try another start)"
+        ) from err
     wall = time.perf_counter() - t0
     evaluations = _PROGRESS["n"]
     _PROGRESS["on"] = False
