@@ -21,6 +21,19 @@ the contact's optimistix root find is rejected by lineax as non-finite. The cont
 3 parameters) is therefore wrapped in a `jax.custom_jvp` whose tangent is its dense 18×4
 Jacobian (computed with `jax.jacfwd`, which is finite) times the input tangent; it is linear in
 the tangent, so reverse mode (`jax.grad`) works through it too.
+
+Convergence. The slips come from an adaptive ODE solver (accurate to ~2e-4 here, `SLIP_ATOL`);
+near the optimum the misfit is flat to that level along the D–G valley, LM's trust region then
+shrinks under the noise and every step is rejected. `NoiseFloorLM` stops after six rejections
+in a row, and a fit counts as converged only if the Gauss–Newton step still left is below
+`GN_STEP_TOL` standard errors. Rows where F_s <= m·a_max (the reticle would slide grossly,
+outside Eq 27's pre-sliding model) or the contact fails get a residual of 1e3, so LM backs off.
+
+Known limitation: forward-mode derivatives through the slip solver's implicit stages (diffrax
+Kvaerno5, optimistix root find with implicit differentiation) raise "A linear solver returned
+non-finite output" where a stage's Newton iteration diverges at a trial point (seen from the
+start D = 2.95, G = 1e-8 m, μ_t = 0.12). `fit_measured_slips` turns that into `ChainFitError`
+naming the trial point.
 """
 
 from __future__ import annotations
@@ -451,8 +464,12 @@ def fit_measured_slips(
             wander along the flat D–G valley without lowering the misfit.
         progress: print one line per residual evaluation to stderr (long fits).
     Returns:
-        ChainFit; `converged` False (with `fit.message`) when LM did not succeed — never raises
-        for that.
+        ChainFit; `converged` False (with `fit.message`) when LM did not succeed or stopped
+        short of the optimum (Gauss–Newton step >= `GN_STEP_TOL` standard errors) — never
+        raises for that.
+    Raises:
+        ValueError: bad input (names the parameter, value and allowed range).
+        ChainFitError: the compiled fit failed (see the module docstring's known limitation).
     """
     free = tuple(free)
     bad = [n for n in free if n not in PARAMETERS]
