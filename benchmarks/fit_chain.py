@@ -67,7 +67,7 @@ def _matched_rtol(params, kw, loads):
     tight = np.asarray(tight)[0]
     D, G, mu_t = params[:3]
     c = ref.reference_contact(D=D, G=G, mu_t=mu_t, load=float(loads[-1]), **kw)
-    for rtol in (1e-5, 1e-6, 1e-7, 1e-8):
+    for rtol in (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8):
         ph, _ = scipy_phases(c["F_s"], c["K_tau"], c["C_tau"], "Radau", rtol)
         err = float(np.max(np.abs(ph / tight - 1)))
         if err <= 5e-4:
