@@ -332,6 +332,9 @@ def main(argv=None):
     import slip as slip_benchmarks  # benchmarks/slip.py (issue 3)
 
     results += slip_benchmarks.run(quick=args.quick)
+    import fit_chain  # benchmarks/fit_chain.py (issue 5: full-chain fit of Tables 4-7)
+
+    results += fit_chain.run(quick=args.quick)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(results, indent=2) + "\n")

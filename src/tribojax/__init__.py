@@ -32,6 +32,9 @@ from ._data import read_table as read_table
 from ._data import wang2022_table as wang2022_table
 from ._fit import FitResult as FitResult
 from ._fit import least_squares_fit as least_squares_fit
+from ._fit_chain import ChainFit as ChainFit
+from ._fit_chain import chain_phase_slips as chain_phase_slips
+from ._fit_chain import fit_measured_slips as fit_measured_slips
 from ._friction import AbstractFrictionElement as AbstractFrictionElement
 from ._hysteresis import HarmonicCoefficients as HarmonicCoefficients
 from ._hysteresis import drive as drive

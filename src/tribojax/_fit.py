@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -62,6 +63,26 @@ class FitResult:
         }
 
 
+@eqx.filter_jit
+def _solve(residual_fn, theta0, args, solver, max_steps, jac):
+    # jitted here so that a module-level `residual_fn` (hashed by identity) is compiled once and
+    # a repeated fit with new data in `args` runs warm
+    return optx.least_squares(
+        residual_fn,
+        solver,
+        theta0,
+        args,
+        options=dict(jac=jac),
+        max_steps=max_steps,
+        throw=False,
+    )
+
+
+@eqx.filter_jit
+def _value_and_jacobian(residual_fn, theta, args):
+    return residual_fn(theta, args), jax.jacfwd(residual_fn)(theta, args)
+
+
 def least_squares_fit(
     residual_fn,
     theta0,
@@ -74,6 +95,7 @@ def least_squares_fit(
     atol: float = 1e-12,
     max_steps: int = 500,
     jac: str = "bwd",
+    solver=None,
 ) -> FitResult:
     """Fit θ minimising ½‖residual_fn(θ, args)‖² with optimistix Levenberg–Marquardt.
 
@@ -86,25 +108,23 @@ def least_squares_fit(
         jac: how LM differentiates the residuals, "bwd" or "fwd" (optimistix option). "bwd" is
             the default because forward linearisation of a residual that contains an optimistix
             root find (the contact load balance) makes lineax reject the Jacobian as non-finite
-            in optimistix 0.1.0, although jax.jacfwd of the same residual is finite.
+            in optimistix 0.1.0, although jax.jacfwd of the same residual is finite (a
+            `jax.custom_jvp` around the root find avoids it, see `_fit_chain`).
+        solver: an optimistix least-squares solver in place of LevenbergMarquardt(rtol, atol).
+    The solve is compiled once per `residual_fn` object: pass a module-level function (data in
+    `args`) and repeated fits run warm.
+
     Returns:
         FitResult; `converged` False (and `message` set) when LM did not succeed. Never raises for
         non-convergence: the caller decides.
     """
     ensure_x64()
     theta0 = jnp.asarray(theta0, dtype=jnp.float64)
-    sol = optx.least_squares(
-        residual_fn,
-        optx.LevenbergMarquardt(rtol=rtol, atol=atol),
-        theta0,
-        args,
-        options=dict(jac=jac),
-        max_steps=max_steps,
-        throw=False,
-    )
+    if solver is None:
+        solver = optx.LevenbergMarquardt(rtol=float(rtol), atol=float(atol))
+    sol = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
     theta = sol.value
-    r = residual_fn(theta, args)
-    J = jax.jacfwd(residual_fn)(theta, args)
+    r, J = _value_and_jacobian(residual_fn, theta, args)
     n, p = J.shape
     u, sv, vt = jnp.linalg.svd(J, full_matrices=False)
     # (JᵀJ)^-1 through the SVD; directions with negligible singular values get infinite variance.
