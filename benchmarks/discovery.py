@@ -38,8 +38,10 @@ def scipy_baseline_fit(run, start):
             zdot = v * max(1.0 - np.sign(v) * z / zmax, 0.0)
             return [v, np.interp(tt, t, a) * 1e9 - (K * z + C * zdot) / m, zdot]
 
+        # max_step below the drive's shortest segment (10 ms): otherwise LSODA steps over the
+        # start of the motion and returns zeros
         sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, 0.0, 0.0], method="LSODA", t_eval=t,
-                        rtol=1e-8, atol=1e-9)  # fmt: skip
+                        rtol=1e-8, atol=1e-9, max_step=2.5e-3)  # fmt: skip
         return sol.y[0] if sol.success else np.full(t.size, 1e6)
 
     t0 = time.perf_counter()
