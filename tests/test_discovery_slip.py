@@ -88,7 +88,9 @@ def test_predict_derivatives_match_finite_differences():
         # makes permanent; it falls as h grows (h = 1e-4: up to 6 %, 1e-3: <= 1.4 % measured),
         # so the check is at the 3 % level of each column's scale
         assert np.max(np.abs(fd - J[:, i])) < 3e-2 * np.max(np.abs(J[:, i])) + 1e-15
-    assert np.allclose(f(v0), b.predict(v0[:3], v0[3:]), rtol=1e-12, atol=1e-18)
+    # jit vs eager: rounding differs between the two compilations, an adaptive step decision
+    # can flip and the ratchet keeps it: measured 2e-5 relative, checked at 1e-4
+    assert np.allclose(f(v0), b.predict(v0[:3], v0[3:]), rtol=1e-4, atol=1e-4 * 4e-8)
     assert dfx  # forward mode is what the baseline uses (adjoint=ForwardMode)
 
 
