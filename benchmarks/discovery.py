@@ -29,6 +29,9 @@ def scipy_baseline_fit(run, start):
     t, a, y, m = run.t, run.accel, run.slip * 1e9, run.mass
     sd = run.noise_std * 1e9
 
+    d2 = np.abs(np.diff(a, 2)) > 1e-9
+    kinks = np.concatenate([[0], np.flatnonzero(d2) + 1, [t.size - 1]])
+
     def simulate(p):
         F, K, C = np.exp(p)
         zmax = F / K * 1e9
@@ -38,11 +41,17 @@ def scipy_baseline_fit(run, start):
             zdot = v * max(1.0 - np.sign(v) * z / zmax, 0.0)
             return [v, np.interp(tt, t, a) * 1e9 - (K * z + C * zdot) / m, zdot]
 
-        # max_step below the drive's shortest segment (10 ms): otherwise LSODA steps over the
-        # start of the motion and returns zeros
-        sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, 0.0, 0.0], method="LSODA", t_eval=t,
-                        rtol=1e-8, atol=1e-9, max_step=2.5e-3)  # fmt: skip
-        return sol.y[0] if sol.success else np.full(t.size, 1e6)
+        # one LSODA solve per stretch between the drive's kinks (as benchmarks/slip.py does):
+        # one solve across them diverges or steps over the start of the motion
+        out, state = np.zeros(t.size), [0.0, 0.0, 0.0]
+        for i0, i1 in zip(kinks[:-1], kinks[1:]):
+            sol = solve_ivp(rhs, (t[i0], t[i1]), state, method="LSODA", t_eval=t[i0 : i1 + 1],
+                            rtol=1e-8, atol=1e-9)  # fmt: skip
+            if not sol.success or not np.all(np.isfinite(sol.y)):
+                return np.full(t.size, 1e6)
+            out[i0 : i1 + 1] = sol.y[0]
+            state = sol.y[:, -1]
+        return out
 
     t0 = time.perf_counter()
     res = least_squares(lambda p: (simulate(p) - y) / sd, np.log(start), method="trf",
