@@ -335,6 +335,10 @@ def main(argv=None):
     import fit_chain  # benchmarks/fit_chain.py (issue 5: full-chain fit of Tables 4-7)
 
     results += fit_chain.run(quick=args.quick)
+
+    import discovery as discovery_benchmarks  # benchmarks/discovery.py (issue 6)
+
+    results += discovery_benchmarks.run(quick=args.quick)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(results, indent=2) + "\n")

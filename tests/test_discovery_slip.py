@@ -1,0 +1,167 @@
+"""Slip side of discovery: the augmented element, the additive effect columns, and the workflow on
+records with hidden effects (tribojax.discovery.synthetic; full confusion table marked slow)."""
+
+import os
+
+import diffrax as dfx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import tribojax as tj
+import tribojax.discovery as disc
+from tribojax.discovery import _slip as ds
+from tribojax.discovery import synthetic as syn
+
+N_CI = 231  # samples over 2.3 s (10 ms apart: the hidden profile's kinks fall on samples)
+T3 = tj.wang2022_table(3)
+F, K, C = float(T3["Fs_N"][0]), float(T3["Ktau_N_per_m"][0]), float(T3["Ctau_Ns_per_m"][0])
+TS = np.linspace(0.0, 2.3, N_CI)
+
+
+def _slip(element, profile=syn.HIDDEN_PROFILE):
+    return np.asarray(tj.simulate_slip(element, profile, ts=TS).slip)
+
+
+def test_augmented_element_null_is_preslip_lugre():
+    ref = _slip(tj.PreSlipLuGre(F, K, C))
+    aug = _slip(ds.AugmentedPreSlip(F, K, C, 0.0, 0.0, 1e-6, 0.0, syn.HIDDEN_PROFILE))
+    # same equations, same solver; differences only from the extra time state in the step control
+    assert np.max(np.abs(aug - ref)) < 1e-5 * np.max(np.abs(ref))
+
+
+def test_augmented_element_matches_lugre_eq25():
+    # σ2 and Stribeck as in tribojax.LuGre (wang2022 Eq 25, F_c = (1 − δ)F_s, β = 2)
+    delta, vs, s2 = 0.15, 1e-6, 2 * C
+    delta_eff = 0.9 * np.tanh(delta / 0.9)  # the element's bounded δ (equal to first order)
+    ref = _slip(tj.LuGre(K, C, s2, (1 - delta_eff) * F, F, vs))
+    aug = _slip(ds.AugmentedPreSlip(F, K, C, s2, delta, vs, 0.0, syn.HIDDEN_PROFILE))
+    assert np.max(np.abs(aug - ref)) < 1e-5 * np.max(np.abs(ref))
+
+
+def test_load_coupling_breaks_the_accel_decel_symmetry():
+    # κ > 0: more load while accelerating (a > 0) → less slip there than while decelerating
+    base = _slip(ds.AugmentedPreSlip(F, K, C, 0.0, 0.0, 1e-6, 0.0, syn.HIDDEN_PROFILE))
+    coup = _slip(ds.AugmentedPreSlip(F, K, C, 0.0, 0.0, 1e-6, 0.3, syn.HIDDEN_PROFILE))
+    acc = (TS > 0.2) & (TS < 0.6)
+    assert np.mean(coup[acc]) < np.mean(base[acc])
+
+
+def test_oscillator_matches_scipy_radau():
+    a = np.asarray(syn.HIDDEN_PROFILE.acceleration(TS))
+    q = np.asarray(ds._oscillator(jnp.asarray(TS), jnp.asarray(a), 2 * np.pi * 40.0, 0.03))[:, 0]
+    ref = syn._oscillator_scipy(TS, syn.HIDDEN_PROFILE, 40.0, 0.03)
+    # exact discretisation vs Radau at rtol 1e-10: agreement to ~1e-7 of the peak
+    assert np.max(np.abs(q - ref)) < 1e-6 * np.max(np.abs(ref))
+
+
+def test_stage_travel_is_exact_for_piecewise_linear_drive():
+    prof = tj.TrapezoidProfile()  # v_max 0.5 m/s, symmetric: back at rest at 2.15 s
+    t = np.linspace(0, 2.3, 461)
+    v, x = ds.stage_travel(t, np.asarray(prof.acceleration(t)))
+    assert abs(v[-1]) < 1e-12 and np.max(v) == pytest.approx(0.5, rel=1e-12)
+    # symmetric speed-up and slow-down (0.65 s each) cover half their time at v_max, plus the
+    # 0.75 s cruise: travel = 0.5 m/s × (0.65/2 + 0.75 + 0.65/2) = 0.7 m
+    assert x[-1] == pytest.approx(0.5 * (0.65 / 2 + 0.75 + 0.65 / 2), rel=1e-12)
+
+
+def test_slip_start_is_near_truth():
+    run = syn.hidden_effect_run("clean", 0.0, 0.6, n=N_CI)
+    F0, K0, C0 = ds.slip_start(run.t, run.accel, run.slip, run.mass)
+    assert F0 == pytest.approx(F, rel=0.25) and K0 == pytest.approx(K, rel=0.25)
+
+
+def test_predict_derivatives_match_finite_differences():
+    run = syn.hidden_effect_run("clean", 0.0, 0.6, n=N_CI)
+    b = disc.slip_baseline(run)
+    th = jnp.log(jnp.array([F, K, C]))
+    kn = jnp.asarray(b.knob_null()).at[0].set(0.5).at[1].set(0.1).at[2].set(-6.0).at[3].set(0.2)
+    f = jax.jit(lambda v: b.predict(v[:3], v[3:]))
+    v0 = jnp.concatenate([th, kn])
+    J = jax.jacfwd(f)(v0)
+    h = 1e-3
+    for i in range(7):
+        e = jnp.zeros(7).at[i].set(h)
+        fd = (f(v0 + e) - f(v0 - e)) / (2 * h)
+        # the FD carries the adaptive solver's step noise (rtol 1e-6), which the slip's ratchet
+        # makes permanent; it falls as h grows (h = 1e-4: up to 6 %, 1e-3: <= 1.4 % measured),
+        # so the check is at the 3 % level of each column's scale
+        assert np.max(np.abs(fd - J[:, i])) < 3e-2 * np.max(np.abs(J[:, i])) + 1e-15
+    # jit vs eager: rounding differs between the two compilations, an adaptive step decision
+    # can flip and the ratchet keeps it: measured 2e-5 relative, checked at 1e-4
+    assert np.allclose(f(v0), b.predict(v0[:3], v0[3:]), rtol=1e-4, atol=1e-4 * 4e-8)
+    assert dfx  # forward mode is what the baseline uses (adjoint=ForwardMode)
+
+
+def test_bad_record_and_start():
+    run = syn.hidden_effect_run("clean", 0.0, 0.6, n=N_CI)
+    with pytest.raises(ValueError, match="start"):
+        disc.slip_baseline(run, start=[1.0, -1.0, 1.0])
+    with pytest.raises(ValueError, match="effect"):
+        syn.hidden_effect_run("friction_gremlins", 1e-10)
+    with pytest.raises(ValueError, match="load"):
+        syn.hidden_effect_run("clean", 1e-10, load=3.3)
+
+
+def _check(row):
+    assert row["converged"], row
+    if row["hidden"] == "clean":
+        assert row["named"] == "none", row
+    elif row["hidden"] in ("viscous_friction", "stribeck") and (
+        row["load_kPa"],
+        row["noise_m"],
+    ) != (0.6, syn.NOISE_LEVELS["low"]):
+        # friction physics is partly absorbed by the baseline's own F_s, K_tau, C_tau (σ2·v by
+        # C_τ·dz/dt most of all): at 2 kPa or the higher noise the gap shrinks by less than 2x
+        # and the weakest viscous case is not found (confusion table in the issue note). Never
+        # another effect, and the residual never grows.
+        assert row["named"] in (row["hidden"], "none"), row
+        assert row["final_rmse_m"] <= row["baseline_rmse_m"], row
+        if row["hidden"] == "stribeck":
+            assert row["named"] == "stribeck" and row["shrink"] > 1.4, row
+    else:
+        assert row["named"] == row["hidden"], row
+        assert row["shrink"] >= 2.0, row
+
+
+FULL = os.environ.get("TRIBOJAX_FULL") == "1"
+# CI form: clean (must give none), one measurement and one physics effect (position_error runs in
+# the CLI test); TRIBOJAX_FULL=1: every effect and clean x 2 noise levels x 2 loads
+CASES = (
+    [(h, None, None) for h in ("clean", *syn.SLIP_EFFECTS)]
+    if FULL
+    else [("clean", "high", 2.0), ("vibration", "high", 0.6), ("load_coupling", "low", 2.0)]
+)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("hidden, noise, load", CASES)
+def test_hidden_effect_confusion(hidden, noise, load):
+    if noise is None:
+        rows = syn.confusion_study([hidden], n=N_CI)
+    else:
+        rows = syn.confusion_study([hidden], [syn.NOISE_LEVELS[noise]], [load], n=N_CI)
+    for row in rows:
+        _check(row)
+
+
+def test_wang2022_table_discovery_short():
+    """fitting/wang2022_discovery.py in its short form (two candidates)."""
+    from fitting.wang2022_discovery import run
+
+    from tribojax._reproduce_slip import table3_phase_slips
+
+    res = run(short=True)
+    rep = res.pop("_report")
+    # the baseline is the published model: its residuals are ln(measured/model) cell by cell
+    model = np.asarray(table3_phase_slips(1.0)).T.ravel()
+    measured = np.concatenate([tj.wang2022_table(n)["measured_nm"] for n in (4, 5, 6, 7)])
+    expected = np.log(np.abs(measured / model))
+    # forward-mode solve vs the default adjoint: same steps, same numbers to ~1e-9
+    assert np.allclose(rep.y - rep.baseline_y, expected, atol=1e-6)
+    assert res["baseline_rmse"] == pytest.approx(np.sqrt(np.mean(expected**2)), rel=1e-6)
+    assert res["effect"] in ("none", "position_error", "gross_sliding")
+    if res["effects"]:
+        assert res["final_rmse"] < res["baseline_rmse"]
+    assert len(res["cells"]) == 24
