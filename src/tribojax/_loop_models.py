@@ -1,0 +1,152 @@
+"""Loop-side models for discovery: a Jenkins baseline and its physical augmentations.
+
+The measured quantity of a loop record is the friction force at each sample; the model drives an
+element through the record's own displacement history (as `fit_loop(..., model="history")`), so it
+works for any history, not only a clean sinusoid.
+
+One generalised element covers the baseline and every physical augmentation:
+
+* an Iwan bank (parallel Jenkins elements, slip displacements y_j, stiffnesses k_j). One element
+  (y = A0 = μN/K_d, k = K_d) is the Jenkins macroslip element (wu2015 Eq 1); `Mindlin`'s Iwan
+  discretisation is the Mindlin/Koh microslip element (wu2015 Eq 2);
+* `microslip`: the force is (1 − w)·Jenkins + w·Mindlin with the same μN and K_d (both have initial
+  slope K_d and gross-slip force μN); w = 0 is the baseline, w = 1 the full Mindlin law;
+* `normal_load_variation`: the normal load follows the displacement, N(u) = N0·(1 + β·u/A) (A: half
+  the record's peak-to-peak u), so μN scales by s(u) = 1 + βu/A and K_d by s(u)^0.7616 (the
+  exponent of wu2015 Eq 5, K_d ∝ N^0.7616); every Iwan slider's limit scales with μN and every
+  spring with K_d. β = 0 is the baseline;
+* `viscous_damping`: c·u̇ added to the force (u̇ from the record's displacement by central
+  differences); c = 0 is the baseline.
+
+Rate-independent updates are exact: z_j ← clip(z_j + Δu, −y_j·a(u), y_j·a(u)), f = Σ k_j·b(u)·z_j
+with a = s^(1−0.7616), b = s^0.7616 (a = b = 1 without load variation).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._checks import fail_if
+from ._hysteresis_elements import Mindlin
+from ._loops import HysteresisLoop, _cycle_starts, analyse_loop
+
+KD_LOAD_EXPONENT = 0.7616  # wu2015 Eq 5: K_d ∝ N^0.7616
+N_IWAN = 128  # Iwan elements of the Mindlin law (interpolation error ~ 1/n² of μN)
+
+
+class LoopData(eqx.Module):
+    """A loop record prepared for the drive model (SI units).
+
+    Fields:
+        u: displacement from the first upward mean-crossing on, relative to mid-stroke (m); the
+            model is driven through it from rest.
+        f: measured force at the fitted samples (N): those from the first reversal after the
+            crossing on (the virgin loading is not fitted).
+        v: velocity at the fitted samples (m/s, central differences of the record's u).
+        A: half the peak-to-peak displacement (m), the scale of β.
+        skip: index of the first fitted sample within `u` (static).
+        index: index of each fitted sample in the original record (static tuple length; array).
+    """
+
+    u: jax.Array
+    f: jax.Array
+    v: jax.Array
+    A: jax.Array
+    index: jax.Array
+    skip: int = eqx.field(static=True)
+
+
+def prepare_loop(loop: HysteresisLoop) -> LoopData:
+    """`LoopData` of a record: drive from the first upward crossing, fit from the first reversal."""
+    t, u = loop.t, loop.u
+    first = int(np.searchsorted(t, _cycle_starts(t, u)[0]))
+    mid = 0.5 * (u.max() + u.min())
+    u_rel = u[first:] - mid
+    omega = analyse_loop(loop).omega
+    half = int(np.searchsorted(t[first:], t[first] + np.pi / omega))
+    skip = int(np.argmax(u_rel[: max(half, 2)]))
+    v = np.gradient(u, t)
+    index = np.arange(first + skip, len(t))
+    return LoopData(
+        u=jnp.asarray(u_rel),
+        f=jnp.asarray(loop.f[index]),
+        v=jnp.asarray(v[index]),
+        A=jnp.asarray(0.5 * (u.max() - u.min())),
+        index=jnp.asarray(index),
+        skip=skip,
+    )
+
+
+class LoopSpec(eqx.Module):
+    """Parameters of the generalised loop model (array leaves; the baseline has w = β = c = 0).
+
+    Fields: mu_N (gross-slip force, N, > 0), K_d (tangential stiffness, N/m, > 0), w (microslip
+    weight, —; 0 Jenkins, 1 Mindlin), beta (normal-load gradient N(u) = N0(1 + βu/A), —, |β| < 1),
+    c (viscous coefficient, N·s/m).
+    """
+
+    mu_N: jax.Array
+    K_d: jax.Array
+    w: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+    beta: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+    c: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+
+
+def _iwan_drive(y, k, a, b, u):
+    """Force of an Iwan bank (slip limits y, stiffnesses k) scaled by a(u), b(u) along u."""
+    du = jnp.diff(u)
+
+    def step(z, inp):
+        d, aa, bb = inp
+        z = jnp.clip(z + d, -y * aa, y * aa)
+        return z, bb * jnp.sum(k * z)
+
+    _, forces = jax.lax.scan(step, jnp.zeros_like(y), (du, a[1:], b[1:]))
+    return jnp.concatenate([jnp.zeros(1), forces])
+
+
+def loop_force(spec: LoopSpec, data: LoopData, *, microslip: bool = True) -> jax.Array:
+    """Model force (N) at the fitted samples of `data` for the parameters `spec`.
+
+    `microslip=False` (static) skips the Mindlin bank (use it when w is identically 0: the result
+    is the same, at a fraction of the cost). References: wu2015 Eqs 1, 2, 5 (see module docstring).
+    """
+    s = 1.0 + spec.beta * data.u / data.A
+    s = fail_if(s, jnp.any(s <= 0.0), "normal_load_variation: beta must keep N(u) > 0 (|beta| < 1)")
+    s_safe = jnp.where(s > 0.0, s, 1.0)
+    b = s_safe**KD_LOAD_EXPONENT
+    a = s_safe / b
+    f = _iwan_drive(jnp.reshape(spec.mu_N / spec.K_d, (1,)), jnp.reshape(spec.K_d, (1,)), a, b, data.u)
+    if microslip:
+        y, k = Mindlin(spec.mu_N, 1.0, spec.K_d, n_iwan=N_IWAN)._iwan()
+        f = f + spec.w * (_iwan_drive(y, k, a, b, data.u) - f)
+    return f[data.skip :] + spec.c * data.v
+
+
+@dataclasses.dataclass(frozen=True)
+class LoopScales:
+    """Reference scales of a record used to make effect parameters O(1): force (N), velocity
+    (m/s); from the record's peak-to-peak force and velocity."""
+
+    force: float
+    velocity: float
+
+
+def loop_scales(loop: HysteresisLoop) -> LoopScales:
+    v = np.gradient(loop.u, loop.t)
+    return LoopScales(
+        force=0.5 * float(loop.f.max() - loop.f.min()),
+        velocity=0.5 * float(v.max() - v.min()),
+    )
+
+
+def loop_branch(loop: HysteresisLoop) -> np.ndarray:
+    """Branch of each sample: +1 loading (u rising), −1 unloading, from a 5-point smoothed u̇."""
+    u = np.convolve(loop.u, np.ones(5) / 5.0, mode="same")
+    u[:2], u[-2:] = loop.u[:2], loop.u[-2:]
+    return np.where(np.gradient(u, loop.t) >= 0.0, 1.0, -1.0)
