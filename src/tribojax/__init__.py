@@ -71,6 +71,12 @@ from ._profiles import AbstractProfile as AbstractProfile
 from ._profiles import MeasuredProfile as MeasuredProfile
 from ._profiles import PiecewiseLinearProfile as PiecewiseLinearProfile
 from ._profiles import TrapezoidProfile as TrapezoidProfile
+from ._records import SlipRun as SlipRun
+from ._records import read_record as read_record
+from ._records import read_slip_run as read_slip_run
+from ._records import simulate_run as simulate_run
+from ._records import synthetic_slip_run as synthetic_slip_run
+from ._records import write_slip_run as write_slip_run
 from ._reproduce import calibrate_table3 as calibrate_table3
 from ._reproduce import equivalent_G as equivalent_G
 from ._reproduce import reproduce_table3 as reproduce_table3

@@ -33,16 +33,24 @@ _ELEMENTS = {"jenkins": Jenkins, "mindlin": Mindlin}
 class HysteresisLoop:
     """A measured (or synthetic) loop: times t (s, increasing), displacement u (m), force f (N).
 
-    Construction checks lengths, finiteness, increasing time and that at least one whole cycle
-    of u is present (ValueError). `source` names the file it came from, if any.
+    Optional metadata (keyword-only): `normal_load` (N) of the contact, the drive `frequency`
+    (Hz) and `noise_std` (N), the standard deviation of the force noise (`fit_loop` uses it as
+    the residual scale when given). Construction checks lengths, finiteness, increasing time,
+    positive metadata and that at least one whole cycle of u is present (ValueError). `source`
+    names the file it came from, if any.
     """
 
     t: np.ndarray
     u: np.ndarray
     f: np.ndarray
     source: str = "<array>"
+    normal_load: float | None = dataclasses.field(default=None, kw_only=True)
+    frequency: float | None = dataclasses.field(default=None, kw_only=True)
+    noise_std: float | None = dataclasses.field(default=None, kw_only=True)
 
     def __post_init__(self):
+        from ._records import _positive_or_none
+
         arrays = [np.asarray(x, dtype=np.float64) for x in (self.t, self.u, self.f)]
         for name, x in zip(("t", "u", "f"), arrays):
             object.__setattr__(self, name, x)
@@ -53,6 +61,9 @@ class HysteresisLoop:
                 raise ValueError(f"{self.source}: {name}[{bad[0]}] is {x[bad[0]]}")
         if not (len(self.t) == len(self.u) == len(self.f)):
             raise ValueError(f"{self.source}: t, u and f must have the same length")
+        for name, unit in (("normal_load", "N"), ("frequency", "Hz"), ("noise_std", "N")):
+            value = _positive_or_none(getattr(self, name), name, self.source, unit)
+            object.__setattr__(self, name, value)
         steps = np.flatnonzero(np.diff(self.t) <= 0)
         if steps.size:
             i = steps[0] + 1
@@ -66,45 +77,86 @@ class HysteresisLoop:
             )
 
 
+_LOOP_SIDECAR = {"normal_load_N": True, "frequency_Hz": True, "noise_std_N": False}
+_LOOP_UNITS = {"normal_load_N": "N", "frequency_Hz": "Hz", "noise_std_N": "N"}
+FREQUENCY_TOLERANCE = 0.1  # relative mismatch allowed between the sidecar and the record
+
+
 def read_loop(path) -> HysteresisLoop:
-    """Load a loop from a CSV with columns t_s, u_m, f_N (SI units), `#` comment lines allowed.
+    """Load a loop: CSV `time_s,displacement_m,force_N` plus sidecar `<stem>.json`, or legacy.
+
+    The issue's format needs the sidecar {"normal_load_N", "frequency_Hz" (required, > 0),
+    "noise_std_N" (optional, > 0)}; the legacy columns `t_s,u_m,f_N` take the same sidecar if
+    present. SI units, `#` comment lines allowed. The sidecar's frequency must agree with the
+    record's cycle spacing within 10 % (catches rad/s given as Hz).
 
     Raises DataFileError naming the file (and the line) for NaN/non-numeric entries, time that
-    does not increase, or fewer than one whole cycle.
+    does not increase, fewer than one whole cycle, or a missing/malformed/inconsistent sidecar.
     """
+    from ._records import LOOP_FILE_COLUMNS, csv_header, data_line_number, read_sidecar
+
     path = Path(path)
-    table = read_table(path, columns=LOOP_COLUMNS)
-    t = table["t_s"]
+    header = set(csv_header(path))
+    new = set(LOOP_FILE_COLUMNS) <= header
+    cols = LOOP_FILE_COLUMNS if new else LOOP_COLUMNS
+    table = read_table(path, columns=cols)
+    t, u, f = (table[c] for c in cols)
     steps = np.flatnonzero(np.diff(t) <= 0)
     if steps.size:
-        lineno = _data_line_number(path, steps[0] + 1)
+        lineno = data_line_number(path, steps[0] + 1)
         raise DataFileError(
-            f"{path}, line {lineno}: time t_s = {t[steps[0] + 1]} does not increase"
+            f"{path}, line {lineno}: time {cols[0]} = {t[steps[0] + 1]} does not increase"
         )
+    side = read_sidecar(path, _LOOP_SIDECAR, _LOOP_UNITS, required=new) or {}
     try:
-        return HysteresisLoop(t, table["u_m"], table["f_N"], source=str(path))
+        loop = HysteresisLoop(
+            t,
+            u,
+            f,
+            source=str(path),
+            normal_load=side.get("normal_load_N"),
+            frequency=side.get("frequency_Hz"),
+            noise_std=side.get("noise_std_N"),
+        )
     except ValueError as err:
         raise DataFileError(str(err)) from None
+    if loop.frequency is not None:
+        starts = _cycle_starts(loop.t, loop.u)
+        measured = (len(starts) - 1) / (starts[-1] - starts[0])
+        if abs(loop.frequency / measured - 1) > FREQUENCY_TOLERANCE:
+            raise DataFileError(
+                f"{path.with_suffix('.json')}: frequency_Hz = {loop.frequency:g} disagrees with "
+                f"the record's {measured:.6g} Hz (from the mean-crossings of its displacement) "
+                f"by more than {FREQUENCY_TOLERANCE:.0%}; give the frequency in Hz, not rad/s"
+            )
+    return loop
 
 
-def _data_line_number(path: Path, row: int) -> int:
-    """1-based line number of data row `row` (0-based) in a CSV with comments and a header."""
-    seen = -1  # the header is row -1
-    for lineno, raw in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
-        text = raw.strip()
-        if not text or text.startswith("#"):
-            continue
-        if seen == row:
-            return lineno
-        seen += 1
-    return -1
+def write_loop(
+    loop: HysteresisLoop, path, comment: str = "", *, overwrite: bool = False, legacy=None
+) -> None:
+    """Write a loop as CSV (17 digits) with optional `#` comment lines, atomically.
 
+    With `normal_load` and `frequency` set, the issue's format `time_s,displacement_m,force_N`
+    plus a sidecar `<stem>.json`; otherwise (or with legacy=True) the legacy `t_s,u_m,f_N`
+    without one. Refuses (FileExistsError) if a target exists, unless `overwrite=True`.
+    """
+    from ._records import LOOP_FILE_COLUMNS, write_record_files
 
-def write_loop(loop: HysteresisLoop, path, comment: str = "") -> None:
-    """Write a loop as CSV (t_s, u_m, f_N) with optional `#` comment lines."""
-    lines = [f"# {c}" for c in comment.splitlines()] + [",".join(LOOP_COLUMNS)]
-    lines += [f"{a:.17g},{b:.17g},{c:.17g}" for a, b, c in zip(loop.t, loop.u, loop.f)]
-    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
+    has_meta = loop.normal_load is not None and loop.frequency is not None
+    legacy = (not has_meta) if legacy is None else bool(legacy)
+    if not legacy and not has_meta:
+        raise ValueError(
+            "the time_s,displacement_m,force_N format needs the loop's normal_load and frequency"
+        )
+    side = None
+    if not legacy:
+        side = {"normal_load_N": loop.normal_load, "frequency_Hz": loop.frequency}
+        if loop.noise_std is not None:
+            side["noise_std_N"] = loop.noise_std
+    header = LOOP_COLUMNS if legacy else LOOP_FILE_COLUMNS
+    write_record_files(path, header, (loop.t, loop.u, loop.f), side, overwrite=overwrite,
+                       comment=comment)  # fmt: skip
 
 
 def _cycle_starts(t, u) -> np.ndarray:
@@ -243,7 +295,8 @@ def fit_loop(
 
     Args:
         element: "jenkins" or "mindlin".
-        sigma: force noise, N (None: estimated from the residuals).
+        sigma: force noise, N (None: the loop's `noise_std` if set, else estimated from the
+            residuals).
         model: "steady" or "history".
     Returns:
         FitResult with names ("mu_N", "K_d"); `converged` says whether LM succeeded.
@@ -254,6 +307,7 @@ def fit_loop(
         raise ValueError(f"model must be 'steady' or 'history', got {model!r}")
     cls = _ELEMENTS[element]
     start = analyse_loop(loop, window=window)
+    sigma = loop.noise_std if sigma is None else sigma
     scale = 1.0 if sigma is None else float(check_range(sigma, "sigma", 0.0, unit="N"))
     if model == "steady":
         direction = jnp.asarray(_loop_phase(loop, start))
@@ -300,15 +354,24 @@ def synthetic_loop(
     samples_per_cycle: int = 400,
     noise: float = 0.0,
     seed: int = 0,
+    normal_load=None,
 ) -> HysteresisLoop:
     """A steady loop of `element` under u = A sin ωt, with Gaussian force noise (N) from `seed`.
 
     The record starts at u = 0 on the rising branch and spans `cycles` + 1/4 periods, so that
-    `analyse_loop` finds `cycles` whole cycles.
+    `analyse_loop` finds `cycles` whole cycles. Its `frequency` is ω/2π, `noise_std` the noise
+    (None if 0) and `normal_load` as given (N).
     """
     n = cycles * samples_per_cycle + samples_per_cycle // 4 + 1
     t = np.arange(n) / samples_per_cycle * (2.0 * np.pi / omega)
     theta = omega * t - 0.5 * np.pi  # u = A cos θ = A sin ωt
     f = np.asarray(jax.vmap(lambda th: element.steady_loop(th, A))(jnp.asarray(theta)))
     rng = np.random.default_rng(seed)
-    return HysteresisLoop(t, A * np.sin(omega * t), f + noise * rng.standard_normal(n))
+    return HysteresisLoop(
+        t,
+        A * np.sin(omega * t),
+        f + noise * rng.standard_normal(n),
+        normal_load=normal_load,
+        frequency=float(omega) / (2.0 * np.pi),
+        noise_std=float(noise) if noise > 0 else None,
+    )
