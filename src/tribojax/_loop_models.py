@@ -24,7 +24,7 @@ with a = s^(1−0.7616), b = s^0.7616 (a = b = 1 without load variation).
 
 from __future__ import annotations
 
-import dataclasses
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -50,7 +50,9 @@ class LoopData(eqx.Module):
         v: velocity at the fitted samples (m/s, central differences of the record's u).
         A: half the peak-to-peak displacement (m), the scale of β.
         skip: index of the first fitted sample within `u` (static).
-        index: index of each fitted sample in the original record (static tuple length; array).
+        index: index of each fitted sample in the original record.
+        c_scale: viscous-coefficient scale F/V (N·s/m): half the peak-to-peak force over half the
+            peak-to-peak velocity of the record.
     """
 
     u: jax.Array
@@ -58,6 +60,7 @@ class LoopData(eqx.Module):
     v: jax.Array
     A: jax.Array
     index: jax.Array
+    c_scale: jax.Array
     skip: int = eqx.field(static=True)
 
 
@@ -70,7 +73,7 @@ def prepare_loop(loop: HysteresisLoop) -> LoopData:
     omega = analyse_loop(loop).omega
     half = int(np.searchsorted(t[first:], t[first] + np.pi / omega))
     skip = int(np.argmax(u_rel[: max(half, 2)]))
-    v = np.gradient(u, t)
+    v = np.gradient(u, t, edge_order=2)
     index = np.arange(first + skip, len(t))
     return LoopData(
         u=jnp.asarray(u_rel),
@@ -78,6 +81,7 @@ def prepare_loop(loop: HysteresisLoop) -> LoopData:
         v=jnp.asarray(v[index]),
         A=jnp.asarray(0.5 * (u.max() - u.min())),
         index=jnp.asarray(index),
+        c_scale=jnp.asarray(0.5 * np.ptp(loop.f) / (0.5 * np.ptp(v))),
         skip=skip,
     )
 
@@ -121,28 +125,13 @@ def loop_force(spec: LoopSpec, data: LoopData, *, microslip: bool = True) -> jax
     s_safe = jnp.where(s > 0.0, s, 1.0)
     b = s_safe**KD_LOAD_EXPONENT
     a = s_safe / b
-    f = _iwan_drive(jnp.reshape(spec.mu_N / spec.K_d, (1,)), jnp.reshape(spec.K_d, (1,)), a, b, data.u)
+    f = _iwan_drive(
+        jnp.reshape(spec.mu_N / spec.K_d, (1,)), jnp.reshape(spec.K_d, (1,)), a, b, data.u
+    )
     if microslip:
         y, k = Mindlin(spec.mu_N, 1.0, spec.K_d, n_iwan=N_IWAN)._iwan()
         f = f + spec.w * (_iwan_drive(y, k, a, b, data.u) - f)
     return f[data.skip :] + spec.c * data.v
-
-
-@dataclasses.dataclass(frozen=True)
-class LoopScales:
-    """Reference scales of a record used to make effect parameters O(1): force (N), velocity
-    (m/s); from the record's peak-to-peak force and velocity."""
-
-    force: float
-    velocity: float
-
-
-def loop_scales(loop: HysteresisLoop) -> LoopScales:
-    v = np.gradient(loop.u, loop.t)
-    return LoopScales(
-        force=0.5 * float(loop.f.max() - loop.f.min()),
-        velocity=0.5 * float(v.max() - v.min()),
-    )
 
 
 def loop_branch(loop: HysteresisLoop) -> np.ndarray:
@@ -150,3 +139,91 @@ def loop_branch(loop: HysteresisLoop) -> np.ndarray:
     u = np.convolve(loop.u, np.ones(5) / 5.0, mode="same")
     u[:2], u[-2:] = loop.u[:2], loop.u[-2:]
     return np.where(np.gradient(u, loop.t) >= 0.0, 1.0, -1.0)
+
+
+# --- named effects ----------------------------------------------------------------------------
+
+
+class AbstractLoopEffect(eqx.Module):
+    """A candidate effect that augments the Jenkins loop baseline.
+
+    `theta` is the effect's unconstrained parameter vector (size len(param_names)); at
+    `theta_null()` (an interior point) the effect vanishes. `apply` changes the physics (the
+    `LoopSpec`), `output` adds a term to the force (default: none). `strength` maps θ to the
+    reported physical strength(s) (default: θ itself).
+    """
+
+    name: ClassVar[str]
+    param_names: ClassVar[tuple[str, ...]]
+    units: ClassVar[tuple[str, ...]]
+
+    def theta_null(self) -> jax.Array:
+        return jnp.zeros(len(self.param_names))
+
+    def apply(self, spec: LoopSpec, theta, data: LoopData) -> LoopSpec:
+        return spec
+
+    def output(self, theta, data: LoopData, force) -> jax.Array:
+        return force
+
+    def strength(self, theta, data: LoopData) -> jax.Array:
+        return theta
+
+
+class Microslip(AbstractLoopEffect):
+    """Partial slip (wu2015 Eq 2, Mindlin/Koh): force (1 − w)·Jenkins + w·Mindlin, w = 0 null."""
+
+    name: ClassVar[str] = "microslip"
+    param_names: ClassVar[tuple[str, ...]] = ("w",)
+    units: ClassVar[tuple[str, ...]] = ("1",)
+
+    def apply(self, spec, theta, data):
+        return eqx.tree_at(lambda s: s.w, spec, spec.w + theta[0])
+
+
+class ViscousDamping(AbstractLoopEffect):
+    """Force ∝ velocity, c·u̇ (c in N·s/m); θ = c·V/F with the record's velocity and force
+    scales (so θ is the viscous force over the friction force at peak velocity); θ = 0 null."""
+
+    name: ClassVar[str] = "viscous_damping"
+    param_names: ClassVar[tuple[str, ...]] = ("c",)
+    units: ClassVar[tuple[str, ...]] = ("N s/m",)
+
+    def apply(self, spec, theta, data):
+        return eqx.tree_at(lambda s: s.c, spec, spec.c + theta[0] * data.c_scale)
+
+    def strength(self, theta, data):
+        return theta * data.c_scale
+
+
+class NormalLoadVariation(AbstractLoopEffect):
+    """Normal load varying with displacement, N(u) = N0(1 + β·u/A): μN ∝ N, K_d ∝ N^0.7616
+    (wu2015 Eq 5); β = 0 null."""
+
+    name: ClassVar[str] = "normal_load_variation"
+    param_names: ClassVar[tuple[str, ...]] = ("beta",)
+    units: ClassVar[tuple[str, ...]] = ("1",)
+
+    def apply(self, spec, theta, data):
+        return eqx.tree_at(lambda s: s.beta, spec, spec.beta + theta[0])
+
+
+def default_loop_effects() -> list[AbstractLoopEffect]:
+    """The library's loop candidates: microslip, viscous_damping, normal_load_variation."""
+    return [Microslip(), ViscousDamping(), NormalLoadVariation()]
+
+
+def loop_predict(theta_base, thetas, effects, data: LoopData):
+    """Force (N) at the fitted samples: the Jenkins baseline (θ_base = log μN, log K_d)
+    augmented by `effects` with parameters `thetas` (one vector per effect).
+
+    The Mindlin bank is evaluated only when a microslip-type effect is present (static choice:
+    any effect whose `apply` may set w is listed in `effects`)."""
+    spec = LoopSpec(jnp.exp(theta_base[0]), jnp.exp(theta_base[1]))
+    for effect, theta in zip(effects, thetas):
+        spec = effect.apply(spec, theta, data)
+    micro = any(isinstance(e, Microslip) for e in effects)
+    force = loop_force(spec, data, microslip=micro)
+    for effect, theta in zip(effects, thetas):
+        force = effect.output(theta, data, force)
+    return force

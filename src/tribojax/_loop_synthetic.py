@@ -25,8 +25,6 @@ Jenkins bound).
 
 from __future__ import annotations
 
-import dataclasses
-
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
@@ -84,30 +82,26 @@ def hidden_effect_loop(
     if effect == "normal_load_variation":
         clean = _load_varying_loop(mu_N, K_d, A, omega, **kw)
     else:
-        el = Mindlin(MU, normal_load, K_d) if effect == "microslip" else Jenkins(MU, normal_load, K_d)
-        clean = synthetic_loop(el, A, omega, **kw)
+        cls = Mindlin if effect == "microslip" else Jenkins
+        clean = synthetic_loop(cls(MU, normal_load, K_d), A, omega, **kw)
     f = clean.f
     if effect == "viscous_damping":
         c = VISCOUS_STRENGTH * mu_N / (omega * A0)
         f = f + c * A * omega * np.cos(omega * clean.t)
     f = f + noise * mu_N * np.random.default_rng(seed).standard_normal(f.shape)
-    return _with_meta(
-        HysteresisLoop(clean.t, clean.u, f, source=f"<hidden {effect}, seed {seed}>"),
+    return HysteresisLoop(
+        clean.t,
+        clean.u,
+        f,
+        source=f"<hidden {effect}, seed {seed}>",
         normal_load=normal_load,
         frequency=frequency,
-        noise_std=noise * mu_N if give_noise else None,
+        noise_std=noise * mu_N if (give_noise and noise > 0) else None,
     )
 
 
-def _with_meta(loop: HysteresisLoop, **meta) -> HysteresisLoop:
-    """The loop with the record fields normal_load/frequency/noise_std where the class has them."""
-    names = {f.name for f in dataclasses.fields(loop)}
-    meta = {k: v for k, v in meta.items() if k in names}
-    return dataclasses.replace(loop, **meta) if meta else loop
-
-
 def _load_varying_loop(mu_N, K_d, A, omega, *, cycles, samples_per_cycle):
-    """Jenkins with N(u) = N0(1 + βu/A), one warm-up cycle discarded; same grid as synthetic_loop."""
+    """Jenkins with N(u) = N0(1 + βu/A); one warm-up cycle dropped; synthetic_loop's grid."""
     n = cycles * samples_per_cycle + samples_per_cycle // 4 + 1
     k = np.arange(-samples_per_cycle, n)
     t = k / samples_per_cycle * (2.0 * np.pi / omega)
@@ -204,7 +198,11 @@ def eq7_standin_loop(
     rise = -np.asarray(_masing_falling(jnp.asarray(-ubar), A_bar, shape["p"], shape["s"]))
     f = mu_N * np.where(falling, fall, rise)
     f = f + noise * mu_N * np.random.default_rng(seed).standard_normal(n)
-    loop = HysteresisLoop(t, A_bar * A0 * np.sin(omega * t), f, source=f"<Eq 7 stand-in, Ā={A_bar}>")
-    return _with_meta(loop, normal_load=normal_load, frequency=frequency, noise_std=None)
-
-
+    return HysteresisLoop(
+        t,
+        A_bar * A0 * np.sin(omega * t),
+        f,
+        source=f"<Eq 7 stand-in, Ā={A_bar}>",
+        normal_load=normal_load,
+        frequency=frequency,
+    )
