@@ -1,0 +1,62 @@
+"""Discovery: find where a model and its data disagree, name the missing effect, add it (issue 6).
+
+Workflow (`discover`): fit a baseline; flag the stretches of the residual that the noise does not
+explain (`find_regions`: window χ² tests with an AR(1) correction, Bonferroni over windows); rank
+named candidate effects by Rao score tests built from forward-mode JAX Jacobians at the current
+fit; refit the best candidates and accept the one with the lowest ΔBIC below −10 (AR(1)-inflated);
+repeat greedily; `none` when nothing qualifies. `DiscoveryReport.as_dict()` is discovery.json.
+
+How to plug in (the contract; a loop or user module needs nothing else)
+-----------------------------------------------------------------------
+A **baseline** is a concrete `AbstractBaseline` (an equinox Module holding the record's arrays):
+
+    class MyBaseline(AbstractBaseline):
+        kind = "loop"                                   # ClassVar: effects of this kind apply
+        param_names = ("mu_N", "K_d"); param_units = ("N", "N/m")
+        knob_names = ("microslip", "load_slope")        # physics knobs effects may move
+        ...fields: the record's arrays (jnp), e.g. u, f, t ...
+        def knob_null(self): return np.array([0.0, 0.0])   # knobs under which effects vanish
+        def start(self): return np.log([...])           # unconstrained θ0 (np array)
+        def physical(self, theta): return jnp.exp(theta)  # θ → physical values (JAX)
+        def predict(self, theta, knobs): ...            # (n,) model samples (JAX, jacfwd-able)
+        def data(self): return DiscoveryData(y=f, x=u, segment=branch, noise_std=None or sd,
+                                             x_label="u (m)", y_label="force (N)",
+                                             segment_names={0: "falling", 1: "rising"})
+        # optional: def solver_ok(self, theta, knobs) -> bool
+
+`predict` must be jit/jacfwd-able in (theta, knobs); the record arrays are fields, so one compiled
+fit serves all records of the same shape. Knobs are always present (their null values give the
+baseline), so every augmented model shares one compiled function.
+
+An **effect** is a concrete `AbstractEffect` with ClassVars `name`, `kind` and a method
+`designs(baseline) -> list[EffectDesign]`, one design per point of its nuisance grid. A design is
+the affine form the engine fits, with signed strengths s (null s = 0, an interior point, so the
+score test is valid):
+
+    y = baseline.predict(θ, knobs) + basis @ s,   knobs = knob_null ⊕ knob_set + knob_gain @ s
+
+- a physics effect sets `knob_gain` (n_knobs × k) and possibly `knob_set` (nuisance knobs);
+- an additive (measurement) effect sets `basis` (n × k, output units per unit s);
+- `strength_names`, `strength_units`, `strength_scale` (physical value per unit s; pick the unit
+  so that s is O(1)), `nuisance` (reported), `n_nuisance` (counted in ΔBIC).
+Register it for `default_effects(kind)` with `@register_effect`, or pass it explicitly:
+`discover(baseline, effects=[*default_effects("slip"), MyEffect()])`. At most `K_MAX` = 8
+strengths in one model.
+
+Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration`,
+`load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip`.
+"""
+
+from ._core import ALPHA as ALPHA
+from ._core import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
+from ._core import K_MAX as K_MAX
+from ._core import AbstractBaseline as AbstractBaseline
+from ._core import AbstractEffect as AbstractEffect
+from ._core import DiscoveryData as DiscoveryData
+from ._core import EffectDesign as EffectDesign
+from ._core import default_effects as default_effects
+from ._core import register_effect as register_effect
+from ._discover import DiscoveryReport as DiscoveryReport
+from ._discover import discover as discover
+from ._regions import find_regions as find_regions
+from ._regions import noise_estimate as noise_estimate

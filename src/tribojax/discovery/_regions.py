@@ -1,0 +1,120 @@
+"""Where model and data disagree: noise level, AR(1) correlation, window tests, regions.
+
+Noise (when the sidecar gives none) comes from first differences of the residual, which a smooth
+misfit hardly touches: for AR(1) noise e with lag-1 correlation ρ, Δe has lag-1 correlation
+−(1−ρ)/2 and variance 2σ²(1−ρ), so
+
+    ρ̂ = 1 + 2·acf₁(Δr)   (clipped to [0, 0.95]),   σ̂ = 1.4826·MAD(Δr)/√(2(1−ρ̂)).
+
+Windows: the residual is cut into windows of w samples (never across a segment change). Under
+the noise model Q = Σ r²/σ² over a window has mean w and, for AR(1) noise, variance
+2w(1+ρ²)/(1−ρ²); Q/c is referred to χ²_ν with c = (1+ρ²)/(1−ρ²), ν = w/c (Satterthwaite).
+p-values are Bonferroni-corrected over the windows; adjacent flagged windows of one segment merge
+into a region, whose statistic and p-value are recomputed over the merged samples.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+RHO_MAX = 0.95
+
+
+def ar1_inflation(rho) -> float:
+    """Variance inflation (1+ρ)/(1−ρ) of a sum of AR(1) terms (effective n = n/c)."""
+    rho = float(np.clip(rho, 0.0, RHO_MAX))
+    return (1.0 + rho) / (1.0 - rho)
+
+
+def lag1(r) -> float:
+    """Lag-1 autocorrelation of `r` (mean removed); 0 for fewer than 3 samples."""
+    r = np.asarray(r, dtype=float) - np.mean(r)
+    den = float(r @ r)
+    if r.size < 3 or den == 0.0:
+        return 0.0
+    return float(r[1:] @ r[:-1]) / den
+
+
+def residual_rho(r) -> float:
+    """AR(1) ρ of a residual taken as noise, clipped to [0, RHO_MAX]."""
+    return float(np.clip(lag1(r), 0.0, RHO_MAX))
+
+
+def noise_estimate(r, segment=None) -> tuple[float, float]:
+    """(σ̂, ρ̂) of the noise in residual `r` from its first differences (module docstring).
+
+    Differences are taken within segments only.
+    """
+    r = np.asarray(r, dtype=float)
+    seg = np.zeros(r.size, int) if segment is None else np.asarray(segment)
+    d = np.diff(r)[np.diff(seg) == 0]
+    if d.size < 4:
+        raise ValueError(f"noise estimate needs >= 5 samples per segment, got {r.size}")
+    rho = float(np.clip(1.0 + 2.0 * lag1(d), 0.0, RHO_MAX))
+    mad = float(np.median(np.abs(d - np.median(d))))
+    sigma = 1.4826 * mad / np.sqrt(2.0 * (1.0 - rho))
+    if sigma == 0.0:
+        sigma = float(np.std(d)) / np.sqrt(2.0 * (1.0 - rho))
+    return sigma, rho
+
+
+def _windows(segment, w):
+    """(start, stop) sample ranges of ≈w samples inside each run of equal segment labels."""
+    seg = np.asarray(segment)
+    cuts = np.flatnonzero(np.diff(seg) != 0) + 1
+    bounds = np.concatenate([[0], cuts, [seg.size]])
+    out = []
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        m = max(1, int(round((b - a) / w)))
+        edges = np.linspace(a, b, m + 1).round().astype(int)
+        out += [(int(s), int(e)) for s, e in zip(edges[:-1], edges[1:]) if e > s]
+    return out
+
+
+def _window_p(r, sigma, rho):
+    c = (1.0 + rho**2) / (1.0 - rho**2)
+    q = float(np.sum((np.asarray(r) / sigma) ** 2))
+    nu = r.size / c
+    return q / r.size, float(stats.chi2.sf(q / c, nu))
+
+
+def find_regions(r, x, segment, sigma, rho, *, n_windows=32, alpha=0.01, segment_names=None):
+    """Flag the stretches where residual `r` exceeds the noise (σ, AR(1) ρ).
+
+    Returns a list of dicts {"segment", "start", "end" (abscissa x), "i0", "i1" (sample range,
+    end exclusive), "n", "statistic" (mean of r²/σ², 1 for noise), "p_value" (Bonferroni over
+    windows)} in sample order. Windows have ≈ n/n_windows samples (at least 8).
+    """
+    r = np.asarray(r, dtype=float)
+    w = max(8, r.size // n_windows)
+    wins = _windows(segment, w)
+    m = len(wins)
+    flags = [(_window_p(r[a:b], sigma, rho)[1] * m) < alpha for a, b in wins]
+    regions = []
+    i = 0
+    seg = np.asarray(segment)
+    while i < m:
+        if not flags[i]:
+            i += 1
+            continue
+        j = i
+        while j + 1 < m and flags[j + 1] and seg[wins[j + 1][0]] == seg[wins[i][0]]:
+            j += 1
+        a, b = wins[i][0], wins[j][1]
+        stat, p = _window_p(r[a:b], sigma, rho)
+        label = int(seg[a])
+        regions.append(
+            {
+                "segment": (segment_names or {}).get(label, label),
+                "start": float(x[a]),
+                "end": float(x[b - 1]),
+                "i0": int(a),
+                "i1": int(b),
+                "n": int(b - a),
+                "statistic": stat,
+                "p_value": min(1.0, p * m),
+            }
+        )
+        i = j + 1
+    return regions

@@ -1,0 +1,142 @@
+"""The discovery engine on a cheap analytic baseline (no ODE): selection, `none`, custom effects,
+regions, report contract."""
+
+from typing import ClassVar
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from jaxtyping import Array
+
+import tribojax.discovery as disc
+from tribojax.discovery import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign
+
+
+class DecayBaseline(AbstractBaseline):
+    """y = A·exp(−t/τ)·(1 + knob_bump·sin(2πt)) — a knob that an effect may move."""
+
+    kind: ClassVar[str] = "toy"
+    param_names: ClassVar[tuple] = ("A", "tau")
+    param_units: ClassVar[tuple] = ("m", "s")
+    knob_names: ClassVar[tuple] = ("bump",)
+    t: Array
+    y: Array
+    noise: float | None
+
+    def knob_null(self):
+        return np.zeros(1)
+
+    def start(self):
+        return np.log([0.5, 0.5])
+
+    def physical(self, theta):
+        return jnp.exp(theta)
+
+    def predict(self, theta, knobs):
+        A, tau = jnp.exp(theta[0]), jnp.exp(theta[1])
+        return A * jnp.exp(-self.t / tau) * (1.0 + knobs[0] * jnp.sin(2 * jnp.pi * self.t))
+
+    def data(self):
+        return DiscoveryData(np.asarray(self.y), np.asarray(self.t), np.zeros(self.t.size, int),
+                             self.noise, "t (s)", "y (m)")  # fmt: skip
+
+
+@disc.register_effect
+class Bump(AbstractEffect):
+    name: ClassVar[str] = "bump"
+    kind: ClassVar[str] = "toy"
+
+    def designs(self, baseline):
+        return [EffectDesign(("b",), ("1",), np.ones(1), knob_gain=np.ones((1, 1)))]
+
+
+@disc.register_effect
+class Ramp(AbstractEffect):
+    name: ClassVar[str] = "ramp"
+    kind: ClassVar[str] = "toy"
+
+    def designs(self, baseline):
+        t = np.asarray(baseline.t)
+        return [EffectDesign(("slope",), ("m/s",), np.ones(1) * 0.01,
+                             basis=(0.01 * t)[:, None])]  # fmt: skip
+
+
+class Tone(AbstractEffect):
+    """A user effect defined here, not registered: sinusoid with frequency on a grid."""
+
+    name: ClassVar[str] = "tone"
+    kind: ClassVar[str] = "toy"
+
+    def designs(self, baseline):
+        t = np.asarray(baseline.t)
+        out = []
+        for f in (3.0, 5.0, 7.0):
+            B = 0.01 * np.stack([np.sin(2 * np.pi * f * t), np.cos(2 * np.pi * f * t)], 1)
+            out.append(EffectDesign(("a_sin", "a_cos"), ("m", "m"), 0.01 * np.ones(2), basis=B,
+                                    nuisance={"f_Hz": f}, n_nuisance=1))  # fmt: skip
+        return out
+
+
+def _record(hidden, sigma=0.005, seed=0, n=400, give_noise=True):
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 2, n)
+    y = 1.0 * np.exp(-t / 0.7)
+    if hidden == "bump":
+        y = y * (1 + 0.3 * np.sin(2 * np.pi * t))
+    elif hidden == "ramp":
+        y = y + 0.05 * t
+    elif hidden == "tone":
+        y = y + 0.04 * np.sin(2 * np.pi * 5.0 * t + 0.3)
+    y = y + sigma * rng.normal(size=n)
+    return DecayBaseline(jnp.asarray(t), jnp.asarray(y), sigma if give_noise else None)
+
+
+@pytest.mark.parametrize("hidden", ["bump", "ramp", "tone"])
+def test_names_hidden_effect_and_gap_shrinks(hidden):
+    base = _record(hidden)
+    rep = disc.discover(base, effects=[*disc.default_effects("toy"), Tone()])
+    assert rep.converged
+    assert rep.effect == hidden
+    assert rep.final_rmse < rep.baseline_rmse / 2
+    assert rep.final_rmse == pytest.approx(0.005, rel=0.15)  # noise sd
+    assert rep.regions, "a hidden effect must flag at least one region"
+    for rg in rep.regions:
+        assert rg["rmse_after"] < rg["rmse_before"]
+
+
+def test_strength_recovered_with_uncertainty():
+    rep = disc.discover(_record("ramp"))
+    s = rep.strengths["ramp"]["slope"]
+    assert abs(s["value"] - 0.05) < 4 * s["std_error"]
+    assert 0 < s["std_error"] < 0.01
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("give_noise", [True, False])
+def test_clean_gives_none_and_no_regions(seed, give_noise):
+    rep = disc.discover(_record("clean", seed=seed, give_noise=give_noise),
+                        effects=[*disc.default_effects("toy"), Tone()])  # fmt: skip
+    assert rep.effect == "none" and rep.effects == ()
+    assert rep.regions == []
+    assert rep.noise_estimated is (not give_noise)
+    assert rep.noise_std == pytest.approx(0.005, rel=0.2)
+
+
+def test_report_contract_keys():
+    d = _record("ramp").data()
+    assert d.y.shape == (400,)
+    out = disc.discover(_record("ramp")).as_dict()
+    for key in ("effect", "effects", "baseline_rmse", "final_rmse", "regions", "candidates"):
+        assert key in out
+    for c in out["candidates"]:
+        assert {"name", "score", "delta_bic"} <= set(c)
+
+
+def test_bad_inputs():
+    base = _record("clean")
+    with pytest.raises(ValueError, match="max_effects"):
+        disc.discover(base, max_effects=-1)
+    with pytest.raises(ValueError, match="duplicate"):
+        disc.discover(base, effects=[Tone(), Tone()])
+    with pytest.raises(ValueError, match="kind"):
+        disc.default_effects("nonexistent-kind")
