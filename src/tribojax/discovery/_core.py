@@ -214,7 +214,7 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=200) -> _State
     ensure_x64()
     spec, k = _pack(baseline, designs)
     p = spec[-1]
-    args = (spec, jnp.asarray(y), float(scale))
+    args = (spec, jnp.asarray(y), jnp.asarray(float(scale)))
     sol = optx.least_squares(
         _residual,
         optx.LevenbergMarquardt(rtol=1e-8, atol=1e-8),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import jax.numpy as jnp
 import numpy as np
 from scipy import stats
 
@@ -231,7 +232,7 @@ def discover(
     while state.converged and len(state.names) < max_effects:
         r = (y - state.yhat) / scale
         spec, k = _pack(baseline, state.designs)
-        J_cur = np.asarray(_jac_residual(state.theta, (spec, y, scale)))[:, : p + k]
+        J_cur = np.asarray(_jac_residual(state.theta, (spec, y, jnp.asarray(scale))))[:, : p + k]
         cache: dict = {}
         cands = []
         for e in effects:
