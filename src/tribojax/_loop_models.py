@@ -24,8 +24,6 @@ with a = s^(1−0.7616), b = s^0.7616 (a = b = 1 without load variation).
 
 from __future__ import annotations
 
-from typing import ClassVar
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -114,20 +112,32 @@ def _iwan_drive(y, k, a, b, u):
     return jnp.concatenate([jnp.zeros(1), forces])
 
 
-def loop_force(spec: LoopSpec, data: LoopData, *, microslip: bool = True) -> jax.Array:
+S_MIN = 0.05  # floor of N(u)/N0 inside fits (check=False)
+
+
+def loop_force(
+    spec: LoopSpec, data: LoopData, *, microslip: bool = True, check: bool = True
+) -> jax.Array:
     """Model force (N) at the fitted samples of `data` for the parameters `spec`.
 
     `microslip=False` (static) skips the Mindlin bank (use it when w is identically 0: the result
-    is the same, at a fraction of the cost). References: wu2015 Eqs 1, 2, 5 (see module docstring).
+    is the same, at a fraction of the cost). `check=True` refuses a β that makes N(u) ≤ 0
+    (ValueError, or equinox's runtime error under jit); `check=False` (inside fits, where a trial
+    step may overshoot) floors N(u)/N0 at S_MIN instead. References: wu2015 Eqs 1, 2, 5 (see the
+    module docstring).
     """
     s = 1.0 + spec.beta * data.u / data.A
-    s = fail_if(s, jnp.any(s <= 0.0), "normal_load_variation: beta must keep N(u) > 0 (|beta| < 1)")
-    s_safe = jnp.where(s > 0.0, s, 1.0)
+    if check:
+        s = fail_if(
+            s,
+            jnp.any(s <= 0.0),
+            "normal_load_variation: beta must keep N(u) = N0(1 + beta u/A) > 0, i.e. |beta| < 1",
+        )
+    s_safe = jnp.where(s > S_MIN, s, S_MIN)
     b = s_safe**KD_LOAD_EXPONENT
     a = s_safe / b
-    f = _iwan_drive(
-        jnp.reshape(spec.mu_N / spec.K_d, (1,)), jnp.reshape(spec.K_d, (1,)), a, b, data.u
-    )
+    one = jnp.ones(1)
+    f = _iwan_drive(one * spec.mu_N / spec.K_d, one * spec.K_d, a, b, data.u)
     if microslip:
         y, k = Mindlin(spec.mu_N, 1.0, spec.K_d, n_iwan=N_IWAN)._iwan()
         f = f + spec.w * (_iwan_drive(y, k, a, b, data.u) - f)
@@ -139,91 +149,3 @@ def loop_branch(loop: HysteresisLoop) -> np.ndarray:
     u = np.convolve(loop.u, np.ones(5) / 5.0, mode="same")
     u[:2], u[-2:] = loop.u[:2], loop.u[-2:]
     return np.where(np.gradient(u, loop.t) >= 0.0, 1.0, -1.0)
-
-
-# --- named effects ----------------------------------------------------------------------------
-
-
-class AbstractLoopEffect(eqx.Module):
-    """A candidate effect that augments the Jenkins loop baseline.
-
-    `theta` is the effect's unconstrained parameter vector (size len(param_names)); at
-    `theta_null()` (an interior point) the effect vanishes. `apply` changes the physics (the
-    `LoopSpec`), `output` adds a term to the force (default: none). `strength` maps θ to the
-    reported physical strength(s) (default: θ itself).
-    """
-
-    name: ClassVar[str]
-    param_names: ClassVar[tuple[str, ...]]
-    units: ClassVar[tuple[str, ...]]
-
-    def theta_null(self) -> jax.Array:
-        return jnp.zeros(len(self.param_names))
-
-    def apply(self, spec: LoopSpec, theta, data: LoopData) -> LoopSpec:
-        return spec
-
-    def output(self, theta, data: LoopData, force) -> jax.Array:
-        return force
-
-    def strength(self, theta, data: LoopData) -> jax.Array:
-        return theta
-
-
-class Microslip(AbstractLoopEffect):
-    """Partial slip (wu2015 Eq 2, Mindlin/Koh): force (1 − w)·Jenkins + w·Mindlin, w = 0 null."""
-
-    name: ClassVar[str] = "microslip"
-    param_names: ClassVar[tuple[str, ...]] = ("w",)
-    units: ClassVar[tuple[str, ...]] = ("1",)
-
-    def apply(self, spec, theta, data):
-        return eqx.tree_at(lambda s: s.w, spec, spec.w + theta[0])
-
-
-class ViscousDamping(AbstractLoopEffect):
-    """Force ∝ velocity, c·u̇ (c in N·s/m); θ = c·V/F with the record's velocity and force
-    scales (so θ is the viscous force over the friction force at peak velocity); θ = 0 null."""
-
-    name: ClassVar[str] = "viscous_damping"
-    param_names: ClassVar[tuple[str, ...]] = ("c",)
-    units: ClassVar[tuple[str, ...]] = ("N s/m",)
-
-    def apply(self, spec, theta, data):
-        return eqx.tree_at(lambda s: s.c, spec, spec.c + theta[0] * data.c_scale)
-
-    def strength(self, theta, data):
-        return theta * data.c_scale
-
-
-class NormalLoadVariation(AbstractLoopEffect):
-    """Normal load varying with displacement, N(u) = N0(1 + β·u/A): μN ∝ N, K_d ∝ N^0.7616
-    (wu2015 Eq 5); β = 0 null."""
-
-    name: ClassVar[str] = "normal_load_variation"
-    param_names: ClassVar[tuple[str, ...]] = ("beta",)
-    units: ClassVar[tuple[str, ...]] = ("1",)
-
-    def apply(self, spec, theta, data):
-        return eqx.tree_at(lambda s: s.beta, spec, spec.beta + theta[0])
-
-
-def default_loop_effects() -> list[AbstractLoopEffect]:
-    """The library's loop candidates: microslip, viscous_damping, normal_load_variation."""
-    return [Microslip(), ViscousDamping(), NormalLoadVariation()]
-
-
-def loop_predict(theta_base, thetas, effects, data: LoopData):
-    """Force (N) at the fitted samples: the Jenkins baseline (θ_base = log μN, log K_d)
-    augmented by `effects` with parameters `thetas` (one vector per effect).
-
-    The Mindlin bank is evaluated only when a microslip-type effect is present (static choice:
-    any effect whose `apply` may set w is listed in `effects`)."""
-    spec = LoopSpec(jnp.exp(theta_base[0]), jnp.exp(theta_base[1]))
-    for effect, theta in zip(effects, thetas):
-        spec = effect.apply(spec, theta, data)
-    micro = any(isinstance(e, Microslip) for e in effects)
-    force = loop_force(spec, data, microslip=micro)
-    for effect, theta in zip(effects, thetas):
-        force = effect.output(theta, data, force)
-    return force

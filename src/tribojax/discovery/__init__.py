@@ -58,5 +58,10 @@ from ._core import default_effects as default_effects
 from ._core import register_effect as register_effect
 from ._discover import DiscoveryReport as DiscoveryReport
 from ._discover import discover as discover
+
+# loop side (registers microslip, viscous_damping, normal_load_variation for kind "loop")
+from ._loop import LoopBaseline as LoopBaseline  # noqa: E402
+from ._loop import discover_loop as discover_loop  # noqa: E402
+from ._loop import loop_baseline as loop_baseline  # noqa: E402
 from ._regions import find_regions as find_regions
 from ._regions import noise_estimate as noise_estimate
