@@ -16,7 +16,7 @@ import numpy as np
 import optimistix as optx
 
 from .._precision import ensure_x64
-from ._regions import ar1_inflation
+from ._regions import ar1_inflation, noise_estimate
 
 K_MAX = 8  # padded number of effect strengths in one fit (one compiled fit per record shape)
 DELTA_BIC_THRESHOLD = -10.0  # "very strong" evidence (Kass & Raftery 1995)
@@ -108,6 +108,12 @@ class AbstractBaseline(eqx.Module):
     @abc.abstractmethod
     def data(self) -> DiscoveryData:
         """The observed record."""
+
+    def noise_model(self, r) -> tuple[float, float]:
+        """(σ̂, AR(1) ρ̂) of the noise in the baseline residual `r` (output units). Default:
+        `noise_estimate` (first differences within segments); a baseline may override it with a
+        record-specific estimator (e.g. differences between loop cycles)."""
+        return noise_estimate(r, self.data().segment)
 
     def solver_ok(self, theta, knobs) -> bool:
         """False when the model could not be evaluated (e.g. ODE failure); default True."""

@@ -221,7 +221,7 @@ def discover(
     state = _fit(baseline, (), theta, y, scale)
     base_state = state
     r0 = y - state.yhat
-    sigma, rho_n = noise_estimate(r0, data.segment)  # ρ always from the data
+    sigma, rho_n = baseline.noise_model(r0)  # ρ always from the data
     estimated = not data.noise_std
     if not estimated:
         sigma = float(data.noise_std)

@@ -13,6 +13,14 @@ Effects (registered for `default_effects("loop")`, names as in the issue): `micr
 `viscous_damping`, `normal_load_variation`; each moves one knob with a signed strength, so the
 null is interior and the Rao score test applies. No nuisance grids are needed.
 
+Noise (when the sidecar gives none) and its AR(1) ρ come from differences between cycles: the
+steady loop's misfit repeats every period T while the noise does not, so d(t) = r(t) − r(t + T)
+(r at t + T linearly interpolated, weight a on the later sample) is noise only, with variance
+σ²(1 + (1 − a)² + a²) for white noise: σ̂ = 1.4826·MAD(d/√(1 + (1 − a)² + a²)), ρ̂ = lag-1
+autocorrelation of d (clipped to [0, 0.95]). First differences within a cycle (the engine's
+default) are biased up by the misfit's own slope at a few hundred samples per cycle. Records with
+less than two fitted cycles fall back to the default.
+
 Regions: the abscissa is the displacement u (m) and the segments are the branches (0 =
 "unloading", u falling; 1 = "loading", u rising); each flagged region also carries "branch",
 "u_min" and "u_max" (m).
@@ -30,6 +38,7 @@ from .._loop_models import LoopData, LoopSpec, loop_branch, loop_force, prepare_
 from .._loops import HysteresisLoop, analyse_loop
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
 from ._discover import DiscoveryReport, discover
+from ._regions import RHO_MAX, lag1, noise_estimate
 
 BRANCH_NAMES = {0: "unloading", 1: "loading"}
 _KNOBS = ("microslip", "load_slope", "viscous")
@@ -46,6 +55,8 @@ class LoopBaseline(AbstractBaseline):
     record: LoopData
     x: Array  # record displacement at the fitted samples, m
     segment: Array  # branch per fitted sample: 0 unloading, 1 loading
+    t: Array  # time of the fitted samples, s
+    period: Array  # drive period T = 2π/ω from `analyse_loop`, s
     theta0: Array
     noise: Array  # force-noise sd from the record (N), NaN when unknown (an array leaf, so
     # records of one length share a compiled fit)
@@ -69,6 +80,9 @@ class LoopBaseline(AbstractBaseline):
         )
         return loop_force(spec, self.record, check=False)
 
+    def noise_model(self, r):
+        return cycle_noise(r, np.asarray(self.t), float(self.period), np.asarray(self.segment))
+
     def data(self):
         return DiscoveryData(
             y=np.asarray(self.record.f),
@@ -91,9 +105,27 @@ def loop_baseline(loop: HysteresisLoop) -> LoopBaseline:
         record=data,
         x=jnp.asarray(loop.u[idx]),
         segment=jnp.asarray((loop_branch(loop)[idx] > 0).astype(int)),
+        t=jnp.asarray(loop.t[idx]),
+        period=jnp.asarray(2.0 * np.pi / a.omega),
         theta0=jnp.log(jnp.array([a.mu_N, a.K_d])),
         noise=jnp.asarray(np.nan if loop.noise_std is None else loop.noise_std),
     )
+
+
+def cycle_noise(r, t, period, segment=None) -> tuple[float, float]:
+    """(σ̂, ρ̂) of the noise in a periodic record's residual r(t) from differences between cycles
+    (module docstring); falls back to `noise_estimate` with less than two cycles."""
+    r, t = np.asarray(r, float), np.asarray(t, float)
+    later = t + period
+    inside = later <= t[-1]
+    if t[-1] - t[0] < 2.0 * period or inside.sum() < 16:
+        return noise_estimate(r, segment)
+    j = np.clip(np.searchsorted(t, later[inside]) - 1, 0, t.size - 2)
+    a = (later[inside] - t[j]) / (t[j + 1] - t[j])
+    d = (r[inside] - ((1.0 - a) * r[j] + a * r[j + 1])) / np.sqrt(1.0 + (1.0 - a) ** 2 + a**2)
+    rho = float(np.clip(lag1(d), 0.0, RHO_MAX))
+    sigma = 1.4826 * float(np.median(np.abs(d - np.median(d))))
+    return (sigma if sigma > 0 else float(np.std(d))), rho
 
 
 def _knob_design(baseline, knob, names, units, scale):
