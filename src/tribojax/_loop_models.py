@@ -145,7 +145,10 @@ def loop_force(
 
 
 def loop_branch(loop: HysteresisLoop) -> np.ndarray:
-    """Branch of each sample: +1 loading (u rising), −1 unloading, from a 5-point smoothed u̇."""
+    """Branch of each sample: +1 loading (u rising), −1 unloading: the sign of the forward
+    difference of a 5-point moving average of u (so a reversal sample belongs to the branch that
+    leaves it; the last sample takes its predecessor's branch)."""
     u = np.convolve(loop.u, np.ones(5) / 5.0, mode="same")
     u[:2], u[-2:] = loop.u[:2], loop.u[-2:]
-    return np.where(np.gradient(u, loop.t) >= 0.0, 1.0, -1.0)
+    step = np.diff(u)
+    return np.where(np.append(step, step[-1]) >= 0.0, 1.0, -1.0)

@@ -112,7 +112,7 @@ class DiscoveryReport:
             parts = [
                 f"{k} = {v['value']:.4g} ± {v['std_error']:.2g} {v['unit']}"
                 for k, v in st.items()
-                if isinstance(v, dict)
+                if isinstance(v, dict) and "value" in v
             ]
             lines.append(f"  {name}: " + "; ".join(parts))
         if not self.baseline_fit["converged"]:
