@@ -7,13 +7,8 @@ import numpy as np
 import pytest
 
 import tribojax as tj
-from tribojax._loop_models import (
-    LoopSpec,
-    default_loop_effects,
-    loop_force,
-    loop_predict,
-    prepare_loop,
-)
+import tribojax.discovery as disc
+from tribojax._loop_models import LoopSpec, loop_force, prepare_loop
 from tribojax._loop_synthetic import (
     LOAD_GRADIENT,
     LOOP_EFFECTS,
@@ -25,6 +20,7 @@ from tribojax._loop_synthetic import (
 )
 
 MUN, KD, A0, OMEGA = rig()
+_force = jax.jit(loop_force)
 
 
 @pytest.mark.parametrize("Ab", [1.2, 3.0])
@@ -40,7 +36,7 @@ def test_model_reproduces_each_generator(effect, Ab):
     }[effect]
     loop = hidden_effect_loop(effect, 0.0, Ab, 0)
     data = prepare_loop(loop)
-    err = np.max(np.abs(np.asarray(loop_force(spec, data)) - np.asarray(data.f))) / MUN
+    err = np.max(np.abs(np.asarray(_force(spec, data)) - np.asarray(data.f))) / MUN
     # Jenkins and N(u): exact updates (round-off); Mindlin: Iwan bank of 128 elements (~1/n²);
     # viscous: u̇ by second-order differences, (ωΔt)²/6 of the viscous force
     tol = {"none": 1e-12, "normal_load_variation": 1e-12, "microslip": 1e-4}.get(effect, 1e-4)
@@ -48,32 +44,30 @@ def test_model_reproduces_each_generator(effect, Ab):
 
 
 def test_effects_vanish_at_their_null_and_are_differentiable():
-    loop = hidden_effect_loop("none", 0.0, 2.0, 0)
-    data = prepare_loop(loop)
-    effects = default_loop_effects()
-    base = jnp.log(jnp.array([MUN, KD]))
-    nulls = [e.theta_null() for e in effects]
-    f0 = loop_predict(base, [], [], data)
-    f1 = loop_predict(base, nulls, effects, data)
-    assert float(jnp.max(jnp.abs(f1 - f0))) < 1e-12 * MUN
-    # jit == eager, and jacfwd against central differences in every effect parameter
-    thetas = [jnp.array([0.3]), jnp.array([0.05]), jnp.array([0.08])]
-    eager = loop_predict(base, thetas, effects, data)
-    jitted = jax.jit(loop_predict, static_argnums=2)(base, thetas, tuple(effects), data)
+    base = disc.loop_baseline(hidden_effect_loop("none", 0.0, 2.0, 0))
+    theta = jnp.log(jnp.array([MUN, KD]))
+    null = jnp.asarray(base.knob_null())
+    f0 = loop_force(LoopSpec(MUN, KD), base.record, microslip=False)
+    assert float(jnp.max(jnp.abs(base.predict(theta, null) - f0))) < 1e-12 * MUN
+    # jit == eager, and jacfwd against central differences in θ and every knob
+    knobs = jnp.array([0.3, 0.05, 0.08])
+    eager = base.predict(theta, knobs)
+    jitted = jax.jit(type(base).predict)(base, theta, knobs)
     np.testing.assert_allclose(np.asarray(jitted), np.asarray(eager), rtol=0, atol=1e-13 * MUN)
 
+    @jax.jit
     def flat(x):
-        return loop_predict(x[:2], [x[2:3], x[3:4], x[4:5]], effects, data)
+        return base.predict(x[:2], x[2:])
 
-    x = jnp.concatenate([base, *thetas])
+    x = jnp.concatenate([theta, knobs])
     J = jax.jacfwd(flat)(x)
-    for i, h in enumerate([1e-6, 1e-6, 1e-5, 1e-5, 1e-5]):
+    for i in range(5):
+        h = 1e-6
         e = jnp.zeros(5).at[i].set(h)
         fd = (flat(x + e) - flat(x - e)) / (2 * h)
-        # piecewise-smooth force (slip onsets): compare in RMS, FD error O(h) at the kinks
-        assert float(jnp.sqrt(jnp.mean((J[:, i] - fd) ** 2))) < 2e-3 * float(
-            jnp.sqrt(jnp.mean(J[:, i] ** 2))
-        ), i
+        # piecewise-smooth force (slip onsets): compare in RMS; FD error O(h) at the kinks
+        scale = float(jnp.sqrt(jnp.mean(J[:, i] ** 2)))
+        assert float(jnp.sqrt(jnp.mean((J[:, i] - fd) ** 2))) < 2e-3 * scale, i
 
 
 def test_load_variation_out_of_range_is_refused():

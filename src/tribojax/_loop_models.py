@@ -30,7 +30,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._checks import fail_if
-from ._hysteresis_elements import Mindlin
 from ._loops import HysteresisLoop, _cycle_starts, analyse_loop
 
 KD_LOAD_EXPONENT = 0.7616  # wu2015 Eq 5: K_d ∝ N^0.7616
@@ -99,17 +98,29 @@ class LoopSpec(eqx.Module):
     c: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
 
 
-def _iwan_drive(y, k, a, b, u):
-    """Force of an Iwan bank (slip limits y, stiffnesses k) scaled by a(u), b(u) along u."""
+def _mindlin_bank(n: int):
+    """Unit Iwan bank of the Mindlin law (as `Mindlin._iwan`): slip limits in units of A0 and
+    stiffnesses in units of K_d, NumPy constants (they depend on n only)."""
+    q = 1.0 - (1.0 - np.arange(n + 1) / n) ** 2  # y_j / Y, Y = 1.5 A0
+    phi = 1.0 - (1.0 - q) ** 1.5  # virgin curve / μN at y_j
+    slopes = np.diff(phi) / (1.5 * np.diff(q))  # / K_d
+    return 1.5 * q[1:], slopes - np.append(slopes[1:], 0.0)
+
+
+_Y_MINDLIN, _K_MINDLIN = _mindlin_bank(N_IWAN)
+
+
+def _bank_deflections(y, a, u):
+    """Deflections (len(u), len(y)) of an Iwan bank with slip limits y·a(u) driven along u."""
     du = jnp.diff(u)
 
     def step(z, inp):
-        d, aa, bb = inp
+        d, aa = inp
         z = jnp.clip(z + d, -y * aa, y * aa)
-        return z, bb * jnp.sum(k * z)
+        return z, z
 
-    _, forces = jax.lax.scan(step, jnp.zeros_like(y), (du, a[1:], b[1:]))
-    return jnp.concatenate([jnp.zeros(1), forces])
+    _, zs = jax.lax.scan(step, jnp.zeros_like(y), (du, a[1:]))
+    return jnp.concatenate([jnp.zeros((1, y.shape[0])), zs])
 
 
 S_MIN = 0.05  # floor of N(u)/N0 inside fits (check=False)
@@ -136,12 +147,14 @@ def loop_force(
     s_safe = jnp.where(s > S_MIN, s, S_MIN)
     b = s_safe**KD_LOAD_EXPONENT
     a = s_safe / b
-    one = jnp.ones(1)
-    f = _iwan_drive(one * spec.mu_N / spec.K_d, one * spec.K_d, a, b, data.u)
-    if microslip:
-        y, k = Mindlin(spec.mu_N, 1.0, spec.K_d, n_iwan=N_IWAN)._iwan()
-        f = f + spec.w * (_iwan_drive(y, k, a, b, data.u) - f)
-    return f[data.skip :] + spec.c * data.v
+    A0 = spec.mu_N / spec.K_d
+    if microslip:  # one bank: the Jenkins element (weight 1 − w) and the Mindlin bank (w)
+        y = A0 * jnp.concatenate([jnp.ones(1), jnp.asarray(_Y_MINDLIN)])
+        k = jnp.concatenate([jnp.ones(1) * (1.0 - spec.w), spec.w * jnp.asarray(_K_MINDLIN)])
+    else:
+        y, k = A0 * jnp.ones(1), jnp.ones(1)
+    z = _bank_deflections(y, a, data.u)[data.skip :]
+    return spec.K_d * b[data.skip :] * (z @ k) + spec.c * data.v
 
 
 def loop_branch(loop: HysteresisLoop) -> np.ndarray:

@@ -25,6 +25,7 @@ Jenkins bound).
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
@@ -142,6 +143,25 @@ def _kc(A_bar, p, s):
     return f_c / A_bar, -jnp.pi * f_s / A_bar  # K̄ = K_eq/K_d, C̄ = W/(K_d A²)
 
 
+def _shape_residual(y, args):
+    A_bar, K7, C7 = args[0], args[1], args[2]
+    K, C = _kc(A_bar, 1.0 + jnp.exp(y[0]), jnp.exp(y[1]))
+    return jnp.stack([K - K7, C - C7])
+
+
+@jax.jit
+def _solve_shape(y0, args):
+    sol = optx.least_squares(
+        _shape_residual,
+        optx.LevenbergMarquardt(1e-12, 1e-14),
+        y0,
+        args,
+        throw=False,
+        max_steps=200,
+    )
+    return sol.value, jnp.linalg.norm(_shape_residual(sol.value, args))
+
+
 def eq7_standin_shape(A_bar: float) -> dict:
     """Backbone shape p and slip-force ratio s = F/μN whose Masing loop has Eq 7's K̄, C̄ at Ā.
 
@@ -151,19 +171,14 @@ def eq7_standin_shape(A_bar: float) -> dict:
     """
     A_bar = float(check_range(A_bar, "A_bar", 0.0, 4.5, hi_open=False))
     K7, C7 = (float(x) for x in eq7_curves(A_bar))
-
-    def res(y, _):
-        K, C = _kc(A_bar, 1.0 + jnp.exp(y[0]), jnp.exp(y[1]))
-        return jnp.stack([K - K7, C - C7])
-
+    args = jnp.array([A_bar, K7, C7])
     best = None
     for y0 in ([0.0, 0.0], [-2.0, 0.0], [1.0, -1.0], [-1.0, -0.5], [-0.5, -1.3]):
-        sol = optx.least_squares(
-            res, optx.LevenbergMarquardt(1e-12, 1e-14), jnp.array(y0), throw=False, max_steps=200
-        )
-        miss = float(jnp.linalg.norm(res(sol.value, None)))
-        if best is None or miss < best[0]:
-            best = (miss, sol.value)
+        y, miss = _solve_shape(jnp.array(y0), args)
+        if best is None or float(miss) < best[0]:
+            best = (float(miss), y)
+        if best[0] < 1e-12:
+            break
     miss, y = best
     p, s = 1.0 + float(np.exp(y[0])), float(np.exp(y[1]))
     K, C = (float(x) for x in _kc(A_bar, p, s))
