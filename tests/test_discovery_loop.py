@@ -1,6 +1,10 @@
 """Loop side of discovery: the drive model and its effects, the hidden-effect generators, and
 the wu2015 Eq 7 stand-in loops."""
 
+import dataclasses
+import json
+from typing import ClassVar
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -18,6 +22,8 @@ from tribojax._loop_synthetic import (
     hidden_effect_loop,
     rig,
 )
+from tribojax.discovery import AbstractEffect, EffectDesign
+from tribojax.discovery._loop import cycle_noise
 
 MUN, KD, A0, OMEGA = rig()
 _force = jax.jit(loop_force)
@@ -98,3 +104,108 @@ def test_eq7_standin_loops_have_eq7_coefficients(Ab):
     assert a.K_eq / KD == pytest.approx(K7, abs=2e-3)
     assert np.pi * a.omega * a.C_eq / KD == pytest.approx(C7, abs=2e-3)
     assert a.K_d == pytest.approx(KD, rel=3e-3)
+
+
+# --- discovery on hidden-effect loops ---------------------------------------------------------
+
+NOISES = (0.005, 0.015)  # force-noise sd / μN
+AMPLITUDES = (1.2, 3.0)  # Ā: partial slip for Mindlin (< 1.5) and gross slip for every model
+GRID = [(e, s, a) for e in ("none", *LOOP_EFFECTS) for s in NOISES for a in AMPLITUDES]
+CI_GRID = [  # one case per effect in CI, covering both noises, both amplitudes, sidecar or not
+    ("none", 0.015, 1.2),
+    ("microslip", 0.015, 1.2),
+    ("viscous_damping", 0.005, 3.0),
+    ("normal_load_variation", 0.015, 3.0),
+]
+TRUTH = {  # generator strengths (see tribojax._loop_synthetic)
+    "microslip": ("w", 1.0),
+    "viscous_damping": ("c", VISCOUS_STRENGTH * MUN / (OMEGA * A0)),
+    "normal_load_variation": ("beta", LOAD_GRADIENT),
+}
+
+
+def _check_discovery(effect, noise, Ab, seed=11):
+    # the sidecar noise is given for the lower noise level and estimated for the higher one
+    loop = hidden_effect_loop(effect, noise, Ab, seed, give_noise=noise < 0.01)
+    rep = disc.discover_loop(loop)
+    assert rep.converged
+    assert rep.noise_estimated is (noise >= 0.01)
+    # σ̂ from differences between cycles: ~400 differences, MAD efficiency → sd ≈ 6 %
+    assert rep.noise_std == pytest.approx(noise * MUN, rel=0.2)
+    if effect == "none":
+        assert rep.effect == "none" and rep.effects == ()
+        assert rep.regions == []
+        assert rep.final_rmse == rep.baseline_rmse
+        return rep
+    assert rep.effect == effect and rep.effects == (effect,)
+    assert rep.final_rmse <= 0.5 * rep.baseline_rmse  # the issue's "shrinks by at least half"
+    assert rep.final_rmse == pytest.approx(noise * MUN, rel=0.15)  # down to the noise
+    name, value = TRUTH[effect]
+    s = rep.strengths[effect][name]
+    assert abs(s["value"] - value) < 5 * s["std_error"] + 0.02 * abs(value), s
+    assert rep.regions, "a hidden effect must flag regions"
+    u_lo, u_hi = loop.u.min(), loop.u.max()
+    for rg in rep.regions:
+        assert rg["branch"] in ("loading", "unloading")
+        assert u_lo <= rg["u_min"] <= rg["u_max"] <= u_hi
+        assert rg["rmse_after"] < rg["rmse_before"]
+    first = rep.candidates[0]
+    assert first["name"] == effect and first["delta_bic"] < -10
+    return rep
+
+
+@pytest.mark.parametrize("effect,noise,Ab", CI_GRID)
+def test_discovery_names_hidden_loop_effect(effect, noise, Ab):
+    _check_discovery(effect, noise, Ab)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("effect,noise,Ab", GRID)
+def test_discovery_full_loop_grid(effect, noise, Ab):
+    _check_discovery(effect, noise, Ab)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_clean_loops_give_none(seed):
+    """Clean Jenkins records with the noise estimated: nothing named, nothing flagged."""
+    rep = disc.discover_loop(hidden_effect_loop("none", 0.01, 2.0, seed, give_noise=False))
+    assert rep.effect == "none" and rep.regions == []
+    for c in rep.candidates:
+        assert c["p_value"] > 0.01 / len(rep.candidates) or c["delta_bic"] > -10
+
+
+class ForceOffset(AbstractEffect):
+    """A user effect defined here (not in the library): a constant offset of the force sensor."""
+
+    name: ClassVar[str] = "force_offset"
+    kind: ClassVar[str] = "loop"
+
+    def designs(self, baseline):
+        n = baseline.data().y.size
+        return [EffectDesign(("offset",), ("N",), np.ones(1) * 0.01, basis=0.01 * np.ones((n, 1)))]
+
+
+def test_user_effect_without_editing_the_library():
+    loop = hidden_effect_loop("none", 0.005, 2.0, 4)
+    shifted = dataclasses.replace(loop, f=loop.f + 0.05 * MUN)
+    rep = disc.discover_loop(shifted, effects=[*disc.default_effects("loop"), ForceOffset()])
+    assert rep.effect == "force_offset"
+    s = rep.strengths["force_offset"]["offset"]
+    assert abs(s["value"] - 0.05 * MUN) < 4 * s["std_error"]
+    assert {c["name"] for c in rep.candidates} == {"force_offset", *LOOP_EFFECTS}
+    json.dumps(rep.as_dict())  # the report is JSON-ready
+
+
+def test_cycle_noise_estimator_ignores_a_periodic_misfit():
+    """σ and AR(1) ρ of noise under a large periodic misfit, from differences between cycles."""
+    rng = np.random.default_rng(5)
+    n, per, sigma, rho = 2000, 97.3, 0.01, 0.5
+    t = np.arange(n) * 1.0
+    e = np.zeros(n)
+    for i in range(1, n):
+        e[i] = rho * e[i - 1] + np.sqrt(1 - rho**2) * sigma * rng.standard_normal()
+    misfit = 0.2 * np.sign(np.sin(2 * np.pi * t / per)) * np.abs(np.sin(2 * np.pi * t / per))
+    s_hat, rho_hat = cycle_noise(misfit + e, t, per)
+    # interpolation between samples smooths the later copy a little: ρ̂ and σ̂ within ±0.1, 15 %
+    assert s_hat == pytest.approx(sigma, rel=0.15)
+    assert rho_hat == pytest.approx(rho, abs=0.1)

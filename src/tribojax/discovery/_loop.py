@@ -15,9 +15,10 @@ null is interior and the Rao score test applies. No nuisance grids are needed.
 
 Noise (when the sidecar gives none) and its AR(1) ρ come from differences between cycles: the
 steady loop's misfit repeats every period T while the noise does not, so d(t) = r(t) − r(t + T)
-(r at t + T linearly interpolated, weight a on the later sample) is noise only, with variance
-σ²(1 + (1 − a)² + a²) for white noise: σ̂ = 1.4826·MAD(d/√(1 + (1 − a)² + a²)), ρ̂ = lag-1
-autocorrelation of d (clipped to [0, 0.95]). First differences within a cycle (the engine's
+(r at t + T linearly interpolated, weight a on the later sample) is noise only. For AR(1) noise
+(sd σ, lag-1 correlation ρ) var d = σ²(1 + P + 2Qρ) and cov(d_i, d_i+1) ≈ σ²(ρ(1 + P) +
+Q(1 + ρ²)), P = (1 − a)² + a², Q = a(1 − a): ρ̂ solves that ratio = lag-1 autocorrelation of d
+(on [0, 0.95]), σ̂ = 1.4826·MAD(d/√(1 + P + 2Qρ̂)). First differences within a cycle (the engine's
 default) are biased up by the misfit's own slope at a few hundred samples per cycle. Records with
 less than two fitted cycles fall back to the default.
 
@@ -121,11 +122,18 @@ def cycle_noise(r, t, period, segment=None) -> tuple[float, float]:
     if t[-1] - t[0] < 2.0 * period or inside.sum() < 16:
         return noise_estimate(r, segment)
     j = np.clip(np.searchsorted(t, later[inside]) - 1, 0, t.size - 2)
-    a = (later[inside] - t[j]) / (t[j + 1] - t[j])
-    d = (r[inside] - ((1.0 - a) * r[j] + a * r[j + 1])) / np.sqrt(1.0 + (1.0 - a) ** 2 + a**2)
-    rho = float(np.clip(lag1(d), 0.0, RHO_MAX))
-    sigma = 1.4826 * float(np.median(np.abs(d - np.median(d))))
-    return (sigma if sigma > 0 else float(np.std(d))), rho
+    a = np.clip((later[inside] - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0)
+    d = r[inside] - ((1.0 - a) * r[j] + a * r[j + 1])
+    # AR(1) noise of sd σ: var d = σ²(1 + P + 2Qρ), cov(d_i, d_i+1) ≈ σ²(ρ(1 + P) + Q(1 + ρ²))
+    # with P = (1 − a)² + a², Q = a(1 − a) (the interpolation correlates neighbouring copies)
+    P, Q = (1.0 - a) ** 2 + a**2, a * (1.0 - a)
+    grid = np.linspace(0.0, RHO_MAX, 951)
+    var = 1.0 + P.mean() + 2.0 * Q.mean() * grid
+    acf = (grid * (1.0 + P.mean()) + Q.mean() * (1.0 + grid**2)) / var
+    rho = float(grid[np.argmin(np.abs(acf - lag1(d)))])
+    dn = d / np.sqrt(1.0 + P + 2.0 * Q * rho)
+    sigma = 1.4826 * float(np.median(np.abs(dn - np.median(dn))))
+    return (sigma if sigma > 0 else float(np.std(dn))), rho
 
 
 def _knob_design(baseline, knob, names, units, scale):
