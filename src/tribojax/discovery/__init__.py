@@ -47,6 +47,9 @@ Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration
 `load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip`.
 """
 
+from .._loop_synthetic import eq7_standin_loop as eq7_standin_loop
+from .._loop_synthetic import eq7_standin_shape as eq7_standin_shape
+from .._loop_synthetic import hidden_effect_loop as hidden_effect_loop
 from ._core import ALPHA as ALPHA
 from ._core import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
 from ._core import K_MAX as K_MAX
@@ -58,10 +61,8 @@ from ._core import default_effects as default_effects
 from ._core import register_effect as register_effect
 from ._discover import DiscoveryReport as DiscoveryReport
 from ._discover import discover as discover
-
-# loop side (registers microslip, viscous_damping, normal_load_variation for kind "loop")
-from ._loop import LoopBaseline as LoopBaseline  # noqa: E402
-from ._loop import discover_loop as discover_loop  # noqa: E402
-from ._loop import loop_baseline as loop_baseline  # noqa: E402
+from ._loop import LoopBaseline as LoopBaseline  # registers the loop effects
+from ._loop import discover_loop as discover_loop
+from ._loop import loop_baseline as loop_baseline
 from ._regions import find_regions as find_regions
 from ._regions import noise_estimate as noise_estimate
