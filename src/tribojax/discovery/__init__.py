@@ -64,5 +64,6 @@ from ._discover import discover as discover
 from ._loop import LoopBaseline as LoopBaseline  # registers the loop effects
 from ._loop import discover_loop as discover_loop
 from ._loop import loop_baseline as loop_baseline
+from ._loop import plot_loop_discovery as plot_loop_discovery
 from ._regions import find_regions as find_regions
 from ._regions import noise_estimate as noise_estimate

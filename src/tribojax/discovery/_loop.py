@@ -190,3 +190,41 @@ def discover_loop(loop: HysteresisLoop, effects=None, **kw) -> DiscoveryReport:
         rg["u_min"] = min(rg["start"], rg["end"])
         rg["u_max"] = max(rg["start"], rg["end"])
     return report
+
+
+def plot_loop_discovery(report: DiscoveryReport, path) -> bool:
+    """Figure of a loop discovery: force against displacement (data, Jenkins baseline, augmented
+    model), and the residuals before and after against sample number with the flagged regions
+    shaded (one colour per branch). PNG at `path`; False (nothing written) without matplotlib."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return False
+    u, y = report.x * 1e6, report.y
+    k = np.arange(y.size)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
+    ax = axes[0]
+    ax.plot(u, y, ".", ms=2, color="0.5", label="data")
+    ax.plot(u, report.baseline_y, "C0-", lw=1, label="baseline (Jenkins)")
+    label = " + ".join(report.effects) if report.effects else "none added"
+    ax.plot(u, report.final_y, "C3-", lw=1, label=f"augmented ({label})")
+    ax.set(xlabel="u (µm)", ylabel="force (N)", title="loop")
+    ax.legend(fontsize=8)
+    ax = axes[1]
+    colours = {"loading": "C1", "unloading": "C2"}
+    for rg in report.regions:
+        ax.axvspan(rg["i0"], rg["i1"] - 1, color=colours.get(rg["branch"], "C4"), alpha=0.2, lw=0)
+    before, after = report.baseline_rmse, report.final_rmse
+    ax.plot(k, y - report.baseline_y, "C0.", ms=2, label=f"before: RMS {before:.3g} N")
+    ax.plot(k, y - report.final_y, "C3.", ms=2, label=f"after: RMS {after:.3g} N")
+    ax.axhline(0.0, color="k", lw=0.6)
+    ax.set(xlabel="sample", ylabel="residual (N)",
+           title="residuals; shaded: flagged (orange loading, green unloading)")  # fmt: skip
+    ax.legend(fontsize=8)
+    fig.suptitle(f"discovery: effect = {report.effect}")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
