@@ -231,3 +231,19 @@ def test_cycle_noise_estimator_ignores_a_periodic_misfit():
     # interpolation between samples smooths the later copy a little: ρ̂ and σ̂ within ±0.1, 15 %
     assert s_hat == pytest.approx(sigma, rel=0.15)
     assert rho_hat == pytest.approx(rho, abs=0.1)
+
+
+def test_wu2015_standin_study_short(tmp_path):
+    """fitting/wu2015_discovery.py, short form: Eq 7-like loops are not Jenkins loops; the
+    missing effect named is microslip and the residual falls to about the noise."""
+    from fitting import wu2015_discovery
+
+    assert wu2015_discovery.main(["--short", "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "wu2015_discovery.json").read_text())
+    assert [r["A_bar"] for r in result["rows"]] == [1.0, 3.0]
+    for r in result["rows"]:
+        assert r["effect"] == "microslip"
+        assert r["final_rmse_N"] < 0.5 * r["baseline_rmse_N"]
+        assert r["final_rmse_N"] < 1.3 * r["true_noise_std_N"]
+        w = r["strengths"]["microslip"]["w"]
+        assert 0.5 < w["value"] < 1.5 and w["std_error"] < 0.1
