@@ -247,3 +247,20 @@ def test_wu2015_standin_study_short(tmp_path):
         assert r["final_rmse_N"] < 1.3 * r["true_noise_std_N"]
         w = r["strengths"]["microslip"]["w"]
         assert 0.5 < w["value"] < 1.5 and w["std_error"] < 0.1
+
+
+def test_loop_file_round_trip_to_discovery_json(tmp_path):
+    """The issue's loop file format (CSV + sidecar) → read_record → discover_loop → JSON."""
+    loop = hidden_effect_loop("viscous_damping", 0.005, 3.0, 21)
+    path = tmp_path / "loop.csv"
+    tj.write_loop(loop, path, comment="hidden viscous damping, seed 21")
+    back = tj.read_record(path)
+    assert back.noise_std == pytest.approx(loop.noise_std) and back.normal_load == 2.94
+    out = disc.discover_loop(back).as_dict()
+    text = json.dumps(out)
+    assert json.loads(text)["effect"] == "viscous_damping"
+    for key in ("effect", "effects", "baseline_rmse", "final_rmse", "regions", "candidates"):
+        assert key in out
+    assert {"branch", "u_min", "u_max"} <= set(out["regions"][0])
+    with pytest.raises(ValueError, match="HysteresisLoop"):
+        disc.discover_loop(np.zeros(10))

@@ -184,6 +184,8 @@ class NormalLoadVariation(AbstractEffect):
 def discover_loop(loop: HysteresisLoop, effects=None, **kw) -> DiscoveryReport:
     """`discover` on a loop record with the Jenkins baseline; regions gain "branch", "u_min",
     "u_max". Keyword arguments go to `discover`."""
+    if not isinstance(loop, HysteresisLoop):
+        raise ValueError(f"loop must be a HysteresisLoop record, got {type(loop).__name__}")
     report = discover(loop_baseline(loop), effects=effects, **kw)
     for rg in report.regions:
         rg["branch"] = rg["segment"]
