@@ -290,6 +290,12 @@ def main(argv=None) -> int:
 
     add_arguments(hys)
     hys.set_defaults(func=cmd_hysteresis)
+    dis = sub.add_parser("discover", help="find the effect a slip run or loop's model is missing")
+    from ._discover_cli import add_arguments as add_discover_arguments
+    from ._discover_cli import run_discover
+
+    add_discover_arguments(dis)
+    dis.set_defaults(func=run_discover)
     args = parser.parse_args(argv)
     return args.func(args)
 

@@ -65,5 +65,13 @@ from ._loop import LoopBaseline as LoopBaseline  # registers the loop effects
 from ._loop import discover_loop as discover_loop
 from ._loop import loop_baseline as loop_baseline
 from ._loop import plot_loop_discovery as plot_loop_discovery
+from ._plot import plot_discovery as plot_discovery
 from ._regions import find_regions as find_regions
 from ._regions import noise_estimate as noise_estimate
+from ._slip import AugmentedPreSlip as AugmentedPreSlip
+from ._slip import SlipBaseline as SlipBaseline
+from ._slip import slip_baseline as slip_baseline
+from ._slip import slip_start as slip_start
+from ._slip import stage_travel as stage_travel
+from ._tables import wang2022_table_baseline as wang2022_table_baseline
+from ._tables import wang2022_table_effects as wang2022_table_effects

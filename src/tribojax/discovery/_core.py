@@ -13,7 +13,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optimistix as optx
 
 from .._precision import ensure_x64
 from ._regions import ar1_inflation, noise_estimate
@@ -154,27 +153,21 @@ def default_effects(kind: str) -> list[AbstractEffect]:
 # ---------------------------------------------------------------- compiled pieces
 
 
-def _model(theta, args):
-    baseline, gain, knob_base, basis, mask, p = args
-    tb, s = theta[:p], theta[p:] * mask
-    return baseline.predict(tb, knob_base + gain @ s) + basis @ s
-
-
-def _residual(theta, args):
-    (baseline, gain, knob_base, basis, mask, p), y, scale = args
-    return (_model(theta, (baseline, gain, knob_base, basis, mask, p)) - y) / scale
-
-
-_jac_residual = eqx.filter_jit(jax.jacfwd(_residual))
-
-
 @eqx.filter_jit
-def _jac_parts(baseline, theta_b, knobs):
-    """∂predict/∂θ_b (n, p) and ∂predict/∂knobs (n, n_knobs), forward mode."""
-    return jax.jacfwd(baseline.predict, argnums=(0, 1))(theta_b, knobs)
+def _value_and_jac(baseline, theta_b, knobs):
+    """predict and its forward-mode Jacobians ∂/∂θ_b (n, p), ∂/∂knobs (n, n_knobs): one pass.
 
+    The only compiled function of a fit (one compile per baseline type and record shape): the
+    effect strengths enter through `knobs` (a fixed-length vector) and additive columns, which
+    the fit applies outside the compiled code.
+    """
 
-_predict = eqx.filter_jit(lambda baseline, theta_b, knobs: baseline.predict(theta_b, knobs))
+    def f(tb, kn):
+        out = baseline.predict(tb, kn)
+        return out, out
+
+    (jb, jk), value = jax.jacfwd(f, argnums=(0, 1), has_aux=True)(theta_b, knobs)
+    return value, jb, jk
 
 
 @dataclasses.dataclass(frozen=True)
@@ -183,95 +176,150 @@ class _State:
 
     names: tuple[str, ...]  # effect names, in order added
     designs: tuple[EffectDesign, ...]
-    theta: np.ndarray  # [θ_b, s (K_MAX, zero-padded)]
+    theta: np.ndarray  # [θ_b, s]
     yhat: np.ndarray
     rss: float  # in units of `scale`²
-    cov: np.ndarray  # covariance of [θ_b, s_active] (scaled units, s² = RSS/(n - p))
+    cov: np.ndarray  # covariance of [θ_b, s] (scaled units, s² = RSS/(n - p))
+    jac: np.ndarray  # ∂yhat/∂[θ_b, s] / scale at the optimum
     converged: bool
     steps: int
     message: str
 
 
 def _pack(baseline, designs):
+    """Knob base vector, knob gain (n_knobs, k) and additive basis (n, k) of active designs."""
     names = baseline.knob_names
     n = baseline.data().y.shape[0]
-    gain = np.zeros((len(names), K_MAX))
+    k = sum(d.k for d in designs)
+    if k > K_MAX:
+        raise ValueError(f"{k} effect strengths in one model: more than K_MAX = {K_MAX}")
+    gain = np.zeros((len(names), k))
     base = np.asarray(baseline.knob_null(), dtype=float).copy()
-    basis = np.zeros((n, K_MAX))
-    mask = np.zeros(K_MAX)
+    basis = np.zeros((n, k))
     j = 0
     for d in designs:
-        if j + d.k > K_MAX:
-            raise ValueError(f"more than K_MAX = {K_MAX} effect strengths in one model")
         if d.knob_gain is not None:
             gain[:, j : j + d.k] = d.knob_gain
         for key, value in d.knob_set.items():
             base[names.index(key)] = value
         if d.basis is not None:
             basis[:, j : j + d.k] = d.basis
-        mask[j : j + d.k] = 1.0
         j += d.k
+    return base, gain, basis
+
+
+def _evaluate(baseline, packed, x):
+    """Model samples and Jacobian (n, p + k) of the augmented model at x = [θ_b, s]."""
+    base, gain, basis = packed
     p = len(baseline.param_names)
-    return (baseline, jnp.asarray(gain), jnp.asarray(base), jnp.asarray(basis), jnp.asarray(mask),
-            p), j  # fmt: skip
+    tb, s = x[:p], x[p:]
+    try:
+        value, jb, jk = _value_and_jac(baseline, jnp.asarray(tb), jnp.asarray(base + gain @ s))
+        value = np.asarray(value)  # blocks: a runtime check inside the model raises here
+    except eqx.EquinoxRuntimeError:
+        # a check inside the model (e.g. a linear solve of the implicit ODE step meeting NaN at
+        # a nonsensical trial point) — the trial is rejected like a non-finite one
+        n = baseline.data().y.shape[0]
+        return np.full(n, np.nan), np.full((n, p + s.size), np.nan)
+    model = np.asarray(value) + basis @ s
+    J = np.concatenate([np.asarray(jb), np.asarray(jk) @ gain + basis], axis=1)
+    return model, J
 
 
-def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=200) -> _State:
+def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=100) -> _State:
+    """Levenberg–Marquardt (Marquardt's diagonal scaling) on (model − y)/scale.
+
+    A plain NumPy loop around one compiled value-and-Jacobian call per trial point: each
+    augmented model reuses the same compiled code, where an optimistix solve would compile
+    once per combination of effects. Converged when the predicted decrease of a Gauss–Newton
+    step gᵀ(JᵀJ)⁻¹g is below 0.01 residual variances (s² = cost/(n − p), at least 1), or when not
+    even a step of damping 1e12 lowers the cost (a local minimum of the cost as evaluated; the
+    message then gives the predicted gain); a non-finite trial counts as a rejected step. Not
+    converged: non-finite start, or `max_steps` reached.
+    """
     ensure_x64()
-    spec, k = _pack(baseline, designs)
-    p = spec[-1]
-    args = (spec, jnp.asarray(y), jnp.asarray(float(scale)))
-    sol = optx.least_squares(
-        _residual,
-        optx.LevenbergMarquardt(rtol=1e-8, atol=1e-8),
-        jnp.asarray(theta0, dtype=jnp.float64),
-        args,
-        options=dict(jac="fwd"),
-        max_steps=max_steps,
-        throw=False,
-    )
-    theta = np.asarray(sol.value)
-    r = np.asarray(_residual(sol.value, args))
-    J = np.asarray(_jac_residual(sol.value, args))[:, : p + k]
-    n = y.shape[0]
-    rss = float(r @ r)
-    finite = np.all(np.isfinite(r)) and np.all(np.isfinite(J))
-    if finite:
-        cov = np.linalg.pinv(J.T @ J) * rss / max(n - p - k, 1)
-    else:
-        cov = np.full((p + k, p + k), np.inf)
-    knobs = spec[2] + spec[1] @ (jnp.asarray(theta[p:]) * spec[4])
-    ok = bool(sol.result == optx.RESULTS.successful) and finite
-    ok = ok and bool(baseline.solver_ok(jnp.asarray(theta[:p]), knobs))
-    message = "" if ok else (str(optx.RESULTS[sol.result]) or "model evaluation failed")
+    packed = _pack(baseline, designs)
+    x = np.asarray(theta0, dtype=float)
+    n, npar = y.shape[0], x.size
+
+    def ev(xx):
+        m, J = _evaluate(baseline, packed, xx)
+        r = (m - y) / scale
+        ok = np.all(np.isfinite(r)) and np.all(np.isfinite(J))
+        return m, r, J / scale, ok
+
+    m, r, J, ok = ev(x)
+    steps, message, converged = 0, "", False
+    if not ok:
+        message = "the model is not finite at the start values"
+    cost, lam = float(r @ r), 1e-3
+    if ok and npar == 0:
+        converged = True  # nothing to fit
+    while ok and not converged and steps < max_steps:
+        A, g = J.T @ J, J.T @ r
+        # predicted decrease of a full Gauss–Newton step, against the residual variance
+        pred = float(g @ np.linalg.lstsq(A, g, rcond=1e-12)[0])
+        s2 = max(cost / max(n - npar, 1), 1.0)
+        if pred < 1e-2 * s2:
+            converged = True
+            break
+        steps += 1
+        dg = np.maximum(np.diag(A), 1e-12 * max(np.max(np.diag(A)), 1e-300))
+        while True:
+            dx = -np.linalg.solve(A + lam * np.diag(dg), g)
+            mn, rn, Jn, okn = ev(x + dx)
+            cn = float(rn @ rn) if okn else np.inf
+            if cn <= cost:
+                break
+            lam *= 4.0
+            if lam > 1e12:
+                break
+        if cn > cost:
+            # not even a tiny step along −g descends: a local minimum of the cost as evaluated
+            # (ODE evaluation noise, or a kink of the model where contacts start sliding)
+            converged = True
+            message = f"stationary: no descent step (predicted gain {pred / s2:.3g} s²)"
+            break
+        x, m, r, J, cost = x + dx, mn, rn, Jn, cn
+        lam = max(lam / 3.0, 1e-12)
+    if ok and not converged and not message:
+        message = f"no convergence in max_steps = {max_steps} steps"
+    p = len(baseline.param_names)
+    if converged and not baseline.solver_ok(
+        jnp.asarray(x[:p]), jnp.asarray(packed[0] + packed[1] @ x[p:])
+    ):
+        converged, message = False, "the model's solver reported a failure at the optimum"
+    cov = np.linalg.pinv(J.T @ J) * cost / max(n - npar, 1) if ok else np.full((npar,) * 2, np.inf)
     return _State(
         names=tuple(names),
         designs=tuple(designs),
-        theta=theta,
-        yhat=np.asarray(y) + r * scale,
-        rss=rss if finite else np.inf,
+        theta=x,
+        yhat=m,
+        rss=cost if ok else np.inf,
         cov=cov,
-        converged=ok,
-        steps=int(sol.stats["num_steps"]),
+        jac=J,
+        converged=bool(converged),
+        steps=steps,
         message=message,
     )
 
 
 def _columns(baseline, state: _State, design: EffectDesign, knob_cache: dict) -> np.ndarray:
     """∂y/∂s of `design` added to the fitted `state` (n, k), output units."""
-    spec, _ = _pack(baseline, state.designs)
-    p = spec[-1]
-    base_knobs = np.asarray(spec[2] + spec[1] @ (jnp.asarray(state.theta[p:]) * spec[4]))
-    knobs = base_knobs.copy()
+    base, gain, _ = _pack(baseline, state.designs)
+    p = len(baseline.param_names)
+    knobs = base + gain @ state.theta[p:]
     for key, value in design.knob_set.items():
         knobs[baseline.knob_names.index(key)] = value
     cols = np.zeros((baseline.data().y.shape[0], design.k))
     if design.knob_gain is not None and np.any(design.knob_gain):
         key = tuple(np.round(knobs, 12))
         if key not in knob_cache:
-            knob_cache[key] = np.asarray(
-                _jac_parts(baseline, jnp.asarray(state.theta[:p]), jnp.asarray(knobs))[1]
-            )
+            try:
+                out = _value_and_jac(baseline, jnp.asarray(state.theta[:p]), jnp.asarray(knobs))
+                knob_cache[key] = np.asarray(out[2])
+            except eqx.EquinoxRuntimeError:
+                knob_cache[key] = np.full((cols.shape[0], knobs.size), np.nan)
         cols = cols + knob_cache[key] @ design.knob_gain
     if design.basis is not None:
         cols = cols + design.basis

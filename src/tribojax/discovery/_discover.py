@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 
-import jax.numpy as jnp
 import numpy as np
 from scipy import stats
 
@@ -17,8 +16,6 @@ from ._core import (
     _columns,
     _delta_bic,
     _fit,
-    _jac_residual,
-    _pack,
     _score,
     _State,
     default_effects,
@@ -82,6 +79,7 @@ class DiscoveryReport:
             "regions": self.regions,
             "candidates": self.candidates,
             "kind": self.kind,
+            "converged": self.converged,
             "rounds": self.rounds,
             "strengths": self.strengths,
             "baseline_fit": self.baseline_fit,
@@ -215,10 +213,8 @@ def discover(
     n = y.size
     scale0 = data.noise_std if data.noise_std else noise_estimate(y, data.segment)[0]
     scale = float(scale0) if scale0 > 0 else float(np.std(y) or 1.0)
-    p = len(baseline.param_names)
     th0 = np.asarray(baseline.start() if theta0 is None else theta0, dtype=float)
-    theta = np.concatenate([th0, np.zeros(K_MAX)])
-    state = _fit(baseline, (), theta, y, scale)
+    state = _fit(baseline, (), th0, y, scale)
     base_state = state
     r0 = y - state.yhat
     sigma, rho_n = baseline.noise_model(r0)  # ρ always from the data
@@ -231,8 +227,7 @@ def discover(
     grids = {e.name: e.designs(baseline) for e in effects}
     while state.converged and len(state.names) < max_effects:
         r = (y - state.yhat) / scale
-        spec, k = _pack(baseline, state.designs)
-        J_cur = np.asarray(_jac_residual(state.theta, (spec, y, jnp.asarray(scale))))[:, : p + k]
+        J_cur = state.jac
         cache: dict = {}
         cands = []
         for e in effects:
@@ -267,7 +262,7 @@ def discover(
         best_fit = None
         for c in [c for c in cands if c["p_value"] < level][:n_refit]:
             d = c["_design"]
-            th = state.theta.copy()
+            th = np.concatenate([state.theta, np.zeros(d.k)])
             new = _fit(baseline, state.designs + (d,), th, y, scale, state.names + (c["name"],))
             if not new.converged or not np.isfinite(new.rss):
                 c["refit_message"] = new.message or "refit failed"

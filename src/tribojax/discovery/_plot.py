@@ -1,0 +1,56 @@
+"""The discovery figure: data, baseline, augmented model, residuals before/after, regions."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def plot_discovery(report, path) -> bool:
+    """Write the figure of a `DiscoveryReport` to `path` (PNG). False if matplotlib is missing.
+
+    Top: data, baseline and final (augmented) model against the record's abscissa. Bottom:
+    residuals before and after; flagged regions shaded. When the abscissa is not monotonic
+    (loops), the bottom panel uses the sample index and the top panel marks flagged samples.
+    """
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return False
+    x, y = np.asarray(report.x), np.asarray(report.y)
+    monotonic = bool(np.all(np.diff(x) > 0))
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=monotonic)
+    ax1.plot(x, y, ".", ms=2, color="0.4", label="data")
+    ax1.plot(x, report.baseline_y, "-", lw=1, color="C0", label="baseline")
+    label = "augmented: " + ", ".join(report.effects) if report.effects else "final (= baseline)"
+    ax1.plot(x, report.final_y, "--", lw=1, color="C3", label=label)
+    ax1.set_ylabel(report.labels.get("y", "y"))
+    ax1.legend(fontsize=8)
+    xr = x if monotonic else np.arange(x.size)
+    ax2.plot(xr, y - report.baseline_y, "-", lw=0.8, color="C0", label="residual, baseline")
+    ax2.plot(xr, y - report.final_y, "-", lw=0.8, color="C3", label="residual, augmented")
+    for rg in report.regions:
+        a, b = rg["i0"], rg["i1"] - 1
+        ax2.axvspan(xr[a], xr[b], color="gold", alpha=0.3, lw=0)
+        if monotonic:
+            ax1.axvspan(xr[a], xr[b], color="gold", alpha=0.3, lw=0)
+        else:
+            ax1.plot(x[a : b + 1], y[a : b + 1], "-", color="gold", lw=3, alpha=0.6)
+    ax2.set_xlabel(report.labels.get("x", "x") if monotonic else "sample")
+    ax2.set_ylabel("residual")
+    ax2.legend(fontsize=8)
+    ax1.set_title(
+        f"discovery: {report.effect}; rmse {report.baseline_rmse:.3g} → {report.final_rmse:.3g}"
+        f" (flagged regions shaded)",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True

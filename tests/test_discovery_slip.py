@@ -1,0 +1,122 @@
+"""Slip side of discovery: the augmented element, the additive effect columns, and the workflow on
+records with hidden effects (tribojax.discovery.synthetic; full confusion table marked slow)."""
+
+import diffrax as dfx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import tribojax as tj
+import tribojax.discovery as disc
+from tribojax.discovery import _slip as ds
+from tribojax.discovery import synthetic as syn
+
+N_CI = 231  # samples over 2.3 s (10 ms apart: the hidden profile's kinks fall on samples)
+T3 = tj.wang2022_table(3)
+F, K, C = float(T3["Fs_N"][0]), float(T3["Ktau_N_per_m"][0]), float(T3["Ctau_Ns_per_m"][0])
+TS = np.linspace(0.0, 2.3, N_CI)
+
+
+def _slip(element, profile=syn.HIDDEN_PROFILE):
+    return np.asarray(tj.simulate_slip(element, profile, ts=TS).slip)
+
+
+def test_augmented_element_null_is_preslip_lugre():
+    ref = _slip(tj.PreSlipLuGre(F, K, C))
+    aug = _slip(ds.AugmentedPreSlip(F, K, C, 0.0, 0.0, 1e-6, 0.0, syn.HIDDEN_PROFILE))
+    # same equations, same solver; differences only from the extra time state in the step control
+    assert np.max(np.abs(aug - ref)) < 1e-5 * np.max(np.abs(ref))
+
+
+def test_augmented_element_matches_lugre_eq25():
+    # σ2 and Stribeck as in tribojax.LuGre (wang2022 Eq 25, F_c = (1 − δ)F_s, β = 2)
+    delta, vs, s2 = 0.15, 1e-6, 2 * C
+    ref = _slip(tj.LuGre(K, C, s2, (1 - delta) * F, F, vs))
+    aug = _slip(ds.AugmentedPreSlip(F, K, C, s2, delta, vs, 0.0, syn.HIDDEN_PROFILE))
+    assert np.max(np.abs(aug - ref)) < 1e-5 * np.max(np.abs(ref))
+
+
+def test_load_coupling_breaks_the_accel_decel_symmetry():
+    # κ > 0: more load while accelerating (a > 0) → less slip there than while decelerating
+    base = _slip(ds.AugmentedPreSlip(F, K, C, 0.0, 0.0, 1e-6, 0.0, syn.HIDDEN_PROFILE))
+    coup = _slip(ds.AugmentedPreSlip(F, K, C, 0.0, 0.0, 1e-6, 0.3, syn.HIDDEN_PROFILE))
+    acc = (TS > 0.2) & (TS < 0.6)
+    assert np.mean(coup[acc]) < np.mean(base[acc])
+
+
+def test_oscillator_matches_scipy_radau():
+    a = np.asarray(syn.HIDDEN_PROFILE.acceleration(TS))
+    q = np.asarray(ds._oscillator(jnp.asarray(TS), jnp.asarray(a), 2 * np.pi * 40.0, 0.03))[:, 0]
+    ref = syn._oscillator_scipy(TS, syn.HIDDEN_PROFILE, 40.0, 0.03)
+    # exact discretisation vs Radau at rtol 1e-10: agreement to ~1e-7 of the peak
+    assert np.max(np.abs(q - ref)) < 1e-6 * np.max(np.abs(ref))
+
+
+def test_stage_travel_is_exact_for_piecewise_linear_drive():
+    prof = tj.TrapezoidProfile()  # v_max 0.5 m/s, symmetric: back at rest at 2.15 s
+    t = np.linspace(0, 2.3, 461)
+    v, x = ds.stage_travel(t, np.asarray(prof.acceleration(t)))
+    assert abs(v[-1]) < 1e-12 and np.max(v) == pytest.approx(0.5, rel=1e-12)
+    # travel = v_max·(ramp + hold + cruise + ...) = 0.5 m/s × (0.15 + 0.35 + 0.75 + 0.15 + 0.35)
+    assert x[-1] == pytest.approx(0.5 * (2.15 - 0.1 - 0.25 - 0.15) + 0.5 * 0.25, rel=1e-9)
+
+
+def test_slip_start_is_near_truth():
+    run = syn.hidden_effect_run("clean", 0.0, 0.6, n=N_CI)
+    F0, K0, C0 = ds.slip_start(run.t, run.accel, run.slip, run.mass)
+    assert F0 == pytest.approx(F, rel=0.25) and K0 == pytest.approx(K, rel=0.25)
+
+
+def test_predict_derivatives_match_finite_differences():
+    run = syn.hidden_effect_run("clean", 0.0, 0.6, n=N_CI)
+    b = disc.slip_baseline(run)
+    th = jnp.log(jnp.array([F, K, C]))
+    kn = jnp.asarray(b.knob_null()).at[0].set(0.5).at[1].set(0.1).at[2].set(-6.0).at[3].set(0.2)
+    f = jax.jit(lambda v: b.predict(v[:3], v[3:]))
+    v0 = jnp.concatenate([th, kn])
+    J = jax.jacfwd(f)(v0)
+    for i, h in enumerate([1e-5, 1e-5, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4]):
+        e = jnp.zeros(7).at[i].set(h)
+        fd = (f(v0 + e) - f(v0 - e)) / (2 * h)
+        # adaptive steps make the FD noisy: agreement to 1e-3 of the column's scale
+        assert np.max(np.abs(fd - J[:, i])) < 1e-3 * np.max(np.abs(J[:, i])) + 1e-15
+    assert np.allclose(f(v0), b.predict(v0[:3], v0[3:]), rtol=1e-12, atol=1e-18)
+    assert dfx  # forward mode is what the baseline uses (adjoint=ForwardMode)
+
+
+def test_bad_record_and_start():
+    run = syn.hidden_effect_run("clean", 0.0, 0.6, n=N_CI)
+    with pytest.raises(ValueError, match="start"):
+        disc.slip_baseline(run, start=[1.0, -1.0, 1.0])
+    with pytest.raises(ValueError, match="effect"):
+        syn.hidden_effect_run("friction_gremlins", 1e-10)
+    with pytest.raises(ValueError, match="load"):
+        syn.hidden_effect_run("clean", 1e-10, load=3.3)
+
+
+def _check(row):
+    if row["hidden"] == "clean":
+        assert row["named"] == "none", row
+    else:
+        assert row["named"] == row["hidden"], row
+        assert row["shrink"] >= 2.0, row
+    assert row["converged"]
+
+
+# CI: clean (must give none), one measurement effect and one physics effect
+@pytest.mark.parametrize(
+    "hidden, noise, load",
+    [("clean", "high", 2.0), ("position_error", "low", 0.6), ("stribeck", "high", 0.6)],
+)
+def test_hidden_effect_ci(hidden, noise, load):
+    (row,) = syn.confusion_study([hidden], [syn.NOISE_LEVELS[noise]], [load], n=N_CI)
+    _check(row)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("hidden", ["clean", *syn.SLIP_EFFECTS])
+def test_hidden_effect_confusion_full(hidden):
+    """Every effect × 2 noise levels × 2 loads (the confusion table of the issue note)."""
+    for row in syn.confusion_study([hidden], n=N_CI):
+        _check(row)
