@@ -264,3 +264,19 @@ def test_loop_file_round_trip_to_discovery_json(tmp_path):
     assert {"branch", "u_min", "u_max"} <= set(out["regions"][0])
     with pytest.raises(ValueError, match="HysteresisLoop"):
         disc.discover_loop(np.zeros(10))
+
+
+def test_cli_discover_on_a_loop_file(tmp_path, capsys):
+    """`tribojax discover LOOP.csv --out DIR`: the loop goes to the Jenkins baseline."""
+    from tribojax._cli import main
+
+    loop = hidden_effect_loop("normal_load_variation", 0.01, 2.0, 8, give_noise=False)
+    path = tmp_path / "loop.csv"
+    tj.write_loop(loop, path)
+    out = tmp_path / "out"
+    assert main(["discover", str(path), "--out", str(out)]) == 0
+    result = json.loads((out / "discovery.json").read_text())
+    assert result["effect"] == "normal_load_variation" and result["kind"] == "loop"
+    assert result["noise_estimated"] is True
+    assert all({"branch", "u_min", "u_max"} <= set(rg) for rg in result["regions"])
+    assert "normal_load_variation" in capsys.readouterr().out

@@ -114,6 +114,11 @@ class AbstractBaseline(eqx.Module):
         record-specific estimator (e.g. differences between loop cycles)."""
         return noise_estimate(r, self.data().segment)
 
+    def region_info(self, region: dict) -> dict:
+        """Extra keys for a flagged region (e.g. a loop's branch and displacement range);
+        default none."""
+        return {}
+
     def solver_ok(self, theta, knobs) -> bool:
         """False when the model could not be evaluated (e.g. ODE failure); default True."""
         return True

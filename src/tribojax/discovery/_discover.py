@@ -223,6 +223,8 @@ def discover(
         sigma = float(data.noise_std)
     regions = find_regions(r0, data.x, data.segment, sigma, rho_n, n_windows=n_windows,
                            alpha=alpha, segment_names=data.segment_names)  # fmt: skip
+    for rg in regions:
+        rg.update(baseline.region_info(rg))
     rounds = []
     grids = {e.name: e.designs(baseline) for e in effects}
     while state.converged and len(state.names) < max_effects:

@@ -84,6 +84,10 @@ class LoopBaseline(AbstractBaseline):
     def noise_model(self, r):
         return cycle_noise(r, np.asarray(self.t), float(self.period), np.asarray(self.segment))
 
+    def region_info(self, region):
+        lo, hi = sorted((region["start"], region["end"]))
+        return {"branch": region["segment"], "u_min": lo, "u_max": hi}
+
     def data(self):
         return DiscoveryData(
             y=np.asarray(self.record.f),
@@ -182,16 +186,11 @@ class NormalLoadVariation(AbstractEffect):
 
 
 def discover_loop(loop: HysteresisLoop, effects=None, **kw) -> DiscoveryReport:
-    """`discover` on a loop record with the Jenkins baseline; regions gain "branch", "u_min",
-    "u_max". Keyword arguments go to `discover`."""
+    """`discover(loop_baseline(loop), effects, **kw)`: the Jenkins baseline and the loop effects
+    (or `effects`) on a loop record; each region carries "branch", "u_min", "u_max" (m)."""
     if not isinstance(loop, HysteresisLoop):
         raise ValueError(f"loop must be a HysteresisLoop record, got {type(loop).__name__}")
-    report = discover(loop_baseline(loop), effects=effects, **kw)
-    for rg in report.regions:
-        rg["branch"] = rg["segment"]
-        rg["u_min"] = min(rg["start"], rg["end"])
-        rg["u_max"] = max(rg["start"], rg["end"])
-    return report
+    return discover(loop_baseline(loop), effects=effects, **kw)
 
 
 def plot_loop_discovery(report: DiscoveryReport, path) -> bool:
