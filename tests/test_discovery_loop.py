@@ -110,9 +110,12 @@ def test_eq7_standin_loops_have_eq7_coefficients(Ab):
 # --- discovery on hidden-effect loops ---------------------------------------------------------
 
 NOISES = (0.005, 0.015)  # force-noise sd / μN
-AMPLITUDES = (1.2, 3.0)  # Ā: partial slip for Mindlin (< 1.5) and gross slip for every model
+# Ā: gross slip for Jenkins but not for Mindlin (1.2, < 1.5), for every model (3.0). At Ā = 0.6
+# (no gross slip anywhere) microslip and viscous damping are near-collinear and, at 1.5 % noise,
+# not much above the noise: see the issue-6 note; not part of the asserted grid.
+AMPLITUDES = (1.2, 3.0)
 GRID = [(e, s, a) for e in ("none", *LOOP_EFFECTS) for s in NOISES for a in AMPLITUDES]
-CI_GRID = [  # one case per effect in CI, covering both noises, both amplitudes, sidecar or not
+CI_GRID = [  # one case per effect in CI: both noise levels, both amplitudes, sidecar or not
     ("none", 0.015, 1.2),
     ("microslip", 0.015, 1.2),
     ("viscous_damping", 0.005, 3.0),
@@ -154,8 +157,11 @@ def _check_discovery(effect, noise, Ab, seed=11, case=None):
         assert rg["branch"] in ("loading", "unloading")
         assert u_lo <= rg["u_min"] <= rg["u_max"] <= u_hi
         assert rg["rmse_after"] < rg["rmse_before"]
-    first = rep.candidates[0]
-    assert first["name"] == effect and first["delta_bic"] < -10
+    # accepted by ΔBIC among the refitted candidates (the score only ranks them)
+    chosen = {c["name"]: c for c in rep.candidates}[effect]
+    assert chosen["delta_bic"] < -10
+    others = [c["delta_bic"] for c in rep.candidates if c["name"] != effect]
+    assert all(d is None or d > chosen["delta_bic"] for d in others)
     return rep
 
 
