@@ -332,6 +332,9 @@ def main(argv=None):
     import slip as slip_benchmarks  # benchmarks/slip.py (issue 3)
 
     results += slip_benchmarks.run(quick=args.quick)
+    import discovery as discovery_benchmarks  # benchmarks/discovery.py (issue 6)
+
+    results += discovery_benchmarks.run(quick=args.quick)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(results, indent=2) + "\n")

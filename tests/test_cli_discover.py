@@ -63,7 +63,7 @@ def test_loop_records_dispatch(tmp_path, capsys):
 
     from tribojax._loops import HysteresisLoop, write_loop
 
-    t = np.linspace(0, 1 / 22, 200, endpoint=False)
+    t = np.linspace(0, 3 / 22, 600, endpoint=False)
     u = 1e-6 * np.cos(2 * np.pi * 22 * t)
     loop = HysteresisLoop(t=t, u=u, f=1e6 * u, normal_load=2.94, frequency=22.0)
     path = tmp_path / "loop.csv"

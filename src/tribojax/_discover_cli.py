@@ -40,13 +40,15 @@ def baseline_for(record):
     return slip_baseline(record)
 
 
-def run_discover(args, out=sys.stdout, err=sys.stderr) -> int:
+def run_discover(args, out=None, err=None) -> int:
     from ._cli import write_json_atomic
     from ._data import DataFileError
     from ._records import read_record
     from .discovery import discover
     from .discovery._plot import plot_discovery
 
+    out = sys.stdout if out is None else out
+    err = sys.stderr if err is None else err
     src = Path(args.file)
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"

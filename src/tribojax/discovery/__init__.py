@@ -39,9 +39,19 @@ score test is valid):
 - an additive (measurement) effect sets `basis` (n × k, output units per unit s);
 - `strength_names`, `strength_units`, `strength_scale` (physical value per unit s; pick the unit
   so that s is O(1)), `nuisance` (reported), `n_nuisance` (counted in ΔBIC).
+An effect may also override `refine(baseline, design, score) -> EffectDesign` to polish its
+nuisance values around the best grid point (`score(design)` is the Rao statistic at the current
+fit; `vibration` refines its frequency and damping this way).
 Register it for `default_effects(kind)` with `@register_effect`, or pass it explicitly:
 `discover(baseline, effects=[*default_effects("slip"), MyEffect()])`. At most `K_MAX` = 8
 strengths in one model.
+
+Loop side: export `loop_baseline(loop: HysteresisLoop) -> AbstractBaseline` from this package
+(module `_loop.py`, effects of kind "loop" registered on import); `tribojax discover` sends
+loop files to it and reports "not available" while it is missing.
+
+Fitting: a NumPy Levenberg–Marquardt loop around one compiled call (`_value_and_jac`: predict
+and its forward-mode Jacobian w.r.t. θ and the knobs), so every augmented model reuses it.
 
 Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration`,
 `load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip`.

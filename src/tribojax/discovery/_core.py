@@ -135,6 +135,11 @@ class AbstractEffect(eqx.Module):
     def designs(self, baseline: AbstractBaseline) -> list[EffectDesign]:
         """One `EffectDesign` per nuisance grid point (a single one when there is no nuisance)."""
 
+    def refine(self, baseline: AbstractBaseline, design: EffectDesign, score) -> EffectDesign:
+        """Optionally improve the best grid design's nuisance values; `score(design) -> float` is
+        the Rao statistic at the current fit. Default: no refinement."""
+        return design
+
 
 _REGISTRY: dict[str, dict[str, type]] = {}
 

@@ -182,7 +182,9 @@ def discover(
     3. Rank each candidate effect by its Rao score statistic at the current fit (LM form
        n·‖P r‖²/‖r‖², χ²_k; for a grid of nuisance settings the largest score, p-value
        Bonferroni-corrected over the grid: the Davies problem of parameters not identified under
-       the null).
+       the null). An effect may then refine its nuisance values around the best grid point
+       (`AbstractEffect.refine`, e.g. the vibration frequency); the p-value keeps the grid's
+       Bonferroni factor, which makes it somewhat optimistic after refinement.
     4. Refit the `n_refit` best candidates whose p-value is below alpha/(number of candidates);
        accept the one with the lowest ΔBIC if ΔBIC < `delta_bic_threshold` (ΔBIC with an AR(1)
        inflation from the augmented residual; nuisance parameters counted). Repeat from 3 until
@@ -245,6 +247,15 @@ def discover(
                 if best is None or pv < best[1] or (pv == best[1] and S > best[0]):
                     best = (S, pv, rank, d)
             S, pv, rank, d = best
+            if rank:
+
+                def score_of(dd, r=r, J_cur=J_cur, cache=cache):
+                    return _score(r, J_cur, _columns(baseline, state, dd, cache) / scale)[0]
+
+                d = e.refine(baseline, d, score_of)
+                S2, rank2 = _score(r, J_cur, _columns(baseline, state, d, cache) / scale)
+                if S2 > S and rank2 == rank:
+                    S, pv = S2, float(stats.chi2.sf(S2, rank))
             cands.append(
                 {
                     "name": e.name,

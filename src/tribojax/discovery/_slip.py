@@ -50,6 +50,7 @@ class AugmentedPreSlip(AbstractFrictionElement):
     """Pre-slip LuGre (wang2022 Eq 27, α = 1) with viscous, Stribeck and load-coupling terms.
 
         N(t)/N₀ = 1 + κ·a(t)/g,   K = K_τ·N/N₀,   g(v) = F_s·N/N₀·(1 − δ(1 − exp(−(v/v_s)²)))
+        (κa/g and δ pass through x ↦ 0.9·tanh(x/0.9): equal to first order, bounded by 0.9)
         dz/dt = v·(1 − s(v)·K z/g(v)),   F_f = K z + C_τ dz/dt + σ2·v   (wang2022 Eqs 25–27)
 
     State (z, τ): bristle deflection (m) and time (s, τ' = 1) to read the stage acceleration.
@@ -67,14 +68,17 @@ class AugmentedPreSlip(AbstractFrictionElement):
     velocity_scale: float = eqx.field(static=True, default=DEFAULT_VELOCITY_SCALE)
 
     def _factor(self, tau):
-        return 1.0 + self.kappa * self.profile.acceleration(tau) / G_ACC
+        # 1 + κa/g, kept within (0.1, 1.9) (tanh, identical to first order) so that trial
+        # points of a fit cannot make the load negative
+        return 1.0 + 0.9 * jnp.tanh(self.kappa * self.profile.acceleration(tau) / G_ACC / 0.9)
 
     def initial_state(self):
         return (jnp.zeros_like(self.K_tau), jnp.zeros_like(self.K_tau))
 
     def _zdot(self, z, tau, v):
         m = self._factor(tau)
-        weak = 1.0 - self.stribeck * (1.0 - jnp.exp(-((v / self.v_s) ** 2)))
+        delta = 0.9 * jnp.tanh(self.stribeck / 0.9)  # |δ| < 0.9, = δ to first order
+        weak = 1.0 - delta * (1.0 - jnp.exp(-((v / self.v_s) ** 2)))
         g = self.F_s * m * weak
         return _bristle_rate(v, self.K_tau * m * z / g, 1.0, self.velocity_scale)
 
@@ -300,35 +304,64 @@ def _oscillator(t, a, omega, zeta):
     return jnp.concatenate([jnp.zeros((1, 2)), xs])
 
 
+def _golden_max(f, lo, hi, iters=18):
+    """Maximiser of a unimodal f on [lo, hi] (golden section)."""
+    g = (np.sqrt(5) - 1) / 2
+    a, b = lo, hi
+    c, d = b - g * (b - a), a + g * (b - a)
+    fc, fd = f(c), f(d)
+    for _ in range(iters):
+        if fc > fd:
+            b, d, fd = d, c, fc
+            c = b - g * (b - a)
+            fc = f(c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + g * (b - a)
+            fd = f(d)
+    return (c, fc) if fc > fd else (d, fd)
+
+
 @register_effect
 class Vibration(AbstractEffect):
     """A lightly damped structural mode excited by the stage acceleration, seen in the reading.
 
     Additive A₁q + A₂q̇/ω (two signed amplitudes set the phase); natural frequency and damping
-    ratio on a grid (default 12 frequencies between 3/T and a quarter of the sampling rate,
-    capped at 500 Hz, × ζ ∈ {0.02, 0.1}).
+    ratio on a grid (default 40 frequencies between 3/T and 0.4 × the sampling rate, capped at
+    500 Hz, × ζ ∈ {0.01, 0.03, 0.1}), then refined around the best grid point by golden-section
+    searches on the score (log f within one grid step, then log ζ within a factor 3).
     """
 
     name: ClassVar[str] = "vibration"
     kind: ClassVar[str] = "slip"
-    zetas: tuple = (0.02, 0.1)
-    n_freq: int = 12
+    zetas: tuple = (0.01, 0.03, 0.1)
+    n_freq: int = 40
 
-    def designs(self, baseline):
+    def design(self, baseline, f, z):
+        ys = _y_scale(baseline)
+        q = np.asarray(_oscillator(baseline.t, baseline.accel, 2 * np.pi * f, z))
+        cols = np.stack([_unit_rms(q[:, 0]), _unit_rms(q[:, 1])], 1) * ys
+        return EffectDesign(("A_q", "A_qdot"), ("m", "m"), np.full(2, ys), basis=cols,
+                            nuisance={"f_Hz": float(f), "zeta": float(z)},
+                            n_nuisance=2)  # fmt: skip
+
+    def frequencies(self, baseline):
         t = np.asarray(baseline.t)
         fs = (t.size - 1) / (t[-1] - t[0])
-        f_lo, f_hi = 3.0 / (t[-1] - t[0]), min(0.25 * fs, 500.0)
-        ys = _y_scale(baseline)
-        out = []
-        for f in np.geomspace(f_lo, f_hi, self.n_freq):
-            for z in self.zetas:
-                w = 2 * np.pi * f
-                q = np.asarray(_oscillator(baseline.t, baseline.accel, w, z))
-                cols = np.stack([_unit_rms(q[:, 0]), _unit_rms(q[:, 1])], 1) * ys
-                out.append(EffectDesign(("A_q", "A_qdot"), ("m", "m"), np.full(2, ys),
-                                        basis=cols, nuisance={"f_Hz": f, "zeta": z},
-                                        n_nuisance=2))  # fmt: skip
-        return out
+        return np.geomspace(3.0 / (t[-1] - t[0]), min(0.4 * fs, 500.0), self.n_freq)
+
+    def designs(self, baseline):
+        return [self.design(baseline, f, z) for f in self.frequencies(baseline)
+                for z in self.zetas]  # fmt: skip
+
+    def refine(self, baseline, design, score):
+        f0, z0 = design.nuisance["f_Hz"], design.nuisance["zeta"]
+        step = float(np.log(self.frequencies(baseline)[1] / self.frequencies(baseline)[0]))
+        lf, _ = _golden_max(lambda u: score(self.design(baseline, np.exp(u), z0)),
+                            np.log(f0) - step, np.log(f0) + step)  # fmt: skip
+        lz, _ = _golden_max(lambda u: score(self.design(baseline, np.exp(lf), np.exp(u))),
+                            np.log(z0 / 3), np.log(min(3 * z0, 0.7)), iters=12)  # fmt: skip
+        return self.design(baseline, np.exp(lf), np.exp(lz))
 
 
 def _knob_design(knob, strength, unit, scale, knob_set=None, nuisance=None, n_nuisance=0):
