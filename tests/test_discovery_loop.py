@@ -75,6 +75,19 @@ def test_effects_vanish_at_their_null_and_are_differentiable():
         # piecewise-smooth force (slip onsets): compare in RMS; FD error O(h) at the kinks
         scale = float(jnp.sqrt(jnp.mean(J[:, i] ** 2)))
         assert float(jnp.sqrt(jnp.mean((J[:, i] - fd) ** 2))) < 2e-3 * scale, i
+    # vmap over knob settings == one at a time; reverse mode (grad of a loss) == forward mode
+    batch = jnp.stack([knobs, 0.5 * knobs, -knobs])
+    vm = jax.vmap(lambda kn: flat(jnp.concatenate([theta, kn])))(batch)
+    for row, kn in zip(vm, batch):
+        np.testing.assert_allclose(np.asarray(row), np.asarray(flat(jnp.concatenate([theta, kn]))),
+                                   rtol=0, atol=1e-13 * MUN)  # fmt: skip
+    y = base.record.f
+
+    def loss(x):
+        return 0.5 * jnp.sum((flat(x) - y) ** 2)
+
+    np.testing.assert_allclose(np.asarray(jax.grad(loss)(x)), np.asarray(J.T @ (flat(x) - y)),
+                               rtol=1e-9, atol=0)  # fmt: skip
 
 
 def test_load_variation_out_of_range_is_refused():
