@@ -55,8 +55,17 @@ and its forward-mode Jacobian w.r.t. θ and the knobs), so every augmented model
 
 Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration`,
 `load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip`.
+
+Loop side (`loop_baseline`: Jenkins, wu2015 Eq 1, driven by the measured displacement; effects
+`microslip`, `viscous_damping`, `normal_load_variation`; `discover_loop`, `plot_loop_discovery`;
+hidden-effect loops `hidden_effect_loop` and wu2015 Eq 7 stand-ins `eq7_standin_loop`): see
+`tribojax.discovery._loop`. Optional baseline hooks used there: `noise_model(r)` (σ̂, ρ̂ of the
+residual's noise) and `region_info(region)` (extra keys of a flagged region).
 """
 
+from .._loop_synthetic import eq7_standin_loop as eq7_standin_loop
+from .._loop_synthetic import eq7_standin_shape as eq7_standin_shape
+from .._loop_synthetic import hidden_effect_loop as hidden_effect_loop
 from ._core import ALPHA as ALPHA
 from ._core import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
 from ._core import K_MAX as K_MAX
@@ -68,6 +77,10 @@ from ._core import default_effects as default_effects
 from ._core import register_effect as register_effect
 from ._discover import DiscoveryReport as DiscoveryReport
 from ._discover import discover as discover
+from ._loop import LoopBaseline as LoopBaseline  # registers the loop effects
+from ._loop import discover_loop as discover_loop
+from ._loop import loop_baseline as loop_baseline
+from ._loop import plot_loop_discovery as plot_loop_discovery
 from ._plot import plot_discovery as plot_discovery
 from ._regions import find_regions as find_regions
 from ._regions import noise_estimate as noise_estimate

@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._precision import ensure_x64
-from ._regions import ar1_inflation
+from ._regions import ar1_inflation, noise_estimate
 
 K_MAX = 8  # padded number of effect strengths in one fit (one compiled fit per record shape)
 DELTA_BIC_THRESHOLD = -10.0  # "very strong" evidence (Kass & Raftery 1995)
@@ -107,6 +107,17 @@ class AbstractBaseline(eqx.Module):
     @abc.abstractmethod
     def data(self) -> DiscoveryData:
         """The observed record."""
+
+    def noise_model(self, r) -> tuple[float, float]:
+        """(σ̂, AR(1) ρ̂) of the noise in the baseline residual `r` (output units). Default:
+        `noise_estimate` (first differences within segments); a baseline may override it with a
+        record-specific estimator (e.g. differences between loop cycles)."""
+        return noise_estimate(r, self.data().segment)
+
+    def region_info(self, region: dict) -> dict:
+        """Extra keys for a flagged region (e.g. a loop's branch and displacement range);
+        default none."""
+        return {}
 
     def solver_ok(self, theta, knobs) -> bool:
         """False when the model could not be evaluated (e.g. ODE failure); default True."""

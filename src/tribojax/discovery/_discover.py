@@ -219,12 +219,14 @@ def discover(
     state = _fit(baseline, (), th0, y, scale)
     base_state = state
     r0 = y - state.yhat
-    sigma, rho_n = noise_estimate(r0, data.segment)  # ρ always from the data
+    sigma, rho_n = baseline.noise_model(r0)  # ρ always from the data
     estimated = not data.noise_std
     if not estimated:
         sigma = float(data.noise_std)
     regions = find_regions(r0, data.x, data.segment, sigma, rho_n, n_windows=n_windows,
                            alpha=alpha, segment_names=data.segment_names)  # fmt: skip
+    for rg in regions:
+        rg.update(baseline.region_info(rg))
     rounds = []
     grids = {e.name: e.designs(baseline) for e in effects}
     while state.converged and len(state.names) < max_effects:
