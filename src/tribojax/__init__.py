@@ -32,6 +32,8 @@ from ._data import read_table as read_table
 from ._data import wang2022_table as wang2022_table
 from ._fit import FitResult as FitResult
 from ._fit import least_squares_fit as least_squares_fit
+from ._fit_user import fit_slip_run as fit_slip_run
+from ._fit_user import slip_run_start as slip_run_start
 from ._friction import AbstractFrictionElement as AbstractFrictionElement
 from ._hysteresis import HarmonicCoefficients as HarmonicCoefficients
 from ._hysteresis import drive as drive

@@ -1,0 +1,90 @@
+"""Fits to user data: parameters recovered from synthetic noisy records within 2 standard errors,
+and standard errors calibrated (coverage over seeds)."""
+
+import numpy as np
+import pytest
+
+import tribojax as tj
+
+# wang2022 Table 3 at 0.6 kPa (F_s N, K_τ N/m, C_τ N s/m); short records keep CI fast:
+# the first second of the cycle (acceleration, hold, ramp down, cruise) at 5 ms.
+TRUTH = {"F_s": 0.4868, "K_tau": 1.4878e7, "C_tau": 771.05}
+SHORT = dict(n=201, t_end=1.0)
+NOISE = 2e-10  # m, ~1 % of the peak slip
+ELEMENT = tj.PreSlipLuGre(*TRUTH.values())
+
+
+def short_run(seed, alpha=1.0, **kw):
+    el = tj.PreSlipLuGre(*TRUTH.values(), alpha)
+    return tj.synthetic_slip_run(el, noise=NOISE, seed=seed, **SHORT, **kw)
+
+
+@pytest.fixture(scope="module")
+def run():
+    return short_run(101)
+
+
+def test_start_is_close_to_the_truth(run):
+    start = tj.slip_run_start(run)
+    assert set(start) == {"F_s", "K_tau", "C_tau"}
+    # quasi-static F_s and K_τ within a few %, the damping only to a factor of ~6
+    assert start["F_s"] == pytest.approx(TRUTH["F_s"], rel=0.05)
+    assert start["K_tau"] == pytest.approx(TRUTH["K_tau"], rel=0.05)
+    assert 1 / 8 < start["C_tau"] / TRUTH["C_tau"] < 8
+
+
+def test_fit_slip_run_recovers_parameters(run):
+    messages = []
+    fit = tj.fit_slip_run(run, alpha=1.0, progress=messages.append)
+    assert fit.converged, fit.message
+    assert fit.names == ("F_s", "K_tau", "C_tau") and fit.fixed == {"alpha": 1.0}
+    truth = np.array(list(TRUTH.values()))
+    z = (fit.values - truth) / fit.std_errors
+    assert np.all(np.abs(z) < 2), z
+    # the noise is known (run.noise_std): residuals in units of σ, chi² per point ≈ 1 ± 0.2
+    assert np.mean(fit.residuals**2) == pytest.approx(1.0, abs=0.2)
+    # F_s and K_τ to better than 1 %; C_τ is weakly determined by 5-ms samples of the slip
+    assert np.all(fit.std_errors[:2] / truth[:2] < 0.01)
+    assert any(m.startswith("LM:") for m in messages) and messages[0].startswith("start")
+
+
+def test_fit_slip_run_with_free_alpha():
+    run = short_run(7, alpha=1.2)
+    fit = tj.fit_slip_run(run)
+    assert fit.converged, fit.message
+    assert fit.names == ("F_s", "K_tau", "C_tau", "alpha") and fit.fixed == {}
+    truth = np.array([*TRUTH.values(), 1.2])
+    z = (fit.values - truth) / fit.std_errors
+    assert np.all(np.abs(z) < 2), z
+    assert fit.values[3] == pytest.approx(1.2, abs=0.1)
+
+
+def test_slip_fit_coverage_short_form(run):
+    """8 seeds: F_s, K_τ within 2 se in ≥ 6/8 (binomial, p = 0.95: P(≤ 5 of 8) = 0.6 %)."""
+    truth = np.array(list(TRUTH.values()))
+    hits = []
+    for seed in range(8):
+        fit = tj.fit_slip_run(short_run(seed), alpha=1.0)
+        assert fit.converged, (seed, fit.message)
+        hits.append(np.abs(fit.values - truth) <= 2 * fit.std_errors)
+    cover = np.mean(hits, axis=0)
+    assert np.all(cover[:2] >= 6 / 8), cover
+
+
+def test_bad_input_to_the_slip_fit(run):
+    few = tj.SlipRun(run.t[:3], run.accel[:3], run.slip[:3], mass=0.321)
+    with pytest.raises(ValueError, match=r"3 slip samples are too few to fit 3 parameters"):
+        tj.fit_slip_run(few, alpha=1.0)
+    with pytest.raises(ValueError, match=r"alpha = -1 is outside the allowed range"):
+        tj.fit_slip_run(run, alpha=-1.0)
+    with pytest.raises(ValueError, match=r"sigma = 0 m is outside"):
+        tj.fit_slip_run(run, alpha=1.0, sigma=0.0)
+    with pytest.raises(ValueError, match=r"unknown key\(s\) \['Fs'\]"):
+        tj.fit_slip_run(run, alpha=1.0, start={"Fs": 1.0})
+    still = tj.SlipRun(run.t, np.zeros_like(run.t), run.slip, mass=0.321)
+    with pytest.raises(ValueError, match="acceleration is zero throughout"):
+        tj.slip_run_start(still)
+    # a start far off with a tiny step budget: not converged, said so, no exception
+    fit = tj.fit_slip_run(run, alpha=1.0, start={"F_s": 2.0, "K_tau": 3e6, "C_tau": 3e4},
+                          max_steps=2)  # fmt: skip
+    assert not fit.converged and "max_steps = 2" in fit.message
