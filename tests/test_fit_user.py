@@ -6,10 +6,12 @@ import pytest
 
 import tribojax as tj
 
-# wang2022 Table 3 at 0.6 kPa (F_s N, K_τ N/m, C_τ N s/m); short records keep CI fast:
-# the first second of the cycle (acceleration, hold, ramp down, cruise) at 5 ms.
+# wang2022 Table 3 at 0.6 kPa (F_s N, K_τ N/m, C_τ N s/m); short records keep CI fast: the
+# first second of the cycle (acceleration, hold, ramp down, cruise), sampled at 0.1 ms. The
+# sampling must resolve the ~1 kHz ring-down after each jerk kink for C_τ to be determined: at
+# 5 ms the cost has two minima in C_τ (≈ 570 and ≈ 7100 N s/m for seed 5, Δχ² ≈ 4).
 TRUTH = {"F_s": 0.4868, "K_tau": 1.4878e7, "C_tau": 771.05}
-SHORT = dict(n=201, t_end=1.0)
+SHORT = dict(n=10001, t_end=1.0)
 NOISE = 2e-10  # m, ~1 % of the peak slip
 ELEMENT = tj.PreSlipLuGre(*TRUTH.values())
 
@@ -43,8 +45,8 @@ def test_fit_slip_run_recovers_parameters(run):
     assert np.all(np.abs(z) < 2), z
     # the noise is known (run.noise_std): residuals in units of σ, chi² per point ≈ 1 ± 0.2
     assert np.mean(fit.residuals**2) == pytest.approx(1.0, abs=0.2)
-    # F_s and K_τ to better than 1 %; C_τ is weakly determined by 5-ms samples of the slip
-    assert np.all(fit.std_errors[:2] / truth[:2] < 0.01)
+    # F_s and K_τ to better than 0.2 %, C_τ to ~10 %
+    assert np.all(fit.std_errors[:2] / truth[:2] < 2e-3) and fit.std_errors[2] / truth[2] < 0.2
     assert any(m.startswith("LM:") for m in messages) and messages[0].startswith("start")
 
 
@@ -60,7 +62,7 @@ def test_fit_slip_run_with_free_alpha():
 
 
 def test_slip_fit_coverage_short_form(run):
-    """8 seeds: F_s, K_τ within 2 se in ≥ 6/8 (binomial, p = 0.95: P(≤ 5 of 8) = 0.6 %)."""
+    """8 seeds: each parameter within 2 se in ≥ 6/8 (binomial, p = 0.95: P(≤ 5 of 8) = 0.6 %)."""
     truth = np.array(list(TRUTH.values()))
     hits = []
     for seed in range(8):
@@ -68,7 +70,7 @@ def test_slip_fit_coverage_short_form(run):
         assert fit.converged, (seed, fit.message)
         hits.append(np.abs(fit.values - truth) <= 2 * fit.std_errors)
     cover = np.mean(hits, axis=0)
-    assert np.all(cover[:2] >= 6 / 8), cover
+    assert np.all(cover >= 6 / 8), cover
 
 
 def test_bad_input_to_the_slip_fit(run):

@@ -163,7 +163,7 @@ def _fit_loop(loop, args):
 
     if len(loop.t) <= 2:
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
-    fit = fit_loop(loop, args.element, model=args.model)
+    fit = fit_loop(loop, args.element, model=args.model, max_steps=args.max_steps)
     scale = loop.noise_std if loop.noise_std is not None else 1.0
     resid = fit.residuals * scale  # N, on the fitted samples (the last len(resid))
     m = len(resid)

@@ -277,6 +277,7 @@ def fit_loop(
     sigma=None,
     window: float = 0.05,
     model: str = "steady",
+    max_steps: int = 500,
 ) -> FitResult:
     """Least-squares fit of μN (N) and K_d (N/m) of a Jenkins or Mindlin element to the data.
 
@@ -298,6 +299,7 @@ def fit_loop(
         sigma: force noise, N (None: the loop's `noise_std` if set, else estimated from the
             residuals).
         model: "steady" or "history".
+        max_steps: Levenberg–Marquardt step budget.
     Returns:
         FitResult with names ("mu_N", "K_d"); `converged` says whether LM succeeded.
     """
@@ -341,6 +343,7 @@ def fit_loop(
         names=("mu_N", "K_d"),
         transform=jnp.exp,
         sigma_known=sigma is not None,
+        max_steps=max_steps,
         jac="fwd" if model == "history" else "bwd",  # forward mode: 2 parameters, long scan
     )
 
