@@ -1,6 +1,8 @@
 """Fits to user data: parameters recovered from synthetic noisy records within 2 standard errors,
 and standard errors calibrated (coverage over seeds)."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -90,3 +92,45 @@ def test_bad_input_to_the_slip_fit(run):
     fit = tj.fit_slip_run(run, alpha=1.0, start={"F_s": 2.0, "K_tau": 3e6, "C_tau": 3e4},
                           max_steps=2)  # fmt: skip
     assert not fit.converged and "max_steps = 2" in fit.message
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(os.environ.get("TRIBOJAX_FULL") != "1", reason="long form: TRIBOJAX_FULL=1")
+def test_slip_fit_coverage_long_form():
+    """24 seeds: each parameter within 2 se in ≥ 20/24 (binomial p = 0.95: P(≤ 19) = 0.8 %)."""
+    truth = np.array(list(TRUTH.values()))
+    hits = []
+    for seed in range(100, 124):
+        fit = tj.fit_slip_run(short_run(seed), alpha=1.0)
+        assert fit.converged, (seed, fit.message)
+        hits.append(np.abs(fit.values - truth) <= 2 * fit.std_errors)
+    cover = np.mean(hits, axis=0)
+    assert np.all(cover >= 20 / 24), cover
+
+
+def _loop_coverage(cls, seeds, A_bar=2.5):
+    el = cls(MU_LOOP, N_LOOP, KD_LOOP)
+    A = A_bar * MU_LOOP * N_LOOP / KD_LOOP
+    truth = np.array([MU_LOOP * N_LOOP, KD_LOOP])
+    sigma = 0.01 * MU_LOOP * N_LOOP
+    hits, z = [], []
+    for seed in seeds:
+        loop = tj.synthetic_loop(el, A, 2 * np.pi * 22, cycles=2, samples_per_cycle=200,
+                                 noise=sigma, seed=seed)  # fmt: skip
+        fit = tj.fit_loop(loop, cls.__name__.lower())  # σ from the record's noise_std
+        assert fit.converged
+        hits.append(np.abs(fit.values - truth) <= 2 * fit.std_errors)
+        z.append((fit.values - truth) / fit.std_errors)
+    return np.mean(hits, axis=0), np.asarray(z)
+
+
+MU_LOOP, N_LOOP, KD_LOOP = 0.3, 2.94, 1.2e6
+
+
+@pytest.mark.parametrize("cls", [tj.Jenkins, tj.Mindlin], ids=["jenkins", "mindlin"])
+def test_loop_fit_coverage(cls):
+    """Cheap (one compilation per element), so always the long form. 100 seeds: coverage of
+    the 2-se interval in [0.89, 0.99] (binomial 99 % band at p = 0.954) and the z-scores' standard deviation 1 ± 0.2."""
+    cover, z = _loop_coverage(cls, range(1000, 1100))
+    assert np.all((cover >= 0.89) & (cover <= 0.99)), cover
+    assert np.all(np.abs(np.std(z, axis=0) - 1) < 0.2), np.std(z, axis=0)
