@@ -130,7 +130,8 @@ MU_LOOP, N_LOOP, KD_LOOP = 0.3, 2.94, 1.2e6
 @pytest.mark.parametrize("cls", [tj.Jenkins, tj.Mindlin], ids=["jenkins", "mindlin"])
 def test_loop_fit_coverage(cls):
     """Cheap (one compilation per element), so always the long form. 100 seeds: coverage of
-    the 2-se interval in [0.89, 0.99] (binomial 99 % band at p = 0.954) and the z-scores' standard deviation 1 ± 0.2."""
+    the 2-se interval in [0.89, 0.99] (binomial 99 % band at p = 0.954) and the z-scores'
+    standard deviation 1 ± 0.2."""
     cover, z = _loop_coverage(cls, range(1000, 1100))
     assert np.all((cover >= 0.89) & (cover <= 0.99)), cover
     assert np.all(np.abs(np.std(z, axis=0) - 1) < 0.2), np.std(z, axis=0)
