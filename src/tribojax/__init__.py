@@ -30,6 +30,7 @@ from ._contact import (
 from ._data import DataFileError as DataFileError
 from ._data import read_table as read_table
 from ._data import wang2022_table as wang2022_table
+from ._data import wu2015_table as wu2015_table
 from ._fit import FitResult as FitResult
 from ._fit import least_squares_fit as least_squares_fit
 from ._fit_user import fit_slip_run as fit_slip_run
