@@ -137,7 +137,8 @@ def gauss_newton_step(r, J) -> np.ndarray:
     se = np.sqrt(np.sum((vt[keep] / sv[keep, None]) ** 2, axis=0))
     n, p = J.shape
     s = max(np.sqrt(float(r @ r) / max(n - p, 1)), 1e-300)
-    return step / (se * s)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(se > 0, step / (se * s), np.inf)
 
 
 def levenberg_marquardt(
