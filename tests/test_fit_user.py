@@ -135,3 +135,36 @@ def test_loop_fit_coverage(cls):
     cover, z = _loop_coverage(cls, range(1000, 1100))
     assert np.all((cover >= 0.89) & (cover <= 0.99)), cover
     assert np.all(np.abs(np.std(z, axis=0) - 1) < 0.2), np.std(z, axis=0)
+
+
+SURFACE = (2.8821, 4.3636e-8, 0.1416)  # D, G (m), μ_t of the Table 3 calibration (σ_s 1.893 GPa)
+
+
+def test_surface_fit_refuses_bad_input(run):
+    with pytest.raises(ValueError, match=r"normal_load_N is required"):
+        tj.fit_surface_from_runs([run, run])
+    loaded = short_run(1, normal_load=3.69)
+    with pytest.raises(ValueError, match=r"1 run\(s\) give 3 data for 3 parameters"):
+        tj.fit_surface_from_runs([loaded])
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(os.environ.get("TRIBOJAX_FULL") != "1", reason="long form: TRIBOJAX_FULL=1")
+def test_surface_fit_recovers_D_G_mu():
+    import jax
+    import jax.numpy as jnp
+
+    from tribojax._fit_user import surface_contact_model
+
+    loads = (3.6912, 9.5088, 21.3258)
+    out = jax.vmap(surface_contact_model(*SURFACE))(jnp.asarray(loads))
+    runs = [
+        tj.synthetic_slip_run(
+            tj.PreSlipLuGre(F, K, C), noise=NOISE, seed=40 + i, normal_load=L, **SHORT
+        )  # fmt: skip
+        for i, (L, F, K, C) in enumerate(zip(loads, out.F_s, out.K_tau, out.C_tau))
+    ]
+    fit = tj.fit_surface_from_runs(runs, start=(2.85, 3e-8, 0.16))
+    assert fit.converged and fit.names == ("D", "G_m", "mu_t")
+    z = (fit.values - np.array(SURFACE)) / fit.std_errors
+    assert np.all(np.abs(z) < 2), z

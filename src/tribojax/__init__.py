@@ -34,6 +34,7 @@ from ._data import wu2015_table as wu2015_table
 from ._fit import FitResult as FitResult
 from ._fit import least_squares_fit as least_squares_fit
 from ._fit_user import fit_slip_run as fit_slip_run
+from ._fit_user import fit_surface_from_runs as fit_surface_from_runs
 from ._fit_user import slip_run_start as slip_run_start
 from ._friction import AbstractFrictionElement as AbstractFrictionElement
 from ._hysteresis import HarmonicCoefficients as HarmonicCoefficients
