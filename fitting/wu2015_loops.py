@@ -80,7 +80,8 @@ def run(conditions=None, elements=("jenkins", "mindlin"), A_bars=A_BARS) -> dict
                     }
                 )
     z = np.array([[r["z_mu_N"], r["z_K_d"]] for r in rows])
-    ok = np.all(np.isfinite(z), axis=1)  # a loop without slip bounds μN only: se infinite/NaN
+    se = np.array([[r["mu_N_se"], r["K_d_se"]] for r in rows])
+    ok = np.all(np.isfinite(z) & np.isfinite(se), axis=1)  # no slip: μN only bounded, se inf/NaN
     summary = {
         "fits": len(rows),
         "all_converged": all(r["converged"] for r in rows),

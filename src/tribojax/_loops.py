@@ -303,7 +303,9 @@ def fit_loop(
         model: "steady" or "history".
         max_steps: Levenberg–Marquardt step budget.
     Returns:
-        FitResult with names ("mu_N", "K_d"); `converged` says whether LM succeeded.
+        FitResult with names ("mu_N", "K_d"); `converged` says whether LM succeeded. For a
+        Jenkins loop that does not slip at the fit (Ā ≤ 1), μN's standard error is inf and
+        `message` says that μN is only bounded below.
     """
     if element not in _ELEMENTS:
         raise ValueError(f"element must be one of {sorted(_ELEMENTS)}, got {element!r}")
@@ -332,7 +334,7 @@ def fit_loop(
 
     theta0 = jnp.log(jnp.array([start.mu_N, start.K_d]))
     # jitted once per (element, model, record length): repeated fits reuse the compilation
-    return levenberg_marquardt(
+    fit = levenberg_marquardt(
         fn,
         theta0,
         args,
@@ -346,6 +348,22 @@ def fit_loop(
         step_tol=0.0,
         stall_tol=0.0,
     )
+    A_fit = 0.5 * (float(loop.u.max()) - float(loop.u.min())) * fit.values[1] / fit.values[0]
+    if cls is Jenkins and A_fit <= 1.0 + 1e-3:
+        # no slip in the fitted Jenkins loop: μN is only bounded below by the peak force
+        import dataclasses
+
+        std = fit.std_errors.copy()
+        cov = fit.covariance.copy()
+        corr = fit.correlation.copy()
+        std[0], cov[0, :], cov[:, 0] = np.inf, np.inf, np.inf
+        corr[0, :], corr[:, 0] = np.nan, np.nan
+        corr[0, 0] = 1.0
+        msg = (f"mu_N is only bounded below (>= {fit.values[0]:.6g} N): the fitted Jenkins loop "
+               f"does not slip (A_bar = {A_fit:.4g} <= 1)")  # fmt: skip
+        fit = dataclasses.replace(fit, std_errors=std, covariance=cov, correlation=corr,
+                                  message=msg)  # fmt: skip
+    return fit
 
 
 class _LoopResiduals(eqx.Module):
