@@ -16,7 +16,7 @@ REPO = Path(__file__).resolve().parents[1]
 def test_checksums_match_data_readme():
     readme = (REPO / "data" / "README.md").read_text()
     rows = re.findall(r"\| `([\w.]+\.csv)` \|.*\| `([0-9a-f]{64})` \|", readme)
-    assert len(rows) == 8
+    assert len(rows) == 9
     for name, digest in rows:
         (path,) = (REPO / "data").glob(f"*/{name}")
         assert hashlib.sha256(path.read_bytes()).hexdigest() == digest, name
@@ -35,6 +35,13 @@ def test_tables_load_with_units():
         assert t["vacuum_kPa"].tolist() == [0.6, 2, 4, 7, 10, 20]
     with pytest.raises(ValueError, match="Tables 1-7"):
         tj.wang2022_table(8)
+    w1 = tj.wu2015_table(1)
+    assert list(w1["material"]) == ["1Cr13"] * 9
+    assert sorted(set(w1["radius_mm"])) == [6, 18, 36]
+    assert sorted(set(w1["normal_force_N"])) == [1.96, 2.94, 4.90]
+    assert w1["frequency_Hz"].tolist() == [22] * 6 + [82] * 3
+    with pytest.raises(ValueError, match="one table"):
+        tj.wu2015_table(2)
 
 
 def test_data_dir_is_found_from_any_cwd(tmp_path, monkeypatch):

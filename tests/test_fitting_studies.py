@@ -27,3 +27,25 @@ def test_wang2022_slip_study_short_form(tmp_path):
     assert agree["max_spread_over_std_error"] < 0.5  # three starts, one optimum
     # refuses to overwrite its own earlier output
     assert wang2022_slip.main(["--short", "--out", str(tmp_path)]) == 2
+
+
+def test_wu2015_loops_study_short_form(tmp_path):
+    from fitting import wu2015_loops
+
+    assert wu2015_loops.main(["--short", "--out", str(tmp_path)]) == 0
+    res = json.loads((tmp_path / "wu2015_loops.json").read_text())
+    rows = res["rows"]
+    assert len(rows) == 4 and all(r["converged"] for r in rows)
+    for r in rows:
+        # within 3 se where the loop slips; Jenkins at Ā = 1 does not slip: μN is only bounded
+        # below (no finite se) while its stick slope still gives K_d
+        if r["A_bar_true"] > 1 or r["element"] == "mindlin":
+            assert abs(r["z_mu_N"]) < 3 and abs(r["z_K_d"]) < 3
+        else:
+            assert not (r["mu_N_se"] < 1e-3 * r["mu_N"])  # NaN or huge
+            assert r["K_d"] == pytest.approx(r["K_d_true"], rel=1e-3)
+    # gross slip (Ā = 3): the steady loop's K̄ is within 0.03 of Eq 7 for both elements
+    for r in rows:
+        if r["A_bar_true"] == 3.0:
+            assert abs(r["K_bar"] - r["K_bar_eq7"]) < 0.03
+    assert (tmp_path / "wu2015_loops.csv").read_text().count("\n") == 5

@@ -30,11 +30,15 @@ from ._contact import (
 from ._data import DataFileError as DataFileError
 from ._data import read_table as read_table
 from ._data import wang2022_table as wang2022_table
+from ._data import wu2015_table as wu2015_table
 from ._fit import FitResult as FitResult
 from ._fit import least_squares_fit as least_squares_fit
 from ._fit_chain import ChainFit as ChainFit
 from ._fit_chain import chain_phase_slips as chain_phase_slips
 from ._fit_chain import fit_measured_slips as fit_measured_slips
+from ._fit_user import fit_slip_run as fit_slip_run
+from ._fit_user import fit_surface_from_runs as fit_surface_from_runs
+from ._fit_user import slip_run_start as slip_run_start
 from ._friction import AbstractFrictionElement as AbstractFrictionElement
 from ._hysteresis import HarmonicCoefficients as HarmonicCoefficients
 from ._hysteresis import drive as drive

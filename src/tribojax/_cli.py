@@ -5,6 +5,7 @@ tribojax reproduce [--out DIR]   wang2022 Table 3 (published inputs and calibrat
                                  measured slips) and wu2015 vs Eq 7: JSON + figures
 tribojax contact (--topography FILE | --D D --G G) --load N [...]   surface → D, G → F_s, K_τ, C_τ
 tribojax hysteresis [...]        K̄, C̄ (and K_eq, C_eq) of a Jenkins/Mindlin/LuGre element
+tribojax fit FILE.csv [--out DIR] fit a user's slip run or hysteresis loop: JSON + plot
 """
 
 from __future__ import annotations
@@ -342,6 +343,12 @@ def main(argv=None) -> int:
 
     add_discover_arguments(dis)
     dis.set_defaults(func=run_discover)
+    from ._fit_cli import add_arguments as add_fit_arguments
+    from ._fit_cli import run_fit
+
+    fit = sub.add_parser("fit", help="fit a slip run or hysteresis loop CSV (+ sidecar JSON)")
+    add_fit_arguments(fit)
+    fit.set_defaults(func=run_fit)
     args = parser.parse_args(argv)
     return args.func(args)
 

@@ -122,3 +122,24 @@ def wang2022_table(number: int) -> dict[str, np.ndarray]:
         raise ValueError(f"wang2022 has Tables 1-7; got table {number!r}")
     name, cols, text = _WANG2022[number]
     return read_table(data_dir() / "wang2022" / name, columns=cols, text_columns=text)
+
+
+_WU2015 = {
+    1: (
+        "table1_conditions.csv",
+        ("condition", "material", "radius_mm", "normal_force_N", "frequency_Hz"),
+        ("material",),
+    ),
+}
+
+
+def wu2015_table(number: int = 1) -> dict[str, np.ndarray]:
+    """wu2015 Table `number` (only Table 1, the experimental conditions) from `data/wu2015/`.
+
+    Table 1: one row per condition (1–3) and normal force: material, contact radius (mm), normal
+    force (N) and exciting frequency (Hz). Eq 7's fits are `tribojax.wu2015_eq7()`.
+    """
+    if number not in _WU2015:
+        raise ValueError(f"wu2015 has one table, Table 1; got table {number!r}")
+    name, cols, text = _WU2015[number]
+    return read_table(data_dir() / "wu2015" / name, columns=cols, text_columns=text)

@@ -16,13 +16,14 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ._checks import check_range
 from ._data import DataFileError, read_table
-from ._fit import FitResult, least_squares_fit
+from ._fit import FitResult
 from ._hysteresis_elements import Jenkins, Mindlin
 
 LOOP_COLUMNS = ("t_s", "u_m", "f_N")
@@ -277,6 +278,7 @@ def fit_loop(
     sigma=None,
     window: float = 0.05,
     model: str = "steady",
+    max_steps: int = 500,
 ) -> FitResult:
     """Least-squares fit of μN (N) and K_d (N/m) of a Jenkins or Mindlin element to the data.
 
@@ -289,17 +291,21 @@ def fit_loop(
     fitted. Works for any history (drifting or multi-harmonic amplitude); for Mindlin the
     time-domain form is the Iwan discretisation (error ~1e-5 μN).
 
-    Parameters are fitted as logarithms (optimistix Levenberg–Marquardt via
-    `least_squares_fit`), started from `analyse_loop`'s μN and Eq 6 K_d. Only the product μN is
-    identifiable from a loop; without gross slip (Jenkins Ā ≤ 1) μN is only bounded below.
+    Parameters are fitted as logarithms (optimistix Levenberg–Marquardt, jitted once per
+    element, model and record length), started from `analyse_loop`'s μN and Eq 6 K_d; standard
+    errors from the Jacobian at the optimum. Only the product μN is identifiable from a loop;
+    without gross slip (Jenkins Ā ≤ 1) μN is only bounded below.
 
     Args:
         element: "jenkins" or "mindlin".
         sigma: force noise, N (None: the loop's `noise_std` if set, else estimated from the
             residuals).
         model: "steady" or "history".
+        max_steps: Levenberg–Marquardt step budget.
     Returns:
-        FitResult with names ("mu_N", "K_d"); `converged` says whether LM succeeded.
+        FitResult with names ("mu_N", "K_d"); `converged` says whether LM succeeded. For a
+        Jenkins loop that does not slip at the fit (Ā ≤ 1), μN's standard error is inf and
+        `message` says that μN is only bounded below.
     """
     if element not in _ELEMENTS:
         raise ValueError(f"element must be one of {sorted(_ELEMENTS)}, got {element!r}")
@@ -312,37 +318,70 @@ def fit_loop(
     if model == "steady":
         direction = jnp.asarray(_loop_phase(loop, start))
         u, f = jnp.asarray(loop.u), jnp.asarray(loop.f)
-        A = 0.5 * (float(loop.u.max()) - float(loop.u.min()))
-
-        def force(el):
-            return el.steady_force(u, A, direction)
-
+        A = jnp.asarray(0.5 * (float(loop.u.max()) - float(loop.u.min())))
+        fn, args = _LoopResiduals(cls, None), (u, f, A, direction, jnp.asarray(scale))
     else:
-        from ._hysteresis import drive
-
         first = int(np.searchsorted(loop.t, _cycle_starts(loop.t, loop.u)[0]))
         u_rel = loop.u[first:] - 0.5 * (loop.u.max() + loop.u.min())
         half = int(np.searchsorted(loop.t[first:], loop.t[first] + np.pi / start.omega))
         skip = int(np.argmax(u_rel[:half]))  # the first reversal (u_max) after the crossing
-        u = jnp.asarray(u_rel)
         f = jnp.asarray(loop.f[first + skip :])
-
-        def force(el):
-            return drive(el, u)[skip:]
-
-    def residuals(theta, args):
-        el = cls(jnp.exp(theta[0]), 1.0, jnp.exp(theta[1]))  # only the product μN enters
-        return (force(el) - f) / scale
+        fn = _LoopResiduals(cls, skip)
+        args = (jnp.asarray(u_rel), f, jnp.asarray(0.0), f, jnp.asarray(scale))
+    if len(f) <= 2:
+        raise ValueError(f"{loop.source}: {len(f)} samples are too few to fit mu_N and K_d")
+    from ._fit_user import levenberg_marquardt
 
     theta0 = jnp.log(jnp.array([start.mu_N, start.K_d]))
-    return least_squares_fit(
-        jax.jit(residuals),
+    # jitted once per (element, model, record length): repeated fits reuse the compilation
+    fit = levenberg_marquardt(
+        fn,
         theta0,
+        args,
         names=("mu_N", "K_d"),
         transform=jnp.exp,
         sigma_known=sigma is not None,
-        jac="fwd" if model == "history" else "bwd",  # forward mode: 2 parameters, long scan
+        max_steps=max_steps,
+        block=max_steps,
+        rtol=1e-10,
+        atol=1e-12,
+        step_tol=0.0,
+        stall_tol=0.0,
     )
+    A_fit = 0.5 * (float(loop.u.max()) - float(loop.u.min())) * fit.values[1] / fit.values[0]
+    if cls is Jenkins and A_fit <= 1.0 + 1e-3:
+        # no slip in the fitted Jenkins loop: μN is only bounded below by the peak force
+        import dataclasses
+
+        std = fit.std_errors.copy()
+        cov = fit.covariance.copy()
+        corr = fit.correlation.copy()
+        std[0], cov[0, :], cov[:, 0] = np.inf, np.inf, np.inf
+        corr[0, :], corr[:, 0] = np.nan, np.nan
+        corr[0, 0] = 1.0
+        msg = (f"mu_N is only bounded below (>= {fit.values[0]:.6g} N): the fitted Jenkins loop "
+               f"does not slip (A_bar = {A_fit:.4g} <= 1)")  # fmt: skip
+        fit = dataclasses.replace(fit, std_errors=std, covariance=cov, correlation=corr,
+                                  message=msg)  # fmt: skip
+    return fit
+
+
+class _LoopResiduals(eqx.Module):
+    """(model − measured force)/σ of a loop; θ = log(μN, K_d). skip None: steady loop."""
+
+    cls: type = eqx.field(static=True)
+    skip: int | None = eqx.field(static=True)
+
+    def __call__(self, theta, args):
+        u, f, A, direction, scale = args
+        el = self.cls(jnp.exp(theta[0]), 1.0, jnp.exp(theta[1]))  # only the product μN enters
+        if self.skip is None:
+            model = el.steady_force(u, A, direction)
+        else:
+            from ._hysteresis import drive
+
+            model = drive(el, u)[self.skip :]
+        return (model - f) / scale
 
 
 def synthetic_loop(
