@@ -58,7 +58,6 @@ from ._lugre import PreSlipLuGre
 from ._materials import WANG2022_RETICLE_MASS_KG
 from ._reproduce import wang2022_table3_model
 from ._slip import slip_phase_averages
-from ._surface import FractalSurface
 
 PARAMETERS = ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha")
 # Defaults of the fixed ones: Table 1's D, the Table 3 calibration (M = 1), the paper's α = 1.
@@ -119,9 +118,7 @@ def symmetric_bound(measured=None) -> dict:
 def _contact_raw(phys4, loads):
     """(D, G, μ_t, σ_s) -> [F_s, K_τ, C_τ] at `loads` (3, n), plus a per-load validity flag."""
     D, G, mu_t, sigma_s = phys4
-    base = wang2022_table3_model(G, mu_t, sigma_s, throw=False)
-    s = base.surface
-    model = eqx.tree_at(lambda m: m.surface, base, FractalSurface(D, s.G, s.M, s.gamma))
+    model = wang2022_table3_model(G, mu_t, sigma_s, D=D, throw=False)
     out = jax.vmap(model)(loads)
     ok = out.converged & ~out.all_plastic & (out.K_tau > 0) & (out.F_s > 0)
     ok = ok & jnp.isfinite(out.values).all(-1)

@@ -411,15 +411,9 @@ def surface_contact_model(D, G, mu_t, *, sigma_s=1.893e9, M=1.0, throw=False):
     Defaults: σ_s and M of the Table 3 calibration (REPRODUCTION.md: G, μ_t, σ_s are strongly
     correlated; σ_s is held fixed here, M is exactly degenerate with G).
     """
-    from ._contact import FractalContact
-    from ._materials import WANG2022_RETICLE_MASS_KG, ContactPair, wang2022_pair
-    from ._surface import FractalSurface
+    from ._reproduce import wang2022_table3_model
 
-    base = wang2022_pair()
-    pair = ContactPair(base.E_star, base.G_star, base.H, base.nu, sigma_s)
-    surface = FractalSurface(D=D, G=G, M=M, gamma=1.5)
-    return FractalContact(surface, pair, mu_t=mu_t, tangential_load=WANG2022_RETICLE_MASS_KG,
-                          mass=WANG2022_RETICLE_MASS_KG, throw=throw)  # fmt: skip
+    return wang2022_table3_model(G, mu_t, sigma_s, M=M, D=D, throw=throw)
 
 
 def _surface_physical(theta, mu_min):

@@ -40,17 +40,18 @@ FIXED_M = 1.0
 _LOG_G_RANGE = (math.log(1e-11), math.log(1e-5))
 
 
-def wang2022_table3_model(G, mu_t, sigma_s, *, M=FIXED_M, throw=True) -> FractalContact:
+def wang2022_table3_model(G, mu_t, sigma_s, *, M=FIXED_M, D=None, throw=True) -> FractalContact:
     """The reticle/chuck contact model behind Table 3, for given unpublished constants.
 
-    D = 2.8821 and γ = 1.5 (Table 1), the Table 2 pair with strength `sigma_s` (Pa), T = 0.321 N
-    (m·a_max) in T/P, m = 0.321 kg in Eq 24, a = a'. G in m; `M` ridges (degenerate with G).
+    D = 2.8821 (Table 1; pass `D` to free it) and γ = 1.5, the Table 2 pair with strength
+    `sigma_s` (Pa), T = 0.321 N (m·a_max) in T/P, m = 0.321 kg in Eq 24, a = a'. G in m; `M`
+    ridges (degenerate with G).
     `wang2022_table3_model(*fit.values, M=fit.fixed["M"])` rebuilds a calibration's model.
     """
     base = wang2022_pair()
     pair = ContactPair(base.E_star, base.G_star, base.H, base.nu, sigma_s)
     table1 = wang2022_surface(M)
-    surface = FractalSurface(D=table1.D, G=G, M=M, gamma=table1.gamma)
+    surface = FractalSurface(D=table1.D if D is None else D, G=G, M=M, gamma=table1.gamma)
     return FractalContact(
         surface,
         pair,
