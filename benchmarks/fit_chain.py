@@ -6,10 +6,12 @@ Baseline: the same chain written with NumPy/SciPy — `reference_contact` (tests
 quad + brentq) at the six loads, the slip ODE by `solve_ivp` Radau (benchmarks/slip.py's
 `scipy_phases`, exact sgn, stopped at the kinks) at the loosest rtol of a ladder whose phase
 slips are within the JAX fit's own accuracy (5e-4 relative) of a tight JAX solution — inside
-`scipy.optimize.least_squares` (MINPACK LM, 2-point finite differences: p + 1 chain evaluations
-per Jacobian). Full mode runs that SciPy fit from the same start; --quick times two SciPy chain
-evaluations and extrapolates by the evaluations a 2-point-FD LM needs for the JAX fit's step
-count, (steps + 1)·(p + 1); the entry says which ("baseline_mode").
+`scipy.optimize.least_squares` (MINPACK LM, default tolerances, forward differences: p + 1 chain
+evaluations per Jacobian) over the same unconstrained coordinates θ as the JAX fit. Full mode
+runs that SciPy fit from the same start to its own stop (it reaches the same optimum); --quick
+times two SciPy chain evaluations and extrapolates by the evaluations a forward-difference LM
+needs for the JAX fit's step count, (steps + 1)·(p + 1); the entry says which
+("baseline_mode").
 """
 
 import sys
@@ -31,6 +33,22 @@ from slip import scipy_phases  # noqa: E402
 FREE = fc.DEFAULT_FREE
 TARGET_S = 10.0
 TARGET_RATIO = 20.0
+# reference_contact refuses D > 2.9 for the plastic integral down to a' = 0 (its quad in ln a'
+# overflows below the smallest double); the fitted D is 2.93. For D > 2.9 the benchmark starts
+# that integral at 1e-250 of its upper limit: the part left out is (1e-250)^((3-D)/2) of it,
+# measured against tribojax at Table 3's lightest and heaviest load: F_s, K_tau, C_tau within
+# 2.1e-9 at D = 2.93 and 1.2e-5 at D = 2.96, far below the Radau slips' 1e-4.
+PLASTIC_CUT = 1e-250
+_distribution_integral = ref.distribution_integral
+
+
+def _distribution_integral_cut(func, lo, hi, a_l, D):
+    if lo is None and D > ref.MAX_D_LOWER_LIMIT_ZERO:
+        lo = (a_l if hi is None else min(hi, a_l)) * PLASTIC_CUT
+    return _distribution_integral(func, lo, hi, a_l, D)
+
+
+ref.distribution_integral = _distribution_integral_cut  # this script only
 
 
 def _reference_inputs():
@@ -59,6 +77,46 @@ def scipy_chain(theta, rtol, loads, measured, kw):
     return (np.array(rows) / measured - 1.0).ravel()
 
 
+FD_STEP = 1e-2  # forward-difference step in θ: well above the Radau slips' 1e-4 noise
+
+
+def scipy_fit(start, rtol, loads, measured, kw):
+    """The SciPy fit: MINPACK LM over the same θ as `fit_measured_slips` (logit D and log G in
+    the same box, μ_t > T/P), so that trial points stay inside the model's domain (in physical
+    coordinates MINPACK steps to μ_t < T/P, where Mindlin's law fails). Jacobian by forward
+    differences (step `FD_STEP` in θ), reusing the residual at the current point.
+    Returns (OptimizeResult, chain evaluations, physical optimum)."""
+    from scipy.optimize import least_squares
+
+    mu_min = fc._mu_min(loads)
+    full0 = fc._to_theta([start.get(k, fc.DEFAULTS[k]) for k in fc.PARAMETERS], mu_min)
+    n_free = len(FREE)
+
+    def physical(th):
+        full = np.concatenate([th, full0[n_free:]])
+        return np.asarray(fc._to_physical(jnp.asarray(full), mu_min))[:n_free]
+
+    cache, count = {}, [0]
+
+    def f(th):
+        key = th.tobytes()
+        if key not in cache:
+            count[0] += 1
+            cache.clear()
+            cache[key] = scipy_chain(physical(th), rtol, loads, measured, kw)
+        return cache[key]
+
+    def jac(th):
+        r0 = f(th)
+        cols = [(scipy_chain(physical(th + FD_STEP * e), rtol, loads, measured, kw) - r0) / FD_STEP
+                for e in np.eye(th.size)]  # fmt: skip
+        count[0] += th.size
+        return np.stack(cols, axis=1)
+
+    sol = least_squares(f, full0[:n_free], jac=jac, method="lm")
+    return sol, count[0], physical(sol.x)
+
+
 def _matched_rtol(params, kw, loads):
     """Loosest Radau rtol within 5e-4 of a tight JAX solution at the lightest-damped load."""
     tight, _ = fc.chain_phase_slips(
@@ -76,8 +134,6 @@ def _matched_rtol(params, kw, loads):
 
 
 def run(quick=False):
-    from scipy.optimize import least_squares
-
     start = {k: fc.DEFAULTS[k] for k in FREE}
     t0 = time.perf_counter()
     fc.fit_measured_slips(start)  # compile
@@ -90,8 +146,8 @@ def run(quick=False):
     kw = _reference_inputs()
     params = np.array([fc.DEFAULTS[k] for k in fc.PARAMETERS])
     rtol, scipy_err = _matched_rtol(params, kw, loads)
-    x0 = np.array([start[k] for k in FREE])
     if quick:
+        x0 = np.array([start[k] for k in FREE])
         times = []
         for _ in range(2):
             t = time.perf_counter()
@@ -103,14 +159,15 @@ def run(quick=False):
         scipy_info = {}
     else:
         t = time.perf_counter()
-        sol = least_squares(
-            scipy_chain, x0, args=(rtol, loads, measured, kw), method="lm", x_scale=x0,
-            diff_step=1e-6,
-        )  # fmt: skip
+        sol, nfev, x = scipy_fit(start, rtol, loads, measured, kw)
         base_s = time.perf_counter() - t
-        mode = "measured: scipy.optimize.least_squares (lm) from the same start"
-        scipy_info = {"scipy_nfev": int(sol.nfev), "scipy_x": sol.x.tolist(),
-                      "scipy_rms_rel": float(np.sqrt(np.mean(sol.fun**2)))}  # fmt: skip
+        mode = (
+            "measured: scipy.optimize.least_squares (MINPACK lm, default tolerances) in the JAX "
+            f"fit's coordinates from the same start, forward differences with step {FD_STEP} in θ"
+        )
+        scipy_info = {"scipy_chain_evaluations": nfev, "scipy_x": x.tolist(),
+                      "scipy_rms_rel": float(np.sqrt(np.mean(sol.fun**2))),
+                      "scipy_message": str(sol.message), "scipy_success": bool(sol.success)}  # fmt: skip
     common = dict(
         steps=steps,
         residual_evaluations=fit.evaluations,

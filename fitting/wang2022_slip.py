@@ -26,8 +26,8 @@ STARTS = (
     {"D": 2.8821, "G_m": 4.364e-8, "mu_t": 0.1416},
     {"D": 2.8, "G_m": 2e-8, "mu_t": 0.1},
     {"D": 2.75, "G_m": 3e-8, "mu_t": 0.11},
-    # fails: forward-mode derivatives through the slip solver's implicit stage solve raise at
-    # this start (a diverging Newton iteration); recorded as an error, not dropped
+    # failed with the Kvaerno5 slip solver (a diverging stage Newton iteration under forward
+    # mode); converges with Rodas4. A start that raises is recorded as an error, not dropped
     {"D": 2.95, "G_m": 1e-8, "mu_t": 0.12},
 )
 # short form (CI): two loads (0.6 and 7 kPa), G and μ_t free

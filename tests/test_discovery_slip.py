@@ -108,40 +108,35 @@ def _check(row):
     assert row["converged"], row
     if row["hidden"] == "clean":
         assert row["named"] == "none", row
-    elif row["hidden"] in ("viscous_friction", "stribeck") and (
-        row["load_kPa"],
-        row["noise_m"],
-    ) != (0.6, syn.NOISE_LEVELS["low"]):
-        # friction physics is partly absorbed by the baseline's own F_s, K_tau, C_tau (σ2·v by
-        # C_τ·dz/dt most of all): at 2 kPa or the higher noise the gap shrinks by less than 2x
-        # and the weakest viscous case is not found (confusion table in the issue note). Never
-        # another effect, and the residual never grows.
-        assert row["named"] in (row["hidden"], "none"), row
-        assert row["final_rmse_m"] <= row["baseline_rmse_m"], row
-        if row["hidden"] == "stribeck":
-            assert row["named"] == "stribeck" and row["shrink"] > 1.4, row
     else:
         assert row["named"] == row["hidden"], row
         assert row["shrink"] >= 2.0, row
 
 
 FULL = os.environ.get("TRIBOJAX_FULL") == "1"
-# CI form: clean (must give none), one measurement and one physics effect (position_error runs in
+# CI form: clean (must give none), one measurement and two physics effects (position_error runs in
 # the CLI test); TRIBOJAX_FULL=1: every effect and clean x 2 noise levels x 2 loads
 CASES = (
     [(h, None, None) for h in ("clean", *syn.SLIP_EFFECTS)]
     if FULL
-    else [("clean", "high", 2.0), ("vibration", "high", 0.6), ("load_coupling", "low", 2.0)]
+    else [
+        ("clean", "high", 2.0),
+        ("vibration", "high", 0.6),
+        ("load_coupling", "low", 2.0),
+        ("viscous_friction", "high", 2.0),  # the closest call of the grid (shrink 2.1)
+    ]
 )
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("hidden, noise, load", CASES)
 def test_hidden_effect_confusion(hidden, noise, load):
+    # the study's own records (461 samples; at 231 the closest call, viscous at 2 kPa and the
+    # higher noise, shrinks by 1.99 instead of 2.10)
     if noise is None:
-        rows = syn.confusion_study([hidden], n=N_CI)
+        rows = syn.confusion_study([hidden])
     else:
-        rows = syn.confusion_study([hidden], [syn.NOISE_LEVELS[noise]], [load], n=N_CI)
+        rows = syn.confusion_study([hidden], [syn.NOISE_LEVELS[noise]], [load])
     for row in rows:
         _check(row)
 

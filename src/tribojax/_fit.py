@@ -64,6 +64,23 @@ class FitResult:
 
 
 @eqx.filter_jit
+def gauss_newton_step_jnp(r, J):
+    """The Gauss–Newton step −(JᵀJ)⁺Jᵀr, in units of the standard errors, traceable (JAX).
+
+    Standard errors from s²(JᵀJ)⁺ with s² = rᵀr/(n − p) (the residual scale estimated from the
+    fit). Entries ≪ 1: the step still left is far below the statistical uncertainty. Directions
+    with singular values below 1e-14 of the largest are dropped; a zero standard error gives inf.
+    """
+    u, sv, vt = jnp.linalg.svd(J, full_matrices=False)
+    keep = sv > sv[0] * 1e-14
+    inv = jnp.where(keep, 1.0 / jnp.where(keep, sv, 1.0), 0.0)
+    step = -(vt.T @ ((u.T @ r) * inv))
+    se = jnp.sqrt(jnp.sum((vt * inv[:, None]) ** 2, axis=0))
+    n, p = J.shape
+    s = jnp.maximum(jnp.sqrt(r @ r / max(n - p, 1)), 1e-300)
+    return jnp.where(se > 0, step / jnp.where(se > 0, se * s, 1.0), jnp.inf)
+
+
 def _solve(residual_fn, theta0, args, solver, max_steps, jac):
     # jitted here so that a module-level `residual_fn` (hashed by identity) is compiled once and
     # a repeated fit with new data in `args` runs warm

@@ -28,7 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from ._fit import FitResult
+from ._fit import FitResult, gauss_newton_step_jnp
 from ._lugre import PreSlipLuGre
 from ._precision import ensure_x64
 from ._records import SlipRun, run_profile
@@ -132,15 +132,7 @@ def gauss_newton_step(r, J) -> np.ndarray:
 
     Small entries (≪ 1) mean the remaining step is far below the statistical uncertainty.
     """
-    r, J = np.asarray(r), np.asarray(J)
-    u, sv, vt = np.linalg.svd(J, full_matrices=False)
-    keep = sv > sv[0] * 1e-14
-    step = -(vt[keep].T @ ((u[:, keep].T @ r) / sv[keep]))
-    se = np.sqrt(np.sum((vt[keep] / sv[keep, None]) ** 2, axis=0))
-    n, p = J.shape
-    s = max(np.sqrt(float(r @ r) / max(n - p, 1)), 1e-300)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(se > 0, step / (se * s), np.inf)
+    return np.asarray(gauss_newton_step_jnp(jnp.asarray(r), jnp.asarray(J)))
 
 
 def levenberg_marquardt(

@@ -279,12 +279,12 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=100) -> _State
             dx = -np.linalg.solve(A + lam * np.diag(dg), g)
             mn, rn, Jn, okn = ev(x + dx)
             cn = float(rn @ rn) if okn else np.inf
-            if cn <= cost:
+            if cn < cost:  # strict: a step that does not lower the cost is rejected
                 break
             lam *= 4.0
             if lam > 1e12:
                 break
-        if cn > cost:
+        if not cn < cost:
             # not even a tiny step along −g descends: a local minimum of the cost as evaluated
             # (ODE evaluation noise, or a kink of the model where contacts start sliding)
             converged = True
