@@ -20,7 +20,7 @@ from ._core import (
     _State,
     default_effects,
 )
-from ._regions import find_regions, noise_estimate, residual_rho
+from ._regions import ar1_inflation, find_regions, noise_estimate, residual_rho
 
 
 @dataclasses.dataclass(frozen=True)
@@ -164,6 +164,27 @@ def _rmse(a):
     return float(np.sqrt(np.mean(a * a))) if a.size else float("nan")
 
 
+def _refit(baseline, state, design, name, y, scale, r, cache):
+    """Fit the model augmented by `design` from two starts, keep the lower cost.
+
+    Starts: the current fit with the new strengths at zero, and one Gauss–Newton step of the
+    augmented model from there (the step the score test looks along). One start can end in a
+    local minimum: measured on a hidden-Stribeck slip record (2 kPa, 0.1 nm noise, seed 2),
+    the zero start stopped at δ = 0.044 with 2.1x the noise left; the Gauss–Newton start
+    reached δ = 0.10 (the hidden 0.1) at the noise level.
+    """
+    starts = [np.concatenate([state.theta, np.zeros(design.k)])]
+    A = np.concatenate([state.jac, _columns(baseline, state, design, cache) / scale], axis=1)
+    if np.all(np.isfinite(A)):
+        step = np.linalg.lstsq(A, r, rcond=None)[0]
+        p = state.theta.size
+        starts.append(np.concatenate([state.theta + step[:p], step[p:]]))
+    fits = [_fit(baseline, state.designs + (design,), th, y, scale, state.names + (name,))
+            for th in starts]  # fmt: skip
+    good = [f for f in fits if f.converged and np.isfinite(f.rss)]
+    return min(good, key=lambda f: f.rss) if good else fits[0]
+
+
 def discover(
     baseline: AbstractBaseline,
     effects: list[AbstractEffect] | None = None,
@@ -185,10 +206,12 @@ def discover(
        the null). An effect may then refine its nuisance values around the best grid point
        (`AbstractEffect.refine`, e.g. the vibration frequency); the p-value keeps the grid's
        Bonferroni factor, which makes it somewhat optimistic after refinement.
-    4. Refit the `n_refit` best candidates whose p-value is below alpha/(number of candidates);
-       accept the one with the lowest ΔBIC if ΔBIC < `delta_bic_threshold` (ΔBIC with an AR(1)
-       inflation from the augmented residual; nuisance parameters counted). Repeat from 3 until
-       none qualifies or `max_effects` are in.
+    4. Refit the `n_refit` best candidates whose p-value is below alpha/(number of candidates),
+       each from two starts (new strengths zero, and one Gauss–Newton step). A candidate
+       qualifies if ΔBIC < `delta_bic_threshold` (ΔBIC with an AR(1) inflation from its own
+       augmented residual; nuisance parameters counted); of those, add the one with the lowest
+       ΔBIC at a common inflation (the largest of theirs, `delta_bic_common`). Repeat from 3
+       until none qualifies or `max_effects` are in.
 
     Args:
         baseline: a concrete baseline holding the record (e.g. `slip_baseline(run)`).
@@ -272,25 +295,32 @@ def discover(
             break
         cands.sort(key=lambda c: (c["p_value"], -c["score"]))
         level = alpha / len(cands)
-        best_fit = None
+        accepted = []
         for c in [c for c in cands if c["p_value"] < level][:n_refit]:
             d = c["_design"]
-            th = np.concatenate([state.theta, np.zeros(d.k)])
-            new = _fit(baseline, state.designs + (d,), th, y, scale, state.names + (c["name"],))
+            new = _refit(baseline, state, d, c["name"], y, scale, r, cache)
             if not new.converged or not np.isfinite(new.rss):
                 c["refit_message"] = new.message or "refit failed"
                 continue
             rho1 = residual_rho(y - new.yhat)
             c["delta_bic"] = _delta_bic(new.rss, state.rss, n, d.k + d.n_nuisance, rho1)
             c["rmse_after"] = _rmse(y - new.yhat)
-            if c["delta_bic"] < delta_bic_threshold and (
-                best_fit is None or c["delta_bic"] < best_fit[0]
-            ):
-                best_fit = (c["delta_bic"], new, c["name"])
-        rounds.append([{k: v for k, v in c.items() if k != "_design"} for c in cands])
-        if best_fit is None:
+            if c["delta_bic"] < delta_bic_threshold:
+                accepted.append((c, new, d.k + d.n_nuisance, ar1_inflation(rho1)))
+        if not accepted:
+            rounds.append([{k: v for k, v in c.items() if k != "_design"} for c in cands])
             break
-        state = best_fit[1]
+        # Each candidate is accepted on its own ΔBIC (AR(1) inflation of its own residuals).
+        # The choice between accepted ones uses one inflation for all (the largest): otherwise
+        # a candidate that leaves a smooth misfit is charged more than one that leaves a rough
+        # one, whatever their RSS (measured: a hidden-Stribeck record where `vibration` won
+        # with 1.4x the RSS of `stribeck`).
+        c_common = max(a[3] for a in accepted)
+        for c, new, dk, _ in accepted:
+            gain = n * np.log(new.rss / state.rss) / c_common
+            c["delta_bic_common"] = float(gain + dk * np.log(n))
+        rounds.append([{k: v for k, v in c.items() if k != "_design"} for c in cands])
+        state = min(accepted, key=lambda a: a[0]["delta_bic_common"])[1]
     rf = y - state.yhat
     for rg in regions:
         rg["rmse_before"] = _rmse(r0[rg["i0"] : rg["i1"]])
