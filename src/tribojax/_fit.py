@@ -63,7 +63,6 @@ class FitResult:
         }
 
 
-@eqx.filter_jit
 def gauss_newton_step_jnp(r, J):
     """The Gauss–Newton step −(JᵀJ)⁺Jᵀr, in units of the standard errors, traceable (JAX).
 
@@ -81,6 +80,7 @@ def gauss_newton_step_jnp(r, J):
     return jnp.where(se > 0, step / jnp.where(se > 0, se * s, 1.0), jnp.inf)
 
 
+@eqx.filter_jit
 def _solve(residual_fn, theta0, args, solver, max_steps, jac):
     # jitted here so that a module-level `residual_fn` (hashed by identity) is compiled once and
     # a repeated fit with new data in `args` runs warm
