@@ -35,6 +35,7 @@ class FitResult:
         steps: LM steps taken.
         message: optimistix's result message ("" on success).
         fixed: constants held fixed in the fit (set by the caller, e.g. {"M": 1.0}).
+        jacobian: ∂residuals/∂θ at the optimum, (n, p) (`least_squares_fit`; None elsewhere).
     """
 
     names: tuple[str, ...]
@@ -49,6 +50,7 @@ class FitResult:
     steps: int
     message: str
     fixed: dict = dataclasses.field(default_factory=dict)
+    jacobian: np.ndarray | None = None  # ∂residuals/∂θ at the optimum (n, p), when computed
 
     def as_dict(self) -> dict:
         """Summary as plain Python numbers (non-finite entries mark unidentifiable directions)."""
@@ -97,7 +99,13 @@ def _solve(residual_fn, theta0, args, solver, max_steps, jac):
 
 @eqx.filter_jit
 def _value_and_jacobian(residual_fn, theta, args):
-    return residual_fn(theta, args), jax.jacfwd(residual_fn)(theta, args)
+    # one forward pass gives both (the residual rides along as jacfwd's aux)
+    def both(th):
+        r = residual_fn(th, args)
+        return r, r
+
+    J, r = jax.jacfwd(both, has_aux=True)(theta)
+    return r, J
 
 
 def least_squares_fit(
@@ -169,4 +177,5 @@ def least_squares_fit(
         converged=ok,
         steps=int(sol.stats["num_steps"]),
         message=str(message),
+        jacobian=np.asarray(J),
     )
