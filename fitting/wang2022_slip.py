@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tribojax import _fit_chain as fc
+from tribojax._fit import _chain as fc
 
 # (D, G m, μ_t): Table 1's D with the Table 3 calibration, and two distinct starts. Every start
 # keeps F_s > m·a_max = 0.321 N at all six loads (no gross sliding, Eq 27's pre-sliding regime).

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import tribojax as tj
-from tribojax._cli import main
+from tribojax._cli._main import main
 
 
 def test_contact_from_D_G_matches_the_model(tmp_path, capsys):

@@ -5,8 +5,8 @@ import json
 import pytest
 
 import tribojax.discovery as disc
-from tribojax._cli import main
-from tribojax._records import write_slip_run
+from tribojax._cli._main import main
+from tribojax._io._slip_run import write_slip_run
 from tribojax.discovery.synthetic import NOISE_LEVELS, hidden_effect_run
 
 
@@ -61,7 +61,7 @@ def test_malformed_file_exits_nonzero(tmp_path, capsys):
 def test_loop_records_dispatch(tmp_path, capsys):
     import numpy as np
 
-    from tribojax._loops import HysteresisLoop, write_loop
+    from tribojax._io._loop import HysteresisLoop, write_loop
 
     t = np.linspace(0, 3 / 22, 600, endpoint=False)
     u = 1e-6 * np.cos(2 * np.pi * 22 * t)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import tribojax as tj
-from tribojax._cli import main
+from tribojax._cli._main import main
 
 TRUTH = {"F_s": 0.4868, "K_tau": 1.4878e7, "C_tau": 771.05}
 MU, N, KD, OMEGA = 0.3, 2.94, 1.2e6, 2 * np.pi * 22

@@ -11,7 +11,7 @@ import pytest
 
 import tribojax as tj
 from conftest import TABLE3_LOADS, make_model
-from tribojax._asperity import log_critical_areas
+from tribojax._contact._asperity import log_critical_areas
 
 OUTPUTS = ("F_s", "K_tau", "C_tau", "z_max")
 

@@ -4,7 +4,7 @@
 `scipy.integrate.quad` and `scipy.optimize.brentq` (no closed forms, no JAX). Here we check
 (a) every closed-form regime integral of `tribojax._contact.regime_integral` against quad,
 (b) the full `ContactParameters` against `reference_contact`,
-(c) the per-asperity power laws of `tribojax._asperity` against the physical definitions.
+(c) the per-asperity power laws of `tribojax._contact._asperity` against the physical definitions.
 
 Tolerances. The two sides agree to ~1e-12 in practice; the asserted tolerances leave room for
 accumulated rounding, never for a modelling difference (the mutation tests at the end show a
@@ -30,7 +30,7 @@ import numpy as np
 import pytest
 
 import tribojax as tj
-from tribojax._asperity import (
+from tribojax._contact._asperity import (
     ELASTIC,
     EP1,
     EP2,
@@ -41,7 +41,7 @@ from tribojax._asperity import (
     log_critical_areas,
     mindlin_factors,
 )
-from tribojax._contact import regime_integral
+from tribojax._contact._contact import regime_integral
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import scipy_reference as ref  # noqa: E402

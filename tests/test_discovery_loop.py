@@ -13,8 +13,8 @@ import pytest
 
 import tribojax as tj
 import tribojax.discovery as disc
-from tribojax._loop_models import LoopSpec, loop_force, prepare_loop
-from tribojax._loop_synthetic import (
+from tribojax.discovery._loop_models import LoopSpec, loop_force, prepare_loop
+from tribojax.discovery._loop_synthetic import (
     LOAD_GRADIENT,
     LOOP_EFFECTS,
     VISCOUS_STRENGTH,
@@ -134,7 +134,7 @@ CI_GRID = [  # one case per effect in CI: both noise levels, both amplitudes, si
     ("viscous_damping", 0.005, 3.0),
     ("normal_load_variation", 0.015, 3.0),
 ]
-TRUTH = {  # generator strengths (see tribojax._loop_synthetic)
+TRUTH = {  # generator strengths (see tribojax.discovery._loop_synthetic)
     "microslip": ("w", 1.0),
     "viscous_damping": ("c", VISCOUS_STRENGTH * MUN / (OMEGA * A0)),
     "normal_load_variation": ("beta", LOAD_GRADIENT),
@@ -287,7 +287,7 @@ def test_loop_file_round_trip_to_discovery_json(tmp_path):
 
 def test_cli_discover_on_a_loop_file(tmp_path, capsys):
     """`tribojax discover LOOP.csv --out DIR`: the loop goes to the Jenkins baseline."""
-    from tribojax._cli import main
+    from tribojax._cli._main import main
 
     loop = hidden_effect_loop("normal_load_variation", 0.01, 2.0, 8, give_noise=False)
     path = tmp_path / "loop.csv"

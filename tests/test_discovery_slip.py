@@ -145,7 +145,7 @@ def test_wang2022_table_discovery_short():
     """fitting/wang2022_discovery.py in its short form (two candidates)."""
     from fitting.wang2022_discovery import run
 
-    from tribojax._reproduce_slip import table3_phase_slips
+    from tribojax._reproduce._tables4to7 import table3_phase_slips
 
     res = run(short=True)
     rep = res.pop("_report")

@@ -12,8 +12,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from tribojax import _fit_chain as fc
-from tribojax._data import wang2022_table
+from tribojax._fit import _chain as fc
+from tribojax._io._tables import wang2022_table
 
 P0 = np.array([fc.DEFAULTS[k] for k in fc.PARAMETERS])  # D, G, μ_t, σ_s, α
 ONE_LOAD = jnp.array([3.6912])  # N, 0.6 kPa

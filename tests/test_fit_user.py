@@ -157,7 +157,7 @@ def test_surface_fit_recovers_D_G_mu():
     import jax
     import jax.numpy as jnp
 
-    from tribojax._fit_user import surface_contact_model
+    from tribojax._fit._surface import surface_contact_model
 
     loads = (3.6912, 9.5088, 21.3258)
     out = jax.vmap(surface_contact_model(*SURFACE))(jnp.asarray(loads))

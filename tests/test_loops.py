@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import tribojax as tj
-from tribojax._cli import main
+from tribojax._cli._main import main
 
 MU, N, KD, OMEGA = 0.3, 2.94, 1.2e6, 2 * np.pi * 22
 MUN, A0 = MU * N, MU * N / KD

@@ -92,7 +92,7 @@ def test_lugre_harmonic_gradient_and_vmap():
 
 
 def test_cli_hysteresis_lugre(tmp_path):
-    from tribojax._cli import main
+    from tribojax._cli._main import main
 
     out = tmp_path / "lugre"
     argv = ["hysteresis", "--element", "lugre", "--mu", "0.3", "--N", str(F_S / 0.3)]

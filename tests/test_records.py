@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import tribojax as tj
-from tribojax._records import run_profile
+from tribojax._io._slip_run import run_profile
 
 ELEMENT = tj.PreSlipLuGre(0.4868, 1.4878e7, 750.0)  # Table 3, 0.6 kPa (F_s, K_τ; C_τ rounded)
 MU, N, KD, OMEGA = 0.3, 2.94, 1.2e6, 2 * np.pi * 22

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import tribojax as tj
-from tribojax._cli import main
-from tribojax._reproduce import max_rel_error
+from tribojax._cli._main import main
+from tribojax._reproduce._table3 import max_rel_error
 
 
 @pytest.fixture(scope="module")
@@ -112,8 +112,9 @@ def test_cli_writes_json_and_figure(tmp_path, capsys):
 def test_reproduce_reports_a_fit_that_does_not_converge(monkeypatch, capsys):
     # issue 5 point 6: a non-converged full-chain fit gives a clear message and False (the CLI
     # then exits 1); the fit itself is replaced by a stand-in so that this test is cheap
-    from tribojax import _cli, _fit_chain
-    from tribojax._fit import FitResult
+    from tribojax._cli import _main as _cli
+    from tribojax._fit import _chain as _fit_chain
+    from tribojax._fit._engine import FitResult
 
     def stand_in(start=None, **kw):
         fit = FitResult(

@@ -1,4 +1,4 @@
-"""Rodas4 (tribojax._rosenbrock) on linear test problems with known solutions."""
+"""Rodas4 (tribojax._dynamics._rodas4) on linear test problems with known solutions."""
 
 import diffrax as dfx
 import jax.numpy as jnp

@@ -8,7 +8,7 @@ import pytest
 from scipy import integrate
 
 import tribojax as tj
-from tribojax._roughness import sf_constant
+from tribojax._roughness._estimate import sf_constant
 
 KEY = jax.random.key(7)
 L = 1e-4

@@ -23,7 +23,7 @@ import numpy as np
 from jax.flatten_util import ravel_pytree
 
 import tribojax as tj
-from tribojax._slip import _vector_field
+from tribojax._dynamics._slip import _vector_field
 
 PROFILE = tj.TrapezoidProfile()
 THETA = jnp.array([0.7372, 2.1478e7, 708.8274, 1.2])  # Table 3, 2 kPa; alpha 1.2

@@ -6,120 +6,120 @@ Importing tribojax switches JAX to float64 (`jax_enable_x64`); see `tribojax._pr
 from importlib.metadata import PackageNotFoundError, version
 
 from . import _precision as _precision  # noqa: F401  (float64 switch; must come first)
-from ._asperity import (
+from ._contact._asperity import (
     REGIME_NAMES as REGIME_NAMES,
 )
-from ._asperity import (
+from ._contact._asperity import (
     asperity_load as asperity_load,
 )
-from ._asperity import (
+from ._contact._asperity import (
     asperity_regime as asperity_regime,
 )
-from ._asperity import (
+from ._contact._asperity import (
     critical_areas as critical_areas,
 )
-from ._contact import (
+from ._contact._contact import (
     ContactParameters as ContactParameters,
 )
-from ._contact import (
+from ._contact._contact import (
     FractalContact as FractalContact,
 )
-from ._contact import (
+from ._contact._contact import (
     contact_parameters as contact_parameters,
 )
-from ._data import DataFileError as DataFileError
-from ._data import read_table as read_table
-from ._data import wang2022_table as wang2022_table
-from ._data import wu2015_table as wu2015_table
-from ._fit import FitResult as FitResult
-from ._fit import least_squares_fit as least_squares_fit
-from ._fit_chain import ChainFit as ChainFit
-from ._fit_chain import chain_phase_slips as chain_phase_slips
-from ._fit_chain import fit_measured_slips as fit_measured_slips
-from ._fit_user import fit_slip_run as fit_slip_run
-from ._fit_user import fit_surface_from_runs as fit_surface_from_runs
-from ._fit_user import slip_run_start as slip_run_start
-from ._friction import AbstractFrictionElement as AbstractFrictionElement
-from ._hysteresis import HarmonicCoefficients as HarmonicCoefficients
-from ._hysteresis import drive as drive
-from ._hysteresis import harmonic_balance as harmonic_balance
-from ._hysteresis import harmonic_response as harmonic_response
-from ._hysteresis_elements import AbstractHysteresisElement as AbstractHysteresisElement
-from ._hysteresis_elements import Jenkins as Jenkins
-from ._hysteresis_elements import Mindlin as Mindlin
-from ._loops import HysteresisLoop as HysteresisLoop
-from ._loops import LoopAnalysis as LoopAnalysis
-from ._loops import analyse_loop as analyse_loop
-from ._loops import fit_loop as fit_loop
-from ._loops import read_loop as read_loop
-from ._loops import synthetic_loop as synthetic_loop
-from ._loops import write_loop as write_loop
-from ._lugre import LuGre as LuGre
-from ._lugre import PreSlipLuGre as PreSlipLuGre
-from ._materials import (
+from ._contact._materials import (
     ContactPair as ContactPair,
 )
-from ._materials import (
+from ._contact._materials import (
     Material as Material,
 )
-from ._materials import (
+from ._contact._materials import (
     vacuum_to_load as vacuum_to_load,
 )
-from ._materials import (
+from ._contact._materials import (
     wang2022_chuck as wang2022_chuck,
 )
-from ._materials import (
+from ._contact._materials import (
     wang2022_pair as wang2022_pair,
 )
-from ._materials import (
+from ._contact._materials import (
     wang2022_reticle as wang2022_reticle,
 )
-from ._profiles import AbstractProfile as AbstractProfile
-from ._profiles import MeasuredProfile as MeasuredProfile
-from ._profiles import PiecewiseLinearProfile as PiecewiseLinearProfile
-from ._profiles import TrapezoidProfile as TrapezoidProfile
-from ._records import SlipRun as SlipRun
-from ._records import read_record as read_record
-from ._records import read_slip_run as read_slip_run
-from ._records import simulate_run as simulate_run
-from ._records import synthetic_slip_run as synthetic_slip_run
-from ._records import write_slip_run as write_slip_run
-from ._reproduce import calibrate_table3 as calibrate_table3
-from ._reproduce import equivalent_G as equivalent_G
-from ._reproduce import reproduce_table3 as reproduce_table3
-from ._reproduce import wang2022_table3_model as wang2022_table3_model
-from ._rosenbrock import Rodas4 as Rodas4
-from ._roughness import RoughnessEstimate as RoughnessEstimate
-from ._roughness import estimate_fractal as estimate_fractal
-from ._roughness import psd_model as psd_model
-from ._roughness import structure_function_model as structure_function_model
-from ._sensitivity import Elasticities as Elasticities
-from ._sensitivity import LoopChain as LoopChain
-from ._sensitivity import ReticleChain as ReticleChain
-from ._sensitivity import elasticities as elasticities
-from ._sensitivity import hysteresis_sensitivities as hysteresis_sensitivities
-from ._sensitivity import slip_sensitivities as slip_sensitivities
-from ._slip import SlipSolution as SlipSolution
-from ._slip import simulate_slip as simulate_slip
-from ._slip import slip_phase_averages as slip_phase_averages
-from ._surface import FractalSurface as FractalSurface
-from ._surface import wang2022_surface as wang2022_surface
+from ._contact._surface import FractalSurface as FractalSurface
+from ._contact._surface import wang2022_surface as wang2022_surface
+from ._dynamics._harmonic import HarmonicCoefficients as HarmonicCoefficients
+from ._dynamics._harmonic import drive as drive
+from ._dynamics._harmonic import harmonic_balance as harmonic_balance
+from ._dynamics._harmonic import harmonic_response as harmonic_response
+from ._dynamics._profiles import AbstractProfile as AbstractProfile
+from ._dynamics._profiles import MeasuredProfile as MeasuredProfile
+from ._dynamics._profiles import PiecewiseLinearProfile as PiecewiseLinearProfile
+from ._dynamics._profiles import TrapezoidProfile as TrapezoidProfile
+from ._dynamics._rodas4 import Rodas4 as Rodas4
+from ._dynamics._slip import SlipSolution as SlipSolution
+from ._dynamics._slip import simulate_slip as simulate_slip
+from ._dynamics._slip import slip_phase_averages as slip_phase_averages
+from ._fit._chain import ChainFit as ChainFit
+from ._fit._chain import chain_phase_slips as chain_phase_slips
+from ._fit._chain import fit_measured_slips as fit_measured_slips
+from ._fit._engine import FitResult as FitResult
+from ._fit._engine import least_squares_fit as least_squares_fit
+from ._fit._loop import LoopAnalysis as LoopAnalysis
+from ._fit._loop import analyse_loop as analyse_loop
+from ._fit._loop import fit_loop as fit_loop
+from ._fit._sensitivity import Elasticities as Elasticities
+from ._fit._sensitivity import LoopChain as LoopChain
+from ._fit._sensitivity import ReticleChain as ReticleChain
+from ._fit._sensitivity import elasticities as elasticities
+from ._fit._sensitivity import hysteresis_sensitivities as hysteresis_sensitivities
+from ._fit._sensitivity import slip_sensitivities as slip_sensitivities
+from ._fit._slip import fit_slip_run as fit_slip_run
+from ._fit._start import slip_run_start as slip_run_start
+from ._fit._surface import fit_surface_from_runs as fit_surface_from_runs
+from ._friction._element import AbstractFrictionElement as AbstractFrictionElement
+from ._friction._lugre import LuGre as LuGre
+from ._friction._lugre import PreSlipLuGre as PreSlipLuGre
+from ._friction._rate_independent import AbstractHysteresisElement as AbstractHysteresisElement
+from ._friction._rate_independent import Jenkins as Jenkins
+from ._friction._rate_independent import Mindlin as Mindlin
+from ._io._loop import HysteresisLoop as HysteresisLoop
+from ._io._loop import read_loop as read_loop
+from ._io._loop import synthetic_loop as synthetic_loop
+from ._io._loop import write_loop as write_loop
+from ._io._slip_run import SlipRun as SlipRun
+from ._io._slip_run import read_record as read_record
+from ._io._slip_run import read_slip_run as read_slip_run
+from ._io._slip_run import simulate_run as simulate_run
+from ._io._slip_run import synthetic_slip_run as synthetic_slip_run
+from ._io._slip_run import write_slip_run as write_slip_run
+from ._io._tables import DataFileError as DataFileError
+from ._io._tables import read_table as read_table
+from ._io._tables import wang2022_table as wang2022_table
+from ._io._tables import wu2015_table as wu2015_table
+from ._reproduce._table3 import calibrate_table3 as calibrate_table3
+from ._reproduce._table3 import equivalent_G as equivalent_G
+from ._reproduce._table3 import reproduce_table3 as reproduce_table3
+from ._reproduce._table3 import wang2022_table3_model as wang2022_table3_model
+from ._reproduce._wu2015 import cbar_peak as cbar_peak
+from ._reproduce._wu2015 import dimensionless_curves as dimensionless_curves
+from ._reproduce._wu2015 import eq7_curves as eq7_curves
+from ._reproduce._wu2015 import fractal_tangential_stiffness as fractal_tangential_stiffness
+from ._reproduce._wu2015 import plot_wu2015 as plot_wu2015
+from ._reproduce._wu2015 import wu2015_comparison as wu2015_comparison
+from ._reproduce._wu2015 import wu2015_eq5_stiffness as wu2015_eq5_stiffness
+from ._reproduce._wu2015 import wu2015_eq7 as wu2015_eq7
+from ._roughness._estimate import RoughnessEstimate as RoughnessEstimate
+from ._roughness._estimate import estimate_fractal as estimate_fractal
+from ._roughness._estimate import psd_model as psd_model
+from ._roughness._estimate import structure_function_model as structure_function_model
+from ._roughness._synthesis import direction_factor as direction_factor
+from ._roughness._synthesis import synthesize as synthesize
+from ._roughness._synthesis import wm_profile as wm_profile
+from ._roughness._synthesis import yk_heights as yk_heights
+from ._roughness._topography import Topography as Topography
+from ._roughness._topography import read_topography as read_topography
 from ._sweep import product_grid as product_grid
 from ._sweep import sweep as sweep
-from ._synthesis import direction_factor as direction_factor
-from ._synthesis import synthesize as synthesize
-from ._synthesis import wm_profile as wm_profile
-from ._synthesis import yk_heights as yk_heights
-from ._topography import Topography as Topography
-from ._topography import read_topography as read_topography
-from ._wu2015 import cbar_peak as cbar_peak
-from ._wu2015 import dimensionless_curves as dimensionless_curves
-from ._wu2015 import eq7_curves as eq7_curves
-from ._wu2015 import fractal_tangential_stiffness as fractal_tangential_stiffness
-from ._wu2015 import plot_wu2015 as plot_wu2015
-from ._wu2015 import wu2015_comparison as wu2015_comparison
-from ._wu2015 import wu2015_eq5_stiffness as wu2015_eq5_stiffness
-from ._wu2015 import wu2015_eq7 as wu2015_eq7
 
 try:
     __version__ = version("tribojax")

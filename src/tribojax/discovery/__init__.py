@@ -63,9 +63,6 @@ hidden-effect loops `hidden_effect_loop` and wu2015 Eq 7 stand-ins `eq7_standin_
 residual's noise) and `region_info(region)` (extra keys of a flagged region).
 """
 
-from .._loop_synthetic import eq7_standin_loop as eq7_standin_loop
-from .._loop_synthetic import eq7_standin_shape as eq7_standin_shape
-from .._loop_synthetic import hidden_effect_loop as hidden_effect_loop
 from ._core import ALPHA as ALPHA
 from ._core import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
 from ._core import K_MAX as K_MAX
@@ -81,6 +78,9 @@ from ._loop import LoopBaseline as LoopBaseline  # registers the loop effects
 from ._loop import discover_loop as discover_loop
 from ._loop import loop_baseline as loop_baseline
 from ._loop import plot_loop_discovery as plot_loop_discovery
+from ._loop_synthetic import eq7_standin_loop as eq7_standin_loop
+from ._loop_synthetic import eq7_standin_shape as eq7_standin_shape
+from ._loop_synthetic import hidden_effect_loop as hidden_effect_loop
 from ._plot import plot_discovery as plot_discovery
 from ._regions import find_regions as find_regions
 from ._regions import noise_estimate as noise_estimate

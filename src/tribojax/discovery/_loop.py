@@ -35,10 +35,11 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
-from .._loop_models import LoopData, LoopSpec, loop_branch, loop_force, prepare_loop
-from .._loops import HysteresisLoop, analyse_loop
+from .._fit._loop import analyse_loop
+from .._io._loop import HysteresisLoop
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
 from ._discover import DiscoveryReport, discover
+from ._loop_models import LoopData, LoopSpec, loop_branch, loop_force, prepare_loop
 from ._regions import RHO_MAX, lag1, noise_estimate
 
 BRANCH_NAMES = {0: "unloading", 1: "loading"}

@@ -34,10 +34,10 @@ import numpy as np
 from jax.scipy.linalg import expm
 from jaxtyping import Array
 
-from .._friction import AbstractFrictionElement
-from .._lugre import DEFAULT_VELOCITY_SCALE, _bristle_rate
-from .._profiles import AbstractProfile, MeasuredProfile
-from .._slip import simulate_slip
+from .._dynamics._profiles import AbstractProfile, MeasuredProfile
+from .._dynamics._slip import simulate_slip
+from .._friction._element import AbstractFrictionElement
+from .._friction._lugre import DEFAULT_VELOCITY_SCALE, _bristle_rate
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
 from ._regions import noise_estimate
 

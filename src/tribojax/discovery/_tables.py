@@ -28,10 +28,10 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
-from .._data import wang2022_table
-from .._materials import WANG2022_RETICLE_MASS_KG
-from .._profiles import TrapezoidProfile
-from .._slip import slip_phase_averages
+from .._contact._materials import WANG2022_RETICLE_MASS_KG
+from .._dynamics._profiles import TrapezoidProfile
+from .._dynamics._slip import slip_phase_averages
+from .._io._tables import wang2022_table
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign
 from ._slip import VS_GRID, AugmentedPreSlip
 

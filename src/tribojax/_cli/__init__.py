@@ -1,0 +1,3 @@
+"""The `tribojax` command line: one module per subcommand group."""
+
+from ._main import main as main

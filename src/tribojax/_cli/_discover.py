@@ -1,0 +1,81 @@
+"""`tribojax discover FILE.csv [--out DIR] [--force]`: the discovery workflow on a user record.
+
+The sidecar `<stem>.json` is read from beside the CSV. A slip run (time_s, stage_accel_m_s2,
+slip_m) goes to the pre-slip LuGre baseline; a hysteresis loop (time_s, displacement_m, force_N)
+to the loop baseline (`tribojax.discovery.loop_baseline`, when installed). Writes
+DIR/discovery.json (keys: effect, effects, baseline_rmse, final_rmse, regions, candidates, ...)
+and DIR/discovery.png, and prints a summary.
+
+Exit codes: 0 done; 2 malformed input or refused output; 3 the baseline fit did not converge
+(discovery.json is still written, with "converged": false).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("file", help="record CSV (slip run or hysteresis loop), sidecar beside it")
+    parser.add_argument("--out", default="discovery-out", help="output folder (default "
+                        "discovery-out)")  # fmt: skip
+    parser.add_argument("--force", action="store_true", help="replace an existing discovery.json")
+    parser.add_argument("--max-effects", type=int, default=3, help="greedy rounds (default 3)")
+
+
+def baseline_for(record):
+    """The discovery baseline for a loaded record (slip run or hysteresis loop)."""
+    from .._io._loop import HysteresisLoop
+    from ..discovery import slip_baseline
+
+    if isinstance(record, HysteresisLoop):
+        try:
+            from ..discovery import loop_baseline
+        except ImportError as err:
+            raise ValueError(
+                "hysteresis loops: the loop side of discovery is not available in this build"
+            ) from err
+        return loop_baseline(record)
+    return slip_baseline(record)
+
+
+def run_discover(args, out=None, err=None) -> int:
+    from .._io._slip_run import read_record
+    from .._io._tables import DataFileError
+    from ..discovery import discover
+    from ..discovery._plot import plot_discovery
+    from ._main import write_json_atomic
+
+    out = sys.stdout if out is None else out
+    err = sys.stderr if err is None else err
+    src = Path(args.file)
+    out_dir = Path(args.out)
+    target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
+    inputs = {src.resolve(), src.with_suffix(".json").resolve()}
+    if target.resolve() in inputs or figure.resolve() in inputs:
+        print(f"error: --out {out_dir} would overwrite the input {src}", file=err)
+        return 2
+    if target.exists() and not args.force:
+        print(f"error: {target} exists; choose another --out or pass --force", file=err)
+        return 2
+    try:
+        record = read_record(src)
+        baseline = baseline_for(record)
+        report = discover(baseline, max_effects=args.max_effects)
+    except (DataFileError, ValueError, OSError) as exc:
+        print(f"error: {exc}", file=err)
+        return 2
+    data = report.as_dict()
+    data["source"] = str(src)
+    write_json_atomic(target, data)
+    drew = plot_discovery(report, figure)
+    print(f"{src}: {report.kind} record, {len(report.y)} samples", file=out)
+    print(report.summary(), file=out)
+    print(f"wrote {target}" + (f" and {figure}" if drew else " (no figure: matplotlib missing)"),
+          file=out)  # fmt: skip
+    if not report.converged:
+        print(f"error: the baseline fit did not converge: {report.baseline_fit['message']}",
+              file=err)  # fmt: skip
+        return 3
+    return 0

@@ -1,0 +1,213 @@
+"""`tribojax fit FILE.csv`: fit a friction model to a user's slip run or hysteresis loop.
+
+    tribojax fit run.csv [--out DIR] [--alpha free|VALUE]          # PreSlipLuGre F_s, K_τ, C_τ, α
+    tribojax fit loop.csv [--out DIR] [--element jenkins|mindlin]  # μN and K_d
+
+The record type comes from the CSV header (`tribojax.read_record`). Writes DIR/fit.json
+(parameters, standard errors, correlation, converged, steps, rms residual, number of data, what was
+fitted, the source file) and DIR/fit.png (data and model, residuals). Exit status: 0 converged,
+1 not converged (fit.json still written, with "converged": false), 2 bad input (malformed file,
+fewer data than parameters, an output that exists or would overwrite the input).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument(
+        "file",
+        help="CSV: a slip run (time_s,stage_accel_m_s2,slip_m) or a loop "
+        "(time_s,displacement_m,force_N), each with its <stem>.json sidecar",
+    )
+    parser.add_argument("--out", default=None, help="output folder (default tribojax-out/fit-STEM)")
+    parser.add_argument(
+        "--alpha",
+        default="free",
+        help="slip runs: 'free' (default) to fit the bristle exponent α, or a fixed value",
+    )
+    parser.add_argument(
+        "--element",
+        choices=("jenkins", "mindlin"),
+        default="jenkins",
+        help="loops: the hysteresis element (default jenkins)",
+    )
+    parser.add_argument(
+        "--model",
+        choices=("steady", "history"),
+        default="steady",
+        help="loops: fit the steady loop or drive the element through the record",
+    )
+    parser.add_argument("--max-steps", type=int, default=200, help="LM step budget (default 200)")
+    parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
+
+
+def _error(message: str) -> int:
+    print(f"error: {message}", file=sys.stderr)
+    return 2
+
+
+def _outputs_ok(args, out: Path) -> str | None:
+    """Why the outputs may not be written (None if they may)."""
+    from .._io._slip_run import sidecar_path
+
+    src = Path(args.file).resolve()
+    targets = [out / "fit.json", out / "fit.png"]
+    inputs = {src, sidecar_path(src).resolve()}
+    for t in targets:
+        if t.resolve() in inputs:
+            return f"{t} is an input file; choose another --out"
+    if targets[0].exists() and not args.force:
+        return f"{targets[0]} exists; refusing to overwrite it (use --force or another --out)"
+    return None
+
+
+def run_fit(args) -> int:
+    from .._io._slip_run import SlipRun, read_record
+    from .._io._tables import DataFileError
+    from ._main import write_json_atomic
+
+    path = Path(args.file)
+    out = Path(args.out) if args.out is not None else Path("tribojax-out") / f"fit-{path.stem}"
+    why = _outputs_ok(args, out)
+    if why:
+        return _error(why)
+    if args.max_steps < 1:
+        return _error(f"--max-steps = {args.max_steps} must be at least 1")
+    try:
+        record = read_record(path)
+    except DataFileError as err:
+        return _error(str(err))
+    t0 = time.perf_counter()
+    try:
+        if isinstance(record, SlipRun):
+            result, curves = _fit_slip(record, args)
+        else:
+            result, curves = _fit_loop(record, args)
+    except ValueError as err:
+        return _error(str(err))
+    result["wall_time_s"] = time.perf_counter() - t0
+    write_json_atomic(out / "fit.json", result)
+    fit = result
+    print(f"{result['kind']} {path}: {result['n_data']} samples, fitted {', '.join(fit['fitted'])}")
+    for name in fit["fitted"]:
+        v, s = fit["parameters"][name], fit["std_errors"][name]
+        print(f"  {name:6s} = {v:.6g} ± {s:.2g}")
+    unit = result["residual_unit"]
+    print(f"  rms residual {result['rms_residual']:.4g} {unit}; converged: {fit['converged']} "
+          f"({fit['steps']} steps, {result['wall_time_s']:.1f} s)")  # fmt: skip
+    print(f"wrote {out / 'fit.json'}")
+    if _plot(curves, result, out / "fit.png"):
+        print(f"wrote {out / 'fit.png'}")
+    if not fit["converged"]:
+        print(f"error: the fit did not converge: {fit['message']}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _summary(fit, kind, source, n_data, resid, unit, sigma, sigma_source) -> dict:
+    import numpy as np
+
+    d = fit.as_dict()
+    d.update(
+        kind=kind,
+        source=str(source),
+        fitted=list(fit.names),
+        n_data=int(n_data),
+        rms_residual=float(np.sqrt(np.mean(np.square(resid)))),
+        residual_unit=unit,
+        sigma=sigma,
+        sigma_source=sigma_source,
+        message=fit.message,
+    )
+    return d
+
+
+def _fit_slip(run, args):
+    import numpy as np
+
+    from .._fit._slip import fit_slip_run, noise_scale
+
+    if args.alpha == "free":
+        alpha = None
+    else:
+        try:
+            alpha = float(args.alpha)
+        except ValueError:
+            raise ValueError(f"--alpha must be 'free' or a number, got {args.alpha!r}") from None
+    if run.noise_std is not None:
+        sigma, how = run.noise_std, "sidecar noise_std_m"
+    else:
+        sigma, how = None, "estimated from the residuals"
+    fit = fit_slip_run(run, alpha=alpha, max_steps=args.max_steps,
+                       progress=lambda m: print(f"  {m}", flush=True))  # fmt: skip
+    scale = run.noise_std if run.noise_std is not None else noise_scale(run.slip)
+    resid = fit.residuals * scale  # model − data, m
+    if sigma is None:
+        sigma = float(np.sqrt(np.sum(resid**2) / max(len(run) - len(fit.names), 1)))
+    d = _summary(fit, "slip_run", run.source, len(run), resid, "m", sigma, how)
+    d["model"] = "PreSlipLuGre (wang2022 Eq 27), slip at every sample"
+    d["mass_kg"] = run.mass
+    curves = dict(x=run.t, data=run.slip, model=run.slip + resid, xlabel="t (s)",
+                  ylabel="slip Δx (m)", resid_x=run.t, resid=resid)  # fmt: skip
+    return d, curves
+
+
+def _fit_loop(loop, args):
+    import numpy as np
+
+    from .._fit._loop import fit_loop
+
+    if len(loop.t) <= 2:
+        raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
+    fit = fit_loop(loop, args.element, model=args.model, max_steps=args.max_steps)
+    scale = loop.noise_std if loop.noise_std is not None else 1.0
+    resid = fit.residuals * scale  # N, on the fitted samples (the last len(resid))
+    m = len(resid)
+    how = "sidecar noise_std_N" if loop.noise_std is not None else "estimated from the residuals"
+    sigma = loop.noise_std
+    if sigma is None:
+        sigma = float(np.sqrt(np.sum(resid**2) / max(m - 2, 1)))
+    d = _summary(fit, "loop", loop.source, m, resid, "N", sigma, how)
+    d["model"] = (
+        f"{args.element} ({args.model} loop, wu2015 Eq {1 if args.element == 'jenkins' else 2})"
+    )
+    d["normal_load_N"], d["frequency_Hz"] = loop.normal_load, loop.frequency
+    if loop.normal_load is not None:
+        d["mu"] = float(fit.values[0] / loop.normal_load)
+    curves = dict(x=loop.u[-m:], data=loop.f[-m:], model=loop.f[-m:] + resid,
+                  xlabel="displacement u (m)", ylabel="force f (N)", resid_x=loop.t[-m:],
+                  resid=resid)  # fmt: skip
+    return d, curves
+
+
+def _plot(c, result, path: Path) -> bool:
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("matplotlib is not installed: figure skipped (pip install 'tribojax[plot]')")
+        return False
+    fig, (ax, ar) = plt.subplots(2, 1, figsize=(7, 6), constrained_layout=True,
+                                 gridspec_kw=dict(height_ratios=[3, 1.3]))  # fmt: skip
+    ax.plot(c["x"], c["data"], "k.", ms=2, label="data")
+    ax.plot(c["x"], c["model"], "C3-", lw=1, label="model")
+    ax.set_xlabel(c["xlabel"])
+    ax.set_ylabel(c["ylabel"])
+    ax.set_title(f"{Path(result['source']).name}: {result['model']}", fontsize=9)
+    ax.legend()
+    ar.plot(c["resid_x"], c["resid"], "C0.", ms=2)
+    ar.axhline(0, color="k", lw=0.5)
+    ar.set_xlabel("t (s)")
+    ar.set_ylabel(f"model − data ({result['residual_unit']})")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.png")
+    fig.savefig(tmp, dpi=120)
+    plt.close(fig)
+    tmp.replace(path)
+    return True

@@ -1,0 +1,1 @@
+"""Contact of rough surfaces: materials, fractal surfaces, single asperities, the contact model."""

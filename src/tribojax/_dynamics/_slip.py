@@ -1,0 +1,335 @@
+"""The two-body reticle slip model (wang2022 Eq 27, consistent reading) solved with diffrax.
+
+The stage motion is prescribed by its acceleration a(t); the reticle (mass m) is driven only by
+the friction force F_f of a friction element. With the slip Δx = x_stage − x_reticle and the
+relative velocity v = dΔx/dt:
+
+    dΔx/dt = v,   dv/dt = a(t) − F_f(z, v)/m,   dz/dt = element.state_rate(z, v)
+
+plus I = ∫Δx dt, carried as a fourth state so that window averages of the slip are exact
+differences of I at the window ends (no averaging of a sampled curve).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import diffrax as dfx
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+from jax.custom_derivatives import SymbolicZero
+from jax.flatten_util import ravel_pytree
+from jaxtyping import Array
+
+from .._checks import as_f64, check_range, fail_if
+from .._friction._element import AbstractFrictionElement
+from ._profiles import AbstractProfile, TrapezoidProfile
+from ._rodas4 import Rodas4
+
+DEFAULT_T_END = 2.3  # s, wang2022's cycle ends at rest at 2.3 s (Table 7)
+DEFAULT_ATOL = 1e-15  # m, Rodas4's default absolute tolerance of slip and deflection
+KVAERNO5_ATOL = 1e-16  # m, the same for solver="kvaerno5" (equal accuracy)
+
+
+class SlipSolution(eqx.Module):
+    """A slip simulation sampled at `ts` (SI units).
+
+    ts (s), slip Δx (m), z (bristle deflection, m; the element state), friction F_f (N), velocity
+    v = dΔx/dt (m/s), slip_integral ∫₀ᵗ Δx dt (m s), result (diffrax RESULTS code), stats.
+    """
+
+    ts: Array
+    slip: Array
+    z: Array
+    friction: Array
+    velocity: Array
+    slip_integral: Array
+    result: dfx.RESULTS
+    stats: dict
+
+    @property
+    def ok(self) -> Array:
+        return self.result == dfx.RESULTS.successful
+
+    @property
+    def message(self) -> str:
+        """The solver's message ("" on success); concrete solutions only."""
+        return "" if bool(self.ok) else str(dfx.RESULTS[self.result])
+
+
+def _vector_field(t, y, args):
+    # y = [Δx, v, element state (flattened), ∫Δx dt]: one flat array, so that per-component
+    # tolerances reach the Newton iteration too.
+    element, profile, mass, unravel = args
+    dx, v, z = y[0], y[1], unravel(y[2:-1])
+    force = element.force(z, v)
+    zdot, _ = ravel_pytree(element.state_rate(z, v))
+    acc = profile.acceleration(t) - force / mass
+    return jnp.concatenate([jnp.stack([v, acc]), zdot, dx[None]])
+
+
+def _kvaerno5_chord() -> dfx.AbstractSolver:
+    """Kvaerno5 (L-stable ESDIRK, order 5) with a chord iteration whose Jacobian (4×4, forward
+    mode) is re-evaluated at every stage: optimistix's `Chord`, not diffrax's `VeryChord`.
+    `simulate_slip(..., solver="kvaerno5")` (its default before Rodas4)."""
+    return dfx.Kvaerno5(root_finder=dfx.with_stepsize_controller_tols(optx.Chord)())
+
+
+_SOLVERS = {"rodas4": Rodas4, "kvaerno5": _kvaerno5_chord}
+
+
+def _diffeqsolve(
+    element, profile, mass, ts, unravel, t_end, rtol, atol, max_steps, throw, adjoint, dt0, solver
+):
+    """ys (len(ts), n_state), result, stats of one solve."""
+    z0, _ = ravel_pytree(element.initial_state())
+    y0 = jnp.concatenate([jnp.zeros(2, z0.dtype), jnp.zeros_like(z0), jnp.zeros(1, z0.dtype)])
+    # per-component absolute tolerances: slip/deflection atol (m), velocity atol·1e3 (1/s),
+    # integral atol·0.1 s. The velocity's sets the accuracy (see simulate_slip): 1e4 gave 1e-5.
+    atols = jnp.concatenate(
+        [jnp.array([atol, atol * 1e3]), jnp.full(z0.shape, atol), jnp.array([atol * 0.1])]
+    )
+    # factormax 3 (default 10): a step grown 10x in a quasi-static phase is often rejected
+    controller = dfx.PIDController(
+        rtol=rtol, atol=atols, pcoeff=0.3, icoeff=0.4, factormax=3.0, jump_ts=profile.kinks()
+    )
+    sol = dfx.diffeqsolve(
+        dfx.ODETerm(_vector_field),
+        solver,
+        0.0,
+        t_end,
+        dt0,
+        y0,
+        args=(element, profile, mass, unravel),
+        saveat=dfx.SaveAt(ts=ts),
+        stepsize_controller=controller,
+        max_steps=max_steps,
+        throw=throw,
+        adjoint=adjoint,
+    )
+    return sol.ys, (sol.result, jax.tree.map(jnp.asarray, sol.stats))
+
+
+def _forward_mode_solve(solve, unravel, dyn, static, adjoint):
+    """`solve(element, profile, mass, ts)` with derivatives from forward mode in every direction.
+
+    A `jax.custom_jvp` whose rule builds the Jacobian of ys w.r.t. the differentiated float
+    leaves of (element, profile, mass) by `jax.jacfwd` through diffrax's `ForwardMode`, and
+    applies it (or, under `jax.grad`/`jacrev`, its transpose) to the tangent; ts enters through
+    dys/dts = f(ts, ys). Reverse mode thus never recomputes the solve (see `Rodas4`): jacrev and
+    jacfwd give the same numbers. Cost per reverse pass: one forward solve carrying as many
+    tangents as there are differentiated scalars (4 for an element's parameters).
+    """
+
+    def primal(d):
+        return solve(*eqx.combine(d, static), adjoint)
+
+    @jax.custom_jvp
+    def run(d):
+        return primal(d)
+
+    @functools.partial(run.defjvp, symbolic_zeros=True)
+    def _jvp(primals, tangents):
+        (d,), (td,) = primals, tangents
+        leaves, treedef = jax.tree.flatten(d)
+        tleaves = treedef.flatten_up_to(td)
+        ts_leaf = len(leaves) - 1 if eqx.is_array(d[3]) else None  # ts is the last leaf
+        active = [
+            i for i, t in enumerate(tleaves)
+            if i != ts_leaf and not isinstance(t, SymbolicZero)
+            and jnp.issubdtype(leaves[i].dtype, jnp.inexact)
+        ]  # fmt: skip
+        if active:
+            flat, unflat = ravel_pytree([leaves[i] for i in active])
+
+            def ys_of(p):
+                new = list(leaves)
+                for i, x in zip(active, unflat(p)):
+                    new[i] = x
+                el, pr, m, ts = eqx.combine(jax.tree.unflatten(treedef, new), static)
+                ys, aux = solve(el, pr, m, ts, dfx.ForwardMode())
+                return ys, (ys, aux)
+
+            jac, (ys, aux) = jax.jacfwd(ys_of, has_aux=True)(flat)
+            dp, _ = ravel_pytree([tleaves[i] for i in active])
+            tys = jac @ dp
+        else:
+            ys, aux = primal(d)
+            tys = jnp.zeros_like(ys)
+        if ts_leaf is not None and not isinstance(tleaves[ts_leaf], SymbolicZero):
+            el, pr, m, ts = eqx.combine(d, static)
+            rate = jax.vmap(lambda t, y: _vector_field(t, y, (el, pr, m, unravel)))(ts, ys)
+            tys = tys + rate * tleaves[ts_leaf][:, None]
+        taux = jax.tree.map(
+            lambda x: np.zeros(np.shape(x), jax.dtypes.float0)
+            if not jnp.issubdtype(x.dtype, jnp.inexact) else jnp.zeros_like(x),
+            aux,
+        )  # fmt: skip
+        return (ys, aux), (tys, taux)
+
+    return run(dyn)
+
+
+@eqx.filter_jit
+def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjoint, dt0, solver):
+    _, unravel = ravel_pytree(element.initial_state())
+    cfg = (t_end, rtol, atol, max_steps, throw)
+
+    def solve(el, pr, m, t, adj):
+        return _diffeqsolve(el, pr, m, t, unravel, *cfg, adj, dt0, solver)
+
+    if isinstance(solver, Rodas4):
+        dyn, static = eqx.partition((element, profile, mass, ts), eqx.is_array)
+        ys, (result, stats) = _forward_mode_solve(solve, unravel, dyn, static, adjoint)
+    else:
+        ys, (result, stats) = solve(element, profile, mass, ts, adjoint)
+    dx, v, integral = ys[:, 0], ys[:, 1], ys[:, -1]
+    z = jax.vmap(unravel)(ys[:, 2:-1])
+    friction = jax.vmap(element.force)(z, v)
+    return SlipSolution(ts, dx, z, friction, v, integral, result, stats)
+
+
+def _positive(x, name, unit=""):
+    """A solver setting: a positive Python float (never traced)."""
+    x = float(x)
+    if not x > 0:
+        raise ValueError(f"{name} = {x:g} {unit} is outside the allowed range (0, inf)")
+    return x
+
+
+def simulate_slip(
+    element: AbstractFrictionElement,
+    profile: AbstractProfile | None = None,
+    mass=0.321,
+    *,
+    ts=None,
+    t_end=DEFAULT_T_END,
+    rtol=1e-6,
+    atol=None,
+    max_steps=20_000,
+    dt0=1e-5,
+    throw=True,
+    adjoint=dfx.RecursiveCheckpointAdjoint(),
+    solver: str | dfx.AbstractSolver | None = "rodas4",
+) -> SlipSolution:
+    """Slip of a body carried by friction on a stage with prescribed acceleration (wang2022 Eq 27).
+
+    Solves Δx'' = a(t) − F_f/m, with F_f and the bristle law from `element` (LuGre, Eq 25, or
+    PreSlipLuGre, Eq 27), from rest (Δx = v = z = 0) to `t_end`. Eq 27 as printed carries a spurious
+    factor t and two masses; this is the consistent reading of REPRODUCTION.md (stage prescribed,
+    reticle driven by friction alone, Δx = x_stage − x_reticle).
+
+    Numerics. The problem is stiff (√(K_τ/m) ≈ 7e3–2e4 rad/s, C_τ/K_τ ≈ 50 µs, horizon 2.3 s) and
+    tiny (slips of nm). Default solver: `Rodas4` (Rosenbrock, L-stable, stiffly accurate, order
+    4; one exact 4×4 Jacobian and LU per step, no Newton iteration) with a PID controller (p 0.3,
+    i 0.4, step growth capped at 3x), per-component absolute tolerances (`atol` in m for Δx and z,
+    atol·1e3 for v in m/s, atol·0.1 for ∫Δx dt in m s), and steps stopped at the profile's kinks
+    (`jump_ts`; Rodas4 evaluates ∂f/∂t at the step start, which diffrax then places just after a
+    kink). The sgn(v) kink of the bristle law at v = 0 is crossed every half-period of the
+    transients and sits under the equilibria of the hold phases: the elements' smooth sign
+    v/√(v² + ε²), ε = 1e-12 m/s, makes the right-hand side C¹ (with the exact sign Kvaerno5 and
+    diffrax's `VeryChord` reject ~99 % of their steps there and never finish).
+    `solver="kvaerno5"` selects the earlier default: Kvaerno5 (ESDIRK, order 5) with a chord
+    iteration re-evaluating the Jacobian at every stage (optimistix `Chord`), atol 1e-16.
+
+    Where the time goes: every jerk kink starts a ring-down of ~10 ms (damping ratio ~0.2) that
+    is tracked until |v| falls below its absolute tolerance, and each sign flip of v costs a
+    rejected step. The hysteresis makes a velocity error permanent (a ratchet in Δx that no
+    spring restores), so the velocity tolerance, not `rtol`, sets the accuracy of the phase
+    averages. Measured for Table 3's 0.6, 4 and 20 kPa and α = 1 and 1.26, against SciPy Radau
+    at rtol 1e-11 (exact sign): Rodas4 at the defaults (atol 1e-15) takes ~1150–1250 accepted and
+    ~180–215 rejected steps per cycle, phase averages within 1.5e-8–6.1e-7 relative (atol 3e-16:
+    ~1450–1630 steps, ≤ 2.1e-7); Kvaerno5 ~1050–1250 and 170–210 steps, within 1.9e-7–9.7e-7.
+    Per cycle (0.6 kPa, warm), Rodas4 is ~3x faster than Kvaerno5: 6.3–6.5 ms vs 18.6–19.1 ms of
+    process CPU time, 14–18 ms vs 38–45 ms wall time in the same runs on a loaded 2-core CPU
+    (Kvaerno5 took 18–19 ms wall on a quiet one). A larger ε lets the tail go earlier but biases
+    the result (ε = 1e-11: 3e-7, 1e-10: 4e-6 relative).
+
+    Derivatives. With Rodas4 the solve sits inside a `jax.custom_jvp` whose rule is forward mode
+    (`jax.jacfwd` through `diffrax.ForwardMode`) w.r.t. the differentiated float leaves of
+    `element`, `profile` and `mass` (and dys/dts = f for `ts`); `jax.grad`/`jacrev` transpose
+    that, so every adjoint and both directions give the same numbers (jacrev = jacfwd to 2e-16 of
+    the largest elasticity of the phase averages). Reason: reverse mode through diffrax's
+    `RecursiveCheckpointAdjoint` recomputes the steps in a separately compiled program whose
+    rounding differs (XLA fuses, and contracts multiply-adds, differently); a Rosenbrock step
+    passes that to y and the step controller, the recomputed steps differ from the forward pass
+    and the gradient is wrong by up to 6e-3 (see `Rodas4`). Cost: one solve carrying as many
+    tangents as differentiated scalars; for the 4×4 Jacobian w.r.t. (F_s, K_τ, C_τ, α) ~5x a
+    solve in CPU time, either direction (Kvaerno5's jacfwd: 4.3x, 2.4x in wall time on a quiet
+    2-core machine; loaded wall-time ratios for Rodas4 4.0–4.7x). Kvaerno5 uses diffrax's
+    adjoints unchanged (`jax.jacfwd` then needs `adjoint=diffrax.ForwardMode()`). Batches:
+    `jax.vmap` over loads steps all members together (the union of their steps).
+
+    Args:
+        element: a friction element (its parameters may be traced; batch with jax.vmap).
+        profile: stage acceleration; default `TrapezoidProfile()` (wang2022's cycle).
+        mass: mass of the driven body, kg (> 0); 0.321 kg is wang2022's reticle.
+        ts: save times (s, increasing, within [0, t_end]); default 2301 points over [0, t_end].
+        t_end: end time, s (> 0).
+        rtol, atol: relative tolerance; absolute tolerance of the slip and deflection, m.
+        max_steps: step budget; raise it if the result says it was reached.
+        throw: raise on solver failure (else inspect `result` / `message`).
+        adjoint: diffrax adjoint of the solve. With Rodas4 it only affects the undifferentiated
+            solve (derivatives use forward mode, see above); with other solvers pass
+            `diffrax.ForwardMode()` for `jax.jacfwd`.
+        solver: "rodas4" (default), "kvaerno5" (Kvaerno5 with a chord iteration) or a diffrax
+            solver instance. `atol` defaults to 1e-15 m for Rodas4, 1e-16 m otherwise.
+    Returns:
+        SlipSolution.
+    """
+    profile = TrapezoidProfile() if profile is None else profile
+    mass = check_range(mass, "mass", 0.0, unit="kg")
+    solver = "rodas4" if solver is None else solver  # None: the default, as before
+    solver = _SOLVERS[solver]() if isinstance(solver, str) and solver in _SOLVERS else solver
+    if not isinstance(solver, dfx.AbstractSolver):
+        raise ValueError(
+            f"solver = {solver!r}: expected 'rodas4', 'kvaerno5' or a diffrax solver instance"
+        )
+    if atol is None:
+        atol = DEFAULT_ATOL if isinstance(solver, Rodas4) else KVAERNO5_ATOL
+    t_end, rtol, atol = (
+        _positive(t_end, "t_end", "s"),
+        _positive(rtol, "rtol"),
+        _positive(atol, "atol", "m"),
+    )
+    if rtol >= 1.0:
+        raise ValueError(f"rtol = {rtol:g} is outside the allowed range (0, 1)")
+    ts = jnp.linspace(0.0, t_end, 2301) if ts is None else as_f64(ts, "ts")
+    ts = fail_if(ts, jnp.any(jnp.diff(ts) < 0), "ts must be non-decreasing")
+    ts = fail_if(ts, jnp.any((ts < 0) | (ts > t_end)), "ts must lie within [0, t_end]")
+    return _solve(element, profile, mass, ts, t_end, rtol, atol, int(max_steps), throw, adjoint,
+                  dt0, solver)  # fmt: skip
+
+
+def slip_phase_averages(
+    element: AbstractFrictionElement,
+    profile: TrapezoidProfile | None = None,
+    mass=0.321,
+    *,
+    t_end=DEFAULT_T_END,
+    throw=True,
+    **kw,
+) -> Array:
+    """wang2022's four phase slips (m), Tables 4–7, as REPRODUCTION.md defines them.
+
+    With ⟨Δx⟩_w the mean slip over a window (exact, from ∫Δx dt at the window ends):
+        T4 = ⟨Δx⟩[0.25,0.6] − Δx(0)         T5 = ⟨Δx⟩[0.73,1.5] − ⟨Δx⟩[0.25,0.6]
+        T6 = ⟨Δx⟩[1.65,2.0] − ⟨Δx⟩[0.73,1.5]   T7 = Δx(2.3) − ⟨Δx⟩[1.65,2.0]
+    (windows from `profile.windows()`, end at `t_end`). Returns [T4, T5, T6, T7] in m.
+    Other keywords go to `simulate_slip`. Derivatives w.r.t. the element's parameters: with the
+    default solver (Rodas4) `jax.jacfwd` and `jax.jacrev` both run forward mode (one solve with
+    four tangents for all four parameters); with `solver="kvaerno5"` use `jax.jacfwd` with
+    `adjoint=diffrax.ForwardMode()`.
+    """
+    profile = TrapezoidProfile() if profile is None else profile
+    w = profile.windows()
+    ts = jnp.concatenate([jnp.zeros(1), w.ravel(), jnp.full(1, t_end)])
+    sol = simulate_slip(element, profile, mass, ts=ts, t_end=t_end, throw=throw, **kw)
+    integral = sol.slip_integral[1:7].reshape(3, 2)
+    means = (integral[:, 1] - integral[:, 0]) / (w[:, 1] - w[:, 0])
+    return jnp.stack(
+        [means[0] - sol.slip[0], means[1] - means[0], means[2] - means[1], sol.slip[7] - means[2]]
+    )

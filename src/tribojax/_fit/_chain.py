@@ -1,0 +1,531 @@
+"""Full-chain fit of wang2022's measured reticle slips (Tables 4–7) through the whole model.
+
+Chain (all differentiable, float64):
+
+    (D, G, μ_t, σ_s)  --FractalContact, Eqs 5–24-->  F_s, K_τ, C_τ at Table 3's six loads (Eq 28)
+    (F_s, K_τ, C_τ, α) --PreSlipLuGre + slip ODE, Eq 27-->  phase slips T4…T7 (nm), 24 values
+
+and optimistix Levenberg–Marquardt fits the free parameters to the *measured* columns of
+Tables 4–7. The surface is the Table 1/2 reticle–chuck pair of `_reproduce.wang2022_table3_model`
+with D free (γ = 1.5, M = 1 fixed: G and M are exactly degenerate, see `_reproduce`), T = 0.321 N
+in T/P and m = 0.321 kg in Eq 24.
+
+Uncertainty model (stated): every measured cell has the same *relative* uncertainty s, estimated
+from the fit (s² = RSS/(n − p)); residual_i = model_i/measured_i − 1. This is also the metric of
+the acceptance: the RMS relative residual over the 24 cells, computed the same way for the
+paper's own theoretical values. (T5 at 20 kPa is −0.47 nm measured; it weighs most.)
+
+Derivatives. Forward mode is the cheap direction for a handful of parameters (the slip ODE with
+`diffrax.ForwardMode()`), but optimistix 0.1.0's forward linearisation of a residual that contains
+the contact's optimistix root find is rejected by lineax as non-finite. The contact map (6 loads ×
+3 parameters) is therefore wrapped in a `jax.custom_jvp` whose tangent is its dense 18×4
+Jacobian (computed with `jax.jacfwd`, which is finite) times the input tangent; it is linear in
+the tangent, so reverse mode (`jax.grad`) works through it too.
+
+Convergence. The slips come from an adaptive ODE solver (accurate to ~2e-4 here, `SLIP_ATOL`);
+near the optimum the misfit is flat to that level along the D–G valley. `NoiseFloorLM` therefore
+stops on statistical grounds (the Gauss–Newton step left is below 0.05 standard errors) or after
+six rejected steps in a row, and a fit counts as converged only if the Gauss–Newton step still
+left is below `GN_STEP_TOL` standard errors. Rows where F_s <= m·a_max (the reticle would slide
+grossly, outside Eq 27's pre-sliding model) or the contact fails get a residual of 1e3, so LM
+backs off.
+
+Failures. If the compiled fit raises (an `equinox` runtime check inside the chain at a trial
+point), `fit_measured_slips` turns that into `ChainFitError` naming the trial point. With the
+Kvaerno5 slip solver this happened from D = 2.95, G = 1e-8 m, μ_t = 0.12 (a diverging stage
+Newton iteration under forward mode); Rodas4, the default since, has no Newton iteration and
+that start converges to the same optimum as the others.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+import time
+
+import diffrax as dfx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._checks import as_f64
+from .._contact._materials import WANG2022_RETICLE_MASS_KG
+from .._dynamics._slip import slip_phase_averages
+from .._friction._lugre import PreSlipLuGre
+from .._io._tables import wang2022_table
+from .._reproduce._table3 import wang2022_table3_model
+from ._engine import FitResult, least_squares_fit
+from ._solver import BAD_RESIDUAL, NoiseFloorLM
+
+PARAMETERS = ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha")
+# Defaults of the fixed ones: Table 1's D, the Table 3 calibration (M = 1), the paper's α = 1.
+DEFAULTS = {"D": 2.8821, "G_m": 4.364e-8, "mu_t": 0.1416, "sigma_s_Pa": 1.893e9, "alpha": 1.0}
+DEFAULT_FREE = ("D", "G_m", "mu_t")
+TABLES = (4, 5, 6, 7)
+# Search box for D and log G (scaled logits keep LM inside it).
+_D_RANGE = (2.05, 2.98)
+_LOG_G_RANGE = (math.log(1e-11), math.log(1e-5))
+# Slip tolerances for the fit: atol 1e-15 m gives phase slips within ~2e-4 relative of a
+# 1e-17 reference at 0.6 and 20 kPa, in a third to a half of the time of the 1e-16 default.
+SLIP_ATOL = 1e-15
+SLIP_RTOL = 1e-6
+SLIP_MAX_STEPS = 40_000
+_A_MAX = 1.0  # m/s², the stage's peak acceleration (TrapezoidProfile, REPRODUCTION.md)
+GN_STEP_TOL = 0.1  # converged: the remaining Gauss–Newton step < 0.1 standard errors
+
+
+def wang2022_loads() -> jnp.ndarray:
+    """Table 3's six normal loads, N (Eq 28)."""
+    return jnp.asarray(wang2022_table(3)["load_N"])
+
+
+def measured_slips() -> np.ndarray:
+    """Measured [T4, T5, T6, T7] (nm) of wang2022 Tables 4–7, shape (6, 4) (rows: Table 3's)."""
+    return np.stack([wang2022_table(n)["measured_nm"] for n in TABLES], axis=1)
+
+
+def paper_theory_slips() -> np.ndarray:
+    """The paper's theoretical [T4, T5, T6, T7] (nm), shape (6, 4)."""
+    return np.stack([wang2022_table(n)["theory_nm"] for n in TABLES], axis=1)
+
+
+def rms_relative(model, measured) -> float:
+    """√mean((model/measured − 1)²) over all cells: the acceptance metric."""
+    r = np.asarray(model, dtype=float) / np.asarray(measured, dtype=float) - 1.0
+    return float(np.sqrt(np.mean(r**2)))
+
+
+def symmetric_bound(measured=None) -> dict:
+    """Best RMS relative residual that any model with T6 = −T4 and T7 = −T5 can reach.
+
+    For a measured pair (a, b) and model (x, −x) the relative squared error (x/a − 1)² +
+    (x/b + 1)² is least at x* = (1/a − 1/b)/(1/a² + 1/b²). Returns the bound over the 24 cells
+    and the per-pair optimum (nm). The chain is symmetric to ~1e-3 (|T4 + T6|/|T4|), so this
+    bounds what it can reach.
+    """
+    m = measured_slips() if measured is None else np.asarray(measured, dtype=float)
+    model = np.empty_like(m)
+    for i, j in ((0, 2), (1, 3)):
+        a, b = m[:, i], m[:, j]
+        x = (1 / a - 1 / b) / (1 / a**2 + 1 / b**2)
+        model[:, i], model[:, j] = x, -x
+    return {"rms_relative_residual": rms_relative(model, m), "best_symmetric_nm": model.tolist()}
+
+
+def _contact_raw(phys4, loads):
+    """(D, G, μ_t, σ_s) -> [F_s, K_τ, C_τ] at `loads` (3, n), plus a per-load validity flag."""
+    D, G, mu_t, sigma_s = phys4
+    model = wang2022_table3_model(G, mu_t, sigma_s, D=D, throw=False)
+    out = jax.vmap(model)(loads)
+    ok = out.converged & ~out.all_plastic & (out.K_tau > 0) & (out.F_s > 0)
+    ok = ok & jnp.isfinite(out.values).all(-1)
+    return jnp.stack([out.F_s, out.K_tau, out.C_tau]), ok
+
+
+_SAFE_PHYS4 = (DEFAULTS["D"], DEFAULTS["G_m"], DEFAULTS["mu_t"], DEFAULTS["sigma_s_Pa"])
+
+
+@jax.custom_jvp
+def _contact(phys4, loads):
+    values, ok = _contact_raw(phys4, loads)
+    return jnp.concatenate([values, ok.astype(values.dtype)[None]])  # (4, n): last row = ok
+
+
+@_contact.defjvp
+def _contact_jvp(primals, tangents):
+    phys4, loads = primals
+    dphys, _ = tangents  # the loads are data here
+    out = _contact(phys4, loads)
+    # Where a load balance failed, the implicit derivative of its root find is a non-finite
+    # linear solve that raises: differentiate at a safe point instead and zero the tangent
+    # (those rows are flagged and their residuals are not used).
+    good = jnp.all(out[3] > 0.5)
+    p_eval = jnp.where(good, phys4, jnp.asarray(_SAFE_PHYS4, dtype=phys4.dtype))
+    J = jax.jacfwd(lambda p: _contact_raw(p, loads)[0])(p_eval)  # (3, n, 4)
+    dout = jnp.where(good, J, 0.0) @ dphys
+    return out, jnp.concatenate([dout, jnp.zeros_like(dout[:1])])
+
+
+def chain_contact(params, loads=None):
+    """F_s (N), K_τ (N/m), C_τ (N s/m) at `loads` (N) for physical params (D, G, μ_t, σ_s[, α]).
+
+    wang2022 Eqs 5–24 with D free (`wang2022_table3_model` otherwise). Returns ((3, n), ok (n,)),
+    ok False where the load balance failed or the contact is all-plastic (F_s or K_τ zero).
+    Differentiable by `jax.jacfwd` and `jax.grad` (custom JVP, see the module docstring).
+    """
+    loads = wang2022_loads() if loads is None else as_f64(loads, "loads")
+    p = jnp.asarray(params, dtype=jnp.float64)[:4]
+    out = _contact(p, loads)
+    return out[:3], out[3] > 0.5
+
+
+def chain_phase_slips(
+    params,
+    loads=None,
+    *,
+    adjoint=dfx.RecursiveCheckpointAdjoint(),
+    atol=SLIP_ATOL,
+    rtol=SLIP_RTOL,
+    max_steps=SLIP_MAX_STEPS,
+):
+    """Phase slips [T4, T5, T6, T7] (nm) at `loads` for params (D, G m, μ_t, σ_s Pa, α).
+
+    The whole chain (wang2022 Eqs 5–24, 26–27 and REPRODUCTION.md's phase windows), vmapped over
+    the loads. Returns (slips (n, 4) in nm, ok (n,)): ok is False where the contact is all-plastic
+    or its load balance failed, or the slip solver did not finish (those rows are then not
+    meaningful), or F_s <= m·a_max (gross sliding: outside Eq 27's pre-sliding model).
+    `adjoint=diffrax.ForwardMode()` for `jax.jacfwd`; the default for `jax.grad`.
+    """
+    params = jnp.asarray(params, dtype=jnp.float64)
+    (F_s, K, C), ok = chain_contact(params, loads)
+    alpha = params[4]
+    # Eq 27 is a pre-sliding model: with F_s <= m·a_max the reticle slides grossly (slips of
+    # metres, outside the model and the data); such rows are flagged like failed contacts and
+    # run with harmless stand-in values (their result is not used)
+    ok = ok & (F_s > WANG2022_RETICLE_MASS_KG * _A_MAX)
+    F_s, K, C = (jnp.where(ok, x, safe) for x, safe in zip((F_s, K, C), (1.0, 1e7, 500.0)))
+
+    def one(f, k, c):
+        element = PreSlipLuGre(f, k, c, alpha)
+        return slip_phase_averages(
+            element,
+            mass=WANG2022_RETICLE_MASS_KG,
+            adjoint=adjoint,
+            atol=atol,
+            rtol=rtol,
+            max_steps=max_steps,
+            throw=False,
+        )
+
+    slips = jax.vmap(one)(F_s, K, C) * 1e9
+    ok = ok & jnp.all(jnp.isfinite(slips), axis=-1)
+    return slips, ok
+
+
+# --- parametrisation: θ (unconstrained) <-> physical ------------------------------------------
+
+
+def _logit(u):
+    return math.log(u / (1.0 - u))
+
+
+def _mu_min(loads) -> float:
+    # Mindlin's law (Eq 17) needs μ_t > T/P at every load
+    return float(0.321 / np.min(np.asarray(loads)))
+
+
+def _to_physical(theta_full, mu_min):
+    d0, d1 = _D_RANGE
+    g0, g1 = _LOG_G_RANGE
+    return jnp.stack(
+        [
+            d0 + (d1 - d0) * jax.nn.sigmoid(theta_full[0]),
+            jnp.exp(g0 + (g1 - g0) * jax.nn.sigmoid(theta_full[1])),
+            mu_min * (1.0 + jnp.exp(theta_full[2])),
+            jnp.exp(theta_full[3]),
+            jnp.exp(theta_full[4]),
+        ]
+    )
+
+
+def _to_theta(phys, mu_min) -> np.ndarray:
+    D, G, mu_t, sigma_s, alpha = (float(v) for v in phys)
+    d0, d1 = _D_RANGE
+    g0, g1 = _LOG_G_RANGE
+    checks = {
+        "D": (D, d0 < D < d1, f"({d0}, {d1})"),
+        "G_m": (G, 1e-11 < G < 1e-5, "(1e-11, 1e-05) m"),
+        "mu_t": (mu_t, mu_t > mu_min, f"({mu_min:.4g}, inf) (Eq 17: mu_t > T/P)"),
+        "sigma_s_Pa": (sigma_s, sigma_s > 0, "(0, inf) Pa"),
+        "alpha": (alpha, alpha > 0, "(0, inf)"),
+    }
+    for name, (v, good, rng) in checks.items():
+        if not (math.isfinite(v) and good):
+            raise ValueError(f"{name} = {v:g} is outside the allowed range {rng}")
+    return np.array(
+        [
+            _logit((D - d0) / (d1 - d0)),
+            _logit((math.log(G) - g0) / (g1 - g0)),
+            math.log(mu_t / mu_min - 1.0),
+            math.log(sigma_s),
+            math.log(alpha),
+        ]
+    )
+
+
+# --- the fit -----------------------------------------------------------------------------------
+
+
+class ChainFitError(RuntimeError):
+    """The full-chain fit could not be carried out (names the trial point and the cause)."""
+
+
+_PROGRESS = {"on": False, "n": 0, "t0": 0.0, "size": 1}
+
+
+def _report(rss, phys):
+    _PROGRESS["n"] += 1
+    if _PROGRESS["on"]:
+        values = ", ".join(f"{k} {v:.6g}" for k, v in zip(PARAMETERS, phys.tolist()))
+        print(
+            f"  fit_measured: evaluation {_PROGRESS['n']:3d}, RMS rel. residual "
+            f"{math.sqrt(float(rss) / _PROGRESS['size']):.5f} at {values}; "
+            f"{time.perf_counter() - _PROGRESS['t0']:.1f} s",
+            file=sys.stderr,
+            flush=True,
+        )
+
+
+def _announce(phys):
+    _PROGRESS["last"] = phys.tolist()  # the trial point, for messages if the chain raises
+
+
+def _residuals(theta, args, adjoint):
+    theta_full0, idx, mu_min, y, loads = args
+    phys = _to_physical(theta_full0.at[idx].set(theta), mu_min)
+    jax.debug.callback(_announce, jax.lax.stop_gradient(phys))
+    slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
+    r = jnp.where(ok[:, None], slips / y - 1.0, BAD_RESIDUAL).ravel()
+    jax.debug.callback(_report, jax.lax.stop_gradient(r @ r), jax.lax.stop_gradient(phys))
+    return r
+
+
+def _residuals_fwd(theta, args):
+    """Relative residuals, forward-differentiable (diffrax ForwardMode)."""
+    return _residuals(theta, args, dfx.ForwardMode())
+
+
+def _residuals_bwd(theta, args):
+    """Relative residuals, reverse-differentiable (checkpointed adjoint)."""
+    return _residuals(theta, args, dfx.RecursiveCheckpointAdjoint())
+
+
+@dataclasses.dataclass(frozen=True)
+class ChainFit:
+    """A full-chain fit: the `FitResult` (free parameters) plus the chain's view of it.
+
+    Attributes:
+        fit: FitResult over the free parameters (θ statistics, covariance by the delta method).
+        parameters: all five physical parameters (free and fixed), dict.
+        free: names of the free parameters.
+        model_nm, target_nm: (n, 4) phase slips at the optimum and the fitted data.
+        scaled_singular_values, scaled_right_vectors: SVD of the Jacobian of the residuals with
+            respect to log p (elasticities); rows of the right vectors are parameter combinations,
+            largest singular value first.
+        wall_s: wall time of the fit (s). evaluations: residual evaluations (incl. Jacobians).
+        start: the physical start.
+        gauss_newton_step: the Gauss–Newton step left at the end, max |δp|/std error; the fit
+            counts as converged only when LM stopped and this is below `GN_STEP_TOL`.
+    """
+
+    fit: FitResult
+    parameters: dict
+    free: tuple
+    model_nm: np.ndarray
+    target_nm: np.ndarray
+    scaled_singular_values: np.ndarray
+    scaled_right_vectors: np.ndarray
+    wall_s: float
+    evaluations: int
+    start: dict
+    gauss_newton_step: float = float("nan")
+
+    @property
+    def converged(self) -> bool:
+        return self.fit.converged
+
+    @property
+    def rms_relative_residual(self) -> float:
+        return rms_relative(self.model_nm, self.target_nm)
+
+    def combinations(self, tol=1e-3) -> list[dict]:
+        """Parameter combinations (in log p) the data determine, best first; `determined` is
+        False for singular values below `tol` × the largest."""
+        sv = self.scaled_singular_values
+        out = []
+        for s, v in zip(sv, self.scaled_right_vectors):
+            terms = sorted(zip(self.free, v), key=lambda t: -abs(t[1]))
+            out.append(
+                {
+                    "singular_value": float(s),
+                    "determined": bool(s > tol * sv[0]),
+                    "log_combination": {k: float(c) for k, c in terms},
+                }
+            )
+        return out
+
+    def as_dict(self) -> dict:
+        """JSON-ready report (the `fit_measured` block of reproduction.json)."""
+        f = self.fit
+        resid = self.model_nm / self.target_nm - 1.0
+        vac = wang2022_table(3)["vacuum_kPa"]
+        cells = []
+        for i in range(self.target_nm.shape[0]):
+            for j, n in enumerate(TABLES):
+                cells.append(
+                    {
+                        "table": n,
+                        "vacuum_kPa": float(vac[i]) if self.target_nm.shape[0] == len(vac) else i,
+                        "measured_nm": float(self.target_nm[i, j]),
+                        "model_nm": float(self.model_nm[i, j]),
+                        "rel_residual": float(resid[i, j]),
+                    }
+                )
+        return {
+            "parameters": dict(self.parameters),
+            "free_parameters": list(self.free),
+            "std_errors": dict(zip(f.names, f.std_errors.tolist())),
+            "correlation": f.correlation.tolist(),
+            "rms_relative_residual": self.rms_relative_residual,
+            "converged": f.converged,
+            "message": f.message,
+            "steps": f.steps,
+            "residual_evaluations": self.evaluations,
+            "gauss_newton_step_over_std_error": self.gauss_newton_step,
+            "wall_s": self.wall_s,
+            "relative_scatter": float(
+                np.sqrt(np.sum(f.residuals**2) / max(f.residuals.size - len(f.names), 1))
+            ),
+            "singular_values_theta": f.singular_values.tolist(),
+            "scaled_singular_values": self.scaled_singular_values.tolist(),
+            "identifiability": self.combinations(),
+            "cells": cells,
+            "start": dict(self.start),
+            "fixed": {k: v for k, v in self.parameters.items() if k not in self.free},
+        }
+
+
+def fit_measured_slips(
+    start=None,
+    *,
+    free=DEFAULT_FREE,
+    target=None,
+    loads=None,
+    jac="fwd",
+    max_steps=60,
+    rtol=1e-3,
+    atol=1e-4,
+    progress=False,
+) -> ChainFit:
+    """Fit the free chain parameters to measured phase slips by Levenberg–Marquardt.
+
+    Args:
+        start: dict of physical start values (missing keys from `DEFAULTS`); also supplies the
+            fixed parameters.
+        free: names (subset of `PARAMETERS`) to fit; the others stay at `start`'s values.
+        target: (n, 4) phase slips in nm to fit (default: the measured Tables 4–7); all cells
+            finite and non-zero, and more cells than free parameters.
+        loads: the n normal loads, N (default Table 3's six).
+        jac: "fwd" (forward mode through the custom-JVP contact and diffrax ForwardMode) or
+            "bwd" (reverse mode).
+        max_steps, rtol, atol: LM step budget and Cauchy tolerances (optimistix: both the step in
+            θ and the change of every residual below atol + rtol·|value|). The defaults match
+            the chain's accuracy (slips to ~2e-4 relative, `SLIP_ATOL`); tighter ones make LM
+            wander along the flat D–G valley without lowering the misfit.
+        progress: print one line per residual evaluation to stderr (long fits).
+    Returns:
+        ChainFit; `converged` False (with `fit.message`) when LM did not succeed or stopped
+        short of the optimum (Gauss–Newton step >= `GN_STEP_TOL` standard errors) — never
+        raises for that.
+    Raises:
+        ValueError: bad input (names the parameter, value and allowed range).
+        ChainFitError: the compiled fit raised at a trial point (module docstring, Failures).
+    """
+    free = tuple(free)
+    bad = [n for n in free if n not in PARAMETERS]
+    if bad or len(set(free)) != len(free) or not free:
+        raise ValueError(f"free = {free!r}: names must be distinct, from {PARAMETERS}")
+    if jac not in ("fwd", "bwd"):
+        raise ValueError(f"jac = {jac!r} is outside the allowed values ('fwd', 'bwd')")
+    loads = wang2022_loads() if loads is None else as_f64(loads, "loads")
+    target = measured_slips() if target is None else np.asarray(target, dtype=float)
+    if target.shape != (loads.shape[0], 4):
+        raise ValueError(
+            f"target has shape {target.shape}; expected ({loads.shape[0]}, 4) (loads × T4..T7)"
+        )
+    if not np.all(np.isfinite(target)) or np.any(target == 0):
+        i = np.argwhere(~np.isfinite(target) | (target == 0))[0]
+        raise ValueError(
+            f"target[{i[0]}, {i[1]}] = {target[tuple(i)]} is not allowed: relative residuals "
+            "need finite, non-zero data"
+        )
+    if target.size <= len(free):
+        raise ValueError(
+            f"{target.size} data for {len(free)} free parameters: a fit needs more data than "
+            "parameters"
+        )
+    start_full = dict(DEFAULTS)
+    for k, v in dict(start or {}).items():
+        if k not in PARAMETERS:
+            raise ValueError(f"start has unknown parameter {k!r}; allowed: {PARAMETERS}")
+        start_full[k] = float(v)
+    mu_min = _mu_min(loads)
+    theta_full0 = jnp.asarray(_to_theta([start_full[k] for k in PARAMETERS], mu_min))
+    idx = jnp.array([PARAMETERS.index(n) for n in free])
+    args = (theta_full0, idx, jnp.asarray(mu_min), jnp.asarray(target), loads)
+    residuals = _residuals_fwd if jac == "fwd" else _residuals_bwd
+
+    def transform(theta):
+        return _to_physical(theta_full0.at[idx].set(theta), mu_min)[idx]
+
+    _PROGRESS.update(on=bool(progress), n=0, t0=time.perf_counter(), size=target.size)
+    t0 = time.perf_counter()
+    try:
+        fit = least_squares_fit(
+            residuals,
+            theta_full0[idx],
+            args,
+            names=free,
+            transform=transform,
+            rtol=rtol,
+            atol=atol,
+            max_steps=max_steps,
+            jac=jac,
+            solver=NoiseFloorLM(float(rtol), float(atol)),
+        )
+    except RuntimeError as err:  # equinox runtime errors inside the compiled fit
+        _PROGRESS["on"] = False
+        last = dict(zip(PARAMETERS, _PROGRESS.get("last", [])))
+        lines = str(err).splitlines() or [type(err).__name__]
+        cause = next((ln for ln in lines if "EquinoxRuntimeError:" in ln), lines[0])
+        raise ChainFitError(
+            f"the full-chain fit failed at the trial point {last}: {cause.strip()} "
+            "(a runtime check inside the chain failed at this trial point; try another start)"
+        ) from err
+    wall = time.perf_counter() - t0
+    evaluations = _PROGRESS["n"]
+    _PROGRESS["on"] = False
+    theta = jnp.asarray(fit.theta)
+    phys = np.asarray(_to_physical(theta_full0.at[idx].set(theta), mu_min))
+    r, J = fit.residuals, fit.jacobian  # at the optimum, from least_squares_fit's statistics
+    model = (r.reshape(target.shape) + 1.0) * target
+    # scaled Jacobian: ∂r/∂log p = J_θ (dp/dθ)^-1 diag(p) (transform is diagonal)
+    dpdth = np.diag(np.asarray(jax.jacfwd(transform)(jnp.asarray(fit.theta))))
+    S = J / dpdth[None, :] * np.asarray(fit.values)[None, :]
+    _, sv, vt = np.linalg.svd(S, full_matrices=False)
+    # the Gauss–Newton step still left, in standard errors (physical coordinates)
+    step = -np.linalg.lstsq(J, np.asarray(r), rcond=None)[0] * dpdth
+    gn_step = float(np.max(np.abs(step) / fit.std_errors))
+    if fit.converged and not gn_step < GN_STEP_TOL:
+        fit = dataclasses.replace(
+            fit,
+            converged=False,
+            message=(
+                f"LM stopped, but the remaining Gauss-Newton step is {gn_step:.3g} standard "
+                f"errors (> {GN_STEP_TOL}): not at an optimum"
+            ),
+        )
+    return ChainFit(
+        fit=fit,
+        parameters=dict(zip(PARAMETERS, phys.tolist())),
+        free=free,
+        model_nm=np.asarray(model),
+        target_nm=np.asarray(target),
+        scaled_singular_values=sv,
+        scaled_right_vectors=vt,
+        wall_s=wall,
+        evaluations=evaluations,
+        start=start_full,
+        gauss_newton_step=gn_step,
+    )

@@ -1,0 +1,117 @@
+"""Surface parameters D, G and μ_t from slip runs at several normal loads (two-stage fit)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._reproduce._table3 import wang2022_table3_model
+from ._engine import FitResult, least_squares_fit
+from ._slip import fit_slip_run
+
+SURFACE_NAMES = ("D", "G_m", "mu_t")
+
+
+def surface_contact_model(D, G, mu_t, *, sigma_s=1.893e9, M=1.0, throw=False):
+    """The wang2022 reticle/chuck contact with free D, G (m) and μ_t (wang2022 Sections 2–3).
+
+    As `tribojax.wang2022_table3_model` (Table 2 pair with strength `sigma_s` Pa, γ = 1.5,
+    T = 0.321 N in T/P, m = 0.321 kg in Eq 24, a = a'), with D free instead of Table 1's 2.8821.
+    Defaults: σ_s and M of the Table 3 calibration (REPRODUCTION.md: G, μ_t, σ_s are strongly
+    correlated; σ_s is held fixed here, M is exactly degenerate with G).
+    """
+    return wang2022_table3_model(G, mu_t, sigma_s, M=M, D=D, throw=throw)
+
+
+def _surface_physical(theta, mu_min):
+    """θ → (D, G, μ_t): D = 2 + sigmoid (2 < D < 3), G = e^θ, μ_t = μ_min(1 + e^θ) > T/P."""
+    return jnp.stack(
+        [2.0 + jax.nn.sigmoid(theta[0]), jnp.exp(theta[1]), mu_min * (1.0 + jnp.exp(theta[2]))]
+    )
+
+
+def fit_surface_from_runs(
+    runs,
+    *,
+    alpha=1.0,
+    start=(2.8821, 4.3636e-8, 0.1416),
+    sigma_s=1.893e9,
+    M=1.0,
+    fits=None,
+    progress=None,
+) -> FitResult:
+    """Fit D, G (m) and μ_t jointly to slip runs at different normal loads (two-stage).
+
+    Stage 1: each run's F_s, K_τ, C_τ by `fit_slip_run` (α fixed), with their covariance.
+    Stage 2: D, G, μ_t of `surface_contact_model` (wang2022 Eqs 5–24 → F_s, K_τ, C_τ at each run's
+    `normal_load`) by Levenberg–Marquardt on the whitened differences L_i⁻¹(log p_model − log p̂_i),
+    L_i the Cholesky factor of run i's covariance of log(F_s, K_τ, C_τ). To first order this is
+    the joint full-chain fit of all slip samples (the slip enters only through F_s, K_τ, C_τ of
+    each run), at a fraction of the cost; its standard errors carry the stage-1 uncertainties.
+
+    Args:
+        runs: SlipRun records, each with `normal_load` (N) set; at least 2 (6 data ≥ 3 params).
+        alpha: the bristle exponent used for every run.
+        start: (D, G in m, μ_t).
+        sigma_s, M: fixed strength (Pa) and number of ridges of the contact model.
+        fits: stage-1 FitResults to reuse (one per run), else computed.
+        progress: optional callable for progress lines.
+    Returns:
+        FitResult names ("D", "G_m", "mu_t"); `fixed` holds α, σ_s, M and the stage-1 values.
+    Raises:
+        ValueError: a run without normal_load, fewer than 2 runs, a stage-1 fit that did not
+        converge.
+    """
+    runs = list(runs)
+    if len(runs) < 2:
+        raise ValueError(
+            f"{len(runs)} run(s) give {3 * len(runs)} data for 3 parameters (D, G, mu_t); "
+            "need runs at 2 or more normal loads"
+        )
+    missing = [r.source for r in runs if r.normal_load is None]
+    if missing:
+        raise ValueError(
+            f"{missing[0]}: normal_load_N is required for the surface fit (set it in the sidecar)"
+        )
+    if fits is None:
+        fits = []
+        for i, run in enumerate(runs):
+            if progress is not None:
+                progress(f"run {i + 1}/{len(runs)} ({run.source}, {run.normal_load:g} N)")
+            fits.append(fit_slip_run(run, alpha=alpha, progress=progress))
+    for run, fit in zip(runs, fits):
+        if not fit.converged:
+            raise ValueError(f"{run.source}: the slip fit did not converge ({fit.message})")
+    loads = jnp.asarray([r.normal_load for r in runs])
+    target = jnp.asarray(np.stack([f.theta[:3] for f in fits]))
+    whiten = []
+    for f in fits:
+        inv_p = 1.0 / f.values[:3]
+        cov = f.covariance[:3, :3] * np.outer(inv_p, inv_p)
+        whiten.append(np.linalg.inv(np.linalg.cholesky(cov)))
+    whiten = jnp.asarray(np.stack(whiten))
+    mu_min = 0.321 / float(loads.min())
+
+    def residuals(theta, args):
+        D, G, mu_t = _surface_physical(theta, mu_min)
+        out = jax.vmap(surface_contact_model(D, G, mu_t, sigma_s=sigma_s, M=M))(loads)
+        model = jnp.log(jnp.stack([out.F_s, out.K_tau, out.C_tau], axis=1))
+        return jnp.einsum("nij,nj->ni", whiten, model - target).ravel()
+
+    D0, G0, mu0 = (float(x) for x in start)
+    if not (2 < D0 < 3 and G0 > 0 and mu0 > mu_min):
+        raise ValueError(f"start (D, G, mu_t) = {start} must have 2 < D < 3, G > 0, "
+                         f"mu_t > {mu_min:.4g} (T/P at the smallest load)")  # fmt: skip
+    theta0 = jnp.array([np.log((D0 - 2) / (3 - D0)), np.log(G0), np.log(mu0 / mu_min - 1)])
+    if progress is not None:
+        progress("surface: D, G, mu_t from the runs' F_s, K_tau, C_tau")
+    fit = least_squares_fit(jax.jit(residuals), theta0, names=SURFACE_NAMES,
+                            transform=lambda th: _surface_physical(th, mu_min),
+                            sigma_known=True)  # fmt: skip
+    fixed = {"alpha": float(alpha), "sigma_s_Pa": float(sigma_s), "M": float(M),
+             "loads_N": [float(x) for x in loads],
+             "stage1": [dict(zip(f.names, f.values.tolist())) for f in fits]}  # fmt: skip
+    return dataclasses.replace(fit, fixed=fixed)

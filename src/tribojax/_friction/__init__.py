@@ -1,0 +1,1 @@
+"""Friction elements: the common interface, LuGre and the rate-independent elements."""

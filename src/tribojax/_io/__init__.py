@@ -1,0 +1,1 @@
+"""Records and files: tables, slip runs, hysteresis loops, sidecars and atomic writes."""

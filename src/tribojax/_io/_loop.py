@@ -1,0 +1,194 @@
+"""Measured hysteresis loops: a validated record, wu2015's loop analysis and a fit of μN and K_d.
+
+A loop record is a time series (t, u, f) of a contact under periodic tangential displacement
+(wu2015 Section 5: displacement from the vibrometer, force from the piezo sensor). From it:
+
+* whole cycles are located from the upward mean-crossings of u, and ω from their spacing;
+* the first harmonics of u and f over those cycles (linear least squares, exact for whole cycles)
+  give A and K_eq = F_c/A, C_eq = −F_s/(Aω) in the phase of u = A cos θ (wu2015 Section 5.3);
+* K_d by wu2015 Eq 6, (k1 + k2)/2, the mean of the initial loading and unloading slopes at the
+  reversal points;
+* a least-squares fit of μN and K_d of a Jenkins or Mindlin steady loop to the force samples.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._tables import DataFileError, read_table
+
+LOOP_COLUMNS = ("t_s", "u_m", "f_N")
+
+
+@dataclasses.dataclass(frozen=True)
+class HysteresisLoop:
+    """A measured (or synthetic) loop: times t (s, increasing), displacement u (m), force f (N).
+
+    Optional metadata (keyword-only): `normal_load` (N) of the contact, the drive `frequency`
+    (Hz) and `noise_std` (N), the standard deviation of the force noise (`fit_loop` uses it as
+    the residual scale when given). Construction checks lengths, finiteness, increasing time,
+    positive metadata and that at least one whole cycle of u is present (ValueError). `source`
+    names the file it came from, if any.
+    """
+
+    t: np.ndarray
+    u: np.ndarray
+    f: np.ndarray
+    source: str = "<array>"
+    normal_load: float | None = dataclasses.field(default=None, kw_only=True)
+    frequency: float | None = dataclasses.field(default=None, kw_only=True)
+    noise_std: float | None = dataclasses.field(default=None, kw_only=True)
+
+    def __post_init__(self):
+        from ._slip_run import _positive_or_none
+
+        arrays = [np.asarray(x, dtype=np.float64) for x in (self.t, self.u, self.f)]
+        for name, x in zip(("t", "u", "f"), arrays):
+            object.__setattr__(self, name, x)
+            if x.ndim != 1:
+                raise ValueError(f"{self.source}: {name} must be 1-D, got shape {x.shape}")
+            bad = np.flatnonzero(~np.isfinite(x))
+            if bad.size:
+                raise ValueError(f"{self.source}: {name}[{bad[0]}] is {x[bad[0]]}")
+        if not (len(self.t) == len(self.u) == len(self.f)):
+            raise ValueError(f"{self.source}: t, u and f must have the same length")
+        for name, unit in (("normal_load", "N"), ("frequency", "Hz"), ("noise_std", "N")):
+            value = _positive_or_none(getattr(self, name), name, self.source, unit)
+            object.__setattr__(self, name, value)
+        steps = np.flatnonzero(np.diff(self.t) <= 0)
+        if steps.size:
+            i = steps[0] + 1
+            raise ValueError(
+                f"{self.source}: time is not increasing at sample {i} (t = {self.t[i]})"
+            )
+        if len(cycle_starts(self.t, self.u)) < 2:
+            raise ValueError(
+                f"{self.source}: fewer than one whole cycle of u (need two upward crossings of "
+                "its mean); record a longer stretch"
+            )
+
+
+_LOOP_SIDECAR = {"normal_load_N": True, "frequency_Hz": True, "noise_std_N": False}
+_LOOP_UNITS = {"normal_load_N": "N", "frequency_Hz": "Hz", "noise_std_N": "N"}
+FREQUENCY_TOLERANCE = 0.1  # relative mismatch allowed between the sidecar and the record
+
+
+def read_loop(path) -> HysteresisLoop:
+    """Load a loop: CSV `time_s,displacement_m,force_N` plus sidecar `<stem>.json`, or legacy.
+
+    The issue's format needs the sidecar {"normal_load_N", "frequency_Hz" (required, > 0),
+    "noise_std_N" (optional, > 0)}; the legacy columns `t_s,u_m,f_N` take the same sidecar if
+    present. SI units, `#` comment lines allowed. The sidecar's frequency must agree with the
+    record's cycle spacing within 10 % (catches rad/s given as Hz).
+
+    Raises DataFileError naming the file (and the line) for NaN/non-numeric entries, time that
+    does not increase, fewer than one whole cycle, or a missing/malformed/inconsistent sidecar.
+    """
+    from ._slip_run import LOOP_FILE_COLUMNS, csv_header, data_line_number, read_sidecar
+
+    path = Path(path)
+    header = set(csv_header(path))
+    new = set(LOOP_FILE_COLUMNS) <= header
+    cols = LOOP_FILE_COLUMNS if new else LOOP_COLUMNS
+    table = read_table(path, columns=cols)
+    t, u, f = (table[c] for c in cols)
+    steps = np.flatnonzero(np.diff(t) <= 0)
+    if steps.size:
+        lineno = data_line_number(path, steps[0] + 1)
+        raise DataFileError(
+            f"{path}, line {lineno}: time {cols[0]} = {t[steps[0] + 1]} does not increase"
+        )
+    side = read_sidecar(path, _LOOP_SIDECAR, _LOOP_UNITS, required=new) or {}
+    try:
+        loop = HysteresisLoop(
+            t,
+            u,
+            f,
+            source=str(path),
+            normal_load=side.get("normal_load_N"),
+            frequency=side.get("frequency_Hz"),
+            noise_std=side.get("noise_std_N"),
+        )
+    except ValueError as err:
+        raise DataFileError(str(err)) from None
+    if loop.frequency is not None:
+        starts = cycle_starts(loop.t, loop.u)
+        measured = (len(starts) - 1) / (starts[-1] - starts[0])
+        if abs(loop.frequency / measured - 1) > FREQUENCY_TOLERANCE:
+            raise DataFileError(
+                f"{path.with_suffix('.json')}: frequency_Hz = {loop.frequency:g} disagrees with "
+                f"the record's {measured:.6g} Hz (from the mean-crossings of its displacement) "
+                f"by more than {FREQUENCY_TOLERANCE:.0%}; give the frequency in Hz, not rad/s"
+            )
+    return loop
+
+
+def write_loop(
+    loop: HysteresisLoop, path, comment: str = "", *, overwrite: bool = False, legacy=None
+) -> None:
+    """Write a loop as CSV (17 digits) with optional `#` comment lines, atomically.
+
+    With `normal_load` and `frequency` set, the issue's format `time_s,displacement_m,force_N`
+    plus a sidecar `<stem>.json`; otherwise (or with legacy=True) the legacy `t_s,u_m,f_N`
+    without one. Refuses (FileExistsError) if a target exists, unless `overwrite=True`.
+    """
+    from ._slip_run import LOOP_FILE_COLUMNS, write_record_files
+
+    has_meta = loop.normal_load is not None and loop.frequency is not None
+    legacy = (not has_meta) if legacy is None else bool(legacy)
+    if not legacy and not has_meta:
+        raise ValueError(
+            "the time_s,displacement_m,force_N format needs the loop's normal_load and frequency"
+        )
+    side = None
+    if not legacy:
+        side = {"normal_load_N": loop.normal_load, "frequency_Hz": loop.frequency}
+        if loop.noise_std is not None:
+            side["noise_std_N"] = loop.noise_std
+    header = LOOP_COLUMNS if legacy else LOOP_FILE_COLUMNS
+    write_record_files(path, header, (loop.t, loop.u, loop.f), side, overwrite=overwrite,
+                       comment=comment)  # fmt: skip
+
+
+def cycle_starts(t, u) -> np.ndarray:
+    """Times of the upward crossings of u's mean (linear interpolation between samples)."""
+    x = u - 0.5 * (u.max() + u.min())
+    i = np.flatnonzero((x[:-1] <= 0) & (x[1:] > 0))
+    return t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i])
+
+
+def synthetic_loop(
+    element,
+    A,
+    omega,
+    *,
+    cycles: int = 3,
+    samples_per_cycle: int = 400,
+    noise: float = 0.0,
+    seed: int = 0,
+    normal_load=None,
+) -> HysteresisLoop:
+    """A steady loop of `element` under u = A sin ωt, with Gaussian force noise (N) from `seed`.
+
+    The record starts at u = 0 on the rising branch and spans `cycles` + 1/4 periods, so that
+    `analyse_loop` finds `cycles` whole cycles. Its `frequency` is ω/2π, `noise_std` the noise
+    (None if 0) and `normal_load` as given (N).
+    """
+    n = cycles * samples_per_cycle + samples_per_cycle // 4 + 1
+    t = np.arange(n) / samples_per_cycle * (2.0 * np.pi / omega)
+    theta = omega * t - 0.5 * np.pi  # u = A cos θ = A sin ωt
+    f = np.asarray(jax.vmap(lambda th: element.steady_loop(th, A))(jnp.asarray(theta)))
+    rng = np.random.default_rng(seed)
+    return HysteresisLoop(
+        t,
+        A * np.sin(omega * t),
+        f + noise * rng.standard_normal(n),
+        normal_load=normal_load,
+        frequency=float(omega) / (2.0 * np.pi),
+        noise_std=float(noise) if noise > 0 else None,
+    )

@@ -1,0 +1,1 @@
+"""Surface roughness: synthesis of fractal surfaces, measured topographies, D and G estimates."""

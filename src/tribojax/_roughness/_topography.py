@@ -1,0 +1,222 @@
+"""Measured topographies: a record in SI metres, plain readers, and instrument files.
+
+Plain formats are read here, always: `.npy` (a 1-D profile or 2-D map; give `dx`), CSV or
+whitespace text with two columns (x, height: a profile on a regular grid) or a matrix of heights
+(a map; give `dx`). Instrument formats (Dektak CSV exports, Nanoscope `.di`, ISO 25178 `.x3p`,
+MetroPro `.dat`, …) are handed to SurfaceTopography, an optional extra
+(`pip install 'tribojax[topography]'`); tribojax does not re-implement its readers.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import equinox as eqx
+import numpy as np
+from jaxtyping import Array, Float
+
+from .._io._tables import DataFileError
+
+UNITS = {
+    "m": 1.0,
+    "mm": 1e-3,
+    "um": 1e-6,
+    "µm": 1e-6,
+    "μm": 1e-6,
+    "nm": 1e-9,
+    "A": 1e-10,
+    "Å": 1e-10,
+}
+PLAIN_SUFFIXES = (".npy", ".txt", ".xyz", ".asc", ".dat", ".csv")
+MIN_POINTS = 64
+
+
+def unit_scale(unit: str) -> float:
+    """Metres per `unit` (m, mm, um/µm, nm, Å)."""
+    if unit not in UNITS:
+        raise ValueError(f"unit = {unit!r} is not known; use one of {sorted(set(UNITS))}")
+    return UNITS[unit]
+
+
+class Topography(eqx.Module):
+    """A measured or synthetic surface: a profile (1-D) or height map (2-D), in metres.
+
+    Fields:
+        heights: heights in m; shape (n,) for a profile, (ny, nx) for a map (x along the last axis).
+        dx: sampling interval along x, m, > 0.
+        dy: sampling interval along y, m (None for a profile).
+        source: where it came from (file name or generator), for reports.
+    """
+
+    heights: Float[Array, ...]
+    dx: float = eqx.field(static=True)
+    dy: float | None = eqx.field(static=True, default=None)
+    source: str = eqx.field(static=True, default="")
+
+    def __check_init__(self):
+        nd = np.ndim(self.heights)
+        if nd not in (1, 2):
+            raise ValueError(f"heights must be 1-D or 2-D, got {nd}-D")
+        if not (self.dx > 0 and math.isfinite(self.dx)):
+            raise ValueError(f"dx = {self.dx} m must be a positive finite sampling interval")
+        if nd == 2 and not (self.dy is not None and self.dy > 0 and math.isfinite(self.dy)):
+            raise ValueError(f"dy = {self.dy} m must be a positive finite sampling interval")
+
+    @property
+    def is_profile(self) -> bool:
+        return np.ndim(self.heights) == 1
+
+    @property
+    def length(self) -> float:
+        """Length along x, m."""
+        return float(np.shape(self.heights)[-1] * self.dx)
+
+
+def validate(topo: Topography, *, min_points: int = MIN_POINTS) -> Topography:
+    """Refuse what no fractal analysis can use: NaNs, too few points, a flat surface."""
+    z = np.asarray(topo.heights)
+    name = topo.source or "topography"
+    if not np.all(np.isfinite(z)):
+        bad = int(np.sum(~np.isfinite(z)))
+        raise ValueError(
+            f"{name}: {bad} of {z.size} heights are NaN or infinite (missing data); fill or crop "
+            "them before estimating D and G"
+        )
+    if z.shape[-1] < min_points:
+        raise ValueError(
+            f"{name}: {z.shape[-1]} points along x is too short; at least {min_points} are needed "
+            "for a scaling band of one decade"
+        )
+    span = float(np.ptp(z))
+    if span <= 1e-12 * max(1.0, float(np.max(np.abs(z)))) or span == 0.0:
+        raise ValueError(f"{name}: the surface is flat (height range {span:g} m); nothing to fit")
+    return topo
+
+
+def _read_plain(path: Path, dx, unit: str) -> Topography:
+    s = unit_scale(unit)
+    if path.suffix == ".npy":
+        try:
+            z = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as err:
+            raise DataFileError(f"{path}: not a readable .npy file ({err})") from err
+        if dx is None:
+            raise ValueError(
+                f"{path}: a .npy file carries no sampling interval; pass dx (in {unit})"
+            )
+        z = np.asarray(z, dtype=np.float64)
+        if z.ndim not in (1, 2):
+            raise DataFileError(f"{path}: expected a 1-D or 2-D array, got shape {z.shape}")
+        return Topography(z * s, dx=dx * s, dy=None if z.ndim == 1 else dx * s, source=path.name)
+    rows, width = [], None
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise DataFileError(f"{path}: cannot be read as text ({err})") from err
+    for lineno, raw in enumerate(lines, start=1):
+        text = raw.strip()
+        if not text or text.startswith(("#", "%")):
+            continue
+        fields = text.replace(",", " ").replace(";", " ").split()
+        try:
+            row = [float(f) for f in fields]
+        except ValueError:
+            if not rows:  # one header line is allowed
+                continue
+            raise DataFileError(f"{path}, line {lineno}: {text[:60]!r} is not a row of numbers")
+        if width is not None and len(row) != width:
+            raise DataFileError(
+                f"{path}, line {lineno}: {len(row)} values, earlier rows have {width}"
+            )
+        width = len(row)
+        rows.append(row)
+    if not rows:
+        raise DataFileError(f"{path}: no rows of numbers")
+    a = np.asarray(rows)
+    if width == 2 and dx is None:  # (x, z) profile
+        x = a[:, 0]
+        step = np.diff(x)
+        if len(x) < 3 or np.any(step <= 0):
+            raise DataFileError(f"{path}: the x column is not strictly increasing")
+        h = (x[-1] - x[0]) / (len(x) - 1)
+        drift = np.max(np.abs(x - x[0] - h * np.arange(len(x))))
+        if drift > 0.5 * h:  # rounding of printed x is fine; gaps and resampling are not
+            raise DataFileError(f"{path}: x is not evenly spaced (off a regular grid by {drift:g})")
+        return Topography(a[:, 1] * s, dx=float(h * s), source=path.name)
+    if dx is None:
+        raise ValueError(f"{path}: a matrix of heights carries no sampling interval; pass dx")
+    z = a[:, 0] if width == 1 else a
+    return Topography(z * s, dx=dx * s, dy=None if z.ndim == 1 else dx * s, source=path.name)
+
+
+def _read_instrument(path: Path) -> Topography:
+    try:
+        import SurfaceTopography as st
+    except ImportError:
+        raise ImportError(
+            f"{path}: this instrument format needs SurfaceTopography; install the extra with "
+            "`pip install 'tribojax[topography]'` (or save the heights as .npy/.csv)"
+        ) from None
+    try:
+        t = st.open_topography(str(path)).topography()
+        z = np.ma.filled(np.ma.asarray(t.heights(), dtype=np.float64), np.nan)
+        unit = t.unit
+    except Exception as err:  # SurfaceTopography raises many types for unreadable files
+        raise DataFileError(f"{path}: SurfaceTopography cannot read it ({err})") from err
+    if unit is None:
+        raise DataFileError(f"{path}: the file states no length unit; read it with unit=")
+    s = unit_scale(unit)
+    sizes = t.physical_sizes
+    nx = z.shape[0]
+    dx = float(sizes[0]) / nx * s
+    if z.ndim == 1:
+        return Topography(z * s, dx=dx, source=path.name)
+    # SurfaceTopography stores maps as (nx, ny); tribojax uses (ny, nx), x along the last axis.
+    dy = float(sizes[1]) / z.shape[1] * s
+    return Topography(z.T * s, dx=dx, dy=dy, source=path.name)
+
+
+def read_topography(
+    path, *, unit: str = "m", dx=None, instrument: bool | None = None
+) -> Topography:
+    """Read a profile or height map into a `Topography` in metres.
+
+    Args:
+        path: the file.
+        unit: length unit of a plain file's numbers (x and heights), "m", "mm", "um", "nm".
+        dx: sampling interval (in `unit`) for files that do not carry one (.npy, matrices).
+        instrument: True forces SurfaceTopography, False the plain readers; None picks by
+            content (plain numbers → plain reader, anything else → SurfaceTopography).
+    Raises:
+        DataFileError naming the file (and line) for malformed or unreadable files; ImportError
+        naming the extra when an instrument file needs SurfaceTopography and it is missing.
+    """
+    path = Path(path)
+    unit_scale(unit)  # an unknown unit is refused before anything is read
+    if not path.is_file():
+        raise DataFileError(f"{path}: no such file")
+    if instrument is None:
+        instrument = path.suffix.lower() not in PLAIN_SUFFIXES or not _looks_plain(path)
+    return _read_instrument(path) if instrument else _read_plain(path, dx, unit)
+
+
+def _looks_plain(path: Path) -> bool:
+    """True when the file is a .npy or its first data lines are plain numbers."""
+    if path.suffix == ".npy":
+        return True
+    try:
+        with path.open("rb") as f:
+            head = f.read(4096)
+        text = head.decode("utf-8")
+    except (OSError, UnicodeDecodeError):
+        return False
+    lines = [ln for ln in text.splitlines()[:6] if ln.strip() and not ln.lstrip().startswith("#")]
+    numeric = []
+    for ln in lines[:3]:  # the first line may be a header; later lines are the reader's job
+        try:
+            [float(f) for f in ln.replace(",", " ").replace(";", " ").split()]
+            numeric.append(True)
+        except ValueError:
+            numeric.append(False)
+    return any(numeric) and all(numeric[1:])

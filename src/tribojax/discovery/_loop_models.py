@@ -1,0 +1,168 @@
+"""Loop-side models for discovery: a Jenkins baseline and its physical augmentations.
+
+The measured quantity of a loop record is the friction force at each sample; the model drives an
+element through the record's own displacement history (as `fit_loop(..., model="history")`), so it
+works for any history, not only a clean sinusoid.
+
+One generalised element covers the baseline and every physical augmentation:
+
+* an Iwan bank (parallel Jenkins elements, slip displacements y_j, stiffnesses k_j). One element
+  (y = A0 = μN/K_d, k = K_d) is the Jenkins macroslip element (wu2015 Eq 1); `Mindlin`'s Iwan
+  discretisation is the Mindlin/Koh microslip element (wu2015 Eq 2);
+* `microslip`: the force is (1 − w)·Jenkins + w·Mindlin with the same μN and K_d (both have initial
+  slope K_d and gross-slip force μN); w = 0 is the baseline, w = 1 the full Mindlin law;
+* `normal_load_variation`: the normal load follows the displacement, N(u) = N0·(1 + β·u/A) (A: half
+  the record's peak-to-peak u), so μN scales by s(u) = 1 + βu/A and K_d by s(u)^0.7616 (the
+  exponent of wu2015 Eq 5, K_d ∝ N^0.7616); every Iwan slider's limit scales with μN and every
+  spring with K_d. β = 0 is the baseline;
+* `viscous_damping`: c·u̇ added to the force (u̇ from the record's displacement by central
+  differences); c = 0 is the baseline.
+
+Rate-independent updates are exact: z_j ← clip(z_j + Δu, −y_j·a(u), y_j·a(u)), f = Σ k_j·b(u)·z_j
+with a = s^(1−0.7616), b = s^0.7616 (a = b = 1 without load variation).
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._checks import fail_if
+from .._fit._loop import analyse_loop
+from .._io._loop import HysteresisLoop, cycle_starts
+
+KD_LOAD_EXPONENT = 0.7616  # wu2015 Eq 5: K_d ∝ N^0.7616
+N_IWAN = 128  # Iwan elements of the Mindlin law (interpolation error ~ 1/n² of μN)
+
+
+class LoopData(eqx.Module):
+    """A loop record prepared for the drive model (SI units).
+
+    Fields:
+        u: displacement from the first upward mean-crossing on, relative to mid-stroke (m); the
+            model is driven through it from rest.
+        f: measured force at the fitted samples (N): those from the first reversal after the
+            crossing on (the virgin loading is not fitted).
+        v: velocity at the fitted samples (m/s, central differences of the record's u).
+        A: half the peak-to-peak displacement (m), the scale of β.
+        skip: index of the first fitted sample within `u` (static).
+        index: index of each fitted sample in the original record.
+        c_scale: viscous-coefficient scale F/V (N·s/m): half the peak-to-peak force over half the
+            peak-to-peak velocity of the record.
+    """
+
+    u: jax.Array
+    f: jax.Array
+    v: jax.Array
+    A: jax.Array
+    index: jax.Array
+    c_scale: jax.Array
+    skip: int = eqx.field(static=True)
+
+
+def prepare_loop(loop: HysteresisLoop) -> LoopData:
+    """`LoopData` of a record: drive from the first upward crossing, fit from the first reversal."""
+    t, u = loop.t, loop.u
+    first = int(np.searchsorted(t, cycle_starts(t, u)[0]))
+    mid = 0.5 * (u.max() + u.min())
+    u_rel = u[first:] - mid
+    omega = analyse_loop(loop).omega
+    half = int(np.searchsorted(t[first:], t[first] + np.pi / omega))
+    skip = int(np.argmax(u_rel[: max(half, 2)]))
+    v = np.gradient(u, t, edge_order=2)
+    index = np.arange(first + skip, len(t))
+    return LoopData(
+        u=jnp.asarray(u_rel),
+        f=jnp.asarray(loop.f[index]),
+        v=jnp.asarray(v[index]),
+        A=jnp.asarray(0.5 * (u.max() - u.min())),
+        index=jnp.asarray(index),
+        c_scale=jnp.asarray(0.5 * np.ptp(loop.f) / (0.5 * np.ptp(v))),
+        skip=skip,
+    )
+
+
+class LoopSpec(eqx.Module):
+    """Parameters of the generalised loop model (array leaves; the baseline has w = β = c = 0).
+
+    Fields: mu_N (gross-slip force, N, > 0), K_d (tangential stiffness, N/m, > 0), w (microslip
+    weight, —; 0 Jenkins, 1 Mindlin), beta (normal-load gradient N(u) = N0(1 + βu/A), —, |β| < 1),
+    c (viscous coefficient, N·s/m).
+    """
+
+    mu_N: jax.Array
+    K_d: jax.Array
+    w: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+    beta: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+    c: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+
+
+def _mindlin_bank(n: int):
+    """Unit Iwan bank of the Mindlin law (as `Mindlin._iwan`): slip limits in units of A0 and
+    stiffnesses in units of K_d, NumPy constants (they depend on n only)."""
+    q = 1.0 - (1.0 - np.arange(n + 1) / n) ** 2  # y_j / Y, Y = 1.5 A0
+    phi = 1.0 - (1.0 - q) ** 1.5  # virgin curve / μN at y_j
+    slopes = np.diff(phi) / (1.5 * np.diff(q))  # / K_d
+    return 1.5 * q[1:], slopes - np.append(slopes[1:], 0.0)
+
+
+_Y_MINDLIN, _K_MINDLIN = _mindlin_bank(N_IWAN)
+
+
+def _bank_deflections(y, a, u):
+    """Deflections (len(u), len(y)) of an Iwan bank with slip limits y·a(u) driven along u."""
+    du = jnp.diff(u)
+
+    def step(z, inp):
+        d, aa = inp
+        z = jnp.clip(z + d, -y * aa, y * aa)
+        return z, z
+
+    _, zs = jax.lax.scan(step, jnp.zeros_like(y), (du, a[1:]))
+    return jnp.concatenate([jnp.zeros((1, y.shape[0])), zs])
+
+
+S_MIN = 0.05  # floor of N(u)/N0 inside fits (check=False)
+
+
+def loop_force(
+    spec: LoopSpec, data: LoopData, *, microslip: bool = True, check: bool = True
+) -> jax.Array:
+    """Model force (N) at the fitted samples of `data` for the parameters `spec`.
+
+    `microslip=False` (static) skips the Mindlin bank (use it when w is identically 0: the result
+    is the same, at a fraction of the cost). `check=True` refuses a β that makes N(u) ≤ 0
+    (ValueError, or equinox's runtime error under jit); `check=False` (inside fits, where a trial
+    step may overshoot) floors N(u)/N0 at S_MIN instead. References: wu2015 Eqs 1, 2, 5 (see the
+    module docstring).
+    """
+    s = 1.0 + spec.beta * data.u / data.A
+    if check:
+        s = fail_if(
+            s,
+            jnp.any(s <= 0.0),
+            "normal_load_variation: beta must keep N(u) = N0(1 + beta u/A) > 0, i.e. |beta| < 1",
+        )
+    s_safe = jnp.where(s > S_MIN, s, S_MIN)
+    b = s_safe**KD_LOAD_EXPONENT
+    a = s_safe / b
+    A0 = spec.mu_N / spec.K_d
+    if microslip:  # one bank: the Jenkins element (weight 1 − w) and the Mindlin bank (w)
+        y = A0 * jnp.concatenate([jnp.ones(1), jnp.asarray(_Y_MINDLIN)])
+        k = jnp.concatenate([jnp.ones(1) * (1.0 - spec.w), spec.w * jnp.asarray(_K_MINDLIN)])
+    else:
+        y, k = A0 * jnp.ones(1), jnp.ones(1)
+    z = _bank_deflections(y, a, data.u)[data.skip :]
+    return spec.K_d * b[data.skip :] * (z @ k) + spec.c * data.v
+
+
+def loop_branch(loop: HysteresisLoop) -> np.ndarray:
+    """Branch of each sample: +1 loading (u rising), −1 unloading: the sign of the forward
+    difference of a 5-point moving average of u (so a reversal sample belongs to the branch that
+    leaves it; the last sample takes its predecessor's branch)."""
+    u = np.convolve(loop.u, np.ones(5) / 5.0, mode="same")
+    u[:2], u[-2:] = loop.u[:2], loop.u[-2:]
+    step = np.diff(u)
+    return np.where(np.append(step, step[-1]) >= 0.0, 1.0, -1.0)
