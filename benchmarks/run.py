@@ -9,8 +9,9 @@ before timing, then the median of many calls is taken, each call ending in
 `jax.block_until_ready`. The baseline is the independent quad + brentq implementation in
 tests/scipy_reference.py (imported from the repository's tests/ folder).
 
-Inputs: the calibrated-like wang2022 contact (REPRODUCTION.md): D = 2.8821, G = 7e-8 m, M = 2,
-γ = 1.5, the Table 2 pair with σ_s = 1.9 GPa, μ_t = 0.14, tangential load 0.321 N, mass 0.321 kg.
+Inputs: the calibrated-like wang2022 contact (docs/reproduction.md, "wang2022: Table 3
+calibration"): D = 2.8821, G = 7e-8 m, M = 2, γ = 1.5, the Table 2 pair with σ_s = 1.9 GPa,
+μ_t = 0.14, tangential load 0.321 N, mass 0.321 kg.
 """
 
 import argparse

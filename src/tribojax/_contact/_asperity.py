@@ -82,9 +82,10 @@ def load_laws(surface: FractalSurface, pair: ContactPair, log_a_ec) -> tuple[Pow
     (δ/δ_c)^1.425 with the paper's ratio (a'/a'_ec)^((3-D)/2)) it is a'^(1.1375 + 0.2875 D) over
     a'_ec^(2.1375 - 0.7125 D). The elastic–plastic laws keep the paper's deformation ratio, which
     is below 1 inside those regimes, so the load jumps at a'_ec by the factor 3·0.34 = 1.02
-    (REPRODUCTION.md says ~3 %, which is Kogut–Etsion's unrounded 1.03). The same reading makes
-    P(a') jump at the other boundaries too: x1.41 at a'_epc (ep2 above ep1 just below it) and
-    ~670x at a'_pc (H·a' above the ep2 law). The load balance stays continuous (integrals).
+    (Kogut–Etsion's unrounded 1.03 would give 3 %). The same reading makes P(a') jump at the
+    other boundaries too, at D = 2.8821: x1.41 at a'_epc (ep2 above ep1 just below it) and ~670x
+    at a'_pc (H·a' above the ep2 law). The load balance stays continuous (integrals). See
+    docs/reproduction.md, "wang2022: misprints and corrections".
     """
     D, E, H = surface.D, pair.E_star, pair.H
     ln_lng = jnp.log(jnp.log(surface.gamma))
@@ -146,8 +147,9 @@ def mindlin_factors(psi):
         s_k   = (1 - ψ)^(1/3)                                    (stiffness, Eq 18)
         phi_d = 1 - (1-ψ)^(5/3) - (5ψ/6)(1 + (1-ψ)^(2/3))        (dissipation, Eq 20)
         phi_s = 3/5 - (1-ψ)^(2/3) + (2/5)(1-ψ)^(5/3)              (stored energy, Eq 22)
-    For ψ -> 0, phi_d ≈ 25ψ³/162 and phi_s ≈ ψ²/3 (cancellation limits relative accuracy
-    below ψ ~ 1e-3). Valid for 0 <= ψ < 1.
+    For ψ -> 0, phi_d ≈ 5ψ³/162 (Mindlin–Deresiewicz) and phi_s ≈ ψ²/3 (cancellation limits
+    relative accuracy below ψ ~ 1e-3; docs/reproduction.md, "Further facts"). Valid for
+    0 <= ψ < 1.
     """
     ok = psi < 1.0
     one_minus = jnp.where(ok, 1.0 - psi, 1.0)  # double-where: keep the power's input positive

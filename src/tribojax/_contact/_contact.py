@@ -90,8 +90,8 @@ def _packed(name: str) -> property:
 class ContactParameters(eqx.Module):
     """Contact parameters at one normal load (all SI units); batched under `jax.vmap`.
 
-    The numbers are stored packed in one float array (a single output buffer keeps a jitted call
-    at ~15 µs instead of ~30 µs) and read through these properties:
+    The numbers are stored packed in one float array (a single output buffer keeps the overhead
+    of a jitted call low) and read through these properties:
 
         load:       normal load F, N.
         F_s:        maximum static friction, N (Eqs 14, 16).
@@ -160,7 +160,8 @@ class FractalContact(eqx.Module):
         mu_t:            friction coefficient in Mindlin's law (Eq 17), > 0. Not published.
         tangential_load: T in the ratio T/P of Eqs 18–22, N, >= 0. The paper never defines T/P;
                          a fixed applied tangential load reproduces Table 3's trend, e.g. the
-                         inertial load m·a_max = 0.321 N of the reticle (REPRODUCTION.md).
+                         inertial load m·a_max = 0.321 N of the reticle (docs/reproduction.md,
+                         "wang2022: misprints and corrections").
         mass:            slider mass m in Eq 24, kg, > 0 (0.321 kg reticle in the paper).
         area:            "truncated" (a = a', default) or "real" (Eqs 10, 12, Hertz a'/2) for the
                          contact area in Eqs 14 and 18 (static).

@@ -1,8 +1,8 @@
 """Harmonic balance of friction elements: first-harmonic K_eq, C_eq and wu2015's K̄, C̄.
 
 Under u = A·cos θ (θ = ωt) the friction force's first harmonic is f_c·cos θ + f_s·sin θ with
-f_c = (1/π)∮ f cos θ dθ and f_s = (1/π)∮ f sin θ dθ. wu2015 (Section 5.3, phase convention in
-REPRODUCTION.md) defines
+f_c = (1/π)∮ f cos θ dθ and f_s = (1/π)∮ f sin θ dθ. wu2015 (Section 5.3; phase convention in
+docs/reproduction.md, "wu2015") defines
 
     K_eq = f_c / A,   C_eq = −f_s / (A ω),   K̄ = K_eq / K_d,   C̄ = π ω C_eq / K_d = W / (K_d A²)
 
