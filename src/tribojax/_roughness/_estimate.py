@@ -34,6 +34,7 @@ import numpy as np
 from jax.scipy.special import gammaln
 
 from .._checks import check_range
+from ._synthesis import direction_factor
 from ._topography import Topography, validate
 
 METHODS = ("structure", "psd", "rms")
@@ -252,8 +253,6 @@ def estimate_fractal(
         ValueError for NaNs, flat or too-short data, or when no band shows power-law scaling
         with 2 < D < 3.
     """
-    from ._synthesis import direction_factor
-
     if method not in METHODS:
         raise ValueError(f"method = {method!r}; choose one of {METHODS}")
     validate(topo)

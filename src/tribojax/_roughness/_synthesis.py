@@ -23,6 +23,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .._checks import check_range, fail_if
+from ._topography import Topography
 
 RIDGE_WEIGHTS = ("wang2022", "yk1998")
 
@@ -132,8 +133,6 @@ def synthesize(
     `default_n_max(n_points, gamma)`. The heights are differentiable in D and G; use
     `yk_heights` directly inside jit/grad.
     """
-    from ._topography import Topography
-
     if n_points < 8:
         raise ValueError(f"n_points = {n_points} is too few; use at least 8")
     n_max = default_n_max(n_points, float(gamma)) if n_max is None else n_max
