@@ -86,8 +86,8 @@ from ._io._loop import HysteresisLoop as HysteresisLoop
 from ._io._loop import read_loop as read_loop
 from ._io._loop import synthetic_loop as synthetic_loop
 from ._io._loop import write_loop as write_loop
+from ._io._records import read_record as read_record
 from ._io._slip_run import SlipRun as SlipRun
-from ._io._slip_run import read_record as read_record
 from ._io._slip_run import read_slip_run as read_slip_run
 from ._io._slip_run import simulate_run as simulate_run
 from ._io._slip_run import synthetic_slip_run as synthetic_slip_run
