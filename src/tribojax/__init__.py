@@ -52,6 +52,7 @@ from ._dynamics._harmonic import drive as drive
 from ._dynamics._harmonic import harmonic_balance as harmonic_balance
 from ._dynamics._harmonic import harmonic_response as harmonic_response
 from ._dynamics._profiles import AbstractProfile as AbstractProfile
+from ._dynamics._profiles import DisplacementHistory as DisplacementHistory
 from ._dynamics._profiles import MeasuredProfile as MeasuredProfile
 from ._dynamics._profiles import PiecewiseLinearProfile as PiecewiseLinearProfile
 from ._dynamics._profiles import TrapezoidProfile as TrapezoidProfile

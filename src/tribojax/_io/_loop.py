@@ -1,14 +1,12 @@
-"""Measured hysteresis loops: a validated record, wu2015's loop analysis and a fit of μN and K_d.
+"""Measured hysteresis loops (wu2015 Section 5): the record, its files and synthetic loops.
 
 A loop record is a time series (t, u, f) of a contact under periodic tangential displacement
-(wu2015 Section 5: displacement from the vibrometer, force from the piezo sensor). From it:
-
-* whole cycles are located from the upward mean-crossings of u, and ω from their spacing;
-* the first harmonics of u and f over those cycles (linear least squares, exact for whole cycles)
-  give A and K_eq = F_c/A, C_eq = −F_s/(Aω) in the phase of u = A cos θ (wu2015 Section 5.3);
-* K_d by wu2015 Eq 6, (k1 + k2)/2, the mean of the initial loading and unloading slopes at the
-  reversal points;
-* a least-squares fit of μN and K_d of a Jenkins or Mindlin steady loop to the force samples.
+(wu2015 Section 5: displacement from the vibrometer, force from the piezo sensor). On disk it is
+a CSV `time_s,displacement_m,force_N` (SI, `#` comment lines allowed) with a sidecar
+`<stem>.json` {"normal_load_N", "frequency_Hz", "noise_std_N" (optional)}, or the legacy
+`t_s,u_m,f_N` without one. Whole cycles are located from the upward mean-crossings of u
+(`cycle_starts`); the analysis (wu2015 Eq 6, K_eq, C_eq) and the fit of μN and K_d are
+`tribojax.analyse_loop` and `tribojax.fit_loop`.
 """
 
 from __future__ import annotations
@@ -76,7 +74,8 @@ class HysteresisLoop:
     def profile(self) -> DisplacementHistory:
         """The loop's drive: the measured displacement u(t) (m), linear between samples.
 
-        What `tribojax.drive` drives an element through (`fit_loop(model="history")`).
+        An element is driven through it by `tribojax.drive(element, h.displacements, h.times)`
+        (what `fit_loop(model="history")` does with the loop's samples).
         """
         return DisplacementHistory(self.t, self.u)
 
