@@ -57,6 +57,9 @@ def test_read_loop_round_trip_and_cli(tmp_path):
     tj.write_loop(loop, path, comment="synthetic Mindlin loop\nseed 7")
     back = tj.read_loop(path)
     np.testing.assert_array_equal(back.f, loop.f)
+    drive = back.profile()  # the measured displacement history drives the element
+    np.testing.assert_array_equal(np.asarray(drive.displacements), loop.u)
+    np.testing.assert_array_equal(np.asarray(drive.times), loop.t)
     out = tmp_path / "out"
     rc = main(["hysteresis", "--element", "mindlin", "--K-d", str(KD), "--loop", str(path),
                "--n", "20", "--out", str(out)])  # fmt: skip

@@ -11,7 +11,7 @@ import tribojax as tj
 
 def test_default_trapezoid_is_reproduction_profile():
     p = tj.TrapezoidProfile()
-    # REPRODUCTION.md: ramps 0.10-0.25, 0.60-0.75, 1.50-1.65, 2.00-2.15 s, a_max 1 m/s^2
+    # docs/reproduction.md: ramps 0.10-0.25, 0.60-0.75, 1.50-1.65, 2.00-2.15 s, a_max 1 m/s^2
     np.testing.assert_allclose(
         np.asarray(p.kinks()), [0.1, 0.25, 0.6, 0.75, 1.5, 1.65, 2.0, 2.15], atol=1e-14
     )
@@ -91,3 +91,29 @@ def test_measured_profile_from_file(tmp_path):
     back.write_text("time_s,acceleration_m_per_s2\n0,1\n0.2,1\n0.1,0\n")
     with pytest.raises(ValueError, match="back.csv.*strictly increasing"):
         tj.MeasuredProfile.from_file(back)
+
+
+def test_sampled_drive_stops_at_its_kinks_only_when_they_are_few():
+    # a sampled trapezoid: linear between all samples, solver stops at its corners and ends
+    t = np.linspace(0.0, 2.3, 461)
+    a = np.asarray(tj.TrapezoidProfile().acceleration(t))
+    p = tj.MeasuredProfile.from_samples(t, a)
+    np.testing.assert_array_equal(np.asarray(p.accelerations), a)
+    np.testing.assert_allclose(
+        np.asarray(p.kinks()), [0, 0.1, 0.25, 0.6, 0.75, 1.5, 1.65, 2.0, 2.15, 2.3], atol=1e-12
+    )
+    # noisy measured data kink at every sample: the step controller handles them, no stops
+    noisy = a + 1e-3 * np.random.default_rng(0).standard_normal(t.size)
+    assert tj.MeasuredProfile.from_samples(t, noisy).kinks() is None
+    # a short coarse log stops at every sample
+    coarse = tj.MeasuredProfile.from_samples([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, -1.0, 0.5])
+    np.testing.assert_array_equal(np.asarray(coarse.kinks()), [0.0, 1.0, 2.0, 3.0])
+    assert tj.MeasuredProfile([0.0, 1.0], [0.0, 1.0], stop_at_samples=True).kinks() is not None
+
+
+def test_displacement_history():
+    h = tj.DisplacementHistory([0.0, 1.0, 3.0], [0.0, 2.0, 1.0])
+    np.testing.assert_allclose(np.asarray(h.displacement(jnp.array([0.5, 2.0, 5.0]))), [1, 1.5, 1])
+    np.testing.assert_allclose(np.asarray(h.velocity(jnp.array([0.5, 1.0, 2.0]))), [2, -0.5, -0.5])
+    with pytest.raises(ValueError, match="displacements must be 1-D"):
+        tj.DisplacementHistory([0.0, 1.0], [0.0])

@@ -52,6 +52,7 @@ from ._dynamics._harmonic import drive as drive
 from ._dynamics._harmonic import harmonic_balance as harmonic_balance
 from ._dynamics._harmonic import harmonic_response as harmonic_response
 from ._dynamics._profiles import AbstractProfile as AbstractProfile
+from ._dynamics._profiles import DisplacementHistory as DisplacementHistory
 from ._dynamics._profiles import MeasuredProfile as MeasuredProfile
 from ._dynamics._profiles import PiecewiseLinearProfile as PiecewiseLinearProfile
 from ._dynamics._profiles import TrapezoidProfile as TrapezoidProfile
@@ -86,8 +87,8 @@ from ._io._loop import HysteresisLoop as HysteresisLoop
 from ._io._loop import read_loop as read_loop
 from ._io._loop import synthetic_loop as synthetic_loop
 from ._io._loop import write_loop as write_loop
+from ._io._records import read_record as read_record
 from ._io._slip_run import SlipRun as SlipRun
-from ._io._slip_run import read_record as read_record
 from ._io._slip_run import read_slip_run as read_slip_run
 from ._io._slip_run import simulate_run as simulate_run
 from ._io._slip_run import synthetic_slip_run as synthetic_slip_run

@@ -2,7 +2,7 @@
 
 The sidecar `<stem>.json` is read from beside the CSV. A slip run (time_s, stage_accel_m_s2,
 slip_m) goes to the pre-slip LuGre baseline; a hysteresis loop (time_s, displacement_m, force_N)
-to the loop baseline (`tribojax.discovery.loop_baseline`, when installed). Writes
+to the loop baseline (`tribojax.discovery.loop_baseline`). Writes
 DIR/discovery.json (keys: effect, effects, baseline_rmse, final_rmse, regions, candidates, ...)
 and DIR/discovery.png, and prints a summary.
 
@@ -15,6 +15,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from .._io._loop import HysteresisLoop
+from .._io._records import read_record
+from .._io._tables import DataFileError
+from ..discovery import discover, loop_baseline, plot_discovery, slip_baseline
+from ._common import error, refused_outputs, write_json_atomic
+
 
 def add_arguments(parser) -> None:
     parser.add_argument("file", help="record CSV (slip run or hysteresis loop), sidecar beside it")
@@ -26,46 +32,27 @@ def add_arguments(parser) -> None:
 
 def baseline_for(record):
     """The discovery baseline for a loaded record (slip run or hysteresis loop)."""
-    from .._io._loop import HysteresisLoop
-    from ..discovery import slip_baseline
-
     if isinstance(record, HysteresisLoop):
-        try:
-            from ..discovery import loop_baseline
-        except ImportError as err:
-            raise ValueError(
-                "hysteresis loops: the loop side of discovery is not available in this build"
-            ) from err
         return loop_baseline(record)
     return slip_baseline(record)
 
 
 def run_discover(args, out=None, err=None) -> int:
-    from .._io._slip_run import read_record
-    from .._io._tables import DataFileError
-    from ..discovery import discover
-    from ..discovery._plot import plot_discovery
-    from ._main import write_json_atomic
-
+    """Run `tribojax discover` with parsed `args`; the exit status (see the module docstring)."""
     out = sys.stdout if out is None else out
     err = sys.stderr if err is None else err
     src = Path(args.file)
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
-    inputs = {src.resolve(), src.with_suffix(".json").resolve()}
-    if target.resolve() in inputs or figure.resolve() in inputs:
-        print(f"error: --out {out_dir} would overwrite the input {src}", file=err)
-        return 2
-    if target.exists() and not args.force:
-        print(f"error: {target} exists; choose another --out or pass --force", file=err)
-        return 2
+    why = refused_outputs(src, [target, figure], force=args.force)
+    if why:
+        return error(why, err)
     try:
         record = read_record(src)
         baseline = baseline_for(record)
         report = discover(baseline, max_effects=args.max_effects)
     except (DataFileError, ValueError, OSError) as exc:
-        print(f"error: {exc}", file=err)
-        return 2
+        return error(str(exc), err)
     data = report.as_dict()
     data["source"] = str(src)
     write_json_atomic(target, data)

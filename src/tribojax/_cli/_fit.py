@@ -16,6 +16,17 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
+from .._fit._loop import fit_loop
+from .._fit._slip import fit_slip_run
+from .._fit._start import noise_scale
+from .._io._records import read_record
+from .._io._slip_run import SlipRun
+from .._io._tables import DataFileError
+from .._plot import pyplot, save_figure
+from ._common import error, refused_outputs, write_json_atomic
+
 
 def add_arguments(parser) -> None:
     parser.add_argument(
@@ -45,42 +56,19 @@ def add_arguments(parser) -> None:
     parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
 
 
-def _error(message: str) -> int:
-    print(f"error: {message}", file=sys.stderr)
-    return 2
-
-
-def _outputs_ok(args, out: Path) -> str | None:
-    """Why the outputs may not be written (None if they may)."""
-    from .._io._slip_run import sidecar_path
-
-    src = Path(args.file).resolve()
-    targets = [out / "fit.json", out / "fit.png"]
-    inputs = {src, sidecar_path(src).resolve()}
-    for t in targets:
-        if t.resolve() in inputs:
-            return f"{t} is an input file; choose another --out"
-    if targets[0].exists() and not args.force:
-        return f"{targets[0]} exists; refusing to overwrite it (use --force or another --out)"
-    return None
-
-
 def run_fit(args) -> int:
-    from .._io._slip_run import SlipRun, read_record
-    from .._io._tables import DataFileError
-    from ._main import write_json_atomic
-
+    """Run `tribojax fit` with parsed `args`; the exit status (see the module docstring)."""
     path = Path(args.file)
     out = Path(args.out) if args.out is not None else Path("tribojax-out") / f"fit-{path.stem}"
-    why = _outputs_ok(args, out)
+    why = refused_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force)
     if why:
-        return _error(why)
+        return error(why)
     if args.max_steps < 1:
-        return _error(f"--max-steps = {args.max_steps} must be at least 1")
+        return error(f"--max-steps = {args.max_steps} must be at least 1")
     try:
         record = read_record(path)
     except DataFileError as err:
-        return _error(str(err))
+        return error(str(err))
     t0 = time.perf_counter()
     try:
         if isinstance(record, SlipRun):
@@ -88,7 +76,7 @@ def run_fit(args) -> int:
         else:
             result, curves = _fit_loop(record, args)
     except ValueError as err:
-        return _error(str(err))
+        return error(str(err))
     result["wall_time_s"] = time.perf_counter() - t0
     write_json_atomic(out / "fit.json", result)
     fit = result
@@ -109,8 +97,6 @@ def run_fit(args) -> int:
 
 
 def _summary(fit, kind, source, n_data, resid, unit, sigma, sigma_source) -> dict:
-    import numpy as np
-
     d = fit.as_dict()
     d.update(
         kind=kind,
@@ -127,10 +113,6 @@ def _summary(fit, kind, source, n_data, resid, unit, sigma, sigma_source) -> dic
 
 
 def _fit_slip(run, args):
-    import numpy as np
-
-    from .._fit._slip import fit_slip_run, noise_scale
-
     if args.alpha == "free":
         alpha = None
     else:
@@ -157,10 +139,6 @@ def _fit_slip(run, args):
 
 
 def _fit_loop(loop, args):
-    import numpy as np
-
-    from .._fit._loop import fit_loop
-
     if len(loop.t) <= 2:
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
     fit = fit_loop(loop, args.element, model=args.model, max_steps=args.max_steps)
@@ -185,13 +163,8 @@ def _fit_loop(loop, args):
 
 
 def _plot(c, result, path: Path) -> bool:
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib is not installed: figure skipped (pip install 'tribojax[plot]')")
+    plt = pyplot("figure")
+    if plt is None:
         return False
     fig, (ax, ar) = plt.subplots(2, 1, figsize=(7, 6), constrained_layout=True,
                                  gridspec_kw=dict(height_ratios=[3, 1.3]))  # fmt: skip
@@ -205,9 +178,5 @@ def _plot(c, result, path: Path) -> bool:
     ar.axhline(0, color="k", lw=0.5)
     ar.set_xlabel("t (s)")
     ar.set_ylabel(f"model − data ({result['residual_unit']})")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.png")
-    fig.savefig(tmp, dpi=120)
-    plt.close(fig)
-    tmp.replace(path)
+    save_figure(fig, path)
     return True

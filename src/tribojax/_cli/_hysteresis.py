@@ -10,9 +10,25 @@ not be the folder of the loop file (inputs are never overwritten).
 
 from __future__ import annotations
 
+import io
 import math
 import sys
 from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._dynamics._harmonic import harmonic_balance, harmonic_response
+from .._fit._loop import analyse_loop, fit_loop
+from .._friction._lugre import PreSlipLuGre
+from .._friction._rate_independent import Jenkins, Mindlin
+from .._io._files import write_text_atomic
+from .._io._loop import read_loop
+from .._io._tables import DataFileError
+from .._plot import pyplot, save_figure
+from .._reproduce._wu2015 import wu2015_eq5_stiffness
+from ._common import error, write_json_atomic
 
 
 def add_arguments(parser) -> None:
@@ -49,26 +65,14 @@ def add_arguments(parser) -> None:
 
 
 def run_hysteresis(args) -> int:
-    import jax
-    import jax.numpy as jnp
-    import numpy as np
-
-    from .._dynamics._harmonic import harmonic_balance
-    from .._friction._lugre import PreSlipLuGre
-    from .._friction._rate_independent import Jenkins, Mindlin
-    from .._reproduce._wu2015 import wu2015_eq5_stiffness
-    from ._main import write_json_atomic
-
+    """Run `tribojax hysteresis`: 0 done, 1 the loop fit did not converge, 2 bad input."""
     out = Path(args.out)
     if args.loop is not None and out.resolve() == Path(args.loop).resolve().parent:
-        print("error: --out must not be the folder of the --loop file", file=sys.stderr)
-        return 2
+        return error("--out must not be the folder of the --loop file")
     if args.n < 2:
-        print(f"error: --n = {args.n} must be at least 2", file=sys.stderr)
-        return 2
+        return error(f"--n = {args.n} must be at least 2")
     if args.loop is not None and args.element == "lugre":
-        print("error: --loop fits a jenkins or mindlin element, not lugre", file=sys.stderr)
-        return 2
+        return error("--loop fits a jenkins or mindlin element, not lugre")
     K_d = args.K_d if args.K_d is not None else float(wu2015_eq5_stiffness(args.N))
     try:
         if args.element == "lugre":
@@ -88,8 +92,7 @@ def run_hysteresis(args) -> int:
                 element, A, args.omega
             )
     except ValueError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return error(str(err))
     out.mkdir(parents=True, exist_ok=True)
     cols = ("A", "A_bar", "K_eq", "C_eq", "K_bar", "C_bar", "W")
     header = "A_m,A_bar,K_eq_N_per_m,C_eq_Ns_per_m,K_bar,C_bar,W_J"
@@ -99,7 +102,9 @@ def run_hysteresis(args) -> int:
         f"K_d = {K_d:.6g} N/m, A0 = {A0:.6g} m, omega = {args.omega:.6g} rad/s"
     )
     csv_path = out / "hysteresis.csv"
-    np.savetxt(csv_path, table, delimiter=",", header=header, comments=comment + "\n", fmt="%.12g")
+    text = io.StringIO()
+    np.savetxt(text, table, delimiter=",", header=header, comments=comment + "\n", fmt="%.12g")
+    write_text_atomic(csv_path, text.getvalue())
     print(comment[2:])
     print(f"K_bar {float(hb.K_bar[0]):.4f} .. {float(hb.K_bar[-1]):.4f}; C_bar max ", end="")
     print(f"{float(hb.C_bar.max()):.4f} at A_bar {float(hb.A_bar[int(hb.C_bar.argmax())]):.3f}")
@@ -107,7 +112,7 @@ def run_hysteresis(args) -> int:
     if _plot(hb, args.element, out / "hysteresis.png"):
         print(f"wrote {out / 'hysteresis.png'}")
     if args.loop is not None:
-        return _fit_loop(args, out, write_json_atomic)
+        return _fit_loop(args, out)
     return 0
 
 
@@ -117,10 +122,6 @@ def _lugre_response(element, A, omega, K_d, A0):
     The start-up transient of the bristle state contracts by exp(−4A/z_max) per cycle (α = 1), so
     the number of cycles is chosen from the smallest amplitude (transient below 1e-8, at most 400).
     """
-    import jax
-
-    from .._dynamics._harmonic import harmonic_response
-
     cycles = min(400, max(3, math.ceil(math.log(1e8) * A0 / (4 * float(A.min()))) + 1))
     if cycles == 400:
         print("note: 400 cycles do not settle the smallest amplitudes to 1e-8", file=sys.stderr)
@@ -133,18 +134,13 @@ def _lugre_response(element, A, omega, K_d, A0):
     return jax.jit(jax.vmap(one))(A)
 
 
-def _fit_loop(args, out: Path, write_json_atomic) -> int:
-    from .._fit._loop import analyse_loop, fit_loop
-    from .._io._loop import read_loop
-    from .._io._tables import DataFileError
-
+def _fit_loop(args, out: Path) -> int:
     try:
         loop = read_loop(args.loop)
         analysis = analyse_loop(loop)
         fit = fit_loop(loop, args.element, model=args.fit_model)
     except (DataFileError, ValueError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return error(str(err))
     result = {"loop": str(args.loop), "analysis": analysis.as_dict(), "fit": fit.as_dict()}
     result["fit"]["element"] = args.element
     result["fit"]["model"] = args.fit_model
@@ -166,13 +162,8 @@ def _fit_loop(args, out: Path, write_json_atomic) -> int:
 
 
 def _plot(hb, element: str, path: Path) -> bool:
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib is not installed: figure skipped (pip install 'tribojax[plot]')")
+    plt = pyplot("figure")
+    if plt is None:
         return False
     fig, ax = plt.subplots(figsize=(6, 4), constrained_layout=True)
     ax.plot(hb.A_bar, hb.K_bar, "C0-", label="K̄ = K_eq / K_d")
@@ -181,6 +172,5 @@ def _plot(hb, element: str, path: Path) -> bool:
     ax.set_title(f"{element}: dimensionless equivalent stiffness and damping (wu2015)")
     ax.grid(alpha=0.3)
     ax.legend()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
     return True

@@ -11,44 +11,27 @@ tribojax fit FILE.csv [--out DIR] fit a user's slip run or hysteresis loop: JSON
 from __future__ import annotations
 
 import argparse
-import json
-import math
-import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 
-def _json_default(obj):
-    import numpy as np
+from .. import __version__
+from .._contact._contact import FractalContact
+from .._contact._materials import wang2022_pair
+from .._contact._surface import FractalSurface
+from .._fit import _chain as chain_fit
+from .._plot import pyplot, save_figure
+from .._reproduce._table3 import calibrate_table3, max_rel_error, reproduce_table3
+from .._reproduce._tables4to7 import plot_figure10, print_tables4to7, reproduce_tables4to7
+from .._reproduce._wu2015 import plot_wu2015, wu2015_comparison
+from .._roughness._estimate import estimate_fractal
+from .._roughness._topography import read_topography
+from . import _discover, _fit, _hysteresis
+from ._common import write_json_atomic
 
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    raise TypeError(f"cannot serialise {type(obj).__name__}")
-
-
-def _finite(obj):
-    """Replace NaN/inf by None so the output is strict JSON."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_finite(v) for v in obj]
-    return obj
-
-
-def write_json_atomic(path: Path, data) -> None:
-    """Write strict JSON to `path` via a temporary file, so a failure leaves no partial file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    with os.fdopen(fd, "w") as f:
-        json.dump(_finite(data), f, indent=2, default=_json_default, allow_nan=False)
-        f.write("\n")
-    os.replace(tmp, path)
+__all__ = ["main", "write_json_atomic"]
 
 
 def _print_table3(rows, out=sys.stdout) -> None:
@@ -71,13 +54,8 @@ def _print_table3(rows, out=sys.stdout) -> None:
 
 
 def _plot_table3(rows, path: Path) -> bool:
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib is not installed: figure skipped (pip install 'tribojax[plot]')")
+    plt = pyplot("figure")
+    if plt is None:
         return False
     load = [r["load_N"] for r in rows]
     keys = [
@@ -96,15 +74,12 @@ def _plot_table3(rows, path: Path) -> bool:
         ax.set_ylabel(label)
     axes.flat[0].legend(fontsize=8)
     fig.suptitle("wang2022 Table 3: fractal contact parameters of the reticle/chuck pair")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
     return True
 
 
 def _reproduce_slip_tables(result: dict, out_dir: Path) -> None:
     """wang2022 Tables 4–7 (slip dynamics) into `result`, a table on screen and table4to7.png."""
-    from .._reproduce._tables4to7 import plot_figure10, print_tables4to7, reproduce_tables4to7
-
     print("wang2022 Tables 4-7: slip simulations, alpha fitted to Tables 4 and 6 ...")
     slip = reproduce_tables4to7()
     print_tables4to7(slip)
@@ -117,21 +92,13 @@ def _reproduce_slip_tables(result: dict, out_dir: Path) -> None:
 def _reproduce_fit_measured(result: dict, start=None) -> bool:
     """The full-chain fit to the measured Tables 4–7 into result["fit_measured"]; True if it
     converged. One start here; the multi-start study is `python -m fitting.wang2022_slip`."""
-    from .._fit._chain import (
-        fit_measured_slips,
-        measured_slips,
-        paper_theory_slips,
-        rms_relative,
-        symmetric_bound,
-    )
-
     print("wang2022 Tables 4-7 (measured): full-chain fit of D, G, mu_t (LM through diffrax) ...")
-    fit = fit_measured_slips(start, progress=True)
+    fit = chain_fit.fit_measured_slips(start, progress=True)
     block = fit.as_dict()
-    block["paper_theory_rms_relative_residual"] = rms_relative(
-        paper_theory_slips(), measured_slips()
+    block["paper_theory_rms_relative_residual"] = chain_fit.rms_relative(
+        chain_fit.paper_theory_slips(), chain_fit.measured_slips()
     )
-    block["symmetric_model_bound_rms_relative_residual"] = symmetric_bound()[
+    block["symmetric_model_bound_rms_relative_residual"] = chain_fit.symmetric_bound()[
         "rms_relative_residual"
     ]
     block["uncertainty_model"] = (
@@ -159,8 +126,7 @@ def _reproduce_fit_measured(result: dict, start=None) -> bool:
 
 
 def cmd_reproduce(args) -> int:
-    from .._reproduce._table3 import calibrate_table3, max_rel_error, reproduce_table3
-
+    """`tribojax reproduce`: 0 when every fit converged, else 1."""
     out_dir = Path(args.out)
     t0 = time.perf_counter()
     print("wang2022 Table 3: calibrating G, mu_t, sigma_s (optimistix Levenberg-Marquardt) ...")
@@ -194,8 +160,6 @@ def cmd_reproduce(args) -> int:
         print(f"WARNING: the calibration did not converge: {cal['message']}", file=sys.stderr)
     _reproduce_slip_tables(result, out_dir)
     measured_ok = _reproduce_fit_measured(result)
-    from .. import __version__
-
     result["tribojax_version"] = __version__
     result["wu2015"] = _reproduce_wu2015(out_dir)
     json_path = out_dir / "reproduction.json"
@@ -216,16 +180,13 @@ CONTACT_DEFAULTS = dict(
 
 
 def cmd_contact(args) -> int:
-    import numpy as np
-
-    import tribojax as tj
-
+    """`tribojax contact`: F_s, K_τ, C_τ at each load; 0 when every contact solve converged."""
     result = {"assumed": {}}
     if args.topography is not None:
         if args.D is not None or args.G is not None:
             raise SystemExit("give either --topography or --D/--G, not both")
-        topo = tj.read_topography(args.topography, unit=args.unit, dx=args.dx)
-        est = tj.estimate_fractal(
+        topo = read_topography(args.topography, unit=args.unit, dx=args.dx)
+        est = estimate_fractal(
             topo, args.method, band=args.band, M=int(args.M), min_decades=args.min_decades
         )
         D, G = est.D, est.G
@@ -249,9 +210,9 @@ def cmd_contact(args) -> int:
         + ", ".join(f"{k} = {v:g}" for k, v in result["assumed"].items() if not isinstance(v, str))
         + "; wang2022 Table 2 materials"
     )
-    pair = tj.wang2022_pair(sigma_s=args.sigma_s)
-    model = tj.FractalContact(
-        tj.FractalSurface(D, G, args.M, gamma=args.gamma),
+    pair = wang2022_pair(sigma_s=args.sigma_s)
+    model = FractalContact(
+        FractalSurface(D, G, args.M, gamma=args.gamma),
         pair,
         mu_t=args.mu_t,
         tangential_load=args.tangential_load,
@@ -302,8 +263,6 @@ def _add_contact_parser(sub) -> None:
 
 def _reproduce_wu2015(out_dir: Path) -> dict:
     """wu2015: both elements against Eq 7 (RMS over Ā in [0, 4.5]) and the C̄ peaks, + figure."""
-    from .._reproduce._wu2015 import plot_wu2015, wu2015_comparison
-
     comparison = wu2015_comparison()
     for name in ("jenkins", "mindlin"):
         rms, peak = comparison["eq7_rms"][name], comparison["cbar_peak"][name]
@@ -317,12 +276,6 @@ def _reproduce_wu2015(out_dir: Path) -> dict:
     return {"eq7_rms": comparison["eq7_rms"], "cbar_peak": comparison["cbar_peak"]}
 
 
-def cmd_hysteresis(args) -> int:
-    from ._hysteresis import run_hysteresis
-
-    return run_hysteresis(args)
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
         prog="tribojax", description="Rough-surface contact and friction models (JAX)."
@@ -333,22 +286,14 @@ def main(argv=None) -> int:
     rep.set_defaults(func=cmd_reproduce)
     _add_contact_parser(sub)
     hys = sub.add_parser("hysteresis", help="K̄, C̄ of a Jenkins or Mindlin element (wu2015)")
-    from ._hysteresis import add_arguments
-
-    add_arguments(hys)
-    hys.set_defaults(func=cmd_hysteresis)
+    _hysteresis.add_arguments(hys)
+    hys.set_defaults(func=_hysteresis.run_hysteresis)
     dis = sub.add_parser("discover", help="find the effect a slip run or loop's model is missing")
-    from ._discover import add_arguments as add_discover_arguments
-    from ._discover import run_discover
-
-    add_discover_arguments(dis)
-    dis.set_defaults(func=run_discover)
-    from ._fit import add_arguments as add_fit_arguments
-    from ._fit import run_fit
-
+    _discover.add_arguments(dis)
+    dis.set_defaults(func=_discover.run_discover)
     fit = sub.add_parser("fit", help="fit a slip run or hysteresis loop CSV (+ sidecar JSON)")
-    add_fit_arguments(fit)
-    fit.set_defaults(func=run_fit)
+    _fit.add_arguments(fit)
+    fit.set_defaults(func=_fit.run_fit)
     args = parser.parse_args(argv)
     return args.func(args)
 

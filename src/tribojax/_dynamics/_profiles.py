@@ -31,17 +31,17 @@ class AbstractProfile(eqx.Module):
         """Times (s) where a(t) or its slope jumps (for diffrax `jump_ts`), or None."""
 
 
-def _validated_nodes(times, values, what: str):
+def _validated_nodes(times, values, what: str, quantity: str = "accelerations"):
     times = as_f64(times, f"{what} times")
-    values = as_f64(values, f"{what} accelerations")
+    values = as_f64(values, f"{what} {quantity}")
     if times.ndim != 1 or values.shape != times.shape or times.shape[0] < 2:
         raise ValueError(
-            f"{what}: times and accelerations must be 1-D of equal length >= 2, got shapes "
+            f"{what}: times and {quantity} must be 1-D of equal length >= 2, got shapes "
             f"{times.shape} and {values.shape}"
         )
     times = fail_if(times, ~jnp.all(jnp.isfinite(times)), f"{what}: a time is NaN or infinite")
     values = fail_if(
-        values, ~jnp.all(jnp.isfinite(values)), f"{what}: an acceleration is NaN or infinite"
+        values, ~jnp.all(jnp.isfinite(values)), f"{what}: an entry of {quantity} is NaN or infinite"
     )
     bad = ~jnp.all(jnp.diff(times) > 0)
     times = fail_if(times, bad, f"{what}: times must be strictly increasing")
@@ -64,21 +64,56 @@ class PiecewiseLinearProfile(AbstractProfile):
         return self.times
 
 
+MAX_STOPS = 64  # a sampled profile with more kinks than this is not stopped at each
+
+
+def kink_nodes(times, accelerations) -> np.ndarray:
+    """Mask of the samples where a sampled a(t)'s slope changes (the ends always included).
+
+    A change counts when it exceeds 1e-9 of max|a|/duration, so samples on a straight segment
+    (a sampled ramp or hold) are not kinks: for wang2022's trapezoid that is its 8 corners.
+    """
+    t, a = np.asarray(times, np.float64), np.asarray(accelerations, np.float64)
+    if t.size < 3:
+        return np.ones(t.size, bool)
+    slope = np.diff(a) / np.diff(t)
+    scale = max(float(np.max(np.abs(a))), 1e-300) / float(t[-1] - t[0])
+    return np.concatenate([[True], np.abs(np.diff(slope)) > 1e-9 * scale, [True]])
+
+
 class MeasuredProfile(AbstractProfile):
     """An acceleration interpolated linearly from a measured column (e.g. an accelerometer log).
 
-    Validated on construction: times strictly increasing, no NaN/inf. Measured data kink at every
-    sample, so by default the solver is not stopped at each sample (`stop_at_samples=False`): its
-    step controller handles them. Set it for short, coarse logs.
+    Validated on construction: times strictly increasing, no NaN/inf. `stops` (s) are the times
+    where the solver stops a step (diffrax `jump_ts`); None leaves every kink to the step
+    controller (measured data kink at every sample). `stop_at_samples=True` stops at every
+    sample (short, coarse logs). `from_samples` chooses the stops of a record's drive.
     """
 
     times: Array  # s, strictly increasing
     accelerations: Array  # m/s²
+    stops: Array | None  # s, or None
     stop_at_samples: bool = eqx.field(static=True, default=False)
 
-    def __init__(self, times, accelerations, *, stop_at_samples: bool = False):
+    def __init__(self, times, accelerations, *, stop_at_samples: bool = False, stops=None):
         self.times, self.accelerations = _validated_nodes(times, accelerations, "measured profile")
         self.stop_at_samples = bool(stop_at_samples)
+        if stop_at_samples:
+            stops = self.times
+        self.stops = None if stops is None else as_f64(stops, "measured profile stops")
+
+    @classmethod
+    def from_samples(cls, times, accelerations, *, max_stops: int = MAX_STOPS):
+        """The drive of a sampled record: linear between all samples, stopped at its kinks.
+
+        The solver stops at the samples where the slope changes (`kink_nodes`) when there are at
+        most `max_stops` of them, e.g. a sampled trapezoid; otherwise (noisy measured data, a
+        kink at every sample) it stops nowhere and the step controller handles the kinks.
+        """
+        t = np.asarray(times, np.float64)
+        a = np.asarray(accelerations, np.float64)
+        kinks = kink_nodes(t, a)
+        return cls(t, a, stops=t[kinks] if np.count_nonzero(kinks) <= max_stops else None)
 
     @classmethod
     def from_file(cls, path, time_column="time_s", acceleration_column="acceleration_m_per_s2"):
@@ -97,7 +132,33 @@ class MeasuredProfile(AbstractProfile):
         return jnp.interp(t, self.times, self.accelerations)
 
     def kinks(self):
-        return self.times if self.stop_at_samples else None
+        return self.stops
+
+
+class DisplacementHistory(eqx.Module):
+    """A prescribed displacement u(t) (m), linear between samples: a measured loop's drive.
+
+    `displacements` at `times` (s, strictly increasing) is what `tribojax.drive` takes
+    (`drive(element, history.displacements, history.times)`); `velocity` is the slope of the
+    sample interval (m/s), constant within it.
+    """
+
+    times: Array  # s, strictly increasing
+    displacements: Array  # m
+
+    def __init__(self, times, displacements):
+        nodes = _validated_nodes(times, displacements, "displacement history", "displacements")
+        self.times, self.displacements = nodes
+
+    def displacement(self, t: ArrayLike) -> Array:
+        """u(t), m (the end values outside the record)."""
+        return jnp.interp(t, self.times, self.displacements)
+
+    def velocity(self, t: ArrayLike) -> Array:
+        """du/dt of the sample interval holding `t`, m/s (the end intervals outside the record)."""
+        i = jnp.clip(jnp.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
+        du = self.displacements[i + 1] - self.displacements[i]
+        return du / (self.times[i + 1] - self.times[i])
 
 
 class TrapezoidProfile(AbstractProfile):
@@ -105,7 +166,7 @@ class TrapezoidProfile(AbstractProfile):
 
     a(t) is 0 until `t_start`, ramps to `a_max` over `ramp`, holds for `hold`, ramps back to 0,
     stays at 0 for `cruise`, then mirrors the same to −a_max and back. The peak velocity is
-    v_max = a_max·(ramp + hold). Defaults give REPRODUCTION.md's profile (a_max = 1 m/s²,
+    v_max = a_max·(ramp + hold). Defaults give docs/reproduction.md's profile (a_max = 1 m/s²,
     v_max = 0.5 m/s, ramps 0.10–0.25, 0.60–0.75, 1.50–1.65, 2.00–2.15 s).
     """
 

@@ -38,6 +38,7 @@ from .._dynamics._profiles import TrapezoidProfile
 from .._dynamics._slip import slip_phase_averages
 from .._friction._lugre import PreSlipLuGre
 from .._friction._rate_independent import Jenkins, Mindlin
+from .._plot import pyplot
 from .._precision import ensure_x64
 
 # Table-3-calibrated constants (tribojax.calibrate_table3, M = 1) and wang2022's 4 kPa row.
@@ -261,14 +262,8 @@ class Elasticities:
         Writes a PNG at `path` if given. Returns the matplotlib Figure, or None (with a message)
         when matplotlib is not installed.
         """
-        try:
-            import matplotlib
-
-            if path is not None:
-                matplotlib.use("Agg")
-            import matplotlib.pyplot as plt
-        except ImportError:
-            print("matplotlib is not installed: bar chart skipped (pip install 'tribojax[plot]')")
+        plt = pyplot("bar chart", files=path is not None)
+        if plt is None:
             return None
         n = len(self.outputs)
         cols = min(n, 4)

@@ -29,7 +29,7 @@ import numpy as np
 import optimistix as optx
 
 from .._friction._lugre import PreSlipLuGre
-from .._io._slip_run import SlipRun, run_profile
+from .._io._slip_run import SlipRun
 from .._precision import ensure_x64
 from ._engine import FitResult, gauss_newton_step_jnp
 from ._start import noise_scale, slip_run_start
@@ -216,7 +216,7 @@ def _problem(run: SlipRun, alpha, scale: float):
     fn = _SlipResiduals(t_end=float(run.t[-1]))
     args = (
         jnp.asarray(run.t),
-        run_profile(run),
+        run.profile(),
         jnp.asarray(run.slip),
         jnp.asarray(run.mass, dtype=jnp.float64),
         jnp.asarray(scale, dtype=jnp.float64),

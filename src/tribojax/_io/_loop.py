@@ -1,14 +1,12 @@
-"""Measured hysteresis loops: a validated record, wu2015's loop analysis and a fit of μN and K_d.
+"""Measured hysteresis loops (wu2015 Section 5): the record, its files and synthetic loops.
 
 A loop record is a time series (t, u, f) of a contact under periodic tangential displacement
-(wu2015 Section 5: displacement from the vibrometer, force from the piezo sensor). From it:
-
-* whole cycles are located from the upward mean-crossings of u, and ω from their spacing;
-* the first harmonics of u and f over those cycles (linear least squares, exact for whole cycles)
-  give A and K_eq = F_c/A, C_eq = −F_s/(Aω) in the phase of u = A cos θ (wu2015 Section 5.3);
-* K_d by wu2015 Eq 6, (k1 + k2)/2, the mean of the initial loading and unloading slopes at the
-  reversal points;
-* a least-squares fit of μN and K_d of a Jenkins or Mindlin steady loop to the force samples.
+(wu2015 Section 5: displacement from the vibrometer, force from the piezo sensor). On disk it is
+a CSV `time_s,displacement_m,force_N` (SI, `#` comment lines allowed) with a sidecar
+`<stem>.json` {"normal_load_N", "frequency_Hz", "noise_std_N" (optional)}, or the legacy
+`t_s,u_m,f_N` without one. Whole cycles are located from the upward mean-crossings of u
+(`cycle_starts`); the analysis (wu2015 Eq 6, K_eq, C_eq) and the fit of μN and K_d are
+`tribojax.analyse_loop` and `tribojax.fit_loop`.
 """
 
 from __future__ import annotations
@@ -20,9 +18,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._dynamics._profiles import DisplacementHistory
+from ._files import csv_header, data_line_number, positive_or_none, read_sidecar, write_record_files
 from ._tables import DataFileError, read_table
 
-LOOP_COLUMNS = ("t_s", "u_m", "f_N")
+LOOP_COLUMNS = ("t_s", "u_m", "f_N")  # the legacy format, no sidecar needed
+LOOP_FILE_COLUMNS = ("time_s", "displacement_m", "force_N")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -45,8 +46,6 @@ class HysteresisLoop:
     noise_std: float | None = dataclasses.field(default=None, kw_only=True)
 
     def __post_init__(self):
-        from ._slip_run import _positive_or_none
-
         arrays = [np.asarray(x, dtype=np.float64) for x in (self.t, self.u, self.f)]
         for name, x in zip(("t", "u", "f"), arrays):
             object.__setattr__(self, name, x)
@@ -58,7 +57,7 @@ class HysteresisLoop:
         if not (len(self.t) == len(self.u) == len(self.f)):
             raise ValueError(f"{self.source}: t, u and f must have the same length")
         for name, unit in (("normal_load", "N"), ("frequency", "Hz"), ("noise_std", "N")):
-            value = _positive_or_none(getattr(self, name), name, self.source, unit)
+            value = positive_or_none(getattr(self, name), name, self.source, unit)
             object.__setattr__(self, name, value)
         steps = np.flatnonzero(np.diff(self.t) <= 0)
         if steps.size:
@@ -71,6 +70,14 @@ class HysteresisLoop:
                 f"{self.source}: fewer than one whole cycle of u (need two upward crossings of "
                 "its mean); record a longer stretch"
             )
+
+    def profile(self) -> DisplacementHistory:
+        """The loop's drive: the measured displacement u(t) (m), linear between samples.
+
+        An element is driven through it by `tribojax.drive(element, h.displacements, h.times)`
+        (what `fit_loop(model="history")` does with the loop's samples).
+        """
+        return DisplacementHistory(self.t, self.u)
 
 
 _LOOP_SIDECAR = {"normal_load_N": True, "frequency_Hz": True, "noise_std_N": False}
@@ -89,8 +96,6 @@ def read_loop(path) -> HysteresisLoop:
     Raises DataFileError naming the file (and the line) for NaN/non-numeric entries, time that
     does not increase, fewer than one whole cycle, or a missing/malformed/inconsistent sidecar.
     """
-    from ._slip_run import LOOP_FILE_COLUMNS, csv_header, data_line_number, read_sidecar
-
     path = Path(path)
     header = set(csv_header(path))
     new = set(LOOP_FILE_COLUMNS) <= header
@@ -137,8 +142,6 @@ def write_loop(
     plus a sidecar `<stem>.json`; otherwise (or with legacy=True) the legacy `t_s,u_m,f_N`
     without one. Refuses (FileExistsError) if a target exists, unless `overwrite=True`.
     """
-    from ._slip_run import LOOP_FILE_COLUMNS, write_record_files
-
     has_meta = loop.normal_load is not None and loop.frequency is not None
     legacy = (not has_meta) if legacy is None else bool(legacy)
     if not legacy and not has_meta:

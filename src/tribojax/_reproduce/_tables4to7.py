@@ -24,6 +24,7 @@ from .._dynamics._slip import simulate_slip, slip_phase_averages
 from .._fit._engine import FitResult, least_squares_fit
 from .._friction._lugre import PreSlipLuGre
 from .._io._tables import wang2022_table
+from .._plot import pyplot
 
 TABLES = (4, 5, 6, 7)
 
@@ -179,13 +180,8 @@ def plot_figure10(result: dict, path) -> bool:
     The measured phase values of Tables 4–7 are overlaid as window means, accumulated from
     Δx(0) = 0 (T4 gives the acceleration-window mean, T5 the cruise one, and so on).
     """
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib is not installed: figure skipped (pip install 'tribojax[plot]')")
+    plt = pyplot("figure")
+    if plt is None:
         return False
     t, slip, z = figure10_curves(1.0)
     vac = wang2022_table(3)["vacuum_kPa"]

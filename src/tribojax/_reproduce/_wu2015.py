@@ -21,6 +21,7 @@ from .._checks import check_range, fail_if
 from .._dynamics._harmonic import harmonic_balance
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._tables import data_dir, read_table
+from .._plot import pyplot
 
 EQ7_COLUMNS = ("quantity", "A_bar_min", "A_bar_max", "slope", "intercept")
 ELEMENTS = {"jenkins": Jenkins, "mindlin": Mindlin}
@@ -128,12 +129,8 @@ def plot_wu2015(comparison: dict, path) -> bool:
 
     Returns False (and writes nothing) when matplotlib is missing.
     """
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
+    plt = pyplot("wu2015 figure")
+    if plt is None:
         return False
     c = comparison["curves"]
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)

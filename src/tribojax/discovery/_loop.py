@@ -37,6 +37,7 @@ from jaxtyping import Array
 
 from .._fit._loop import analyse_loop
 from .._io._loop import HysteresisLoop
+from .._plot import pyplot
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
 from ._discover import DiscoveryReport, discover
 from ._loop_models import LoopData, LoopSpec, loop_branch, loop_force, prepare_loop
@@ -198,12 +199,8 @@ def plot_loop_discovery(report: DiscoveryReport, path) -> bool:
     """Figure of a loop discovery: force against displacement (data, Jenkins baseline, augmented
     model), and the residuals before and after against sample number with the flagged regions
     shaded (one colour per branch). PNG at `path`; False (nothing written) without matplotlib."""
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
+    plt = pyplot("loop discovery figure")
+    if plt is None:
         return False
     u, y = report.x * 1e6, report.y
     k = np.arange(y.size)

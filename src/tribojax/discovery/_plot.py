@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._plot import pyplot
+
 
 def plot_discovery(report, path) -> bool:
     """Write the figure of a `DiscoveryReport` to `path` (PNG). False if matplotlib is missing.
@@ -14,12 +16,8 @@ def plot_discovery(report, path) -> bool:
     residuals before and after; flagged regions shaded. When the abscissa is not monotonic
     (loops), the bottom panel uses the sample index and the top panel marks flagged samples.
     """
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
+    plt = pyplot("discovery figure")
+    if plt is None:
         return False
     x, y = np.asarray(report.x), np.asarray(report.y)
     monotonic = bool(np.all(np.diff(x) > 0))

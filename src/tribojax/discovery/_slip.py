@@ -1,9 +1,8 @@
 """Slip side of discovery: the pre-slip LuGre baseline (wang2022 Eq 27, α = 1) and six effects.
 
 Baseline: `PreSlipLuGre(F_s, K_τ, C_τ, α=1)` in the two-body slip model (wang2022 Eq 27,
-consistent reading, `tribojax.simulate_slip`), driven by the record's own acceleration samples
-(linear between samples, steps stopped at every sample: `record_profile`), F_s, K_τ, C_τ fitted
-in log form.
+consistent reading, `tribojax.simulate_slip`), driven by the record's own acceleration
+(`SlipRun.profile`, linear between samples), F_s, K_τ, C_τ fitted in log form.
 
 Physics knobs of the baseline (null values in brackets), all inside one friction element:
     viscous      ν  [0]:  σ2 = ν·σ_ref added to the friction force, σ2·v (LuGre σ2, Eq 25)
@@ -38,6 +37,7 @@ from .._dynamics._profiles import AbstractProfile, MeasuredProfile
 from .._dynamics._slip import simulate_slip
 from .._friction._element import AbstractFrictionElement
 from .._friction._lugre import DEFAULT_VELOCITY_SCALE, _bristle_rate
+from .._io._slip_run import SlipRun
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
 from ._regions import noise_estimate
 
@@ -203,17 +203,6 @@ def _ok(baseline, theta, knobs):
     return baseline._solve(theta, knobs).ok
 
 
-def record_profile(t, accel) -> MeasuredProfile:
-    """The record's acceleration, linear between samples (the step controller handles the kinks).
-
-    With Kvaerno5 (an implicit stage solve) forward-mode derivatives came out non-finite unless
-    the solver stopped at every sample; with the default Rosenbrock solver (`Rodas4`, linear
-    stages) they are finite without stops, and a 5,001-sample record costs ~30 ms per solve and
-    ~70 ms per forward-mode Jacobian instead of ~150 and ~320 ms with a stop at every sample.
-    """
-    return MeasuredProfile(np.asarray(t, float), np.asarray(accel, float))
-
-
 def slip_baseline(run, start=None) -> SlipBaseline:
     """The baseline for a slip record (`SlipRun`, or any object with t, accel, slip, mass and
     optionally noise_std). `start`: (F_s, K_τ, C_τ) start values, default `slip_start`."""
@@ -224,6 +213,7 @@ def slip_baseline(run, start=None) -> SlipBaseline:
     if sv.shape != (3,) or np.any(~(sv > 0)):
         raise ValueError(f"start = {sv} must be three positive numbers (F_s, K_tau, C_tau)")
     noise = getattr(run, "noise_std", None)
+    record = run if isinstance(run, SlipRun) else SlipRun(t, run.accel, run.slip, run.mass)
     return SlipBaseline(
         t=jnp.asarray(t),
         accel=jnp.asarray(run.accel, dtype=jnp.float64),
@@ -232,7 +222,7 @@ def slip_baseline(run, start=None) -> SlipBaseline:
         noise_std=jnp.asarray(np.nan if noise is None else float(noise)),
         start_values=jnp.asarray(sv, dtype=jnp.float64),
         sigma_ref=jnp.asarray(float(sv[2])),
-        profile=record_profile(t, run.accel),
+        profile=record.profile(),
         t_end=float(t[-1]),
     )
 

@@ -1,0 +1,205 @@
+"""Record files: atomic text and JSON writes, sidecars, CSV headers and line-numbered errors.
+
+Used by the records (`SlipRun`, `HysteresisLoop`) and by the command line, so that every file the
+package writes goes through one temporary-file-then-rename path and an existing user file is
+never replaced unless asked. Every loader error is a `DataFileError` naming the file, the line and
+the reason.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ._tables import DataFileError
+
+
+def positive_or_none(value, name: str, source: str, unit: str, *, required=False):
+    """A finite float > 0 (or None where allowed); ValueError naming the field otherwise."""
+    if value is None:
+        if required:
+            raise ValueError(f"{source}: {name} is required ({unit})")
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+        raise ValueError(f"{source}: {name} must be a number ({unit}), got {value!r}")
+    value = float(value)
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(
+            f"{source}: {name} = {value:g} {unit} is outside the allowed range (0, inf)"
+        )
+    return value
+
+
+# ---------------------------------------------------------------------------------------------
+# atomic writes
+
+
+def write_text_atomic(path, text: str) -> None:
+    """Write `text` (UTF-8) to `path` via a temporary file, so a failure leaves no partial file."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _json_default(obj):
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    raise TypeError(f"cannot serialise {type(obj).__name__}")
+
+
+def _finite(obj):
+    """Replace NaN/inf by None so the output is strict JSON."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite(v) for v in obj]
+    return obj
+
+
+def write_json_atomic(path, data) -> None:
+    """Write strict JSON (NaN/inf as null, NumPy values as numbers) to `path`, atomically."""
+    text = json.dumps(_finite(data), indent=2, default=_json_default, allow_nan=False)
+    write_text_atomic(path, text + "\n")
+
+
+def refuse_existing(targets) -> None:
+    """FileExistsError naming the first of `targets` that exists (a user file is not replaced)."""
+    existing = [str(p) for p in targets if Path(p).exists()]
+    if existing:
+        raise FileExistsError(
+            f"{existing[0]} exists; refusing to overwrite it (pass overwrite=True, or choose "
+            "another name)"
+        )
+
+
+# ---------------------------------------------------------------------------------------------
+# sidecars
+
+
+def sidecar_path(path) -> Path:
+    """The sidecar `<stem>.json` beside a record's CSV."""
+    return Path(path).with_suffix(".json")
+
+
+def _key_line(text: str, key: str) -> int | None:
+    """1-based line of the first occurrence of `"key"` in a JSON text (for error messages)."""
+    needle = json.dumps(key)
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        if needle in line:
+            return lineno
+    return None
+
+
+def read_sidecar(csv_path, schema: dict[str, bool], units: dict[str, str], *, required=True):
+    """Read and validate the sidecar of `csv_path`: a JSON object of positive numbers.
+
+    Args:
+        schema: key -> whether it is required. Keys outside it (and "comment") are refused.
+        units: key -> unit, for messages.
+        required: whether the sidecar file itself must exist.
+    Returns:
+        dict key -> float (absent optional keys are None), or None when the file is absent and
+        not required.
+    Raises:
+        DataFileError naming the sidecar, the line and the reason.
+    """
+    side = sidecar_path(csv_path)
+    if not side.is_file():
+        if not required:
+            return None
+        need = ", ".join(f'"{k}"' for k, req in schema.items() if req)
+        raise DataFileError(
+            f"{side}: sidecar not found; {Path(csv_path).name} needs a JSON file beside it with "
+            f"{need} (optional: {', '.join(k for k, req in schema.items() if not req)})"
+        )
+    try:
+        text = side.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        raise DataFileError(f"{side}: cannot be read ({err})") from err
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise DataFileError(f"{side}, line {err.lineno}: not valid JSON ({err.msg})") from None
+    if not isinstance(data, dict):
+        raise DataFileError(
+            f"{side}, line 1: must be a JSON object {{...}}, got {type(data).__name__}"
+        )
+    unknown = [k for k in data if k not in schema and k != "comment"]
+    if unknown:
+        raise DataFileError(
+            f"{side}, line {_key_line(text, unknown[0])}: unknown key {unknown[0]!r}; "
+            f"allowed keys are {sorted(schema) + ['comment']}"
+        )
+    out = {}
+    for key, req in schema.items():
+        where = f"{side}, line {_key_line(text, key)}" if key in data else f"{side}"
+        value = data.get(key)
+        if value is None and key in data:
+            value = "null"  # an explicit null is not a number
+        try:
+            out[key] = positive_or_none(value, f"{key!r}", where, units[key], required=req)
+        except ValueError as err:
+            raise DataFileError(str(err)) from None
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# record CSVs
+
+
+def write_record_files(path, header, columns, sidecar: dict | None, *, overwrite, comment):
+    """Write a CSV (and its sidecar) atomically; refuse existing files unless `overwrite`."""
+    path = Path(path)
+    targets = [path] + ([sidecar_path(path)] if sidecar is not None else [])
+    if path.suffix.lower() != ".csv":
+        raise ValueError(f"{path}: a record file must end in .csv (its sidecar is <stem>.json)")
+    if not overwrite:
+        refuse_existing(targets)
+    lines = [f"# {c}" for c in comment.splitlines()] + [",".join(header)]
+    lines += [",".join(f"{v:.17g}" for v in row) for row in zip(*columns)]
+    if sidecar is not None:
+        write_text_atomic(targets[1], json.dumps(sidecar, indent=2) + "\n")
+    write_text_atomic(path, "\n".join(lines) + "\n")
+
+
+def data_line_number(path, row: int) -> int:
+    """1-based line number of data row `row` (0-based) of a CSV with comments and a header."""
+    seen = -1  # the header is row -1
+    for lineno, raw in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), start=1):
+        text = raw.strip()
+        if not text or text.startswith("#"):
+            continue
+        if seen == row:
+            return lineno
+        seen += 1
+    return -1
+
+
+def csv_header(path) -> tuple[str, ...]:
+    """The header fields of a CSV (first line that is neither blank nor a `#` comment)."""
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise DataFileError(f"{path}: cannot be read ({err})") from err
+    for raw in lines:
+        text = raw.strip()
+        if text and not text.startswith("#"):
+            return tuple(f.strip() for f in text.split(","))
+    raise DataFileError(f"{path}: no header line")
