@@ -13,7 +13,10 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+import optimistix as optx
 
+from .._fit._engine import least_squares_fit
+from .._fit._solver import BAD_RESIDUAL
 from .._precision import ensure_x64
 from ._regions import ar1_inflation, noise_estimate
 
@@ -160,17 +163,11 @@ def default_effects(kind: str) -> list[AbstractEffect]:
     return [cls() for cls in _REGISTRY[kind].values()]
 
 
-# ---------------------------------------------------------------- compiled pieces
+# ---------------------------------------------------------------- the fit
 
 
-@eqx.filter_jit
-def _value_and_jac(baseline, theta_b, knobs):
-    """predict and its forward-mode Jacobians ∂/∂θ_b (n, p), ∂/∂knobs (n, n_knobs): one pass.
-
-    The only compiled function of a fit (one compile per baseline type and record shape): the
-    effect strengths enter through `knobs` (a fixed-length vector) and additive columns, which
-    the fit applies outside the compiled code.
-    """
+def _predict_jac(baseline, theta_b, knobs):
+    """predict and its forward-mode Jacobians ∂/∂θ_b (n, p), ∂/∂knobs (n, n_knobs): one pass."""
 
     def f(tb, kn):
         out = baseline.predict(tb, kn)
@@ -178,6 +175,63 @@ def _value_and_jac(baseline, theta_b, knobs):
 
     (jb, jk), value = jax.jacfwd(f, argnums=(0, 1), has_aux=True)(theta_b, knobs)
     return value, jb, jk
+
+
+_value_and_jac = eqx.filter_jit(_predict_jac)
+
+
+class _Padded(eqx.Module):
+    """Everything the residual needs, with the effect strengths padded to `K_MAX` (array leaves
+    only, so one compiled solve serves every combination of effects on one record shape)."""
+
+    baseline: AbstractBaseline
+    base: jax.Array  # knob vector at s = 0 (n_knobs,)
+    gain: jax.Array  # ∂knobs/∂s (n_knobs, K_MAX)
+    basis: jax.Array  # additive columns (n, K_MAX), output units per unit s
+    mask: jax.Array  # 1 for the active strengths (K_MAX,)
+    y: jax.Array  # observed samples (n,)
+    scale: jax.Array  # residual unit (output units)
+    bad: jax.Array  # residual of every row where the model is not finite
+    d: jax.Array  # variable scaling: x = d·u (p + K_MAX,)
+
+
+def _residual_and_jac(x, a: _Padded):
+    """Residual [(model − y)/scale, held strengths] and its Jacobian ∂/∂x at x = [θ_b, s].
+
+    Inactive strengths are masked out of the model and held at 0 by a row each (residual s,
+    Jacobian 1), so the normal matrix stays regular. A model that is not finite gives `a.bad` in
+    every row and a zero Jacobian: the trial is rejected as a rise of the cost.
+    """
+    p = x.size - K_MAX
+    hold = 1.0 - a.mask
+    s = x[p:] * a.mask
+    value, jb, jk = _predict_jac(a.baseline, x[:p], a.base + a.gain @ s)
+    r = (value + a.basis @ s - a.y) / a.scale
+    J = jnp.concatenate([jb, (jk @ a.gain + a.basis) * a.mask[None, :]], axis=1) / a.scale
+    ok = jnp.all(jnp.isfinite(r)) & jnp.all(jnp.isfinite(J))
+    r = jnp.concatenate([jnp.where(ok, r, a.bad), hold * x[p:]])
+    J_hold = jnp.concatenate([jnp.zeros((K_MAX, p)), jnp.diag(hold)], axis=1)
+    return r, jnp.concatenate([jnp.where(ok, J, 0.0), J_hold], axis=0)
+
+
+_start_point = eqx.filter_jit(_residual_and_jac)
+
+
+@eqx.filter_custom_jvp
+def _residual(u, a):
+    """The residual function of every discovery fit, in scaled variables u = x/d (module level:
+    the solve compiles once per record shape)."""
+    return _residual_and_jac(a.d * u, a)[0]
+
+
+@_residual.def_jvp
+def _residual_jvp(primals, tangents):
+    # the Jacobian from one forward pass over (θ_b, knobs), not over the K_MAX padded strengths:
+    # optimistix's linearisation and the statistics then cost one `_predict_jac` per point
+    u, a = primals
+    r, J = _residual_and_jac(a.d * u, a)
+    tu = tangents[0]
+    return r, (jnp.zeros_like(r) if tu is None else (J * a.d[None, :]) @ tu)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -197,15 +251,16 @@ class _State:
 
 
 def _pack(baseline, designs):
-    """Knob base vector, knob gain (n_knobs, k) and additive basis (n, k) of active designs."""
+    """Knob base vector, knob gain (n_knobs, K_MAX) and additive basis (n, K_MAX) of the active
+    designs (their k strengths first, zero columns after)."""
     names = baseline.knob_names
     n = baseline.data().y.shape[0]
     k = sum(d.k for d in designs)
     if k > K_MAX:
         raise ValueError(f"{k} effect strengths in one model: more than K_MAX = {K_MAX}")
-    gain = np.zeros((len(names), k))
+    gain = np.zeros((len(names), K_MAX))
     base = np.asarray(baseline.knob_null(), dtype=float).copy()
-    basis = np.zeros((n, k))
+    basis = np.zeros((n, K_MAX))
     j = 0
     for d in designs:
         if d.knob_gain is not None:
@@ -218,98 +273,135 @@ def _pack(baseline, designs):
     return base, gain, basis
 
 
-def _evaluate(baseline, packed, x):
-    """Model samples and Jacobian (n, p + k) of the augmented model at x = [θ_b, s]."""
-    base, gain, basis = packed
-    p = len(baseline.param_names)
-    tb, s = x[:p], x[p:]
-    try:
-        value, jb, jk = _value_and_jac(baseline, jnp.asarray(tb), jnp.asarray(base + gain @ s))
-        value = np.asarray(value)  # blocks: a runtime check inside the model raises here
-    except eqx.EquinoxRuntimeError:
-        # a check inside the model (e.g. a linear solve of the implicit ODE step meeting NaN at
-        # a nonsensical trial point) — the trial is rejected like a non-finite one
-        n = baseline.data().y.shape[0]
-        return np.full(n, np.nan), np.full((n, p + s.size), np.nan)
-    model = np.asarray(value) + basis @ s
-    J = np.concatenate([np.asarray(jb), np.asarray(jk) @ gain + basis], axis=1)
-    return model, J
+GAIN_TOL = 1e-2  # converged: a Gauss–Newton step would lower the cost by < 0.01 residual variances
 
 
-def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=100) -> _State:
-    """Levenberg–Marquardt (Marquardt's diagonal scaling) on (model − y)/scale.
+def _quiet(**kwargs):
+    return None
 
-    A plain NumPy loop around one compiled value-and-Jacobian call per trial point: each
-    augmented model reuses the same compiled code, where an optimistix solve would compile
-    once per combination of effects. Converged when the predicted decrease of a Gauss–Newton
-    step gᵀ(JᵀJ)⁻¹g is below 0.01 residual variances (s² = cost/(n − p), at least 1), or when not
-    even a step of damping 1e12 lowers the cost (a local minimum of the cost as evaluated; the
-    message then gives the predicted gain); a non-finite trial counts as a rejected step. Not
-    converged: non-finite start, or `max_steps` reached.
+
+class _RelativeTrustRegion(optx.ClassicalTrustRegion):
+    """The textbook trust-region update (cutoffs 0.25/0.75, as `NoiseFloorLM`) of a radius in
+    units of the Gauss–Newton step length (`optx.IndirectDampedNewtonDescent`), capped at 1: a
+    rejection then shrinks the step at once instead of first undoing earlier growth."""
+
+    def step(self, first_step, y, y_eval, f_info, f_eval_info, state):
+        size, accept, result, state = super().step(first_step, y, y_eval, f_info, f_eval_info,
+                                                   state)  # fmt: skip
+        size = jnp.minimum(size, 1.0)
+        return size, accept, result, eqx.tree_at(lambda st: st.step_size, state, size)
+
+
+class _DiscoveryLM(optx.AbstractGaussNewton):
+    """Levenberg–Marquardt (trust region in Gauss–Newton step lengths) with the discovery stops,
+    s² = RSS/(n − p) (at least 1; n and p without the held strengths): after an accepted step,
+    the Gauss–Newton gain gᵀ(JᵀJ)⁻¹g < `GAIN_TOL`·s² (converged); after a rejected step, the
+    next trial step's predicted gain < `GAIN_TOL`·s² (the trust region has shrunk below what
+    the noise resolves: stationary); `max_rejections` rejections in a row; optimistix's Cauchy
+    test (`rtol`, `atol`)."""
+
+    rtol: float
+    atol: float
+    norm: object
+    descent: optx.IndirectDampedNewtonDescent
+    search: _RelativeTrustRegion
+    verbose: object
+    max_rejections: int = eqx.field(static=True)
+
+    def __init__(self, rtol, atol, max_rejections=12):
+        self.rtol, self.atol, self.norm = rtol, atol, optx.max_norm
+        self.descent = optx.IndirectDampedNewtonDescent()
+        self.search = _RelativeTrustRegion(high_cutoff=0.75, low_cutoff=0.25)
+        self.verbose = _quiet
+        self.max_rejections = max_rejections
+
+    def terminate(self, fn, y, args, options, state, tags):
+        r, jac = state.f_info.residual, state.f_info.jac
+        J = jac.as_matrix()
+        n, p = r.size - K_MAX, J.shape[1] - K_MAX + jnp.sum(args.mask)
+        s2 = jnp.maximum(r @ r / jnp.maximum(n - p, 1), 1.0)
+        gn = jnp.sum((jnp.linalg.qr(J)[0].T @ r) ** 2)
+        # the next trial step (optimistix passes the previous iterate as `y`: recompute it)
+        step, _ = self.descent.step(state.search_state.step_size, state.descent_state)
+        trial = r @ r - jnp.sum((r + jac.mv(step)) ** 2)
+        fresh = state.num_steps_since_acceptance == 0
+        done = ~state.first_step & (jnp.where(fresh, gn, trial) < GAIN_TOL * s2)
+        stalled = state.num_steps_since_acceptance >= self.max_rejections
+        return state.terminate | stalled | done, state.result
+
+
+_SOLVER = _DiscoveryLM(rtol=1e-8, atol=1e-10)
+
+
+def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=256) -> _State:
+    """Fit [θ_b, s] minimising ‖(model − y)/scale‖² with `least_squares_fit` (`NoiseFloorLM`).
+
+    The strengths are padded to `K_MAX` (`_residual`), so the compiled solve is shared by every
+    combination of effects on the same record shape; statistics use the active columns only.
+    The variables are scaled by the start Jacobian's column norms (Marquardt's scaling, so the
+    damping is relative to the curvature). Converged when the predicted decrease of a
+    Gauss–Newton step gᵀ(JᵀJ)⁻¹g at the optimum is below `GAIN_TOL` residual variances
+    (s² = cost/(n − p), at least 1), or, as "stationary", when the solver stopped because no
+    trial step lowered the cost (a local minimum of the cost as evaluated: ODE evaluation noise,
+    or a kink where contacts start sliding; the message gives the predicted gain). A trial
+    point where the model is not finite counts as a rejected step. Not converged: a model that
+    is not finite at the start, a solver failure, or `max_steps` (accepted and rejected steps).
     """
     ensure_x64()
-    packed = _pack(baseline, designs)
-    x = np.asarray(theta0, dtype=float)
-    n, npar = y.shape[0], x.size
+    base, gain, basis = _pack(baseline, designs)
+    p, k, n = len(baseline.param_names), sum(d.k for d in designs), y.shape[0]
+    npar = p + k
+    x0 = np.zeros(p + K_MAX)
+    x0[:npar] = np.asarray(theta0, dtype=float)
+    arrays = (base, gain, basis, np.arange(K_MAX) < k, y, scale, np.inf, np.ones(p + K_MAX))
+    args = _Padded(baseline, *(jnp.asarray(v, dtype=jnp.float64) for v in arrays))
 
-    def ev(xx):
-        m, J = _evaluate(baseline, packed, xx)
-        r = (m - y) / scale
-        ok = np.all(np.isfinite(r)) and np.all(np.isfinite(J))
-        return m, r, J / scale, ok
+    def failed(message, steps=0):
+        return _State(tuple(names), tuple(designs), x0[:npar], np.full(n, np.nan), np.inf,
+                      np.full((npar,) * 2, np.inf), np.full((n, npar), np.nan), False, steps,
+                      message)  # fmt: skip
 
-    m, r, J, ok = ev(x)
-    steps, message, converged = 0, "", False
-    if not ok:
-        message = "the model is not finite at the start values"
-    cost, lam = float(r @ r), 1e-3
-    if ok and npar == 0:
-        converged = True  # nothing to fit
-    while ok and not converged and steps < max_steps:
-        A, g = J.T @ J, J.T @ r
-        # predicted decrease of a full Gauss–Newton step, against the residual variance
-        pred = float(g @ np.linalg.lstsq(A, g, rcond=1e-12)[0])
-        s2 = max(cost / max(n - npar, 1), 1.0)
-        if pred < 1e-2 * s2:
-            converged = True
-            break
-        steps += 1
-        dg = np.maximum(np.diag(A), 1e-12 * max(np.max(np.diag(A)), 1e-300))
-        while True:
-            dx = -np.linalg.solve(A + lam * np.diag(dg), g)
-            mn, rn, Jn, okn = ev(x + dx)
-            cn = float(rn @ rn) if okn else np.inf
-            if cn < cost:  # strict: a step that does not lower the cost is rejected
-                break
-            lam *= 4.0
-            if lam > 1e12:
-                break
-        if not cn < cost:
-            # not even a tiny step along −g descends: a local minimum of the cost as evaluated
-            # (ODE evaluation noise, or a kink of the model where contacts start sliding)
-            converged = True
-            message = f"stationary: no descent step (predicted gain {pred / s2:.3g} s²)"
-            break
-        x, m, r, J, cost = x + dx, mn, rn, Jn, cn
-        lam = max(lam / 3.0, 1e-12)
-    if ok and not converged and not message:
-        message = f"no convergence in max_steps = {max_steps} steps"
-    p = len(baseline.param_names)
-    if converged and not baseline.solver_ok(
-        jnp.asarray(x[:p]), jnp.asarray(packed[0] + packed[1] @ x[p:])
-    ):
+    try:
+        r0, J0 = (np.asarray(v) for v in _start_point(jnp.asarray(x0), args))
+        if not np.all(np.isfinite(r0)):
+            return failed("the model is not finite at the start values")
+        # a failed trial point costs more than the start (100x)
+        bad = max(BAD_RESIDUAL, 10.0 * float(np.max(np.abs(r0))))
+        norms = np.linalg.norm(J0, axis=0)
+        d = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
+        args = eqx.tree_at(lambda t: (t.bad, t.d), args, (jnp.asarray(bad), jnp.asarray(d)))
+        res = least_squares_fit(_residual, x0 / d, args, names=(*baseline.param_names,
+                                *(f"s{i}" for i in range(K_MAX))), jac="fwd",
+                                solver=_SOLVER, max_steps=max_steps)  # fmt: skip
+    except eqx.EquinoxRuntimeError as err:  # a check inside the model: not a trial rejection
+        return failed(f"the model raised inside the fit: {str(err).splitlines()[0]}")
+    x = (d * res.theta)[:npar]
+    r, J = res.residuals[:n], (res.jacobian / d)[:n, :npar]
+    cost = float(r @ r)
+    g = J.T @ r
+    pred = float(g @ np.linalg.lstsq(J.T @ J, g, rcond=1e-12)[0])
+    s2 = max(cost / max(n - npar, 1), 1.0)
+    if np.all(r == bad):
+        return failed("the model is not finite at the optimum", res.steps)
+    converged, message = res.converged, ""
+    if not res.converged:
+        message = (f"no convergence in max_steps = {max_steps} steps" if res.steps >= max_steps
+                   else res.message)  # fmt: skip
+    elif pred >= GAIN_TOL * s2:
+        message = f"stationary: no descent step (predicted gain {pred / s2:.3g} s²)"
+    knobs = jnp.asarray(base + gain[:, :k] @ x[p:])
+    if converged and not baseline.solver_ok(jnp.asarray(x[:p]), knobs):
         converged, message = False, "the model's solver reported a failure at the optimum"
-    cov = np.linalg.pinv(J.T @ J) * cost / max(n - npar, 1) if ok else np.full((npar,) * 2, np.inf)
     return _State(
         names=tuple(names),
         designs=tuple(designs),
         theta=x,
-        yhat=m,
-        rss=cost if ok else np.inf,
-        cov=cov,
+        yhat=y + scale * r,
+        rss=cost,
+        cov=np.linalg.pinv(J.T @ J) * cost / max(n - npar, 1),
         jac=J,
         converged=bool(converged),
-        steps=steps,
+        steps=res.steps,
         message=message,
     )
 
@@ -318,7 +410,7 @@ def _columns(baseline, state: _State, design: EffectDesign, knob_cache: dict) ->
     """∂y/∂s of `design` added to the fitted `state` (n, k), output units."""
     base, gain, _ = _pack(baseline, state.designs)
     p = len(baseline.param_names)
-    knobs = base + gain @ state.theta[p:]
+    knobs = base + gain[:, : state.theta.size - p] @ state.theta[p:]
     for key, value in design.knob_set.items():
         knobs[baseline.knob_names.index(key)] = value
     cols = np.zeros((baseline.data().y.shape[0], design.k))
