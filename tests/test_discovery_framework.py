@@ -155,7 +155,7 @@ def test_fit_rejects_steps_that_do_not_lower_the_cost():
     # near the optimum small steps leave the quantized cost unchanged; accepting such steps
     # (cost <= instead of <) walked on for 35 steps here (and 100+ on a hidden-Stribeck slip
     # record near gross slip, never converging); rejecting them ends the fit as stationary
-    from tribojax.discovery import _core
+    from tribojax.discovery import _fitting as _core
 
     t = jnp.linspace(0.0, 3.0, 300)
     y = np.exp(-np.asarray(t) / 0.8) + 0.005 * np.random.default_rng(0).standard_normal(300)
@@ -181,7 +181,7 @@ def test_chi2_sf_matches_scipy():
 def test_fit_shares_one_compiled_solve_across_effects():
     # strengths padded to K_MAX: adding effects to the model reuses the baseline fit's solve
     from tribojax._fit import _engine
-    from tribojax.discovery import _core
+    from tribojax.discovery import _fitting as _core
 
     base = _record("tone")
     y = np.asarray(base.y)
