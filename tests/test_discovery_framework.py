@@ -155,7 +155,7 @@ def test_fit_rejects_steps_that_do_not_lower_the_cost():
     # near the optimum small steps leave the quantized cost unchanged; accepting such steps
     # (cost <= instead of <) walked on for 35 steps here (and 100+ on a hidden-Stribeck slip
     # record near gross slip, never converging); rejecting them ends the fit as stationary
-    from tribojax.discovery import _core
+    from tribojax.discovery import _fitting as _core
 
     t = jnp.linspace(0.0, 3.0, 300)
     y = np.exp(-np.asarray(t) / 0.8) + 0.005 * np.random.default_rng(0).standard_normal(300)
@@ -164,3 +164,31 @@ def test_fit_rejects_steps_that_do_not_lower_the_cost():
     assert st.converged and st.message.startswith("stationary"), st.message
     assert st.steps <= 10
     assert np.allclose(np.exp(st.theta), [1.0, 0.8], rtol=2e-3)
+
+
+def test_chi2_sf_matches_scipy():
+    # the score and window p-values: SciPy's chi2.sf without SciPy at run time
+    from scipy import stats
+
+    from tribojax.discovery._regions import chi2_sf
+
+    for dof in (1, 2, 3, 4, 8, 0.7, 3.3, 12.5, 40.0):
+        for x in (0.0, 1e-3, 0.5, 3.0, 10.0, 60.0, 300.0, 1000.0):
+            want = stats.chi2.sf(x, dof)
+            assert chi2_sf(x, dof) == pytest.approx(want, rel=1e-10, abs=1e-300)
+
+
+def test_fit_shares_one_compiled_solve_across_effects():
+    # strengths padded to K_MAX: adding effects to the model reuses the baseline fit's solve
+    from tribojax._fit import _engine
+    from tribojax.discovery import _fitting as _core
+
+    base = _record("tone")
+    y = np.asarray(base.y)
+    st = _core._fit(base, (), base.start(), y, 0.005)
+    size = _engine._solve._cached._cache_size()
+    for designs in ([Ramp().designs(base)[0]], [Bump().designs(base)[0], Tone().designs(base)[1]]):
+        th = np.concatenate([st.theta, np.zeros(sum(d.k for d in designs))])
+        fit = _core._fit(base, tuple(designs), th, y, 0.005)
+        assert fit.converged and fit.theta.size == 2 + sum(d.k for d in designs)
+    assert _engine._solve._cached._cache_size() == size

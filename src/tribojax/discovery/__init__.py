@@ -50,8 +50,11 @@ Loop side: export `loop_baseline(loop: HysteresisLoop) -> AbstractBaseline` from
 (module `_loop.py`, effects of kind "loop" registered on import); `tribojax discover` sends
 loop files to it and reports "not available" while it is missing.
 
-Fitting: a NumPy Levenberg–Marquardt loop around one compiled call (`_value_and_jac`: predict
-and its forward-mode Jacobian w.r.t. θ and the knobs), so every augmented model reuses it.
+Fitting: `tribojax.least_squares_fit` (optimistix Levenberg–Marquardt) on one residual function
+whose effect strengths are padded to `K_MAX` (inactive ones masked and held at 0), so one compiled
+solve serves every combination of effects on a record shape; its Jacobian comes from one
+forward-mode pass of `predict` over θ and the knobs. `predict` must not raise inside that solve:
+a trial point where it is not finite is rejected as a rise of the cost.
 
 Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration`,
 `load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip`.

@@ -15,8 +15,11 @@ into a region, whose statistic and p-value are recomputed over the merged sample
 
 from __future__ import annotations
 
+import jax.numpy as jnp
 import numpy as np
-from scipy import stats
+from jax.scipy.special import gammaincc
+
+from .._precision import ensure_x64
 
 RHO_MAX = 0.95
 
@@ -25,6 +28,14 @@ def ar1_inflation(rho) -> float:
     """Variance inflation (1+ρ)/(1−ρ) of a sum of AR(1) terms (effective n = n/c)."""
     rho = float(np.clip(rho, 0.0, RHO_MAX))
     return (1.0 + rho) / (1.0 - rho)
+
+
+def chi2_sf(x, dof) -> float:
+    """Survival function P(χ²_dof > x) of the chi-square distribution, the regularised upper
+    incomplete gamma function Q(dof/2, x/2) (`jax.scipy.special.gammaincc`, float64); dof > 0
+    need not be an integer."""
+    ensure_x64()
+    return float(gammaincc(jnp.asarray(dof / 2.0), jnp.asarray(max(float(x), 0.0) / 2.0)))
 
 
 def lag1(r) -> float:
@@ -76,7 +87,7 @@ def _window_p(r, sigma, rho):
     c = (1.0 + rho**2) / (1.0 - rho**2)
     q = float(np.sum((np.asarray(r) / sigma) ** 2))
     nu = r.size / c
-    return q / r.size, float(stats.chi2.sf(q / c, nu))
+    return q / r.size, chi2_sf(q / c, nu)
 
 
 def find_regions(r, x, segment, sigma, rho, *, n_windows=32, alpha=0.01, segment_names=None):
