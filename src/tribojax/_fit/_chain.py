@@ -55,7 +55,7 @@ from .._dynamics._slip import slip_phase_averages
 from .._friction._lugre import PreSlipLuGre
 from .._io._tables import wang2022_table
 from .._reproduce._table3 import wang2022_table3_model
-from .._results import RESULTS
+from .._results import RESULTS, result_name
 from ._engine import FAILED_RESIDUAL, FitResult, gauss_newton_step, least_squares_fit
 from ._solver import NoiseFloorLM
 
@@ -386,7 +386,7 @@ class ChainFit:
             "rms_relative_residual": self.rms_relative_residual,
             "converged": f.converged,
             "message": f.message,
-            "result": f.as_dict()["result"],
+            "result": result_name(f.result),
             "steps": f.steps,
             "residual_evaluations": self.evaluations,
             "gauss_newton_step_over_std_error": self.gauss_newton_step,
