@@ -1,4 +1,4 @@
-"""Benchmark: `fit_slip_run` on a synthetic slip run (issue 13: one fit engine, same speed or better).
+"""Benchmark: `fit_slip_run` on a synthetic slip run (issue 13: one fit engine, today's speed).
 
 The record is `tribojax.synthetic_slip_run` of wang2022 Table 3's 0.6 kPa element (F_s, K_τ, C_τ)
 over the first second of the cycle at 0.1 ms (10001 samples, noise 2e-10 m), as in

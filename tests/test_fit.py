@@ -140,6 +140,15 @@ def test_noise_floor_lm_stops_on_the_statistical_rule():
     assert lines and all(ln.startswith("LM: ") for ln in lines)
     assert "Gauss-Newton step" in lines[-1]
     # plain LM with the same (switched-off) Cauchy test runs to the step budget
-    plain = tj.least_squares_fit(residuals, jnp.array([1.0, 0.0]), (x, y), names=("A", "b"),
-                                 sigma_known=True, max_steps=50, jac="fwd", rtol=0.0, atol=0.0)
+    plain = tj.least_squares_fit(
+        residuals,
+        jnp.array([1.0, 0.0]),
+        (x, y),
+        names=("A", "b"),
+        sigma_known=True,
+        max_steps=50,
+        jac="fwd",
+        rtol=0.0,
+        atol=0.0,
+    )
     assert plain.result == tj.RESULTS.nonlinear_max_steps_reached

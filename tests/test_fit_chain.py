@@ -11,8 +11,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-import tribojax as tj
 
+import tribojax as tj
 from tribojax._fit import _chain as fc
 from tribojax._io._tables import wang2022_table
 

@@ -26,9 +26,9 @@ Convergence. The slips come from an adaptive ODE solver (accurate to ~2e-4 here,
 near the optimum the misfit is flat to that level along the D–G valley. `NoiseFloorLM` therefore
 stops on statistical grounds (the Gauss–Newton step left is below 0.05 standard errors) or after
 six rejected steps in a row, and a fit counts as converged only if the Gauss–Newton step still
-left is below `GN_STEP_TOL` standard errors (else `RESULTS.short_of_optimum`). Rows where F_s <= m·a_max (the reticle would slide
-grossly, outside Eq 27's pre-sliding model) or the contact fails get the failed-evaluation
-residual `FAILED_RESIDUAL`, so LM backs off.
+left is below `GN_STEP_TOL` standard errors (else `RESULTS.short_of_optimum`). Rows where
+F_s <= m·a_max (the reticle would slide grossly, outside Eq 27's pre-sliding model) or the contact
+fails get the failed-evaluation residual `FAILED_RESIDUAL`, so LM backs off.
 
 Failures. If the compiled fit raises (an `equinox` runtime check inside the chain at a trial
 point), `fit_measured_slips` turns that into `ChainFitError` naming the trial point. With the

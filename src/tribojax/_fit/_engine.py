@@ -68,7 +68,7 @@ class FitResult:
         result = self.result
         if result is None:
             if self.converged is None:
-                raise TypeError("FitResult needs `result` (a tribojax.RESULTS member) or `converged`")
+                raise TypeError("FitResult needs `result` (a tribojax.RESULTS member) or converged")
             result = RESULTS.successful if self.converged else RESULTS.not_converged
         elif not isinstance(result, RESULTS):
             result = RESULTS.promote(result)
@@ -269,5 +269,6 @@ def least_squares_fit(
             result = RESULTS.short_of_optimum
             message = (f"{RESULTS[result]} The step left is {gn:.3g} standard errors "
                        f"(tolerance {optimum_tol:g}).")  # fmt: skip
+    steps = int(sol.stats["num_steps"])
     return fit_statistics(theta, r, J, names=names, transform=transform, sigma_known=sigma_known,
-                          result=result, steps=int(sol.stats["num_steps"]), message=message)  # fmt: skip
+                          result=result, steps=steps, message=message)  # fmt: skip

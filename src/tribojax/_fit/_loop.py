@@ -150,9 +150,9 @@ def fit_loop(
     time-domain form is the Iwan discretisation (error ~1e-5 μN).
 
     Parameters are fitted as logarithms (`least_squares_fit`: optimistix Levenberg–Marquardt,
-    compiled once per element, model and record length), started from `analyse_loop`'s μN and Eq 6 K_d; standard
-    errors from the Jacobian at the optimum. Only the product μN is identifiable from a loop;
-    without gross slip (Jenkins Ā ≤ 1) μN is only bounded below.
+    compiled once per element, model and record length), started from `analyse_loop`'s μN and
+    Eq 6 K_d; standard errors from the Jacobian at the optimum. Only the product μN is
+    identifiable from a loop; without gross slip (Jenkins Ā ≤ 1) μN is only bounded below.
 
     Args:
         element: "jenkins" or "mindlin".
