@@ -1,5 +1,6 @@
 """least_squares_fit: recovery from synthetic data and standard errors vs ordinary least squares."""
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -54,3 +55,100 @@ def test_non_convergence_is_reported():
 
     fit = tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=2)
     assert not fit.converged and fit.message
+
+
+def _power_law_residuals(theta, args):
+    x, y = args
+    return theta[0] + theta[1] * jnp.log(x) - jnp.log(y)
+
+
+def _power_law_data():
+    rng = np.random.default_rng(7)
+    x = np.geomspace(1.0, 100.0, 40)
+    return jnp.asarray(x), jnp.asarray(3.0 * x**0.75 * np.exp(0.02 * rng.standard_normal(40)))
+
+
+def test_fit_reports_a_results_member():
+    fit = tj.least_squares_fit(_power_law_residuals, jnp.zeros(2), _power_law_data(),
+                               names=("a", "b"))  # fmt: skip
+    assert isinstance(fit.result, tj.RESULTS) and fit.result == tj.RESULTS.successful
+    assert fit.converged and fit.message == tj.RESULTS[tj.RESULTS.successful] == ""
+    assert fit.as_dict()["result"] == "successful" and fit.as_dict()["converged"] is True
+
+
+def test_a_fit_stopped_by_max_steps_says_so():
+    def residuals(theta, args):
+        return jnp.array([jnp.exp(theta[0]) - 1e6, theta[0] * 1e-3])
+
+    fit = tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=1)
+    assert fit.result == tj.RESULTS.nonlinear_max_steps_reached and not fit.converged
+    assert "maximum number of steps" in fit.message and "max_steps = 1" in fit.message
+    assert fit.as_dict()["result"] == "nonlinear_max_steps_reached"
+    assert fit.as_dict()["converged"] is False
+
+
+def test_a_failed_model_evaluation_is_reported():
+    from tribojax._fit._engine import FAILED_RESIDUAL
+
+    def residuals(theta, args):  # the model cannot be evaluated anywhere
+        return jnp.full(3, FAILED_RESIDUAL) + 0.0 * theta[0]
+
+    fit = tj.least_squares_fit(residuals, jnp.array([1.0]), names=("a",))
+    assert fit.result == tj.RESULTS.model_failed_at_start and not fit.converged
+    assert "start values" in fit.message
+
+
+def test_fit_result_status_fields_stay_consistent():
+    kw = dict(names=("a",), values=np.ones(1), std_errors=np.ones(1), covariance=np.eye(1),
+              correlation=np.eye(1), theta=np.zeros(1), residuals=np.zeros(3),
+              singular_values=np.ones(1))  # fmt: skip
+    old = tj.FitResult(**kw, converged=False, steps=3, message="stopped")
+    assert old.result == tj.RESULTS.not_converged and old.message == "stopped"
+    ok = tj.FitResult(**kw, result=tj.RESULTS.successful)
+    assert ok.converged and ok.message == ""
+    short = ok.with_result(tj.RESULTS.short_of_optimum)
+    assert not short.converged and short.message == tj.RESULTS[tj.RESULTS.short_of_optimum]
+    with pytest.raises(ValueError, match="contradicts"):
+        tj.FitResult(**kw, converged=True, result=tj.RESULTS.model_failed)
+
+
+def test_noise_floor_lm_stops_on_the_statistical_rule():
+    # y = A e^(b x) + noise, and a residual that jitters at 1e-7 of its scale with θ (as one
+    # computed through an adaptive ODE solve), which its Jacobian does not see. With the Cauchy
+    # test off (rtol = atol = 0) and rejections allowed up to 100, only the Gauss-Newton rule
+    # (step left < 0.05 standard errors after an accepted step) can stop it within 50 steps.
+    from tribojax._fit._engine import gauss_newton_step
+    from tribojax._fit._solver import NoiseFloorLM
+
+    rng = np.random.default_rng(3)
+    x = jnp.linspace(0.0, 1.0, 50)
+    y = 2.0 * jnp.exp(-1.5 * x) + 0.01 * jnp.asarray(rng.standard_normal(50))
+
+    def residuals(theta, args):
+        x, y = args
+        jitter = 1e-9 * jnp.sin(1e9 * jax.lax.stop_gradient(theta[0] + x * theta[1]))
+        return (theta[0] * jnp.exp(theta[1] * x) - y) / 0.01 + jitter
+
+    lines = []
+    fit = tj.least_squares_fit(residuals, jnp.array([1.0, 0.0]), (x, y), names=("A", "b"),
+                               sigma_known=True, max_steps=50, jac="fwd",
+                               solver=NoiseFloorLM(0.0, 0.0, max_rejections=100),
+                               progress=lines.append)  # fmt: skip
+    assert fit.result == tj.RESULTS.successful and fit.steps < 50
+    assert float(jnp.max(jnp.abs(gauss_newton_step(fit.residuals, fit.jacobian)))) < 0.05
+    assert np.all(np.abs(fit.values - [2.0, -1.5]) < 3 * fit.std_errors)
+    assert lines and all(ln.startswith("LM: ") for ln in lines)
+    assert "Gauss-Newton step" in lines[-1]
+    # plain LM with the same (switched-off) Cauchy test runs to the step budget
+    plain = tj.least_squares_fit(
+        residuals,
+        jnp.array([1.0, 0.0]),
+        (x, y),
+        names=("A", "b"),
+        sigma_known=True,
+        max_steps=50,
+        jac="fwd",
+        rtol=0.0,
+        atol=0.0,
+    )
+    assert plain.result == tj.RESULTS.nonlinear_max_steps_reached

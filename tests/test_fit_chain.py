@@ -12,6 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+import tribojax as tj
 from tribojax._fit import _chain as fc
 from tribojax._io._tables import wang2022_table
 
@@ -178,6 +179,7 @@ def test_report_keys(two_fits):
     for key in ("parameters", "std_errors", "correlation", "rms_relative_residual", "converged"):
         assert key in d
     assert len(d["cells"]) == 8 and set(d["parameters"]) == set(fc.PARAMETERS)
+    assert d["result"] == "successful" and two_fits[0].result == tj.RESULTS.successful
     assert d["fixed"]["D"] == pytest.approx(2.86)
     assert np.allclose(np.diag(d["correlation"]), 1.0)
 

@@ -50,6 +50,7 @@ def test_fit_slip_run_recovers_parameters(run):
     # F_s and K_τ to better than 0.2 %, C_τ to ~10 %
     assert np.all(fit.std_errors[:2] / truth[:2] < 2e-3) and fit.std_errors[2] / truth[2] < 0.2
     assert any(m.startswith("LM:") for m in messages) and messages[0].startswith("start")
+    assert fit.result == tj.RESULTS.successful and fit.as_dict()["result"] == "successful"
 
 
 def test_fit_slip_run_with_free_alpha():
@@ -95,6 +96,7 @@ def test_bad_input_to_the_slip_fit(run):
     fit = tj.fit_slip_run(run, alpha=1.0, start={"F_s": 2.0, "K_tau": 3e6, "C_tau": 3e4},
                           max_steps=2)  # fmt: skip
     assert not fit.converged and "max_steps = 2" in fit.message
+    assert fit.result == tj.RESULTS.nonlinear_max_steps_reached
 
 
 @pytest.mark.slow

@@ -109,6 +109,7 @@ from ._reproduce._wu2015 import plot_wu2015 as plot_wu2015
 from ._reproduce._wu2015 import wu2015_comparison as wu2015_comparison
 from ._reproduce._wu2015 import wu2015_eq5_stiffness as wu2015_eq5_stiffness
 from ._reproduce._wu2015 import wu2015_eq7 as wu2015_eq7
+from ._results import RESULTS as RESULTS
 from ._roughness._estimate import RoughnessEstimate as RoughnessEstimate
 from ._roughness._estimate import estimate_fractal as estimate_fractal
 from ._roughness._estimate import psd_model as psd_model

@@ -26,9 +26,9 @@ Convergence. The slips come from an adaptive ODE solver (accurate to ~2e-4 here,
 near the optimum the misfit is flat to that level along the D–G valley. `NoiseFloorLM` therefore
 stops on statistical grounds (the Gauss–Newton step left is below 0.05 standard errors) or after
 six rejected steps in a row, and a fit counts as converged only if the Gauss–Newton step still
-left is below `GN_STEP_TOL` standard errors. Rows where F_s <= m·a_max (the reticle would slide
-grossly, outside Eq 27's pre-sliding model) or the contact fails get a residual of 1e3, so LM
-backs off.
+left is below `GN_STEP_TOL` standard errors (else `RESULTS.short_of_optimum`). Rows where
+F_s <= m·a_max (the reticle would slide grossly, outside Eq 27's pre-sliding model) or the contact
+fails get the failed-evaluation residual `FAILED_RESIDUAL`, so LM backs off.
 
 Failures. If the compiled fit raises (an `equinox` runtime check inside the chain at a trial
 point), `fit_measured_slips` turns that into `ChainFitError` naming the trial point. With the
@@ -55,8 +55,9 @@ from .._dynamics._slip import slip_phase_averages
 from .._friction._lugre import PreSlipLuGre
 from .._io._tables import wang2022_table
 from .._reproduce._table3 import wang2022_table3_model
-from ._engine import FitResult, least_squares_fit
-from ._solver import BAD_RESIDUAL, NoiseFloorLM
+from .._results import RESULTS, result_name
+from ._engine import FAILED_RESIDUAL, FitResult, gauss_newton_step, least_squares_fit
+from ._solver import NoiseFloorLM
 
 PARAMETERS = ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha")
 # Defaults of the fixed ones: Table 1's D, the Table 3 calibration (M = 1), the paper's α = 1.
@@ -286,7 +287,7 @@ def _residuals(theta, args, adjoint):
     phys = _to_physical(theta_full0.at[idx].set(theta), mu_min)
     jax.debug.callback(_announce, jax.lax.stop_gradient(phys))
     slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
-    r = jnp.where(ok[:, None], slips / y - 1.0, BAD_RESIDUAL).ravel()
+    r = jnp.where(ok[:, None], slips / y - 1.0, FAILED_RESIDUAL).ravel()
     jax.debug.callback(_report, jax.lax.stop_gradient(r @ r), jax.lax.stop_gradient(phys))
     return r
 
@@ -336,6 +337,11 @@ class ChainFit:
         return self.fit.converged
 
     @property
+    def result(self) -> RESULTS:
+        """The outcome (`tribojax.RESULTS`), that of `fit`."""
+        return self.fit.result
+
+    @property
     def rms_relative_residual(self) -> float:
         return rms_relative(self.model_nm, self.target_nm)
 
@@ -380,6 +386,7 @@ class ChainFit:
             "rms_relative_residual": self.rms_relative_residual,
             "converged": f.converged,
             "message": f.message,
+            "result": result_name(f.result),
             "steps": f.steps,
             "residual_evaluations": self.evaluations,
             "gauss_newton_step_over_std_error": self.gauss_newton_step,
@@ -425,9 +432,9 @@ def fit_measured_slips(
             wander along the flat D–G valley without lowering the misfit.
         progress: print one line per residual evaluation to stderr (long fits).
     Returns:
-        ChainFit; `converged` False (with `fit.message`) when LM did not succeed or stopped
-        short of the optimum (Gauss–Newton step >= `GN_STEP_TOL` standard errors) — never
-        raises for that.
+        ChainFit; `result` a `tribojax.RESULTS` member, `converged` False (with `fit.message`)
+        when LM did not succeed or stopped short of the optimum (`RESULTS.short_of_optimum`:
+        Gauss–Newton step >= `GN_STEP_TOL` standard errors) — never raises for that.
     Raises:
         ValueError: bad input (names the parameter, value and allowed range).
         ChainFitError: the compiled fit raised at a trial point (module docstring, Failures).
@@ -483,6 +490,7 @@ def fit_measured_slips(
             max_steps=max_steps,
             jac=jac,
             solver=NoiseFloorLM(float(rtol), float(atol)),
+            optimum_tol=GN_STEP_TOL,
         )
     except RuntimeError as err:  # equinox runtime errors inside the compiled fit
         _PROGRESS["on"] = False
@@ -504,18 +512,8 @@ def fit_measured_slips(
     dpdth = np.diag(np.asarray(jax.jacfwd(transform)(jnp.asarray(fit.theta))))
     S = J / dpdth[None, :] * np.asarray(fit.values)[None, :]
     _, sv, vt = np.linalg.svd(S, full_matrices=False)
-    # the Gauss–Newton step still left, in standard errors (physical coordinates)
-    step = -np.linalg.lstsq(J, np.asarray(r), rcond=None)[0] * dpdth
-    gn_step = float(np.max(np.abs(step) / fit.std_errors))
-    if fit.converged and not gn_step < GN_STEP_TOL:
-        fit = dataclasses.replace(
-            fit,
-            converged=False,
-            message=(
-                f"LM stopped, but the remaining Gauss-Newton step is {gn_step:.3g} standard "
-                f"errors (> {GN_STEP_TOL}): not at an optimum"
-            ),
-        )
+    # the Gauss–Newton step still left, in standard errors (`least_squares_fit` checked it)
+    gn_step = float(np.max(np.abs(np.asarray(gauss_newton_step(r, J)))))
     return ChainFit(
         fit=fit,
         parameters=dict(zip(PARAMETERS, phys.tolist())),

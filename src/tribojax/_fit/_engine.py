@@ -1,14 +1,17 @@
-"""Least squares with uncertainties: optimistix Levenberg–Marquardt plus Jacobian statistics.
+"""The fit engine: optimistix least squares, then statistics from the Jacobian at the optimum.
 
 Parameters are fitted in unconstrained coordinates θ (log for positive quantities, etc.); a
 `transform` maps θ to the physical parameters, and the covariance is carried over by the delta
 method. Residuals should already be divided by their uncertainty; if `sigma_known` is False the
-common scale is estimated from the residual sum of squares (s² = RSS/(n - p)).
+common scale is estimated from the residual sum of squares (s² = RSS/(n - p)). A residual equal to
+`FAILED_RESIDUAL` marks a row where the model could not be evaluated. The outcome is a
+`tribojax.RESULTS` member.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import equinox as eqx
 import jax
@@ -17,11 +20,17 @@ import numpy as np
 import optimistix as optx
 
 from .._precision import ensure_x64
+from .._results import RESULTS, result_name
+
+# Residual (in units of the uncertainty) of a row where the model could not be evaluated (ODE
+# budget, failed load balance, all-plastic contact): far above any real misfit, so that LM
+# rejects the trial point.
+FAILED_RESIDUAL = 1e6
 
 
 @dataclasses.dataclass(frozen=True)
 class FitResult:
-    """Outcome of `least_squares_fit` (NumPy arrays; physical coordinates unless stated).
+    """Outcome of a fit (NumPy arrays; physical coordinates unless stated).
 
     Attributes:
         names: parameter names.
@@ -31,11 +40,13 @@ class FitResult:
         theta: the unconstrained optimum.
         residuals: residuals at the optimum (as returned by the residual function).
         singular_values: of the Jacobian in θ, largest first (identifiability).
-        converged: optimistix reported success.
-        steps: LM steps taken.
-        message: optimistix's result message ("" on success).
+        converged: `result == RESULTS.successful` (derived from `result`; given alone, `result`
+            becomes successful or `RESULTS.not_converged`).
+        steps: solver steps taken.
+        message: `RESULTS[result]` ("" on success), or a more specific text.
         fixed: constants held fixed in the fit (set by the caller, e.g. {"M": 1.0}).
         jacobian: ∂residuals/∂θ at the optimum, (n, p) (`least_squares_fit`; None elsewhere).
+        result: the outcome, a `tribojax.RESULTS` member.
     """
 
     names: tuple[str, ...]
@@ -46,11 +57,34 @@ class FitResult:
     theta: np.ndarray
     residuals: np.ndarray
     singular_values: np.ndarray
-    converged: bool
-    steps: int
-    message: str
+    converged: bool | None = None
+    steps: int = 0
+    message: str | None = None
     fixed: dict = dataclasses.field(default_factory=dict)
-    jacobian: np.ndarray | None = None  # ∂residuals/∂θ at the optimum (n, p), when computed
+    jacobian: np.ndarray | None = None
+    result: RESULTS | None = None
+
+    def __post_init__(self):
+        result = self.result
+        if result is None:
+            if self.converged is None:
+                raise TypeError("FitResult needs `result` (a tribojax.RESULTS member) or converged")
+            result = RESULTS.successful if self.converged else RESULTS.not_converged
+        elif not isinstance(result, RESULTS):
+            result = RESULTS.promote(result)
+        ok = bool(result == RESULTS.successful)
+        if self.converged is not None and bool(self.converged) != ok:
+            raise ValueError(
+                f"converged = {self.converged} contradicts result {result_name(result)!r}"
+            )
+        object.__setattr__(self, "result", result)
+        object.__setattr__(self, "converged", ok)
+        if self.message is None:
+            object.__setattr__(self, "message", str(RESULTS[result]))
+
+    def with_result(self, result, message: str | None = None) -> FitResult:
+        """A copy with another outcome (`converged` and `message` follow it)."""
+        return dataclasses.replace(self, result=result, converged=None, message=message)
 
     def as_dict(self) -> dict:
         """Summary as plain Python numbers (non-finite entries mark unidentifiable directions)."""
@@ -62,16 +96,18 @@ class FitResult:
             "steps": self.steps,
             "singular_values": self.singular_values.tolist(),
             "fixed": dict(self.fixed),
+            "result": result_name(self.result),
         }
 
 
-def gauss_newton_step_jnp(r, J):
-    """The Gauss–Newton step −(JᵀJ)⁺Jᵀr, in units of the standard errors, traceable (JAX).
+def gauss_newton_step(r, J):
+    """The Gauss–Newton step −(JᵀJ)⁺Jᵀr from θ, in units of θ's standard errors; traceable.
 
     Standard errors from s²(JᵀJ)⁺ with s² = rᵀr/(n − p) (the residual scale estimated from the
     fit). Entries ≪ 1: the step still left is far below the statistical uncertainty. Directions
     with singular values below 1e-14 of the largest are dropped; a zero standard error gives inf.
     """
+    r, J = jnp.asarray(r), jnp.asarray(J)
     u, sv, vt = jnp.linalg.svd(J, full_matrices=False)
     keep = sv > sv[0] * 1e-14
     inv = jnp.where(keep, 1.0 / jnp.where(keep, sv, 1.0), 0.0)
@@ -80,6 +116,60 @@ def gauss_newton_step_jnp(r, J):
     n, p = J.shape
     s = jnp.maximum(jnp.sqrt(r @ r / max(n - p, 1)), 1e-300)
     return jnp.where(se > 0, step / jnp.where(se > 0, se * s, 1.0), jnp.inf)
+
+
+def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps, message=None):
+    """A FitResult from the optimum θ, its residuals r and Jacobian J = ∂r/∂θ.
+
+    Covariance of θ: s²(JᵀJ)⁻¹ through the SVD of J (s² = RSS/(n − p), or 1 if `sigma_known`);
+    directions with singular values ≤ 1e-14 of the largest get infinite variance. Mapped to the
+    physical parameters `transform(θ)` by the delta method, T·cov·Tᵀ with T = ∂transform/∂θ.
+    """
+    theta = np.asarray(theta, dtype=np.float64)
+    r, J = np.asarray(r, dtype=np.float64), np.asarray(J, dtype=np.float64)
+    n, p = J.shape
+    _, sv, vt = np.linalg.svd(J, full_matrices=False)
+    tiny = sv <= sv[0] * 1e-14
+    inv_s2 = np.where(tiny, np.inf, 1.0 / np.where(tiny, 1.0, sv) ** 2)
+    with np.errstate(invalid="ignore"):
+        cov_theta = (vt.T * inv_s2[None, :]) @ vt
+    cov_theta = np.where(np.isnan(cov_theta), np.inf, cov_theta)
+    scale2 = 1.0 if sigma_known else float(r @ r) / max(n - p, 1)
+    T = np.asarray(jax.jacfwd(transform)(jnp.asarray(theta)))
+    with np.errstate(invalid="ignore"):
+        cov = T @ (cov_theta * scale2) @ T.T
+        std = np.sqrt(np.diag(cov))
+        corr = cov / np.outer(std, std)
+    return FitResult(
+        names=tuple(names),
+        values=np.asarray(transform(jnp.asarray(theta))),
+        std_errors=std,
+        covariance=cov,
+        correlation=corr,
+        theta=theta,
+        residuals=r,
+        singular_values=sv,
+        steps=int(steps),
+        message=message,
+        jacobian=J,
+        result=result,
+    )
+
+
+# Progress of the running fit: `NoiseFloorLM` reports each step through `report_step` (a
+# jax.debug.callback), which forwards to the callable `least_squares_fit(progress=...)` set here.
+# A module-level hook keeps the compiled solve independent of the callable.
+_PROGRESS: list = []
+
+
+def report_step(shown, accepted, steps, cost, gn_step):
+    """Host side of a solver step: steps taken, ½‖r‖² at the last accepted point and, after an
+    accepted step, the Gauss–Newton step left (max over parameters, in standard errors)."""
+    if _PROGRESS and shown:
+        progress, t0 = _PROGRESS[-1]
+        gn = f"Gauss-Newton step {float(gn_step):.2g} std errors" if accepted else "step rejected"
+        progress(f"LM: {int(steps)} steps, cost {float(cost):.8g}, {gn}, "
+                 f"{time.perf_counter() - t0:.1f} s")  # fmt: skip
 
 
 @eqx.filter_jit
@@ -121,61 +211,64 @@ def least_squares_fit(
     max_steps: int = 500,
     jac: str = "bwd",
     solver=None,
+    optimum_tol: float | None = None,
+    progress=None,
 ) -> FitResult:
-    """Fit θ minimising ½‖residual_fn(θ, args)‖² with optimistix Levenberg–Marquardt.
+    """Fit θ minimising ½‖residual_fn(θ, args)‖² with an optimistix least-squares solver.
 
     Args:
-        residual_fn: (θ, args) -> residual vector (already divided by its uncertainty).
+        residual_fn: (θ, args) -> residual vector (already divided by its uncertainty);
+            `FAILED_RESIDUAL` marks a row where the model could not be evaluated.
         theta0: start, 1-D.
         names: parameter names for the physical vector `transform(θ)`.
         transform: θ -> physical parameter vector (differentiable).
         sigma_known: residuals are in units of their standard deviation (else s² is estimated).
-        jac: how LM differentiates the residuals, "bwd" or "fwd" (optimistix option). "bwd" is
-            the default because forward linearisation of a residual that contains an optimistix
-            root find (the contact load balance) makes lineax reject the Jacobian as non-finite
-            in optimistix 0.1.0, although jax.jacfwd of the same residual is finite (a
-            `jax.custom_jvp` around the root find avoids it, see `_fit_chain`).
-        solver: an optimistix least-squares solver in place of LevenbergMarquardt(rtol, atol).
+        rtol, atol, max_steps: the default solver's Cauchy tolerances and the step budget.
+        jac: how the solver differentiates the residuals, "bwd" or "fwd" (optimistix option).
+            "bwd" is the default because forward linearisation of a residual that contains an
+            optimistix root find (the contact load balance) makes lineax reject the Jacobian as
+            non-finite in optimistix 0.1.0, although jax.jacfwd of the same residual is finite (a
+            `jax.custom_jvp` around the root find avoids it, see `fit_measured_slips`).
+        solver: an optimistix least-squares solver in place of LevenbergMarquardt(rtol, atol);
+            `NoiseFloorLM` for residuals computed through an ODE solve.
+        optimum_tol: if given, a successful stop counts only when the Gauss–Newton step still
+            left is below this many standard errors in every parameter (else
+            `RESULTS.short_of_optimum`): the check for `NoiseFloorLM`'s stop on rejected steps.
+        progress: callable receiving one line per solver step (`NoiseFloorLM` only).
     The solve is compiled once per `residual_fn` object: pass a module-level function (data in
     `args`) and repeated fits run warm.
 
     Returns:
-        FitResult; `converged` False (and `message` set) when LM did not succeed. Never raises for
-        non-convergence: the caller decides.
+        FitResult with `result` (`tribojax.RESULTS`): the solver's code, `model_failed` /
+        `model_failed_at_start` if the returned residuals contain `FAILED_RESIDUAL`, or
+        `short_of_optimum`. Never raises for non-convergence: the caller decides.
     """
     ensure_x64()
     theta0 = jnp.asarray(theta0, dtype=jnp.float64)
     if solver is None:
         solver = optx.LevenbergMarquardt(rtol=float(rtol), atol=float(atol))
-    sol = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
+    if progress is not None:
+        _PROGRESS.append((progress, time.perf_counter()))
+    try:
+        sol = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
+    finally:
+        if progress is not None:
+            _PROGRESS.pop()
     theta = sol.value
     r, J = _value_and_jacobian(residual_fn, theta, args)
-    n, p = J.shape
-    u, sv, vt = jnp.linalg.svd(J, full_matrices=False)
-    # (JᵀJ)^-1 through the SVD; directions with negligible singular values get infinite variance.
-    tiny = sv <= sv[0] * 1e-14
-    inv_s2 = jnp.where(tiny, jnp.inf, 1.0 / jnp.where(tiny, 1.0, sv) ** 2)
-    cov_theta = (vt.T * inv_s2[None, :]) @ vt
-    cov_theta = jnp.where(jnp.isnan(cov_theta), jnp.inf, cov_theta)
-    scale2 = 1.0 if sigma_known else float(r @ r) / max(n - p, 1)
-    cov_theta = cov_theta * scale2
-    T = jax.jacfwd(transform)(theta)
-    cov = T @ cov_theta @ T.T
-    std = jnp.sqrt(jnp.diag(cov))
-    corr = cov / jnp.outer(std, std)
-    ok = bool(sol.result == optx.RESULTS.successful)
-    message = "" if ok else optx.RESULTS[sol.result]
-    return FitResult(
-        names=tuple(names),
-        values=np.asarray(transform(theta)),
-        std_errors=np.asarray(std),
-        covariance=np.asarray(cov),
-        correlation=np.asarray(corr),
-        theta=np.asarray(theta),
-        residuals=np.asarray(r),
-        singular_values=np.asarray(sv),
-        converged=ok,
-        steps=int(sol.stats["num_steps"]),
-        message=str(message),
-        jacobian=np.asarray(J),
-    )
+    r, J = np.asarray(r), np.asarray(J)
+    result, message = RESULTS.promote(sol.result), None
+    if np.any(r == FAILED_RESIDUAL):
+        moved = not np.array_equal(np.asarray(theta), np.asarray(theta0))
+        result = RESULTS.model_failed if moved else RESULTS.model_failed_at_start
+    elif result == RESULTS.nonlinear_max_steps_reached:
+        message = f"{RESULTS[result]} (max_steps = {int(max_steps)})"
+    elif optimum_tol is not None and result == RESULTS.successful:
+        gn = float(np.max(np.abs(np.asarray(gauss_newton_step(r, J)))))
+        if not gn < optimum_tol:
+            result = RESULTS.short_of_optimum
+            message = (f"{RESULTS[result]} The step left is {gn:.3g} standard errors "
+                       f"(tolerance {optimum_tol:g}).")  # fmt: skip
+    steps = int(sol.stats["num_steps"])
+    return fit_statistics(theta, r, J, names=names, transform=transform, sigma_known=sigma_known,
+                          result=result, steps=steps, message=message)  # fmt: skip

@@ -20,8 +20,7 @@ from .._checks import check_range
 from .._dynamics._harmonic import drive
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._loop import HysteresisLoop, cycle_starts
-from ._engine import FitResult
-from ._slip import levenberg_marquardt
+from ._engine import FitResult, least_squares_fit
 
 _ELEMENTS = {"jenkins": Jenkins, "mindlin": Mindlin}
 
@@ -150,10 +149,10 @@ def fit_loop(
     fitted. Works for any history (drifting or multi-harmonic amplitude); for Mindlin the
     time-domain form is the Iwan discretisation (error ~1e-5 μN).
 
-    Parameters are fitted as logarithms (optimistix Levenberg–Marquardt, jitted once per
-    element, model and record length), started from `analyse_loop`'s μN and Eq 6 K_d; standard
-    errors from the Jacobian at the optimum. Only the product μN is identifiable from a loop;
-    without gross slip (Jenkins Ā ≤ 1) μN is only bounded below.
+    Parameters are fitted as logarithms (`least_squares_fit`: optimistix Levenberg–Marquardt,
+    compiled once per element, model and record length), started from `analyse_loop`'s μN and
+    Eq 6 K_d; standard errors from the Jacobian at the optimum. Only the product μN is
+    identifiable from a loop; without gross slip (Jenkins Ā ≤ 1) μN is only bounded below.
 
     Args:
         element: "jenkins" or "mindlin".
@@ -162,7 +161,8 @@ def fit_loop(
         model: "steady" or "history".
         max_steps: Levenberg–Marquardt step budget.
     Returns:
-        FitResult with names ("mu_N", "K_d"); `converged` says whether LM succeeded. For a
+        FitResult with names ("mu_N", "K_d"); `result` (`tribojax.RESULTS`) and `converged` say
+        whether LM succeeded. For a
         Jenkins loop that does not slip at the fit (Ā ≤ 1), μN's standard error is inf and
         `message` says that μN is only bounded below.
     """
@@ -191,7 +191,7 @@ def fit_loop(
         raise ValueError(f"{loop.source}: {len(f)} samples are too few to fit mu_N and K_d")
     theta0 = jnp.log(jnp.array([start.mu_N, start.K_d]))
     # jitted once per (element, model, record length): repeated fits reuse the compilation
-    fit = levenberg_marquardt(
+    fit = least_squares_fit(
         fn,
         theta0,
         args,
@@ -199,17 +199,11 @@ def fit_loop(
         transform=jnp.exp,
         sigma_known=sigma is not None,
         max_steps=max_steps,
-        block=max_steps,
-        rtol=1e-10,
-        atol=1e-12,
-        step_tol=0.0,
-        stall_tol=0.0,
+        jac="fwd",
     )
     A_fit = 0.5 * (float(loop.u.max()) - float(loop.u.min())) * fit.values[1] / fit.values[0]
     if cls is Jenkins and A_fit <= 1.0 + 1e-3:
         # no slip in the fitted Jenkins loop: μN is only bounded below by the peak force
-        import dataclasses
-
         std = fit.std_errors.copy()
         cov = fit.covariance.copy()
         corr = fit.correlation.copy()

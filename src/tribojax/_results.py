@@ -1,0 +1,51 @@
+"""Result codes: optimistix's `RESULTS` (itself lineax's plus the nonlinear-solver outcomes) and
+the outcomes of tribojax's fits.
+
+A fit reports one member (`FitResult.result`); `FitResult.converged` is `result ==
+RESULTS.successful` and `RESULTS[result]` is the message. Optimistix extends lineax's RESULTS the
+same way, so a code returned by `optimistix.least_squares` is promoted unchanged
+(`RESULTS.promote`).
+"""
+
+from __future__ import annotations
+
+import optimistix as optx
+
+
+class RESULTS(optx.RESULTS):  # pyright: ignore
+    """An `equinox.Enumeration` of outcomes: every member of `optimistix.RESULTS` plus
+
+    - `model_failed`: the model could not be evaluated at the returned parameters (an ODE solve
+      or a load balance failed there; its residuals carry the failed-evaluation value).
+    - `model_failed_at_start`: the model could not be evaluated at the start values and the
+      solver did not move away from them.
+    - `short_of_optimum`: the solver stopped on its noise-floor rule (`NoiseFloorLM`), but the
+      Gauss-Newton step still left is above the fit's tolerance in standard errors.
+    - `not_converged`: the fit did not converge, cause not recorded (a `FitResult` built with
+      `converged=False` and no result).
+
+    `RESULTS[member]` is the message; `result_name(member)` the member's name.
+    """
+
+    model_failed = (
+        "The model could not be evaluated at the fitted parameters (an ODE solve or a contact load "
+        "balance failed there). Try another start or a larger solver budget."
+    )
+    model_failed_at_start = (
+        "The model could not be evaluated at the start values. Give a start closer to the data."
+    )
+    short_of_optimum = (
+        "The solver stopped on its noise-floor rule, but the Gauss-Newton step still left is too "
+        "large (in standard errors): not at an optimum. Try another start or more steps."
+    )
+    not_converged = "The fit did not converge."
+
+
+def result_name(result) -> str:
+    """The name of a concrete `RESULTS` member (e.g. "successful"), for JSON reports."""
+    result = RESULTS.promote(result) if not isinstance(result, RESULTS) else result
+    # equinox keeps the members by name in `_name_to_item` (no public iteration)
+    for name, item in RESULTS._name_to_item.items():
+        if bool(item == result):
+            return name
+    raise ValueError(f"{result!r} is not a concrete RESULTS member")
