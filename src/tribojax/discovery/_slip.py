@@ -37,7 +37,9 @@ from jaxtyping import Array
 
 from .._dynamics._profiles import AbstractProfile, MeasuredProfile
 from .._dynamics._slip import simulate_slip
+from .._fit._start import slip_run_start
 from .._friction._lugre import DEFAULT_VELOCITY_SCALE, PreSlipLuGre
+from .._io._slip_run import SlipRun
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
 from ._regions import noise_estimate
 
@@ -74,44 +76,17 @@ def stage_travel(t, accel):
 
 
 def slip_start(t, accel, slip, mass) -> np.ndarray:
-    """Data-driven start (F_s, K_τ, C_τ) from the hold and cruise slip levels.
+    """Start values (F_s, K_τ, C_τ) of the baseline: `tribojax.slip_run_start` as an array.
 
-    For α = 1 the quasi-static bristle law gives, at a hold of acceleration a after rest,
-    Δx₁ = −z_max ln(1 − q) and, back at a = 0, Δx₂ − Δx₁ = −z_max ln(1 + q), q = m a/F_s
-    (wang2022 Eqs 26–27 integrated along dz/dΔx = 1 ∓ z/z_max). The ratio of the two gives q,
-    then z_max, F_s = m a/q, K_τ = F_s/z_max; C_τ from a damping ratio 0.2. Falls back to
-    q = 0.6 when the record does not show the two levels.
+    The one start heuristic of slip runs (the quasi-static limit of wang2022 Eq 27, searched on
+    F_s; C_τ from a damping ratio 0.1), kept under this name for discovery. It replaced a
+    hold-level heuristic that reached the same optima in as many LM steps on the hidden-effect
+    records but twice the steps of `fit_slip_run` on a drive without holds.
     """
-    t, a, y = (np.asarray(v, float) for v in (t, accel, slip))
-    amax = float(np.max(np.abs(a)))
-    if amax <= 0:
-        raise ValueError("slip record: the stage acceleration is zero throughout")
-    i_peak = int(np.argmax(np.abs(a)))
-    sgn = np.sign(a[i_peak])
-    hold = np.abs(a - a[i_peak]) < 0.05 * amax
-    hold[: max(0, i_peak - 1)] &= np.cumsum(np.abs(a) > 0.95 * amax)[: max(0, i_peak - 1)] > 0
-    first = np.flatnonzero(hold)
-    end_hold = first[np.flatnonzero(np.diff(first) > 1)[0]] if np.any(np.diff(first) > 1) else (
-        first[-1])  # fmt: skip
-    seg = first[first <= end_hold]
-    lvl1 = float(np.mean(y[seg[len(seg) // 3 :]]) - y[0]) * sgn
-    after = np.flatnonzero((np.arange(t.size) > end_hold) & (np.abs(a) < 0.05 * amax))
-    q = 0.6
-    if after.size > 4 and lvl1 > 0:
-        run = after[: np.argmax(np.diff(after) > 1) + 1] if np.any(np.diff(after) > 1) else after
-        lvl2 = float(np.mean(y[run[len(run) // 3 :]]) - y[0]) * sgn
-        drop = lvl1 - lvl2
-        if drop > 0:
-            ratio = lvl1 / drop
-            qs = np.linspace(0.02, 0.98, 97)
-            f = -np.log(1 - qs) / np.log(1 + qs)
-            if f[0] < ratio < f[-1]:
-                q = float(np.interp(ratio, f, qs))
-    zmax = max(lvl1, 1e-12) / -np.log(1 - q)
-    F_s = mass * amax / q
-    K = F_s / zmax
-    C = 2 * 0.2 * np.sqrt(K * mass)
-    return np.array([F_s, K, C])
+    s = slip_run_start(SlipRun(t=np.asarray(t, float), accel=np.asarray(accel, float),
+                               slip=np.asarray(slip, float), mass=float(mass),
+                               source="slip record"))  # fmt: skip
+    return np.array([s["F_s"], s["K_tau"], s["C_tau"]])
 
 
 class SlipBaseline(AbstractBaseline):
