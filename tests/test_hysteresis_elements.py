@@ -153,3 +153,17 @@ def test_drive_input_checks():
         tj.harmonic_response(ELEMENTS[0], 1e-6, 1.0, steps_per_cycle=1001)
     with pytest.raises(ValueError, match="n_iwan"):
         tj.Mindlin(MU, N, KD, n_iwan=1)
+
+
+def test_iwan_bank_is_mindlins_rate_form():
+    el = tj.Mindlin(0.3, 10.0, 1e6, n_iwan=64)
+    bank = tj.IwanBank.mindlin(64, el.A0, el.K_d)
+    u = jnp.concatenate([jnp.linspace(0.0, 2.0, 40), jnp.linspace(2.0, -1.0, 60)]) * el.A0
+    zs = bank.deflections(u)
+    z = el.initial_state()
+    for i in range(1, u.shape[0]):
+        z = el.increment(z, u[i] - u[i - 1])
+    np.testing.assert_allclose(np.asarray(zs[-1]), np.asarray(z), rtol=1e-12, atol=1e-20)
+    # the virgin curve is the interpolant of φ at the slip limits
+    f = [float(bank.force(zz)) for zz in zs[:40]]
+    np.testing.assert_allclose(f, np.asarray(el.virgin_curve(u[:40])), rtol=1e-3, atol=1e-4)

@@ -142,3 +142,17 @@ def test_solver_failure_is_reported():
     sol = tj.simulate_slip(el, max_steps=20, throw=False)
     assert not bool(sol.ok)
     assert "max_steps" in sol.message
+
+
+def test_forward_jacobian_adjoint_with_kvaerno5():
+    # the adjoint object also gives reverse mode through a solver other than Rodas4
+    adj = tj.ForwardJacobianAdjoint()
+
+    def t4(alpha):
+        el = tj.PreSlipLuGre(ROW["F_s"], ROW["K_tau"], ROW["C_tau"], alpha)
+        ts = jnp.array([0.3, 0.6])
+        return tj.simulate_slip(el, ts=ts, t_end=0.7, solver="kvaerno5", adjoint=adj).slip[-1]
+
+    assert float(jax.grad(t4)(1.2)) == pytest.approx(float(jax.jacfwd(t4)(1.2)), rel=1e-12)
+    with pytest.raises(ValueError, match="adjoint"):
+        tj.simulate_slip(tj.PreSlipLuGre(**ROW), adjoint="forward")

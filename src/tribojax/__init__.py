@@ -47,6 +47,7 @@ from ._contact._materials import (
 )
 from ._contact._surface import FractalSurface as FractalSurface
 from ._contact._surface import wang2022_surface as wang2022_surface
+from ._dynamics._adjoint import ForwardJacobianAdjoint as ForwardJacobianAdjoint
 from ._dynamics._harmonic import HarmonicCoefficients as HarmonicCoefficients
 from ._dynamics._harmonic import drive as drive
 from ._dynamics._harmonic import harmonic_balance as harmonic_balance
@@ -81,6 +82,7 @@ from ._friction._element import AbstractFrictionElement as AbstractFrictionEleme
 from ._friction._lugre import LuGre as LuGre
 from ._friction._lugre import PreSlipLuGre as PreSlipLuGre
 from ._friction._rate_independent import AbstractHysteresisElement as AbstractHysteresisElement
+from ._friction._rate_independent import IwanBank as IwanBank
 from ._friction._rate_independent import Jenkins as Jenkins
 from ._friction._rate_independent import Mindlin as Mindlin
 from ._io._loop import HysteresisLoop as HysteresisLoop

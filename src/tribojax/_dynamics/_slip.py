@@ -12,20 +12,18 @@ differences of I at the window ends (no averaging of a sampled curve).
 
 from __future__ import annotations
 
-import functools
-
 import diffrax as dfx
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
-from jax.custom_derivatives import SymbolicZero
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array
 
 from .._checks import as_f64, check_range, fail_if
 from .._friction._element import AbstractFrictionElement
+from ._adjoint import ForwardJacobianAdjoint
 from ._profiles import AbstractProfile, TrapezoidProfile
 from ._rodas4 import Rodas4
 
@@ -113,66 +111,6 @@ def _diffeqsolve(
     return sol.ys, (sol.result, jax.tree.map(jnp.asarray, sol.stats))
 
 
-def _forward_mode_solve(solve, unravel, dyn, static, adjoint):
-    """`solve(element, profile, mass, ts)` with derivatives from forward mode in every direction.
-
-    A `jax.custom_jvp` whose rule builds the Jacobian of ys w.r.t. the differentiated float
-    leaves of (element, profile, mass) by `jax.jacfwd` through diffrax's `ForwardMode`, and
-    applies it (or, under `jax.grad`/`jacrev`, its transpose) to the tangent; ts enters through
-    dys/dts = f(ts, ys). Reverse mode thus never recomputes the solve (see `Rodas4`): jacrev and
-    jacfwd give the same numbers. Cost per reverse pass: one forward solve carrying as many
-    tangents as there are differentiated scalars (4 for an element's parameters).
-    """
-
-    def primal(d):
-        return solve(*eqx.combine(d, static), adjoint)
-
-    @jax.custom_jvp
-    def run(d):
-        return primal(d)
-
-    @functools.partial(run.defjvp, symbolic_zeros=True)
-    def _jvp(primals, tangents):
-        (d,), (td,) = primals, tangents
-        leaves, treedef = jax.tree.flatten(d)
-        tleaves = treedef.flatten_up_to(td)
-        ts_leaf = len(leaves) - 1 if eqx.is_array(d[3]) else None  # ts is the last leaf
-        active = [
-            i for i, t in enumerate(tleaves)
-            if i != ts_leaf and not isinstance(t, SymbolicZero)
-            and jnp.issubdtype(leaves[i].dtype, jnp.inexact)
-        ]  # fmt: skip
-        if active:
-            flat, unflat = ravel_pytree([leaves[i] for i in active])
-
-            def ys_of(p):
-                new = list(leaves)
-                for i, x in zip(active, unflat(p)):
-                    new[i] = x
-                el, pr, m, ts = eqx.combine(jax.tree.unflatten(treedef, new), static)
-                ys, aux = solve(el, pr, m, ts, dfx.ForwardMode())
-                return ys, (ys, aux)
-
-            jac, (ys, aux) = jax.jacfwd(ys_of, has_aux=True)(flat)
-            dp, _ = ravel_pytree([tleaves[i] for i in active])
-            tys = jac @ dp
-        else:
-            ys, aux = primal(d)
-            tys = jnp.zeros_like(ys)
-        if ts_leaf is not None and not isinstance(tleaves[ts_leaf], SymbolicZero):
-            el, pr, m, ts = eqx.combine(d, static)
-            rate = jax.vmap(lambda t, y: _vector_field(t, y, (el, pr, m, unravel)))(ts, ys)
-            tys = tys + rate * tleaves[ts_leaf][:, None]
-        taux = jax.tree.map(
-            lambda x: np.zeros(np.shape(x), jax.dtypes.float0)
-            if not jnp.issubdtype(x.dtype, jnp.inexact) else jnp.zeros_like(x),
-            aux,
-        )  # fmt: skip
-        return (ys, aux), (tys, taux)
-
-    return run(dyn)
-
-
 @eqx.filter_jit
 def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjoint, dt0, solver):
     _, unravel = ravel_pytree(element.initial_state())
@@ -181,9 +119,12 @@ def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjo
     def solve(el, pr, m, t, adj):
         return _diffeqsolve(el, pr, m, t, unravel, *cfg, adj, dt0, solver)
 
-    if isinstance(solver, Rodas4):
-        dyn, static = eqx.partition((element, profile, mass, ts), eqx.is_array)
-        ys, (result, stats) = _forward_mode_solve(solve, unravel, dyn, static, adjoint)
+    if isinstance(adjoint, ForwardJacobianAdjoint):
+
+        def rate(el, pr, m, t, ys):
+            return jax.vmap(lambda ti, y: _vector_field(ti, y, (el, pr, m, unravel)))(t, ys)
+
+        ys, (result, stats) = adjoint.solve(solve, rate, (element, profile, mass, ts))
     else:
         ys, (result, stats) = solve(element, profile, mass, ts, adjoint)
     dx, v, integral = ys[:, 0], ys[:, 1], ys[:, -1]
@@ -212,15 +153,15 @@ def simulate_slip(
     max_steps=20_000,
     dt0=1e-5,
     throw=True,
-    adjoint=dfx.RecursiveCheckpointAdjoint(),
+    adjoint: dfx.AbstractAdjoint | ForwardJacobianAdjoint | None = None,
     solver: str | dfx.AbstractSolver | None = "rodas4",
 ) -> SlipSolution:
     """Slip of a body carried by friction on a stage with prescribed acceleration (wang2022 Eq 27).
 
     Solves Δx'' = a(t) − F_f/m, with F_f and the bristle law from `element` (LuGre, Eq 25, or
-    PreSlipLuGre, Eq 27), from rest (Δx = v = z = 0) to `t_end`. Eq 27 as printed carries a spurious
-    factor t and two masses; this is the consistent reading of REPRODUCTION.md (stage prescribed,
-    reticle driven by friction alone, Δx = x_stage − x_reticle).
+    PreSlipLuGre, Eq 27), from rest (Δx = v = z = 0) to `t_end`. Eq 27 as printed carries a
+    spurious factor t and two masses; this is the consistent reading of docs/reproduction.md
+    (stage prescribed, reticle driven by friction alone, Δx = x_stage − x_reticle).
 
     Numerics. The problem is stiff (√(K_τ/m) ≈ 7e3–2e4 rad/s, C_τ/K_τ ≈ 50 µs, horizon 2.3 s) and
     tiny (slips of nm). Default solver: `Rodas4` (Rosenbrock, L-stable, stiffly accurate, order
@@ -243,25 +184,23 @@ def simulate_slip(
     at rtol 1e-11 (exact sign): Rodas4 at the defaults (atol 1e-15) takes ~1150–1250 accepted and
     ~180–215 rejected steps per cycle, phase averages within 1.5e-8–6.1e-7 relative (atol 3e-16:
     ~1450–1630 steps, ≤ 2.1e-7); Kvaerno5 ~1050–1250 and 170–210 steps, within 1.9e-7–9.7e-7.
-    Per cycle (0.6 kPa, warm), Rodas4 is ~3x faster than Kvaerno5: 6.3–6.5 ms vs 18.6–19.1 ms of
-    process CPU time, 14–18 ms vs 38–45 ms wall time in the same runs on a loaded 2-core CPU
-    (Kvaerno5 took 18–19 ms wall on a quiet one). A larger ε lets the tail go earlier but biases
-    the result (ε = 1e-11: 3e-7, 1e-10: 4e-6 relative).
+    Rodas4 takes about a third of Kvaerno5's time per cycle (benchmarks/slip.py). A larger ε
+    lets the tail go earlier but biases the result (ε = 1e-11: 3e-7, 1e-10: 4e-6 relative).
 
-    Derivatives. With Rodas4 the solve sits inside a `jax.custom_jvp` whose rule is forward mode
-    (`jax.jacfwd` through `diffrax.ForwardMode`) w.r.t. the differentiated float leaves of
-    `element`, `profile` and `mass` (and dys/dts = f for `ts`); `jax.grad`/`jacrev` transpose
-    that, so every adjoint and both directions give the same numbers (jacrev = jacfwd to 2e-16 of
-    the largest elasticity of the phase averages). Reason: reverse mode through diffrax's
-    `RecursiveCheckpointAdjoint` recomputes the steps in a separately compiled program whose
-    rounding differs (XLA fuses, and contracts multiply-adds, differently); a Rosenbrock step
-    passes that to y and the step controller, the recomputed steps differ from the forward pass
-    and the gradient is wrong by up to 6e-3 (see `Rodas4`). Cost: one solve carrying as many
-    tangents as differentiated scalars; for the 4×4 Jacobian w.r.t. (F_s, K_τ, C_τ, α) ~5x a
-    solve in CPU time, either direction (Kvaerno5's jacfwd: 4.3x, 2.4x in wall time on a quiet
-    2-core machine; loaded wall-time ratios for Rodas4 4.0–4.7x). Kvaerno5 uses diffrax's
-    adjoints unchanged (`jax.jacfwd` then needs `adjoint=diffrax.ForwardMode()`). Batches:
-    `jax.vmap` over loads steps all members together (the union of their steps).
+    Derivatives (`adjoint`). With Rodas4 the default, and any diffrax adjoint passed, becomes
+    `ForwardJacobianAdjoint` (tribojax._dynamics._adjoint): the solve sits inside a
+    `jax.custom_jvp` whose rule is forward mode (`jax.jacfwd` through `diffrax.ForwardMode`) w.r.t.
+    the differentiated float leaves of `element`, `profile` and `mass` (and dys/dts = f for
+    `ts`); `jax.grad`/`jacrev` transpose that, so both directions give the same numbers (jacrev =
+    jacfwd to 2e-16 of the largest elasticity of the phase averages). Reason: reverse mode through
+    diffrax's `RecursiveCheckpointAdjoint` recomputes the steps in a separately compiled program
+    whose rounding differs; a Rosenbrock step passes that to y and the step controller, the
+    recomputed steps differ from the forward pass and the gradient is wrong by up to 6e-3 (see
+    `Rodas4`). Cost: one solve carrying as many tangents as differentiated scalars (about 5x a
+    solve for the 4×4 Jacobian w.r.t. (F_s, K_τ, C_τ, α), either direction). Other solvers use
+    the diffrax adjoint given (default `RecursiveCheckpointAdjoint`; `jax.jacfwd` then needs
+    `adjoint=diffrax.ForwardMode()`), or `ForwardJacobianAdjoint()` if passed. Batches: `jax.vmap`
+    over loads steps all members together (the union of their steps).
 
     Args:
         element: a friction element (its parameters may be traced; batch with jax.vmap).
@@ -272,9 +211,10 @@ def simulate_slip(
         rtol, atol: relative tolerance; absolute tolerance of the slip and deflection, m.
         max_steps: step budget; raise it if the result says it was reached.
         throw: raise on solver failure (else inspect `result` / `message`).
-        adjoint: diffrax adjoint of the solve. With Rodas4 it only affects the undifferentiated
-            solve (derivatives use forward mode, see above); with other solvers pass
-            `diffrax.ForwardMode()` for `jax.jacfwd`.
+        adjoint: how to differentiate the solve (see Derivatives): `ForwardJacobianAdjoint(...)`
+            or a diffrax adjoint; None (default) is `ForwardJacobianAdjoint()` with Rodas4 and
+            `diffrax.RecursiveCheckpointAdjoint()` otherwise. With Rodas4 a diffrax adjoint only
+            picks the undifferentiated solve (`ForwardJacobianAdjoint(adjoint)`).
         solver: "rodas4" (default), "kvaerno5" (Kvaerno5 with a chord iteration) or a diffrax
             solver instance. `atol` defaults to 1e-15 m for Rodas4, 1e-16 m otherwise.
     Returns:
@@ -290,6 +230,14 @@ def simulate_slip(
         )
     if atol is None:
         atol = DEFAULT_ATOL if isinstance(solver, Rodas4) else KVAERNO5_ATOL
+    if adjoint is None:
+        adjoint = dfx.RecursiveCheckpointAdjoint()
+    if isinstance(solver, Rodas4) and isinstance(adjoint, dfx.AbstractAdjoint):
+        adjoint = ForwardJacobianAdjoint(adjoint)  # never diffrax's reverse mode through Rodas4
+    if not isinstance(adjoint, (dfx.AbstractAdjoint, ForwardJacobianAdjoint)):
+        raise ValueError(
+            f"adjoint = {adjoint!r}: expected a diffrax adjoint or ForwardJacobianAdjoint()"
+        )
     t_end, rtol, atol = (
         _positive(t_end, "t_end", "s"),
         _positive(rtol, "rtol"),
@@ -313,7 +261,7 @@ def slip_phase_averages(
     throw=True,
     **kw,
 ) -> Array:
-    """wang2022's four phase slips (m), Tables 4–7, as REPRODUCTION.md defines them.
+    """wang2022's four phase slips (m), Tables 4–7, as docs/reproduction.md defines them.
 
     With ⟨Δx⟩_w the mean slip over a window (exact, from ∫Δx dt at the window ends):
         T4 = ⟨Δx⟩[0.25,0.6] − Δx(0)         T5 = ⟨Δx⟩[0.73,1.5] − ⟨Δx⟩[0.25,0.6]

@@ -7,7 +7,8 @@ form:
     Δx(t) = (F_s/K_τ) · Σ_k s_k·[ln(1 − s_k F_{k−1}/F_s) − ln(1 − s_k F_k/F_s)],  s_k = sgn(ΔF_k)
 
 which is linear in 1/K_τ for fixed F_s. F_s comes from a 1-D search (1/K_τ by linear least
-squares at each F_s).
+squares at each F_s). This is the one start heuristic of slip runs: `fit_slip_run` and
+discovery's slip baseline (`tribojax.discovery.slip_start`) both use it.
 """
 
 from __future__ import annotations

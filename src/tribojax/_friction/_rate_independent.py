@@ -2,7 +2,7 @@
 
 Each element is usable two ways:
 
-(a) as a steady hysteresis loop under u = A·cos θ (wu2015's phase convention, REPRODUCTION.md):
+(a) as a steady hysteresis loop under u = A·cos θ (wu2015's phase convention, docs/reproduction.md):
     θ ∈ [0, π) is the falling branch, starting at u = +A from the loop's peak force; the rising
     branch follows from the loop's odd symmetry f(θ + π) = −f(θ);
 (b) as an `AbstractFrictionElement` in rate form, driven by any displacement history. Because the
@@ -19,7 +19,9 @@ import abc
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import check_range
@@ -140,6 +142,67 @@ class Jenkins(AbstractHysteresisElement):
         return jnp.clip(state + du, -self.A0, self.A0)
 
 
+def mindlin_unit_bank(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Iwan discretisation of the Mindlin virgin curve in units of A0 (slip limits) and K_d
+    (stiffnesses): NumPy constants that depend on n (>= 2) only.
+
+    Slip displacements y_j = Y·(1 − (1 − j/n)²), Y = 1.5·A0, cluster where φ bends; the
+    stiffnesses make the bank's virgin curve the piecewise-linear interpolant of
+    φ(x) = μN[1 − (1 − x/Y)^(3/2)] at the y_j (wu2015 Eq 2; Masing branches follow, error ~1/n²).
+    """
+    q = 1.0 - (1.0 - np.arange(n + 1) / n) ** 2  # y_j / Y
+    phi = 1.0 - (1.0 - q) ** 1.5  # virgin curve / μN at y_j
+    slopes = np.diff(phi) / (1.5 * np.diff(q))  # of the interpolant / K_d, decreasing
+    return 1.5 * q[1:], slopes - np.append(slopes[1:], 0.0)
+
+
+class IwanBank(eqx.Module):
+    """A parallel bank of Jenkins elements (Iwan): slip limits y_j (m), stiffnesses k_j (N/m).
+
+    State: the spring deflections z_j (m). Each spring follows the displacement until its slider
+    holds it at ±y_j; the force is Σ k_j z_j. One element (y = μN/K_d, k = K_d) is the Jenkins
+    element (wu2015 Eq 1); `IwanBank.mindlin` discretises the Mindlin/Koh element (Eq 2).
+    """
+
+    y: Array
+    k: Array
+
+    @classmethod
+    def mindlin(cls, n: int, A0=1.0, K_d=1.0) -> IwanBank:
+        """The Mindlin bank (`mindlin_unit_bank`) for A0 (m) and K_d (N/m)."""
+        y, k = mindlin_unit_bank(n)
+        return cls(A0 * jnp.asarray(y), K_d * jnp.asarray(k))
+
+    def state_rate(self, z, velocity) -> Array:
+        """dz_j/dt (m/s): the velocity, 0 where a slider slides (|z_j| = y_j, moving outward)."""
+        sliding = (jnp.abs(z) >= self.y) & (z * velocity > 0)
+        return jnp.where(sliding, 0.0, velocity)
+
+    def force(self, z) -> Array:
+        """Σ k_j z_j, N."""
+        return jnp.sum(self.k * z)
+
+    def increment(self, z, du, limit_scale=1.0) -> Array:
+        """Deflections after a displacement step du (m), no reversal inside; slip limits y·s."""
+        y = self.y * limit_scale
+        return jnp.clip(z + du, -y, y)
+
+    def deflections(self, u, limit_scale=None) -> Array:
+        """Deflections (len(u), n) driven from rest along the displacement history u (m).
+
+        `limit_scale` (len(u), optional): the slip limits at each sample are y·s (a varying
+        normal load); exact for a rate-independent bank between samples.
+        """
+        s = jnp.ones_like(u) if limit_scale is None else limit_scale
+
+        def step(z, inp):
+            z = self.increment(z, inp[0], inp[1])
+            return z, z
+
+        _, zs = jax.lax.scan(step, jnp.zeros_like(self.y), (jnp.diff(u), s[1:]))
+        return jnp.concatenate([jnp.zeros((1, self.y.shape[0])), zs])
+
+
 def _three_halves(p):
     """max(p, 0)^(3/2), double-where masked so that derivatives of every order are finite at 0."""
     positive = p > 0.0
@@ -157,13 +220,11 @@ class Mindlin(AbstractHysteresisElement):
     Correction to the printed Eq 2: the branches must start from the loop's peak force
     f* = μN[1 − (1 − 2Ā/3)^(3/2)] (wu2015 defines f* but leaves it out of Eq 2). f* = μN in gross
     slip (Ā ≥ 1.5, θ* = arccos(1 − 3/Ā)); for Ā < 1.5 the printed form (starting at μN) does not
-    close and gives negative damping (REPRODUCTION.md).
+    close and gives negative damping (docs/reproduction.md).
 
     Rate form: an Iwan (parallel-Jenkins) discretisation of the virgin curve with `n_iwan`
-    elements (static). The slip displacements y_j = Y·(1 − (1 − j/n)²) cluster where φ bends, and
-    the stiffnesses make the virgin curve the piecewise-linear interpolant of φ at the y_j, so all
-    Masing branches are interpolated too (relative error ~1/n²). The state is the vector of the
-    n spring deflections (m).
+    elements (static), `IwanBank.mindlin` (see `mindlin_unit_bank`): all Masing branches are
+    interpolated (relative error ~1/n²). The state is the vector of the n spring deflections (m).
 
     Fields: mu (—, > 0), N (normal load, N, > 0), K_d (initial tangential stiffness, N/m, > 0),
     n_iwan (number of Iwan elements of the rate form, static, >= 2).
@@ -197,28 +258,18 @@ class Mindlin(AbstractHysteresisElement):
         f = self.peak_force(A) - 2.0 * self.virgin_curve(0.5 * (A - u))
         return jnp.maximum(f, -self.slip_force)
 
-    def _iwan(self):
-        """Slip displacements y_j (m) and stiffnesses k_j (N/m) of the Iwan discretisation."""
-        j = jnp.arange(self.n_iwan + 1, dtype=jnp.float64) / self.n_iwan
-        q = 1.0 - (1.0 - j) ** 2  # y_j / Y, from 0 to 1
-        Y = 1.5 * self.A0
-        phi = self.slip_force * (1.0 - (1.0 - q) ** 1.5)
-        slopes = jnp.diff(phi) / (Y * jnp.diff(q))  # of the interpolant, decreasing
-        k = slopes - jnp.concatenate([slopes[1:], jnp.zeros(1)])
-        return Y * q[1:], k
+    def iwan_bank(self) -> IwanBank:
+        """The Iwan discretisation of the rate form: `IwanBank.mindlin(n_iwan, A0, K_d)`."""
+        return IwanBank.mindlin(self.n_iwan, self.A0, self.K_d)
 
     def initial_state(self) -> Array:
         return jnp.zeros(self.n_iwan, dtype=jnp.float64)
 
     def state_rate(self, state, velocity: ArrayLike) -> Array:
-        y, _ = self._iwan()
-        sliding = (jnp.abs(state) >= y) & (state * velocity > 0)
-        return jnp.where(sliding, 0.0, velocity)
+        return self.iwan_bank().state_rate(state, velocity)
 
     def force(self, state, velocity: ArrayLike) -> Array:
-        _, k = self._iwan()
-        return jnp.sum(k * state)
+        return self.iwan_bank().force(state)
 
     def increment(self, state, du):
-        y, _ = self._iwan()
-        return jnp.clip(state + du, -y, y)
+        return self.iwan_bank().increment(state, du)

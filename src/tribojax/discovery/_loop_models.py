@@ -8,7 +8,8 @@ One generalised element covers the baseline and every physical augmentation:
 
 * an Iwan bank (parallel Jenkins elements, slip displacements y_j, stiffnesses k_j). One element
   (y = A0 = μN/K_d, k = K_d) is the Jenkins macroslip element (wu2015 Eq 1); `Mindlin`'s Iwan
-  discretisation is the Mindlin/Koh microslip element (wu2015 Eq 2);
+  discretisation (`IwanBank.mindlin`, the same bank) is the Mindlin/Koh microslip element
+  (wu2015 Eq 2);
 * `microslip`: the force is (1 − w)·Jenkins + w·Mindlin with the same μN and K_d (both have initial
   slope K_d and gross-slip force μN); w = 0 is the baseline, w = 1 the full Mindlin law;
 * `normal_load_variation`: the normal load follows the displacement, N(u) = N0·(1 + β·u/A) (A: half
@@ -31,6 +32,7 @@ import numpy as np
 
 from .._checks import fail_if
 from .._fit._loop import analyse_loop
+from .._friction._rate_independent import IwanBank, mindlin_unit_bank
 from .._io._loop import HysteresisLoop, cycle_starts
 
 KD_LOAD_EXPONENT = 0.7616  # wu2015 Eq 5: K_d ∝ N^0.7616
@@ -99,31 +101,7 @@ class LoopSpec(eqx.Module):
     c: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
 
 
-def _mindlin_bank(n: int):
-    """Unit Iwan bank of the Mindlin law (as `Mindlin._iwan`): slip limits in units of A0 and
-    stiffnesses in units of K_d, NumPy constants (they depend on n only)."""
-    q = 1.0 - (1.0 - np.arange(n + 1) / n) ** 2  # y_j / Y, Y = 1.5 A0
-    phi = 1.0 - (1.0 - q) ** 1.5  # virgin curve / μN at y_j
-    slopes = np.diff(phi) / (1.5 * np.diff(q))  # / K_d
-    return 1.5 * q[1:], slopes - np.append(slopes[1:], 0.0)
-
-
-_Y_MINDLIN, _K_MINDLIN = _mindlin_bank(N_IWAN)
-
-
-def _bank_deflections(y, a, u):
-    """Deflections (len(u), len(y)) of an Iwan bank with slip limits y·a(u) driven along u."""
-    du = jnp.diff(u)
-
-    def step(z, inp):
-        d, aa = inp
-        z = jnp.clip(z + d, -y * aa, y * aa)
-        return z, z
-
-    _, zs = jax.lax.scan(step, jnp.zeros_like(y), (du, a[1:]))
-    return jnp.concatenate([jnp.zeros((1, y.shape[0])), zs])
-
-
+_Y_MINDLIN, _K_MINDLIN = mindlin_unit_bank(N_IWAN)  # the Mindlin bank in units of A0, K_d
 S_MIN = 0.05  # floor of N(u)/N0 inside fits (check=False)
 
 
@@ -154,7 +132,7 @@ def loop_force(
         k = jnp.concatenate([jnp.ones(1) * (1.0 - spec.w), spec.w * jnp.asarray(_K_MINDLIN)])
     else:
         y, k = A0 * jnp.ones(1), jnp.ones(1)
-    z = _bank_deflections(y, a, data.u)[data.skip :]
+    z = IwanBank(y, k).deflections(data.u, a)[data.skip :]
     return spec.K_d * b[data.skip :] * (z @ k) + spec.c * data.v
 
 

@@ -37,6 +37,8 @@ Noise levels: `NOISE_LEVELS` (m). Loads: `LOADS` (vacuum kPa → Table 3 row).
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 from scipy.integrate import solve_ivp
 
@@ -45,7 +47,8 @@ from .._dynamics._profiles import PiecewiseLinearProfile
 from .._friction._lugre import LuGre, PreSlipLuGre
 from .._io._slip_run import SlipRun, synthetic_slip_run
 from .._io._tables import wang2022_table
-from ._slip import AugmentedPreSlip, stage_travel
+from ._discover import discover
+from ._slip import AugmentedPreSlip, slip_baseline, stage_travel
 
 SLIP_EFFECTS = (
     "sensor_drift",
@@ -162,11 +165,6 @@ def confusion_study(
     effects, baseline and final RMS residual (m), their ratio, wall time (s), baseline converged.
     `progress`: optional callable receiving each row as it is done.
     """
-    import time
-
-    from ._discover import discover
-    from ._slip import slip_baseline
-
     rows = []
     for eff in effects:
         for noise in noises:
