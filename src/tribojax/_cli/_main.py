@@ -19,6 +19,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from .. import _presets as P
+
 
 def _json_default(obj):
     import numpy as np
@@ -211,8 +213,13 @@ def cmd_reproduce(args) -> int:
 
 
 CONTACT_DEFAULTS = dict(
-    M=1.0, gamma=1.5, sigma_s=1.893e9, mu_t=0.1416, tangential_load=0.321, mass=0.321
-)  # wang2022 pair, Table-3-calibrated constants (see _reproduce)
+    M=P.CALIBRATED_M,
+    gamma=P.WANG2022_GAMMA,
+    sigma_s=P.CALIBRATED_SIGMA_S,
+    mu_t=P.CALIBRATED_MU_T,
+    tangential_load=P.TANGENTIAL_LOAD_N,
+    mass=P.WANG2022_RETICLE_MASS_KG,
+)  # wang2022 pair, Table-3-calibrated constants (tribojax._presets)
 
 
 def cmd_contact(args) -> int:

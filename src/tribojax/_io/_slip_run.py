@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from .._dynamics._profiles import MeasuredProfile
+from .._presets import WANG2022_RETICLE_MASS_KG
 from ._tables import DataFileError, read_table
 
 SLIP_COLUMNS = ("time_s", "stage_accel_m_s2", "slip_m")
@@ -311,7 +312,7 @@ def write_slip_run(run: SlipRun, path, *, overwrite: bool = False, comment: str 
 def synthetic_slip_run(
     element,
     profile=None,
-    mass=0.321,
+    mass=WANG2022_RETICLE_MASS_KG,
     *,
     n: int = 2301,
     t_end: float = 2.3,

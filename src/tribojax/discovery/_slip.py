@@ -38,10 +38,10 @@ from .._dynamics._profiles import AbstractProfile, MeasuredProfile
 from .._dynamics._slip import simulate_slip
 from .._friction._element import AbstractFrictionElement
 from .._friction._lugre import DEFAULT_VELOCITY_SCALE, _bristle_rate
+from .._presets import STANDARD_GRAVITY_WANG2022 as G_ACC  # m/s², wang2022 Eq 28
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
 from ._regions import noise_estimate
 
-G_ACC = 9.81  # m/s²
 KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling")
 VS_GRID = tuple(10.0 ** np.arange(-7.0, -3.4, 0.5))  # m/s, Stribeck velocity grid
 
