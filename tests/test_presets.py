@@ -14,7 +14,7 @@ SRC = Path(tj.__file__).resolve().parent
 # Literals that belong to _presets alone (wang2022 Tables 1-3, Eq 28, the Table 3 calibration and
 # the 4 kPa load; wu2015 Eq 5).
 PRESET_LITERALS = {
-    0.321: "reticle mass / tangential load (WANG2022_RETICLE_MASS_KG, TANGENTIAL_LOAD_N)",
+    0.321: "reticle mass / tangential load (WANG2022_RETICLE_MASS_KG, WANG2022_TANGENTIAL_LOAD_N)",
     909e-6: "suction area of Eq 28 (WANG2022_SUCTION_AREA_M2)",
     9.8: "g of Eq 28 (STANDARD_GRAVITY_WANG2022)",
     9.81: "g (use STANDARD_GRAVITY_WANG2022)",
@@ -57,7 +57,8 @@ def test_presets_agree_with_the_bundled_tables():
     np.testing.assert_allclose(tj.vacuum_to_load(t3["vacuum_kPa"]), t3["load_N"], rtol=1e-12)
     assert _presets.WANG2022_REFERENCE_LOAD_N == pytest.approx(t3["load_N"][2], rel=1e-12)
     assert t3["vacuum_kPa"][2] == 4.0
-    assert _presets.TANGENTIAL_LOAD_N == _presets.WANG2022_RETICLE_MASS_KG * _presets.WANG2022_A_MAX
+    P = _presets
+    assert P.WANG2022_TANGENTIAL_LOAD_N == P.WANG2022_RETICLE_MASS_KG * P.WANG2022_A_MAX
     assert float(tj.TrapezoidProfile().a_max) == _presets.WANG2022_A_MAX
     cal = _presets.WANG2022_CALIBRATED
     assert _presets.CHAIN_DEFAULTS == {
@@ -68,7 +69,9 @@ def test_presets_agree_with_the_bundled_tables():
 
 def test_public_names_come_from_presets():
     for name in ("wang2022_pair", "wang2022_surface", "wang2022_chuck", "wang2022_reticle",
-                 "vacuum_to_load", "wang2022_table3_model", "wu2015_eq5_stiffness"):  # fmt: skip
+                 "vacuum_to_load", "wang2022_table3_model", "wu2015_eq5_stiffness",
+                 "WANG2022_CALIBRATED", "WANG2022_RETICLE_MASS_KG", "WANG2022_TANGENTIAL_LOAD_N",
+                 "WANG2022_A_MAX"):  # fmt: skip
         assert getattr(tj, name) is getattr(_presets, name), name
     assert float(tj.wu2015_eq5_stiffness(1.0)) == _presets.WU2015_EQ5_COEFFICIENT
 

@@ -83,6 +83,10 @@ from ._io._tables import DataFileError as DataFileError
 from ._io._tables import read_table as read_table
 from ._io._tables import wang2022_table as wang2022_table
 from ._io._tables import wu2015_table as wu2015_table
+from ._presets import WANG2022_A_MAX as WANG2022_A_MAX
+from ._presets import WANG2022_CALIBRATED as WANG2022_CALIBRATED
+from ._presets import WANG2022_RETICLE_MASS_KG as WANG2022_RETICLE_MASS_KG
+from ._presets import WANG2022_TANGENTIAL_LOAD_N as WANG2022_TANGENTIAL_LOAD_N
 from ._presets import vacuum_to_load as vacuum_to_load
 from ._presets import wang2022_chuck as wang2022_chuck
 from ._presets import wang2022_pair as wang2022_pair

@@ -31,9 +31,9 @@ from ._friction._lugre import PreSlipLuGre
 from ._io._tables import wang2022_table
 from ._presets import (
     CHAIN_DEFAULTS,
-    TANGENTIAL_LOAD_N,
     WANG2022_A_MAX,
     WANG2022_RETICLE_MASS_KG,
+    WANG2022_TANGENTIAL_LOAD_N,
     wang2022_table3_model,
 )
 
@@ -47,7 +47,7 @@ def _logit(u):
     return math.log(u / (1.0 - u))
 
 
-def mu_min(loads, tangential_load=TANGENTIAL_LOAD_N) -> float:
+def mu_min(loads, tangential_load=WANG2022_TANGENTIAL_LOAD_N) -> float:
     """T/P at the smallest load: Mindlin's law (wang2022 Eq 17) needs μ_t above it."""
     return float(tangential_load / np.min(np.asarray(loads)))
 
@@ -216,7 +216,7 @@ def chain_phase_slips(
     # Eq 27 is a pre-sliding model: with F_s <= m·a_max the reticle slides grossly (slips of
     # metres, outside the model and the data); such rows are flagged like failed contacts and
     # run with harmless stand-in values (their result is not used)
-    ok = ok & (F_s > TANGENTIAL_LOAD_N)
+    ok = ok & (F_s > WANG2022_TANGENTIAL_LOAD_N)
     F_s, K, C = (jnp.where(ok, x, safe) for x, safe in zip((F_s, K, C), (1.0, 1e7, 500.0)))
     slips = lugre_phase_slips_nm(F_s, K, C, params[4], adjoint=adjoint, atol=atol, rtol=rtol,
                                  max_steps=max_steps, throw=False)  # fmt: skip

@@ -18,6 +18,8 @@ wu2015: Eq 5, K_d = 0.5924·N^0.7616 (N in N, K_d in N/µm; `wu2015_eq5_stiffnes
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 from ._checks import check_range
 from ._contact._contact import FractalContact
 from ._contact._materials import ContactPair, Material
@@ -27,7 +29,7 @@ from ._io._tables import wang2022_table
 # --- wang2022 -----------------------------------------------------------------------------------
 WANG2022_RETICLE_MASS_KG = 0.321  # m in Eqs 24 and 28
 WANG2022_A_MAX = 1.0  # m/s², the stage's peak acceleration
-TANGENTIAL_LOAD_N = WANG2022_RETICLE_MASS_KG * WANG2022_A_MAX  # T = m·a_max in T/P
+WANG2022_TANGENTIAL_LOAD_N = WANG2022_RETICLE_MASS_KG * WANG2022_A_MAX  # T = m·a_max in T/P
 WANG2022_SUCTION_AREA_M2 = 909e-6  # A_v of Eq 28
 STANDARD_GRAVITY_WANG2022 = 9.8  # m/s², g of Eq 28 (reproduces Table 3's load column)
 WANG2022_GAMMA = 1.5  # YK frequency-density parameter
@@ -37,21 +39,25 @@ CALIBRATED_M = 1.0
 CALIBRATED_G_M = 4.3636e-8
 CALIBRATED_MU_T = 0.1416
 CALIBRATED_SIGMA_S = 1.893e9  # Pa
-WANG2022_CALIBRATED = {
-    "M": CALIBRATED_M,
-    "D": WANG2022_TABLE1_D,
-    "G_m": CALIBRATED_G_M,
-    "mu_t": CALIBRATED_MU_T,
-    "sigma_s_Pa": CALIBRATED_SIGMA_S,
-}
+WANG2022_CALIBRATED = MappingProxyType(
+    {
+        "M": CALIBRATED_M,
+        "D": WANG2022_TABLE1_D,
+        "G_m": CALIBRATED_G_M,
+        "mu_t": CALIBRATED_MU_T,
+        "sigma_s_Pa": CALIBRATED_SIGMA_S,
+    }
+)
 # The chain fit's defaults (start and fixed values): the calibrated point and the paper's α = 1.
-CHAIN_DEFAULTS = {
-    "D": WANG2022_TABLE1_D,
-    "G_m": CALIBRATED_G_M,
-    "mu_t": CALIBRATED_MU_T,
-    "sigma_s_Pa": CALIBRATED_SIGMA_S,
-    "alpha": 1.0,
-}
+CHAIN_DEFAULTS = MappingProxyType(
+    {
+        "D": WANG2022_TABLE1_D,
+        "G_m": CALIBRATED_G_M,
+        "mu_t": CALIBRATED_MU_T,
+        "sigma_s_Pa": CALIBRATED_SIGMA_S,
+        "alpha": 1.0,
+    }
+)
 
 # --- wu2015 -------------------------------------------------------------------------------------
 WU2015_EQ5_COEFFICIENT = 0.5924e6  # N/m per N^exponent (Eq 5 read with K_d in N/µm)
@@ -148,7 +154,7 @@ def wang2022_table3_model(
     M=CALIBRATED_M,
     D=None,
     gamma=WANG2022_GAMMA,
-    tangential_load=TANGENTIAL_LOAD_N,
+    tangential_load=WANG2022_TANGENTIAL_LOAD_N,
     mass=WANG2022_RETICLE_MASS_KG,
     throw=True,
 ) -> FractalContact:

@@ -217,7 +217,7 @@ CONTACT_DEFAULTS = dict(
     gamma=P.WANG2022_GAMMA,
     sigma_s=P.CALIBRATED_SIGMA_S,
     mu_t=P.CALIBRATED_MU_T,
-    tangential_load=P.TANGENTIAL_LOAD_N,
+    tangential_load=P.WANG2022_TANGENTIAL_LOAD_N,
     mass=P.WANG2022_RETICLE_MASS_KG,
 )  # wang2022 pair, Table-3-calibrated constants (tribojax._presets)
 

@@ -32,9 +32,9 @@ from .._fit._engine import FitResult, least_squares_fit
 from .._io._tables import wang2022_table
 from .._presets import (
     CALIBRATED_M,
-    TANGENTIAL_LOAD_N,
     WANG2022_GAMMA,
     WANG2022_RETICLE_MASS_KG,
+    WANG2022_TANGENTIAL_LOAD_N,
     vacuum_to_load,
     wang2022_pair,
     wang2022_surface,
@@ -143,7 +143,7 @@ def reproduce_table3(fit: FitResult | None = None) -> dict:
             "D": float(published_surface.D),
             "gamma": float(published_surface.gamma),
             "area": "truncated (a = a')",
-            "tangential_load_N": TANGENTIAL_LOAD_N,
+            "tangential_load_N": WANG2022_TANGENTIAL_LOAD_N,
             "eq24_mass_kg": WANG2022_RETICLE_MASS_KG,
             "published_inputs": {
                 "G_m": float(published_surface.G),
