@@ -146,18 +146,9 @@ WANG2022_REFERENCE_LOAD_N = WANG2022_SUCTION_AREA_M2 * 4e3 + (
 )
 
 
-def wang2022_table3_model(
-    G,
-    mu_t,
-    sigma_s,
-    *,
-    M=CALIBRATED_M,
-    D=None,
-    gamma=WANG2022_GAMMA,
-    tangential_load=WANG2022_TANGENTIAL_LOAD_N,
-    mass=WANG2022_RETICLE_MASS_KG,
-    throw=True,
-) -> FractalContact:
+def wang2022_table3_model(G, mu_t, sigma_s, *, M=CALIBRATED_M, D=None, gamma=WANG2022_GAMMA,
+                          tangential_load=WANG2022_TANGENTIAL_LOAD_N,
+                          mass=WANG2022_RETICLE_MASS_KG, throw=True) -> FractalContact:  # fmt: skip
     """The reticle/chuck contact model behind wang2022 Table 3, for given unpublished constants.
 
     D = 2.8821 (Table 1; pass `D` to free it) and γ = 1.5, the Table 2 pair with strength
