@@ -61,8 +61,8 @@ def _reference_inputs():
         H=float(pair.H),
         nu=float(pair.nu),
         sigma_s=fc.DEFAULTS["sigma_s_Pa"],
-        tangential_load=0.321,
-        mass=0.321,
+        tangential_load=tj.WANG2022_TANGENTIAL_LOAD_N,
+        mass=tj.WANG2022_RETICLE_MASS_KG,
     )
 
 

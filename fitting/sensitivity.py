@@ -29,7 +29,8 @@ import tribojax as tj
 
 TABLE3_LOADS = (3.6912, 4.9638, 6.7818, 9.5088, 12.2358, 21.3258)  # N, 0.6 ... 20 kPa (Eq 28)
 TABLE3_VACUUM = (0.6, 2.0, 4.0, 7.0, 10.0, 20.0)  # kPa
-SURFACE = dict(D=2.8821, G=4.3636e-8, mu_t=0.1416, a_max=1.0)
+CAL = tj.WANG2022_CALIBRATED  # Table 1 D and the Table 3 calibration (M = 1)
+SURFACE = dict(D=CAL["D"], G=CAL["G_m"], mu_t=CAL["mu_t"], a_max=tj.WANG2022_A_MAX)
 AMPLITUDE = 50e-9  # m
 SWEEP_AXES = dict(
     D=np.linspace(2.70, 2.95, 20),
@@ -183,7 +184,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     result = {
         "study": "elasticities of the wang2022 chain and a sharded surface/load sweep",
-        "surface": {**SURFACE, "M": 1.0, "sigma_s_Pa": 1.893e9, "gamma": 1.5},
+        "surface": {**SURFACE, "M": CAL["M"], "sigma_s_Pa": CAL["sigma_s_Pa"], "gamma": 1.5},
         "loop_amplitude_m": AMPLITUDE,
         "elasticities": [
             {

@@ -23,7 +23,7 @@ from tribojax._fit import _chain as fc
 # (D, G m, μ_t): Table 1's D with the Table 3 calibration, and two distinct starts. Every start
 # keeps F_s > m·a_max = 0.321 N at all six loads (no gross sliding, Eq 27's pre-sliding regime).
 STARTS = (
-    {"D": 2.8821, "G_m": 4.364e-8, "mu_t": 0.1416},
+    {k: fc.DEFAULTS[k] for k in ("D", "G_m", "mu_t")},  # the calibrated point (tribojax._presets)
     {"D": 2.8, "G_m": 2e-8, "mu_t": 0.1},
     {"D": 2.75, "G_m": 3e-8, "mu_t": 0.11},
     # failed with the Kvaerno5 slip solver (a diverging stage Newton iteration under forward

@@ -16,7 +16,7 @@ import numpy as np
 import tribojax as tj
 
 STARTS = ((1e-8, 0.2, 1e9), (3e-7, 0.3, 3e9), (1e-9, 0.12, 5e8))
-D_TABLE1 = 2.8821
+D_TABLE1 = tj.WANG2022_CALIBRATED["D"]  # Table 1
 
 
 def run(Ms=(1.0, 2.0, 10.0), starts=STARTS) -> dict:

@@ -33,20 +33,7 @@ from ._contact._materials import (
 from ._contact._materials import (
     Material as Material,
 )
-from ._contact._materials import (
-    vacuum_to_load as vacuum_to_load,
-)
-from ._contact._materials import (
-    wang2022_chuck as wang2022_chuck,
-)
-from ._contact._materials import (
-    wang2022_pair as wang2022_pair,
-)
-from ._contact._materials import (
-    wang2022_reticle as wang2022_reticle,
-)
 from ._contact._surface import FractalSurface as FractalSurface
-from ._contact._surface import wang2022_surface as wang2022_surface
 from ._dynamics._adjoint import ForwardJacobianAdjoint as ForwardJacobianAdjoint
 from ._dynamics._harmonic import HarmonicCoefficients as HarmonicCoefficients
 from ._dynamics._harmonic import drive as drive
@@ -99,17 +86,26 @@ from ._io._tables import DataFileError as DataFileError
 from ._io._tables import read_table as read_table
 from ._io._tables import wang2022_table as wang2022_table
 from ._io._tables import wu2015_table as wu2015_table
+from ._presets import WANG2022_A_MAX as WANG2022_A_MAX
+from ._presets import WANG2022_CALIBRATED as WANG2022_CALIBRATED
+from ._presets import WANG2022_RETICLE_MASS_KG as WANG2022_RETICLE_MASS_KG
+from ._presets import WANG2022_TANGENTIAL_LOAD_N as WANG2022_TANGENTIAL_LOAD_N
+from ._presets import vacuum_to_load as vacuum_to_load
+from ._presets import wang2022_chuck as wang2022_chuck
+from ._presets import wang2022_pair as wang2022_pair
+from ._presets import wang2022_reticle as wang2022_reticle
+from ._presets import wang2022_surface as wang2022_surface
+from ._presets import wang2022_table3_model as wang2022_table3_model
+from ._presets import wu2015_eq5_stiffness as wu2015_eq5_stiffness
 from ._reproduce._table3 import calibrate_table3 as calibrate_table3
 from ._reproduce._table3 import equivalent_G as equivalent_G
 from ._reproduce._table3 import reproduce_table3 as reproduce_table3
-from ._reproduce._table3 import wang2022_table3_model as wang2022_table3_model
 from ._reproduce._wu2015 import cbar_peak as cbar_peak
 from ._reproduce._wu2015 import dimensionless_curves as dimensionless_curves
 from ._reproduce._wu2015 import eq7_curves as eq7_curves
 from ._reproduce._wu2015 import fractal_tangential_stiffness as fractal_tangential_stiffness
 from ._reproduce._wu2015 import plot_wu2015 as plot_wu2015
 from ._reproduce._wu2015 import wu2015_comparison as wu2015_comparison
-from ._reproduce._wu2015 import wu2015_eq5_stiffness as wu2015_eq5_stiffness
 from ._reproduce._wu2015 import wu2015_eq7 as wu2015_eq7
 from ._results import RESULTS as RESULTS
 from ._roughness._estimate import RoughnessEstimate as RoughnessEstimate

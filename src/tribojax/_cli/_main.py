@@ -18,11 +18,12 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
+from .. import _presets as P
 from .._contact._contact import FractalContact
-from .._contact._materials import wang2022_pair
 from .._contact._surface import FractalSurface
 from .._fit import _chain as chain_fit
 from .._plot import pyplot, save_figure
+from .._presets import wang2022_pair
 from .._reproduce._table3 import calibrate_table3, max_rel_error, reproduce_table3
 from .._reproduce._tables4to7 import plot_figure10, print_tables4to7, reproduce_tables4to7
 from .._reproduce._wu2015 import plot_wu2015, wu2015_comparison
@@ -175,8 +176,13 @@ def cmd_reproduce(args) -> int:
 
 
 CONTACT_DEFAULTS = dict(
-    M=1.0, gamma=1.5, sigma_s=1.893e9, mu_t=0.1416, tangential_load=0.321, mass=0.321
-)  # wang2022 pair, Table-3-calibrated constants (see _reproduce)
+    M=P.CALIBRATED_M,
+    gamma=P.WANG2022_GAMMA,
+    sigma_s=P.CALIBRATED_SIGMA_S,
+    mu_t=P.CALIBRATED_MU_T,
+    tangential_load=P.WANG2022_TANGENTIAL_LOAD_N,
+    mass=P.WANG2022_RETICLE_MASS_KG,
+)  # wang2022 pair, Table-3-calibrated constants (tribojax._presets)
 
 
 def cmd_contact(args) -> int:

@@ -1,4 +1,4 @@
-"""Materials, contact pairs and the wang2022 presets (Table 2, Eq 28)."""
+"""Materials and contact pairs (the wang2022 presets are in `tribojax._presets`)."""
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -87,62 +87,3 @@ class ContactPair(eqx.Module):
             nu=pick(first.nu, second.nu),
             sigma_s=pick(first.sigma_y, second.sigma_y) if sigma_s is None else sigma_s,
         )
-
-
-def _wang2022_material(row: int, name: str) -> Material:
-    from .._io._tables import wang2022_table
-
-    t = wang2022_table(2)
-    return Material(
-        E=t["E_Pa"][row],
-        nu=t["nu"][row],
-        G=t["shear_modulus_Pa"][row],
-        H=t["H_Pa"][row],
-        sigma_y=t["yield_strength_Pa"][row],
-        name=name,
-    )
-
-
-# wang2022 Table 2 (bundled as data/wang2022/table2_materials.csv). The printed header is garbled;
-# by the values column 1 is the fused-quartz chuck and column 2 the glass-ceramic reticle.
-def wang2022_chuck() -> Material:
-    """Fused-quartz vacuum chuck, wang2022 Table 2: E 70.5 GPa, G 30.2 GPa, H 1.372 GPa."""
-    return _wang2022_material(0, "fused quartz chuck")
-
-
-def wang2022_reticle() -> Material:
-    """Glass-ceramic reticle, wang2022 Table 2: E 90.3 GPa, G 36.3 GPa, H 6.5 GPa."""
-    return _wang2022_material(1, "glass-ceramic reticle")
-
-
-def wang2022_pair(*, sigma_s=None) -> ContactPair:
-    """The reticle/chuck pair of wang2022 Table 2: E* = 41.28 GPa, G' = 9.158 GPa, H = 1.372 GPa.
-
-    sigma_s defaults to the softer body's tabulated yield strength, 490 MPa.
-    """
-    return ContactPair.from_materials(wang2022_chuck(), wang2022_reticle(), sigma_s=sigma_s)
-
-
-WANG2022_SUCTION_AREA_M2 = 909e-6
-WANG2022_RETICLE_MASS_KG = 0.321
-STANDARD_GRAVITY_WANG2022 = 9.8  # m/s^2; reproduces Table 3's load column exactly
-
-
-def vacuum_to_load(
-    vacuum_kPa,
-    *,
-    suction_area_m2=WANG2022_SUCTION_AREA_M2,
-    mass_kg=WANG2022_RETICLE_MASS_KG,
-    g=STANDARD_GRAVITY_WANG2022,
-):
-    """Normal load F = A_v P_v + m g, in N (wang2022 Eq 28).
-
-    Args:
-        vacuum_kPa: vacuum degree P_v, kPa, >= 0.
-        suction_area_m2: adsorption area A_v, m^2 (909 mm^2 in the paper; the nominal contact area
-            of 2101.72 mm^2 is not what Table 3 uses).
-        mass_kg: reticle mass, kg (0.321).
-        g: gravitational acceleration, m/s^2 (9.8 reproduces Table 3).
-    """
-    p = check_range(vacuum_kPa, "vacuum_kPa", 0.0, lo_open=False, unit="kPa")
-    return suction_area_m2 * p * 1e3 + mass_kg * g

@@ -28,15 +28,3 @@ class FractalSurface(eqx.Module):
         self.G = check_range(G, "G", 0.0, unit="m")
         self.M = check_range(M, "M", 1.0, lo_open=False)
         self.gamma = check_range(gamma, "gamma", 1.0)
-
-
-def wang2022_surface(M, *, gamma=1.5) -> FractalSurface:
-    """The equivalent surface of wang2022 Table 1 (D = 2.8821, G = 7.768e-12 m).
-
-    M is not published; it must be given.
-    """
-    from .._io._tables import wang2022_table
-
-    t = wang2022_table(1)
-    row = list(t["surface"]).index("equivalent")
-    return FractalSurface(D=t["D"][row], G=t["G_m"][row], M=M, gamma=gamma)

@@ -16,13 +16,13 @@ import diffrax as dfx
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 import optimistix as optx
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array
 
 from .._checks import as_f64, check_range, fail_if
 from .._friction._element import AbstractFrictionElement
+from .._presets import WANG2022_RETICLE_MASS_KG
 from ._adjoint import ForwardJacobianAdjoint
 from ._profiles import AbstractProfile, TrapezoidProfile
 from ._rodas4 import Rodas4
@@ -144,7 +144,7 @@ def _positive(x, name, unit=""):
 def simulate_slip(
     element: AbstractFrictionElement,
     profile: AbstractProfile | None = None,
-    mass=0.321,
+    mass=WANG2022_RETICLE_MASS_KG,
     *,
     ts=None,
     t_end=DEFAULT_T_END,
@@ -255,7 +255,7 @@ def simulate_slip(
 def slip_phase_averages(
     element: AbstractFrictionElement,
     profile: TrapezoidProfile | None = None,
-    mass=0.321,
+    mass=WANG2022_RETICLE_MASS_KG,
     *,
     t_end=DEFAULT_T_END,
     throw=True,

@@ -6,9 +6,10 @@ Chain (all differentiable, float64):
     (F_s, K_τ, C_τ, α) --PreSlipLuGre + slip ODE, Eq 27-->  phase slips T4…T7 (nm), 24 values
 
 and optimistix Levenberg–Marquardt fits the free parameters to the *measured* columns of
-Tables 4–7. The surface is the Table 1/2 reticle–chuck pair of `_reproduce.wang2022_table3_model`
-with D free (γ = 1.5, M = 1 fixed: G and M are exactly degenerate, see `_reproduce`), T = 0.321 N
-in T/P and m = 0.321 kg in Eq 24.
+Tables 4–7. The chain is `tribojax._chain` (one path shared with the reproduction, the
+sensitivities and discovery): the Table 1/2 reticle–chuck pair of `wang2022_table3_model` with D
+free (γ = 1.5, M = 1 fixed: G and M are exactly degenerate, see `calibrate_table3`),
+T = m·a_max = 0.321 N in T/P and m = 0.321 kg in Eq 24.
 
 Uncertainty model (stated): every measured cell has the same *relative* uncertainty s, estimated
 from the fit (s² = RSS/(n − p)); residual_i = model_i/measured_i − 1. This is also the metric of
@@ -16,11 +17,7 @@ the acceptance: the RMS relative residual over the 24 cells, computed the same w
 paper's own theoretical values. (T5 at 20 kPa is −0.47 nm measured; it weighs most.)
 
 Derivatives. Forward mode is the cheap direction for a handful of parameters (the slip ODE with
-`diffrax.ForwardMode()`), but optimistix 0.1.0's forward linearisation of a residual that contains
-the contact's optimistix root find is rejected by lineax as non-finite. The contact map (6 loads ×
-3 parameters) is therefore wrapped in a `jax.custom_jvp` whose tangent is its dense 18×4
-Jacobian (computed with `jax.jacfwd`, which is finite) times the input tangent; it is linear in
-the tangent, so reverse mode (`jax.grad`) works through it too.
+`diffrax.ForwardMode()`; the contact through the custom JVP of `tribojax._chain`).
 
 Convergence. The slips come from an adaptive ODE solver (accurate to ~2e-4 here, `SLIP_ATOL`);
 near the optimum the misfit is flat to that level along the D–G valley. `NoiseFloorLM` therefore
@@ -49,36 +46,24 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._chain import SLIP_ATOL as SLIP_ATOL
+from .._chain import SLIP_MAX_STEPS as SLIP_MAX_STEPS
+from .._chain import SLIP_RTOL as SLIP_RTOL
+from .._chain import chain_contact as chain_contact
+from .._chain import chain_phase_slips, mu_min, to_physical, to_theta, wang2022_loads
 from .._checks import as_f64
-from .._contact._materials import WANG2022_RETICLE_MASS_KG
-from .._dynamics._slip import slip_phase_averages
-from .._friction._lugre import PreSlipLuGre
 from .._io._tables import wang2022_table
-from .._reproduce._table3 import wang2022_table3_model
+from .._presets import CHAIN_DEFAULTS
 from .._results import RESULTS, result_name
 from ._engine import FAILED_RESIDUAL, FitResult, gauss_newton_step, least_squares_fit
 from ._solver import NoiseFloorLM
 
 PARAMETERS = ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha")
 # Defaults of the fixed ones: Table 1's D, the Table 3 calibration (M = 1), the paper's α = 1.
-DEFAULTS = {"D": 2.8821, "G_m": 4.364e-8, "mu_t": 0.1416, "sigma_s_Pa": 1.893e9, "alpha": 1.0}
+DEFAULTS = dict(CHAIN_DEFAULTS)
 DEFAULT_FREE = ("D", "G_m", "mu_t")
 TABLES = (4, 5, 6, 7)
-# Search box for D and log G (scaled logits keep LM inside it).
-_D_RANGE = (2.05, 2.98)
-_LOG_G_RANGE = (math.log(1e-11), math.log(1e-5))
-# Slip tolerances for the fit: atol 1e-15 m gives phase slips within ~2e-4 relative of a
-# 1e-17 reference at 0.6 and 20 kPa, in a third to a half of the time of the 1e-16 default.
-SLIP_ATOL = 1e-15
-SLIP_RTOL = 1e-6
-SLIP_MAX_STEPS = 40_000
-_A_MAX = 1.0  # m/s², the stage's peak acceleration (TrapezoidProfile, REPRODUCTION.md)
 GN_STEP_TOL = 0.1  # converged: the remaining Gauss–Newton step < 0.1 standard errors
-
-
-def wang2022_loads() -> jnp.ndarray:
-    """Table 3's six normal loads, N (Eq 28)."""
-    return jnp.asarray(wang2022_table(3)["load_N"])
 
 
 def measured_slips() -> np.ndarray:
@@ -114,147 +99,6 @@ def symmetric_bound(measured=None) -> dict:
     return {"rms_relative_residual": rms_relative(model, m), "best_symmetric_nm": model.tolist()}
 
 
-def _contact_raw(phys4, loads):
-    """(D, G, μ_t, σ_s) -> [F_s, K_τ, C_τ] at `loads` (3, n), plus a per-load validity flag."""
-    D, G, mu_t, sigma_s = phys4
-    model = wang2022_table3_model(G, mu_t, sigma_s, D=D, throw=False)
-    out = jax.vmap(model)(loads)
-    ok = out.converged & ~out.all_plastic & (out.K_tau > 0) & (out.F_s > 0)
-    ok = ok & jnp.isfinite(out.values).all(-1)
-    return jnp.stack([out.F_s, out.K_tau, out.C_tau]), ok
-
-
-_SAFE_PHYS4 = (DEFAULTS["D"], DEFAULTS["G_m"], DEFAULTS["mu_t"], DEFAULTS["sigma_s_Pa"])
-
-
-@jax.custom_jvp
-def _contact(phys4, loads):
-    values, ok = _contact_raw(phys4, loads)
-    return jnp.concatenate([values, ok.astype(values.dtype)[None]])  # (4, n): last row = ok
-
-
-@_contact.defjvp
-def _contact_jvp(primals, tangents):
-    phys4, loads = primals
-    dphys, _ = tangents  # the loads are data here
-    out = _contact(phys4, loads)
-    # Where a load balance failed, the implicit derivative of its root find is a non-finite
-    # linear solve that raises: differentiate at a safe point instead and zero the tangent
-    # (those rows are flagged and their residuals are not used).
-    good = jnp.all(out[3] > 0.5)
-    p_eval = jnp.where(good, phys4, jnp.asarray(_SAFE_PHYS4, dtype=phys4.dtype))
-    J = jax.jacfwd(lambda p: _contact_raw(p, loads)[0])(p_eval)  # (3, n, 4)
-    dout = jnp.where(good, J, 0.0) @ dphys
-    return out, jnp.concatenate([dout, jnp.zeros_like(dout[:1])])
-
-
-def chain_contact(params, loads=None):
-    """F_s (N), K_τ (N/m), C_τ (N s/m) at `loads` (N) for physical params (D, G, μ_t, σ_s[, α]).
-
-    wang2022 Eqs 5–24 with D free (`wang2022_table3_model` otherwise). Returns ((3, n), ok (n,)),
-    ok False where the load balance failed or the contact is all-plastic (F_s or K_τ zero).
-    Differentiable by `jax.jacfwd` and `jax.grad` (custom JVP, see the module docstring).
-    """
-    loads = wang2022_loads() if loads is None else as_f64(loads, "loads")
-    p = jnp.asarray(params, dtype=jnp.float64)[:4]
-    out = _contact(p, loads)
-    return out[:3], out[3] > 0.5
-
-
-def chain_phase_slips(
-    params,
-    loads=None,
-    *,
-    adjoint=dfx.RecursiveCheckpointAdjoint(),
-    atol=SLIP_ATOL,
-    rtol=SLIP_RTOL,
-    max_steps=SLIP_MAX_STEPS,
-):
-    """Phase slips [T4, T5, T6, T7] (nm) at `loads` for params (D, G m, μ_t, σ_s Pa, α).
-
-    The whole chain (wang2022 Eqs 5–24, 26–27 and REPRODUCTION.md's phase windows), vmapped over
-    the loads. Returns (slips (n, 4) in nm, ok (n,)): ok is False where the contact is all-plastic
-    or its load balance failed, or the slip solver did not finish (those rows are then not
-    meaningful), or F_s <= m·a_max (gross sliding: outside Eq 27's pre-sliding model).
-    `adjoint=diffrax.ForwardMode()` for `jax.jacfwd`; the default for `jax.grad`.
-    """
-    params = jnp.asarray(params, dtype=jnp.float64)
-    (F_s, K, C), ok = chain_contact(params, loads)
-    alpha = params[4]
-    # Eq 27 is a pre-sliding model: with F_s <= m·a_max the reticle slides grossly (slips of
-    # metres, outside the model and the data); such rows are flagged like failed contacts and
-    # run with harmless stand-in values (their result is not used)
-    ok = ok & (F_s > WANG2022_RETICLE_MASS_KG * _A_MAX)
-    F_s, K, C = (jnp.where(ok, x, safe) for x, safe in zip((F_s, K, C), (1.0, 1e7, 500.0)))
-
-    def one(f, k, c):
-        element = PreSlipLuGre(f, k, c, alpha)
-        return slip_phase_averages(
-            element,
-            mass=WANG2022_RETICLE_MASS_KG,
-            adjoint=adjoint,
-            atol=atol,
-            rtol=rtol,
-            max_steps=max_steps,
-            throw=False,
-        )
-
-    slips = jax.vmap(one)(F_s, K, C) * 1e9
-    ok = ok & jnp.all(jnp.isfinite(slips), axis=-1)
-    return slips, ok
-
-
-# --- parametrisation: θ (unconstrained) <-> physical ------------------------------------------
-
-
-def _logit(u):
-    return math.log(u / (1.0 - u))
-
-
-def _mu_min(loads) -> float:
-    # Mindlin's law (Eq 17) needs μ_t > T/P at every load
-    return float(0.321 / np.min(np.asarray(loads)))
-
-
-def _to_physical(theta_full, mu_min):
-    d0, d1 = _D_RANGE
-    g0, g1 = _LOG_G_RANGE
-    return jnp.stack(
-        [
-            d0 + (d1 - d0) * jax.nn.sigmoid(theta_full[0]),
-            jnp.exp(g0 + (g1 - g0) * jax.nn.sigmoid(theta_full[1])),
-            mu_min * (1.0 + jnp.exp(theta_full[2])),
-            jnp.exp(theta_full[3]),
-            jnp.exp(theta_full[4]),
-        ]
-    )
-
-
-def _to_theta(phys, mu_min) -> np.ndarray:
-    D, G, mu_t, sigma_s, alpha = (float(v) for v in phys)
-    d0, d1 = _D_RANGE
-    g0, g1 = _LOG_G_RANGE
-    checks = {
-        "D": (D, d0 < D < d1, f"({d0}, {d1})"),
-        "G_m": (G, 1e-11 < G < 1e-5, "(1e-11, 1e-05) m"),
-        "mu_t": (mu_t, mu_t > mu_min, f"({mu_min:.4g}, inf) (Eq 17: mu_t > T/P)"),
-        "sigma_s_Pa": (sigma_s, sigma_s > 0, "(0, inf) Pa"),
-        "alpha": (alpha, alpha > 0, "(0, inf)"),
-    }
-    for name, (v, good, rng) in checks.items():
-        if not (math.isfinite(v) and good):
-            raise ValueError(f"{name} = {v:g} is outside the allowed range {rng}")
-    return np.array(
-        [
-            _logit((D - d0) / (d1 - d0)),
-            _logit((math.log(G) - g0) / (g1 - g0)),
-            math.log(mu_t / mu_min - 1.0),
-            math.log(sigma_s),
-            math.log(alpha),
-        ]
-    )
-
-
 # --- the fit -----------------------------------------------------------------------------------
 
 
@@ -283,8 +127,8 @@ def _announce(phys):
 
 
 def _residuals(theta, args, adjoint):
-    theta_full0, idx, mu_min, y, loads = args
-    phys = _to_physical(theta_full0.at[idx].set(theta), mu_min)
+    theta_full0, idx, mu_min_, y, loads = args
+    phys = to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_min_)
     jax.debug.callback(_announce, jax.lax.stop_gradient(phys))
     slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
     r = jnp.where(ok[:, None], slips / y - 1.0, FAILED_RESIDUAL).ravel()
@@ -467,14 +311,14 @@ def fit_measured_slips(
         if k not in PARAMETERS:
             raise ValueError(f"start has unknown parameter {k!r}; allowed: {PARAMETERS}")
         start_full[k] = float(v)
-    mu_min = _mu_min(loads)
-    theta_full0 = jnp.asarray(_to_theta([start_full[k] for k in PARAMETERS], mu_min))
+    mu_lo = mu_min(loads)
+    theta_full0 = jnp.asarray(to_theta([start_full[k] for k in PARAMETERS], PARAMETERS, mu_lo))
     idx = jnp.array([PARAMETERS.index(n) for n in free])
-    args = (theta_full0, idx, jnp.asarray(mu_min), jnp.asarray(target), loads)
+    args = (theta_full0, idx, jnp.asarray(mu_lo), jnp.asarray(target), loads)
     residuals = _residuals_fwd if jac == "fwd" else _residuals_bwd
 
     def transform(theta):
-        return _to_physical(theta_full0.at[idx].set(theta), mu_min)[idx]
+        return to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo)[idx]
 
     _PROGRESS.update(on=bool(progress), n=0, t0=time.perf_counter(), size=target.size)
     t0 = time.perf_counter()
@@ -505,7 +349,7 @@ def fit_measured_slips(
     evaluations = _PROGRESS["n"]
     _PROGRESS["on"] = False
     theta = jnp.asarray(fit.theta)
-    phys = np.asarray(_to_physical(theta_full0.at[idx].set(theta), mu_min))
+    phys = np.asarray(to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo))
     r, J = fit.residuals, fit.jacobian  # at the optimum, from least_squares_fit's statistics
     model = (r.reshape(target.shape) + 1.0) * target
     # scaled Jacobian: ∂r/∂log p = J_θ (dp/dθ)^-1 diag(p) (transform is diagonal)

@@ -14,8 +14,9 @@ Two chains, both `equinox.Module`s mapping a dict of scalar inputs to a dict of 
 
 * `ReticleChain`: {D, G, mu_t, load, a_max} → FractalContact (F_s, K_τ, C_τ, z_max; wang2022
   Eqs 14–26) → `PreSlipLuGre` (Eq 27) → the phase slips T4–T7 of Tables 4–7 under the stage cycle
-  with peak acceleration a_max. a_max enters twice: through the profile and through T/P of
-  Eqs 18–22, with T = m·a_max (the inertial load of the reticle; REPRODUCTION.md).
+  with peak acceleration a_max (`tribojax._chain`'s path, at one load). a_max enters twice:
+  through the profile and through T/P of Eqs 18–22, with T = m·a_max (the inertial load of the
+  reticle; docs/reproduction.md).
 * `LoopChain`: the same contact, then a Jenkins or Mindlin element with μN = F_s and K_d = K_τ
   under a harmonic displacement of fixed physical amplitude A → K̄, C̄ (wu2015 Section 5.3).
 """
@@ -29,21 +30,36 @@ import equinox as eqx
 import jax
 import numpy as np
 
+from .._chain import phase_slips
 from .._checks import check_range, fail_if
-from .._contact._contact import ContactParameters, FractalContact
-from .._contact._materials import WANG2022_RETICLE_MASS_KG, ContactPair, wang2022_pair
-from .._contact._surface import FractalSurface
+from .._contact._contact import ContactParameters
+from .._contact._materials import ContactPair
 from .._dynamics._harmonic import harmonic_balance
-from .._dynamics._profiles import TrapezoidProfile
-from .._dynamics._slip import slip_phase_averages
 from .._friction._lugre import PreSlipLuGre
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._plot import pyplot
 from .._precision import ensure_x64
+from .._presets import (
+    CALIBRATED_G_M,
+    CALIBRATED_MU_T,
+    CALIBRATED_SIGMA_S,
+    WANG2022_A_MAX,
+    WANG2022_GAMMA,
+    WANG2022_REFERENCE_LOAD_N,
+    WANG2022_RETICLE_MASS_KG,
+    WANG2022_TABLE1_D,
+    wang2022_pair,
+    wang2022_table3_model,
+)
 
-# Table-3-calibrated constants (tribojax.calibrate_table3, M = 1) and wang2022's 4 kPa row.
-CALIBRATED_SIGMA_S = 1.893e9  # Pa
-REFERENCE_POINT = {"D": 2.8821, "G": 4.3636e-8, "mu_t": 0.1416, "load": 6.7818, "a_max": 1.0}
+# The Table-3-calibrated point (tribojax._presets, M = 1) and wang2022's 4 kPa row.
+REFERENCE_POINT = {
+    "D": WANG2022_TABLE1_D,
+    "G": CALIBRATED_G_M,
+    "mu_t": CALIBRATED_MU_T,
+    "load": WANG2022_REFERENCE_LOAD_N,
+    "a_max": WANG2022_A_MAX,
+}
 # Fixed loop amplitude: about the largest measured phase slip of Tables 4–7 (43.9 nm, Table 6 at
 # 0.6 kPa); with Table 3's z_max = 33–44 nm this is Ā ≈ 1.1–1.5, Mindlin microslip.
 DEFAULT_AMPLITUDE = 50e-9  # m
@@ -111,7 +127,7 @@ class ReticleChain(eqx.Module):
         *,
         sigma_s=CALIBRATED_SIGMA_S,
         M=1.0,
-        gamma=1.5,
+        gamma=WANG2022_GAMMA,
         mass=WANG2022_RETICLE_MASS_KG,
         alpha=1.0,
         slip: bool = True,
@@ -151,15 +167,10 @@ class ReticleChain(eqx.Module):
         return self._contact(self.check(params), throw)
 
     def _contact(self, p: dict, throw: bool = True) -> ContactParameters:
-        surface = FractalSurface(D=p["D"], G=p["G"], M=self.M, gamma=self.gamma)
-        model = FractalContact(
-            surface,
-            self.pair,
-            mu_t=p["mu_t"],
-            tangential_load=self.mass * p["a_max"],
-            mass=self.mass,
-            throw=throw,
-        )
+        T = self.mass * p["a_max"]
+        model = wang2022_table3_model(p["G"], p["mu_t"], self.pair.sigma_s, M=self.M, D=p["D"],
+                                      gamma=self.gamma, tangential_load=T, mass=self.mass,
+                                      throw=throw)  # fmt: skip
         return model(p["load"])
 
     def __call__(self, params: dict) -> dict:
@@ -168,15 +179,9 @@ class ReticleChain(eqx.Module):
         out = {"F_s": c.F_s, "K_tau": c.K_tau, "C_tau": c.C_tau, "z_max": c.z_max}
         if self.slip:
             element = PreSlipLuGre(c.F_s, c.K_tau, c.C_tau, self.alpha)
-            phases = slip_phase_averages(
-                element,
-                TrapezoidProfile(a_max=p["a_max"]),
-                self.mass,
-                rtol=self.rtol,
-                atol=self.atol,
-                max_steps=self.max_steps,
-                adjoint=dfx.ForwardMode(),
-            )
+            phases = phase_slips(element, a_max=p["a_max"], mass=self.mass, rtol=self.rtol,
+                                 atol=self.atol, max_steps=self.max_steps,
+                                 adjoint=dfx.ForwardMode())  # fmt: skip
             out.update(zip(SLIP_OUTPUTS, phases))
         return out
 
@@ -355,8 +360,7 @@ def slip_sensitivities(
     Inputs: D (Table 1), G (m), μ_t (Eq 17), normal load (N, Eq 28) and the stage's peak
     acceleration a_max (m/s²). Defaults: the Table-3 calibration at 4 kPa. `chain_kw` go to
     `ReticleChain` (sigma_s, M, gamma, mass, alpha, rtol, atol, max_steps). Forward mode through
-    diffrax (`ForwardMode` adjoint) costs ~4x one evaluation of the chain for the five inputs
-    (measured 2.2 s vs 0.52 s warm on a busy 2-core CPU at rtol 1e-8); compiling takes ~10 s.
+    diffrax (`ForwardMode` adjoint): one solve carries the tangents of all five inputs.
     """
     chain = ReticleChain(**chain_kw)
     params = dict(D=D, G=G, mu_t=mu_t, load=load, a_max=a_max)
@@ -379,7 +383,7 @@ def hysteresis_sensitivities(
 
     μN = F_s and K_d = K_τ of the contact at (D, G, μ_t, load, a_max); loop amplitude A (m,
     default 50 nm, see `LoopChain`). `element`: "mindlin" (default: it dissipates at any Ā and
-    is the closer of the two to wu2015's measurements, REPRODUCTION.md) or "jenkins" (C̄ = 0,
+    is the closer of the two to wu2015's measurements, docs/reproduction.md) or "jenkins" (C̄ = 0,
     so its elasticity is undefined, for Ā ≤ 1).
     """
     chain = LoopChain(element, **chain_kw)

@@ -8,38 +8,45 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._reproduce._table3 import wang2022_table3_model
+from .._chain import mu_min as _mu_min
+from .._chain import to_physical, to_theta
+from .._presets import (
+    CALIBRATED_G_M,
+    CALIBRATED_M,
+    CALIBRATED_MU_T,
+    CALIBRATED_SIGMA_S,
+    WANG2022_TABLE1_D,
+    wang2022_table3_model,
+)
 from ._engine import FitResult, least_squares_fit
 from ._slip import fit_slip_run
 
 SURFACE_NAMES = ("D", "G_m", "mu_t")
 
 
-def surface_contact_model(D, G, mu_t, *, sigma_s=1.893e9, M=1.0, throw=False):
+def surface_contact_model(D, G, mu_t, *, sigma_s=CALIBRATED_SIGMA_S, M=CALIBRATED_M, throw=False):
     """The wang2022 reticle/chuck contact with free D, G (m) and μ_t (wang2022 Sections 2–3).
 
-    As `tribojax.wang2022_table3_model` (Table 2 pair with strength `sigma_s` Pa, γ = 1.5,
-    T = 0.321 N in T/P, m = 0.321 kg in Eq 24, a = a'), with D free instead of Table 1's 2.8821.
-    Defaults: σ_s and M of the Table 3 calibration (REPRODUCTION.md: G, μ_t, σ_s are strongly
+    `tribojax.wang2022_table3_model` (Table 2 pair with strength `sigma_s` Pa, γ = 1.5,
+    T = 0.321 N in T/P, m = 0.321 kg in Eq 24, a = a') with D free instead of Table 1's 2.8821.
+    Defaults: σ_s and M of the Table 3 calibration (docs/reproduction.md: G, μ_t, σ_s are strongly
     correlated; σ_s is held fixed here, M is exactly degenerate with G).
     """
     return wang2022_table3_model(G, mu_t, sigma_s, M=M, D=D, throw=throw)
 
 
 def _surface_physical(theta, mu_min):
-    """θ → (D, G, μ_t): D = 2 + sigmoid (2 < D < 3), G = e^θ, μ_t = μ_min(1 + e^θ) > T/P."""
-    return jnp.stack(
-        [2.0 + jax.nn.sigmoid(theta[0]), jnp.exp(theta[1]), mu_min * (1.0 + jnp.exp(theta[2]))]
-    )
+    """θ → (D, G, μ_t) by the chain's one mapping (`tribojax._chain.to_physical`)."""
+    return to_physical(theta, SURFACE_NAMES, mu_min)
 
 
 def fit_surface_from_runs(
     runs,
     *,
     alpha=1.0,
-    start=(2.8821, 4.3636e-8, 0.1416),
-    sigma_s=1.893e9,
-    M=1.0,
+    start=(WANG2022_TABLE1_D, CALIBRATED_G_M, CALIBRATED_MU_T),
+    sigma_s=CALIBRATED_SIGMA_S,
+    M=CALIBRATED_M,
     fits=None,
     progress=None,
 ) -> FitResult:
@@ -55,15 +62,16 @@ def fit_surface_from_runs(
     Args:
         runs: SlipRun records, each with `normal_load` (N) set; at least 2 (6 data ≥ 3 params).
         alpha: the bristle exponent used for every run.
-        start: (D, G in m, μ_t).
+        start: (D, G in m, μ_t), inside the fit's box: 2.05 < D < 2.98, 1e-11 < G < 1e-5 m,
+            μ_t > T/P at the smallest load (`tribojax._chain.to_theta`).
         sigma_s, M: fixed strength (Pa) and number of ridges of the contact model.
         fits: stage-1 FitResults to reuse (one per run), else computed.
         progress: optional callable for progress lines.
     Returns:
         FitResult names ("D", "G_m", "mu_t"); `fixed` holds α, σ_s, M and the stage-1 values.
     Raises:
-        ValueError: a run without normal_load, fewer than 2 runs, a stage-1 fit that did not
-        converge.
+        ValueError: a run without normal_load, fewer than 2 runs, a start outside the box, a
+        stage-1 fit that did not converge.
     """
     runs = list(runs)
     if len(runs) < 2:
@@ -93,7 +101,7 @@ def fit_surface_from_runs(
         cov = f.covariance[:3, :3] * np.outer(inv_p, inv_p)
         whiten.append(np.linalg.inv(np.linalg.cholesky(cov)))
     whiten = jnp.asarray(np.stack(whiten))
-    mu_min = 0.321 / float(loads.min())
+    mu_min = _mu_min(loads)
 
     def residuals(theta, args):
         D, G, mu_t = _surface_physical(theta, mu_min)
@@ -101,11 +109,7 @@ def fit_surface_from_runs(
         model = jnp.log(jnp.stack([out.F_s, out.K_tau, out.C_tau], axis=1))
         return jnp.einsum("nij,nj->ni", whiten, model - target).ravel()
 
-    D0, G0, mu0 = (float(x) for x in start)
-    if not (2 < D0 < 3 and G0 > 0 and mu0 > mu_min):
-        raise ValueError(f"start (D, G, mu_t) = {start} must have 2 < D < 3, G > 0, "
-                         f"mu_t > {mu_min:.4g} (T/P at the smallest load)")  # fmt: skip
-    theta0 = jnp.array([np.log((D0 - 2) / (3 - D0)), np.log(G0), np.log(mu0 / mu_min - 1)])
+    theta0 = jnp.asarray(to_theta(start, SURFACE_NAMES, mu_min))  # ValueError outside the box
     if progress is not None:
         progress("surface: D, G, mu_t from the runs' F_s, K_tau, C_tau")
     fit = least_squares_fit(jax.jit(residuals), theta0, names=SURFACE_NAMES,

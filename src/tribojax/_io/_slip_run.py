@@ -25,6 +25,7 @@ import numpy as np
 
 from .._dynamics._profiles import MeasuredProfile, TrapezoidProfile
 from .._dynamics._slip import simulate_slip
+from .._presets import WANG2022_RETICLE_MASS_KG
 from ._files import data_line_number, positive_or_none, read_sidecar, write_record_files
 from ._tables import DataFileError, read_table
 
@@ -167,7 +168,7 @@ def write_slip_run(run: SlipRun, path, *, overwrite: bool = False, comment: str 
 def synthetic_slip_run(
     element,
     profile=None,
-    mass=0.321,
+    mass=WANG2022_RETICLE_MASS_KG,
     *,
     n: int = 2301,
     t_end: float = 2.3,

@@ -14,70 +14,35 @@ zero singular value; any M is matched by G·M^(1/(2D-4)). We therefore fix M (de
 the equivalence line.
 
 Fixed in both: D = 2.8821, γ = 1.5, a = a' (truncated area), T/P = 0.321 N / F (the reticle's
-inertial load m·a_max over the normal load) and m = 0.321 kg in Eq 24 (see REPRODUCTION.md).
+inertial load m·a_max over the normal load) and m = 0.321 kg in Eq 24 (see docs/reproduction.md;
+the constants live in `tribojax._presets`, the θ ↔ physical mapping in `tribojax._chain`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._chain import mu_min, to_physical, to_theta
 from .._contact._asperity import REGIME_NAMES
-from .._contact._contact import FractalContact
-from .._contact._materials import (
-    WANG2022_RETICLE_MASS_KG,
-    ContactPair,
-    vacuum_to_load,
-    wang2022_pair,
-)
-from .._contact._surface import FractalSurface, wang2022_surface
 from .._fit._engine import FitResult, least_squares_fit
 from .._io._tables import wang2022_table
+from .._presets import (
+    CALIBRATED_M,
+    WANG2022_GAMMA,
+    WANG2022_RETICLE_MASS_KG,
+    WANG2022_TANGENTIAL_LOAD_N,
+    vacuum_to_load,
+    wang2022_pair,
+    wang2022_surface,
+    wang2022_table3_model,
+)
 
-TANGENTIAL_LOAD_N = WANG2022_RETICLE_MASS_KG * 1.0  # m·a_max, a_max = 1 m/s^2
 CALIBRATED_NAMES = ("G_m", "mu_t", "sigma_s_Pa")
-FIXED_M = 1.0
-# Search box for the calibration (scaled-logit coordinates keep LM inside it).
-_LOG_G_RANGE = (math.log(1e-11), math.log(1e-5))
-
-
-def wang2022_table3_model(G, mu_t, sigma_s, *, M=FIXED_M, D=None, throw=True) -> FractalContact:
-    """The reticle/chuck contact model behind Table 3, for given unpublished constants.
-
-    D = 2.8821 (Table 1; pass `D` to free it) and γ = 1.5, the Table 2 pair with strength
-    `sigma_s` (Pa), T = 0.321 N (m·a_max) in T/P, m = 0.321 kg in Eq 24, a = a'. G in m; `M`
-    ridges (degenerate with G).
-    `wang2022_table3_model(*fit.values, M=fit.fixed["M"])` rebuilds a calibration's model.
-    """
-    base = wang2022_pair()
-    pair = ContactPair(base.E_star, base.G_star, base.H, base.nu, sigma_s)
-    table1 = wang2022_surface(M)
-    surface = FractalSurface(D=table1.D if D is None else D, G=G, M=M, gamma=table1.gamma)
-    return FractalContact(
-        surface,
-        pair,
-        mu_t=mu_t,
-        tangential_load=TANGENTIAL_LOAD_N,
-        mass=WANG2022_RETICLE_MASS_KG,
-        throw=throw,
-    )
-
-
-def _physical(theta, mu_min):
-    """θ -> (G, μ_t, σ_s): scaled logit for log G, μ_min(1 + e^θ) for μ_t, e^θ for σ_s."""
-    lo, hi = _LOG_G_RANGE
-    G = jnp.exp(lo + (hi - lo) * jax.nn.sigmoid(theta[0]))
-    return jnp.stack([G, mu_min * (1.0 + jnp.exp(theta[1])), jnp.exp(theta[2])])
-
-
-def _theta(G, mu_t, sigma_s, mu_min):
-    lo, hi = _LOG_G_RANGE
-    u = (math.log(G) - lo) / (hi - lo)
-    return jnp.array([math.log(u / (1 - u)), math.log(mu_t / mu_min - 1.0), math.log(sigma_s)])
+FIXED_M = CALIBRATED_M
 
 
 def equivalent_G(G, M, D, M_new):
@@ -97,18 +62,18 @@ def calibrate_table3(start=(1e-8, 0.2, 1e9), *, M=FIXED_M) -> FitResult:
     t3 = wang2022_table(3)
     loads = jnp.asarray(t3["load_N"])
     target = jnp.concatenate([jnp.asarray(t3["Fs_N"]), jnp.asarray(t3["Ktau_N_per_m"])])
-    mu_min = TANGENTIAL_LOAD_N / float(loads.min())  # Eq 17 needs μ_t > T/P at every load
+    mu_lo = mu_min(loads)  # Eq 17 needs μ_t > T/P at every load
 
     def residuals(theta, args):
-        G, mu_t, sigma_s = _physical(theta, mu_min)
+        G, mu_t, sigma_s = to_physical(theta, CALIBRATED_NAMES, mu_lo)
         out = jax.vmap(wang2022_table3_model(G, mu_t, sigma_s, M=M, throw=False))(loads)
         return jnp.concatenate([out.F_s, out.K_tau]) / target - 1.0
 
     fit = least_squares_fit(
         residuals,
-        _theta(*start, mu_min),
+        jnp.asarray(to_theta(start, CALIBRATED_NAMES, mu_lo)),
         names=CALIBRATED_NAMES,
-        transform=lambda th: _physical(th, mu_min),
+        transform=lambda th: to_physical(th, CALIBRATED_NAMES, mu_lo),
     )
     return dataclasses.replace(fit, fixed={"M": float(M)})
 
@@ -137,15 +102,8 @@ def reproduce_table3(fit: FitResult | None = None) -> dict:
     vac = t3["vacuum_kPa"]
     loads = jnp.asarray(vacuum_to_load(jnp.asarray(vac)))
     published_surface = wang2022_surface(M)
-    published = jax.vmap(
-        FractalContact(
-            published_surface,
-            wang2022_pair(),
-            mu_t=mu_t,
-            tangential_load=TANGENTIAL_LOAD_N,
-            mass=WANG2022_RETICLE_MASS_KG,
-        )
-    )(loads)
+    published_model = wang2022_table3_model(published_surface.G, mu_t, wang2022_pair().sigma_s, M=M)
+    published = jax.vmap(published_model)(loads)
     calibrated = jax.vmap(wang2022_table3_model(G, mu_t, sigma_s, M=M))(loads)
     rows = []
     for i, v in enumerate(vac):
@@ -170,7 +128,7 @@ def reproduce_table3(fit: FitResult | None = None) -> dict:
         )
     calib = fit.as_dict()
     calib["free_parameters"] = list(CALIBRATED_NAMES)
-    calib["fixed"] = {"M": M, "D": float(published_surface.D), "gamma": 1.5}
+    calib["fixed"] = {"M": M, "D": float(published_surface.D), "gamma": WANG2022_GAMMA}
     calib["degeneracy"] = (
         "G and M enter only as G^(2D-4)/M: the same fit holds for any M with "
         "G(M) = G_fit * (M / M_fixed)^(1/(2D-4))"
@@ -185,7 +143,7 @@ def reproduce_table3(fit: FitResult | None = None) -> dict:
             "D": float(published_surface.D),
             "gamma": float(published_surface.gamma),
             "area": "truncated (a = a')",
-            "tangential_load_N": TANGENTIAL_LOAD_N,
+            "tangential_load_N": WANG2022_TANGENTIAL_LOAD_N,
             "eq24_mass_kg": WANG2022_RETICLE_MASS_KG,
             "published_inputs": {
                 "G_m": float(published_surface.G),

@@ -1,8 +1,9 @@
 """Reproduction of wang2022 Tables 4–7 (mean reticle slip per phase of the stage cycle).
 
 Inputs: Table 3's published F_s, K_τ, C_τ at the six vacuum levels, the 0.321 kg reticle, and
-REPRODUCTION.md's stage profile (`TrapezoidProfile()`); the model is the pre-slip element of
-Eq 27 (`PreSlipLuGre`) in the two-body slip simulation. Computed at α = 1 (the paper's value)
+the stage profile of docs/reproduction.md (`TrapezoidProfile()`); the model is the pre-slip
+element of Eq 27 (`PreSlipLuGre`) in the two-body slip simulation: the element → observables half
+of `tribojax._chain`. Computed at α = 1 (the paper's value)
 and with α fitted by optimistix Levenberg–Marquardt to the paper's *theoretical* Tables 4 and 6
 (12 values, relative residuals, α > 0 through α = e^θ, scatter estimated from the fit).
 
@@ -19,19 +20,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._contact._materials import WANG2022_RETICLE_MASS_KG
-from .._dynamics._slip import simulate_slip, slip_phase_averages
+from .._chain import lugre_phase_slips_nm, table3_contact
+from .._dynamics._slip import simulate_slip
 from .._fit._engine import FitResult, least_squares_fit
 from .._friction._lugre import PreSlipLuGre
 from .._io._tables import wang2022_table
 from .._plot import pyplot
+from .._presets import WANG2022_RETICLE_MASS_KG
 
 TABLES = (4, 5, 6, 7)
-
-
-def _table3_elements(alpha):
-    t3 = wang2022_table(3)
-    return PreSlipLuGre(t3["Fs_N"], t3["Ktau_N_per_m"], t3["Ctau_Ns_per_m"], alpha)
 
 
 @eqx.filter_jit
@@ -40,14 +37,7 @@ def table3_phase_slips(alpha, adjoint=dfx.RecursiveCheckpointAdjoint()):
 
     `adjoint=diffrax.ForwardMode()` makes it forward-differentiable (used by the α fit).
     """
-    t3 = wang2022_table(3)
-    F_s, K, C = (jnp.asarray(t3[k]) for k in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m"))
-
-    def one(f, k, c):
-        element = PreSlipLuGre(f, k, c, alpha)
-        return slip_phase_averages(element, mass=WANG2022_RETICLE_MASS_KG, adjoint=adjoint) * 1e9
-
-    return jax.vmap(one)(F_s, K, C)
+    return lugre_phase_slips_nm(*table3_contact(), alpha, adjoint=adjoint)
 
 
 def fit_alpha(alpha0: float = 1.2) -> FitResult:
@@ -113,7 +103,7 @@ def reproduce_tables4to7(fit: FitResult | None = None) -> dict:
         },
         "tables4to7_notes": (
             "Table 3's published F_s, K_tau, C_tau; m = 0.321 kg; the stage profile of "
-            "REPRODUCTION.md. "
+            "docs/reproduction.md. "
             "A model symmetric under a -> -a gives T5 ~ -T7; the paper's theoretical T5 and T7 at "
             "0.6-2 kPa are not (e.g. -10.00 vs +13.8 nm at 0.6 kPa), so those cells stay off."
         ),
@@ -134,14 +124,11 @@ def figure10_curves(alpha=1.0, n_points=1151):
 
     @jax.jit
     def run(alpha):
-        t3 = wang2022_table(3)
-        F_s, K, C = (jnp.asarray(t3[k]) for k in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m"))
-
         def one(f, k, c):
-            sol = simulate_slip(PreSlipLuGre(f, k, c, alpha), ts=ts)
+            sol = simulate_slip(PreSlipLuGre(f, k, c, alpha), mass=WANG2022_RETICLE_MASS_KG, ts=ts)
             return sol.slip * 1e9, sol.z * 1e9
 
-        return jax.vmap(one)(F_s, K, C)
+        return jax.vmap(one)(*table3_contact())
 
     slip, z = run(jnp.asarray(alpha, dtype=jnp.float64))
     return np.asarray(ts), np.asarray(slip), np.asarray(z)

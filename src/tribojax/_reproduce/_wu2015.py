@@ -4,7 +4,8 @@
   bundled as data/wu2015/eq7_fits.csv).
 * `wu2015_comparison`: K̄(Ā), C̄(Ā) of both elements against Eq 7 with the RMS difference per model
   over Ā ∈ [0, 4.5], and the C̄ peak of each element.
-* `fractal_tangential_stiffness` (Eq 4, exponent corrected) and `wu2015_eq5_stiffness` (Eq 5).
+* `fractal_tangential_stiffness` (Eq 4, exponent corrected); Eq 5 (`wu2015_eq5_stiffness`) is a
+  preset in `tribojax._presets`.
 
 All K̄, C̄ are functions of Ā only, so the comparison uses a unit element (μN = 1 N, K_d = 1 N/m).
 """
@@ -22,6 +23,7 @@ from .._dynamics._harmonic import harmonic_balance
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._tables import data_dir, read_table
 from .._plot import pyplot
+from .._presets import wu2015_eq5_stiffness as wu2015_eq5_stiffness  # noqa: F401 (re-export)
 
 EQ7_COLUMNS = ("quantity", "A_bar_min", "A_bar_max", "slope", "intercept")
 ELEMENTS = {"jenkins": Jenkins, "mindlin": Mindlin}
@@ -92,7 +94,7 @@ def _newton_peak(element, a):
 def cbar_peak(name: str) -> tuple[float, float]:
     """(Ā, C̄) at the maximum of C̄(Ā) for the named element: a grid, then Newton on dC̄/dĀ.
 
-    Closed forms: Jenkins Ā = 2, C̄ = 1; Mindlin Ā = 2.4, C̄ = 5/6 (REPRODUCTION.md).
+    Closed forms: Jenkins Ā = 2, C̄ = 1; Mindlin Ā = 2.4, C̄ = 5/6 (docs/reproduction.md).
     """
     element = unit_element(name)
     grid = jnp.linspace(1.05, 6.0, 100)
@@ -183,16 +185,3 @@ def fractal_tangential_stiffness(a_l, a_c, D, E_star, nu):
     pre = 4.0 * (1.0 - nu) * E_star * D / (math.sqrt(2.0 * math.pi) * (2.0 - nu) * (D - 1.0))
     # a_l^(D/2) a_c^((1-D)/2) - a_l^(1/2) = a_l^(1/2) [(a_l/a_c)^((D-1)/2) - 1]  (wu2015 Eq 4)
     return pre * jnp.sqrt(a_l) * jnp.expm1(0.5 * (D - 1.0) * jnp.log(a_l / a_c))
-
-
-def wu2015_eq5_stiffness(N):
-    """K_d (N/m) from wu2015 Eq 5, K_d = 0.5924·N^0.7616, with N in newtons.
-
-    Eq 5 is a power law (the text calls it exponential). Its units are not stated consistently:
-    read literally (N in N, K_d in N/m) it gives ~1 N/m, and read in Fig 14's per-area units
-    (MPa, MPa/m) a stiffness of the same absurd order for a ~1e-7 m² contact. Only the reading
-    N in N → K_d in N/µm gives the ~1e6 N/m of a measured sphere-on-flat loop, so that is what is
-    returned here: 0.5924e6·N^0.7616 N/m.
-    """
-    N = check_range(N, "N", 0.0, unit="N")
-    return 0.5924e6 * N**0.7616

@@ -18,7 +18,7 @@ import numpy as np
 import optimistix as optx
 
 from .._fit._engine import least_squares_fit
-from .._fit._solver import BAD_RESIDUAL
+from .._fit._engine import FAILED_RESIDUAL
 from .._precision import ensure_x64
 from ._core import K_MAX, AbstractBaseline, EffectDesign
 from ._regions import ar1_inflation
@@ -224,7 +224,7 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=256) -> _State
         if not np.all(np.isfinite(r0)):
             return failed("the model is not finite at the start values")
         # a failed trial point costs more than the start (100x)
-        bad = max(BAD_RESIDUAL, 10.0 * float(np.max(np.abs(r0))))
+        bad = max(FAILED_RESIDUAL, 10.0 * float(np.max(np.abs(r0))))
         norms = np.linalg.norm(J0, axis=0)
         d = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
         args = eqx.tree_at(lambda t: (t.bad, t.d), args, (jnp.asarray(bad), jnp.asarray(d)))

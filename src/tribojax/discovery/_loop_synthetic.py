@@ -33,13 +33,14 @@ import optimistix as optx
 from .._checks import check_range
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._loop import HysteresisLoop, synthetic_loop
-from .._reproduce._wu2015 import eq7_curves, wu2015_eq5_stiffness
+from .._presets import WU2015_EQ5_EXPONENT, wu2015_eq5_stiffness
+from .._reproduce._wu2015 import eq7_curves
 
 LOOP_EFFECTS = ("microslip", "viscous_damping", "normal_load_variation")
 MU = 0.3  # friction coefficient of the synthetic rig (wu2015 gives none; a typical steel value)
 VISCOUS_STRENGTH = 0.08  # c·ω·A0 / μN
 LOAD_GRADIENT = 0.1  # β in N(u) = N0(1 + βu/A)
-KD_EXPONENT = 0.7616  # wu2015 Eq 5
+KD_EXPONENT = WU2015_EQ5_EXPONENT  # wu2015 Eq 5
 
 
 def rig(normal_load: float = 2.94, frequency: float = 22.0):

@@ -10,7 +10,7 @@ Physics knobs of the baseline (null values in brackets), all inside one friction
                           F_c = (1 − δ)F_s, β = 2); δ > 0 is velocity weakening
     log10_v_s       [−5]: the Stribeck velocity scale (a nuisance, on a grid)
     load_coupling κ [0]:  normal load N(t) = N₀(1 + κ·a(t)/g), so F_s and K_τ scale by the
-                          same factor (stage acceleration a, g = 9.81 m/s²)
+                          same factor (stage acceleration a, g = 9.8 m/s², wang2022 Eq 28)
 The element (`AugmentedPreSlip`, a `PreSlipLuGre` with knob fields) carries the time as a
 second state (τ' = 1) so that it can read a(τ).
 
@@ -39,10 +39,10 @@ from .._dynamics._slip import simulate_slip
 from .._fit._start import slip_run_start
 from .._friction._lugre import DEFAULT_VELOCITY_SCALE, PreSlipLuGre
 from .._io._slip_run import SlipRun
+from .._presets import STANDARD_GRAVITY_WANG2022 as G_ACC  # m/s², wang2022 Eq 28
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
 from ._regions import noise_estimate
 
-G_ACC = 9.81  # m/s²
 KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling")
 VS_GRID = tuple(10.0 ** np.arange(-7.0, -3.4, 0.5))  # m/s, Stribeck velocity grid
 

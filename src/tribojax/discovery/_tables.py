@@ -1,10 +1,10 @@
 """Table-level discovery on wang2022's measured Tables 4–7 (24 phase-averaged slips).
 
 Baseline (no fitted parameters): the paper's model as published — Table 3's F_s, K_τ, C_τ at the
-six vacuum levels, α = 1, the 0.321 kg reticle, REPRODUCTION.md's stage profile, the phase
-averages of `slip_phase_averages` (wang2022 Eq 27 and Tables 4–7). Observations are compared
-in log form, y = ln|T| (a relative error model: the tables span 0.5–44 nm), one segment per
-table, abscissa the vacuum level (kPa).
+six vacuum levels, α = 1, the 0.321 kg reticle, the stage profile of docs/reproduction.md, the
+phase averages of `tribojax._chain.phase_slips` (wang2022 Eq 27 and Tables 4–7). Observations
+are compared in log form, y = ln|T| (a relative error model: the tables span 0.5–44 nm), one
+segment per table, abscissa the vacuum level (kPa).
 
 Knobs (null in brackets) and the effects of kind "wang2022_table" that move them:
     position_error   ε [0] (nm per m of stage travel): + ε·Δ⟨x_s⟩ per phase (Table 4: ⟨x_s⟩ over
@@ -28,9 +28,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
-from .._contact._materials import WANG2022_RETICLE_MASS_KG
+from .._chain import phase_slips, table3_contact, wang2022_loads
 from .._dynamics._profiles import TrapezoidProfile
-from .._dynamics._slip import slip_phase_averages
 from .._io._tables import wang2022_table
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign
 from ._slip import VS_GRID, AugmentedPreSlip
@@ -85,8 +84,7 @@ class Wang2022TableBaseline(AbstractBaseline):
         def one(F, K, C, wi):
             el = AugmentedPreSlip(F * (1.0 - dgs * wi), K, C, visc * C, strib, 10.0**lvs, kappa,
                                   prof)  # fmt: skip
-            return slip_phase_averages(el, prof, WANG2022_RETICLE_MASS_KG,
-                                       adjoint=dfx.ForwardMode(), throw=False)  # fmt: skip
+            return phase_slips(el, profile=prof, adjoint=dfx.ForwardMode(), throw=False)
 
         phases = jax.vmap(one)(self.F_s, self.K_tau, self.C_tau, w) * 1e9  # (6, 4) nm
         phases = phases + eps * self.travel[None, :] * 1e9 + rate * self.centres[None, :]
@@ -108,14 +106,14 @@ class Wang2022TableBaseline(AbstractBaseline):
 
 def wang2022_table_baseline() -> Wang2022TableBaseline:
     """The baseline for wang2022's measured Tables 4–7 with Table 3's published parameters."""
-    t3 = wang2022_table(3)
+    F_s, K_tau, C_tau = table3_contact()
     measured = np.concatenate([wang2022_table(n)["measured_nm"] for n in (4, 5, 6, 7)])
     dx, dt = _travel_columns(TrapezoidProfile())
     return Wang2022TableBaseline(
-        F_s=jnp.asarray(t3["Fs_N"]),
-        K_tau=jnp.asarray(t3["Ktau_N_per_m"]),
-        C_tau=jnp.asarray(t3["Ctau_Ns_per_m"]),
-        load=jnp.asarray(t3["load_N"]),
+        F_s=F_s,
+        K_tau=K_tau,
+        C_tau=C_tau,
+        load=wang2022_loads(),
         measured=jnp.asarray(measured),
         travel=jnp.asarray(dx),
         centres=jnp.asarray(dt),

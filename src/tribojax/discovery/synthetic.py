@@ -42,11 +42,11 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .._contact._materials import WANG2022_RETICLE_MASS_KG
 from .._dynamics._profiles import PiecewiseLinearProfile
 from .._friction._lugre import LuGre, PreSlipLuGre
 from .._io._slip_run import SlipRun, synthetic_slip_run
 from .._io._tables import wang2022_table
+from .._presets import WANG2022_RETICLE_MASS_KG
 from ._discover import discover
 from ._slip import AugmentedPreSlip, slip_baseline, stage_travel
 
