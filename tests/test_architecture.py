@@ -1,0 +1,154 @@
+"""The package's layout rules (issue 13): no import cycles, no hidden imports, small modules.
+
+Read from the source with `ast` (nothing is imported), so a violation names the file and line:
+- no cycle in the graph of module imports inside `tribojax`;
+- no import of a `tribojax` module inside a function (such imports hid cycles before);
+- no private name (`_x`) imported from another subpackage (make it public in its package or
+  move it);
+- every module at most 400 lines (the house limit);
+- every third-party module imported at run time is a declared dependency (optional ones only
+  inside the optional-dependency guards).
+"""
+
+import ast
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src" / "tribojax"
+MAX_LINES = 400
+# optional dependencies: allowed only in these modules (each import guarded there)
+OPTIONAL = {"matplotlib": {"tribojax._plot"}, "SurfaceTopography": {"tribojax._roughness._topography"}}
+# distribution name -> import name where they differ
+IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {_module_name(p): p for p in sorted(SRC.rglob("*.py"))}
+
+
+def _target(mod: str, node: ast.ImportFrom, is_package: bool) -> str:
+    if node.level == 0:
+        return node.module or ""
+    base = mod.split(".") if is_package else mod.split(".")[:-1]
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def _subpackage(mod: str) -> str:
+    parts = mod.split(".")
+    return parts[1] if len(parts) > 2 else ""
+
+
+def _scan():
+    edges, hidden, private, external = {}, [], [], {}
+    for mod, path in MODULES.items():
+        tree = ast.parse(path.read_text(), filename=str(path))
+        top = {id(node) for node in tree.body}
+        is_package = path.name == "__init__.py"
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                for alias in node.names:
+                    name = alias.name.split(".")[0]
+                    if name == "tribojax":
+                        if id(node) not in top:
+                            hidden.append(f"{path}:{node.lineno}")
+                    else:
+                        external.setdefault(name, set()).add(mod)
+                continue
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            target = _target(mod, node, is_package)
+            if not target.startswith("tribojax"):
+                external.setdefault(target.split(".")[0], set()).add(mod)
+                continue
+            if id(node) not in top:
+                hidden.append(f"{path}:{node.lineno}")
+            for alias in node.names:
+                full = f"{target}.{alias.name}"
+                dep = full if full in MODULES else target
+                if dep != mod and dep in MODULES:
+                    edges.setdefault(mod, set()).add(dep)
+                name = alias.name
+                if (name.startswith("_") and not name.startswith("__") and full not in MODULES
+                        and _subpackage(target) != _subpackage(mod)):  # fmt: skip
+                    private.append(f"{path}:{node.lineno} imports {name} from {target}")
+    return edges, hidden, private, external
+
+
+EDGES, HIDDEN, PRIVATE, EXTERNAL = _scan()
+
+
+def test_no_import_cycles():
+    index, low, stack, on_stack, cycles = {}, {}, [], set(), []
+    counter = [0]
+
+    def visit(v):  # Tarjan's strongly connected components
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on_stack.add(v)
+        for w in EDGES.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    sys.setrecursionlimit(max(sys.getrecursionlimit(), 10_000))
+    for v in MODULES:
+        if v not in index:
+            visit(v)
+    assert not cycles, f"import cycles: {cycles}"
+
+
+def test_no_function_level_imports_of_tribojax():
+    assert not HIDDEN, f"imports of tribojax modules inside functions: {HIDDEN}"
+
+
+def test_no_private_names_across_subpackages():
+    assert not PRIVATE, "\n".join(PRIVATE)
+
+
+@pytest.mark.parametrize("mod", sorted(MODULES))
+def test_module_size(mod):
+    n = len(MODULES[mod].read_text().splitlines())
+    assert n <= MAX_LINES, f"{MODULES[mod]} has {n} lines (house limit {MAX_LINES})"
+
+
+def test_runtime_imports_are_declared():
+    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    declared = set()
+    for req in meta["dependencies"]:
+        name = req.split(">")[0].split("=")[0].split("<")[0].split("[")[0].strip().lower()
+        declared |= IMPORT_NAMES.get(name, {name})
+    stdlib = set(sys.stdlib_module_names) | {"__future__"}
+    undeclared, misplaced = [], []
+    for name, users in sorted(EXTERNAL.items()):
+        if name in stdlib or name.lower() in declared:
+            continue
+        if name in OPTIONAL:
+            extra = users - OPTIONAL[name]
+            if extra:
+                misplaced.append(f"{name} imported in {sorted(extra)} (only {OPTIONAL[name]})")
+            continue
+        undeclared.append(f"{name} (in {sorted(users)})")
+    assert not undeclared, f"runtime imports not declared in pyproject.toml: {undeclared}"
+    assert not misplaced, misplaced
