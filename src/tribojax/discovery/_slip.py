@@ -35,7 +35,7 @@ import numpy as np
 from jax.scipy.linalg import expm
 from jaxtyping import Array
 
-from .._dynamics._profiles import AbstractProfile, MeasuredProfile
+from .._dynamics._profiles import MeasuredProfile
 from .._dynamics._slip import simulate_slip
 from .._fit._start import slip_run_start
 from .._friction._lugre import DEFAULT_VELOCITY_SCALE, PreSlipLuGre
