@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 import tribojax.discovery as disc
-from tribojax._cli._main import write_json_atomic
+from tribojax import write_json_atomic
 
 
 def run(short: bool = False) -> dict:

@@ -18,12 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from tribojax._fit import _chain as fc
+import tribojax as tj
 
 # (D, G m, μ_t): Table 1's D with the Table 3 calibration, and two distinct starts. Every start
 # keeps F_s > m·a_max = 0.321 N at all six loads (no gross sliding, Eq 27's pre-sliding regime).
 STARTS = (
-    {k: fc.DEFAULTS[k] for k in ("D", "G_m", "mu_t")},  # the calibrated point (tribojax._presets)
+    {k: tj.CHAIN_DEFAULTS[k] for k in ("D", "G_m", "mu_t")},  # the calibrated point (tj.CHAIN_DEFAULTS)
     {"D": 2.8, "G_m": 2e-8, "mu_t": 0.1},
     {"D": 2.75, "G_m": 3e-8, "mu_t": 0.11},
     # failed with the Kvaerno5 slip solver (a diverging stage Newton iteration under forward
@@ -50,15 +50,15 @@ def agreement(fits) -> dict:
     }
 
 
-def run(starts=STARTS, free=fc.DEFAULT_FREE, loads=None, target=None, progress=True) -> dict:
+def run(starts=STARTS, free=tj.CHAIN_DEFAULT_FREE, loads=None, target=None, progress=True) -> dict:
     fits, records = [], []
     for i, start in enumerate(starts):
         print(f"start {i + 1}/{len(starts)}: {start}", file=sys.stderr, flush=True)
         try:
-            f = fc.fit_measured_slips(
+            f = tj.fit_measured_slips(
                 start, free=free, loads=loads, target=target, progress=progress
             )
-        except fc.ChainFitError as err:
+        except tj.ChainFitError as err:
             print(f"  -> FAILED: {err}", file=sys.stderr, flush=True)
             records.append({"start": start, "converged": False, "error": str(err)})
             continue
@@ -87,7 +87,7 @@ def run(starts=STARTS, free=fc.DEFAULT_FREE, loads=None, target=None, progress=T
     if not fits:
         return {"starts": records, "agreement": agreement(fits)}
     best = min(fits, key=lambda f: float(f.fit.residuals @ f.fit.residuals))
-    measured = fc.measured_slips() if target is None else np.asarray(target)
+    measured = tj.wang2022_measured_slips() if target is None else np.asarray(target)
     out = {
         "study": "wang2022 Tables 4-7 (measured): full-chain fit from several starts",
         "uncertainty_model": (
@@ -99,10 +99,10 @@ def run(starts=STARTS, free=fc.DEFAULT_FREE, loads=None, target=None, progress=T
         "agreement": agreement(fits),
     }
     if target is None:
-        out["paper_theory_rms_relative_residual"] = fc.rms_relative(
-            fc.paper_theory_slips(), measured
+        out["paper_theory_rms_relative_residual"] = tj.rms_relative(
+            tj.wang2022_theory_slips(), measured
         )
-        out["symmetric_model_bound"] = fc.symmetric_bound(measured)
+        out["symmetric_model_bound"] = tj.symmetric_bound(measured)
     return out
 
 
@@ -110,7 +110,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="fitting-out/wang2022_slip")
     parser.add_argument("--short", action="store_true", help="two loads, two parameters (CI)")
-    parser.add_argument("--free", default=",".join(fc.DEFAULT_FREE))
+    parser.add_argument("--free", default=",".join(tj.CHAIN_DEFAULT_FREE))
     args = parser.parse_args(argv)
     out = Path(args.out)
     path = out / "wang2022_slip_fit.json"
@@ -119,8 +119,8 @@ def main(argv=None) -> int:
         return 2
     if args.short:
         # two loads (0.6 and 7 kPa), measured cells, (G, μ_t) free: same code path, less cost
-        loads = fc.wang2022_loads()[np.array([0, 3])]
-        target = fc.measured_slips()[[0, 3]]
+        loads = tj.wang2022_loads()[np.array([0, 3])]
+        target = tj.wang2022_measured_slips()[[0, 3]]
         starts = [{**start, "D": STARTS[0]["D"]} for start in STARTS[:3]]  # same fixed D
         result = run(starts=starts, free=SHORT_FREE, loads=loads, target=target)
     else:

@@ -48,9 +48,17 @@ from ._dynamics._rodas4 import Rodas4 as Rodas4
 from ._dynamics._slip import SlipSolution as SlipSolution
 from ._dynamics._slip import simulate_slip as simulate_slip
 from ._dynamics._slip import slip_phase_averages as slip_phase_averages
+from ._fit._chain import DEFAULT_FREE as CHAIN_DEFAULT_FREE  # noqa: F401
+from ._fit._chain import PARAMETERS as CHAIN_PARAMETERS  # noqa: F401
 from ._fit._chain import ChainFit as ChainFit
+from ._fit._chain import ChainFitError as ChainFitError
 from ._fit._chain import chain_phase_slips as chain_phase_slips
 from ._fit._chain import fit_measured_slips as fit_measured_slips
+from ._fit._chain import measured_slips as wang2022_measured_slips  # noqa: F401
+from ._fit._chain import paper_theory_slips as wang2022_theory_slips  # noqa: F401
+from ._fit._chain import rms_relative as rms_relative
+from ._fit._chain import symmetric_bound as symmetric_bound
+from ._fit._chain import wang2022_loads as wang2022_loads
 from ._fit._engine import FitResult as FitResult
 from ._fit._engine import least_squares_fit as least_squares_fit
 from ._fit._loop import LoopAnalysis as LoopAnalysis
@@ -72,6 +80,7 @@ from ._friction._rate_independent import AbstractHysteresisElement as AbstractHy
 from ._friction._rate_independent import IwanBank as IwanBank
 from ._friction._rate_independent import Jenkins as Jenkins
 from ._friction._rate_independent import Mindlin as Mindlin
+from ._io._files import write_json_atomic as write_json_atomic
 from ._io._loop import HysteresisLoop as HysteresisLoop
 from ._io._loop import read_loop as read_loop
 from ._io._loop import synthetic_loop as synthetic_loop
@@ -86,6 +95,7 @@ from ._io._tables import DataFileError as DataFileError
 from ._io._tables import read_table as read_table
 from ._io._tables import wang2022_table as wang2022_table
 from ._io._tables import wu2015_table as wu2015_table
+from ._presets import CHAIN_DEFAULTS as CHAIN_DEFAULTS
 from ._presets import WANG2022_A_MAX as WANG2022_A_MAX
 from ._presets import WANG2022_CALIBRATED as WANG2022_CALIBRATED
 from ._presets import WANG2022_RETICLE_MASS_KG as WANG2022_RETICLE_MASS_KG
