@@ -164,11 +164,13 @@ _PROGRESS: list = []
 
 def report_step(shown, accepted, steps, cost, gn_step):
     """Host side of a solver step: steps taken, ½‖r‖² at the last accepted point and, after an
-    accepted step, the Gauss–Newton step left (max over parameters, in standard errors)."""
-    if _PROGRESS and shown:
+    accepted step, the Gauss–Newton step left (max over parameters, in standard errors). Under
+    `jax.vmap` the batch is summarised (most steps, summed cost, largest step left)."""
+    if _PROGRESS and np.any(shown):
         progress, t0 = _PROGRESS[-1]
-        gn = f"Gauss-Newton step {float(gn_step):.2g} std errors" if accepted else "step rejected"
-        progress(f"LM: {int(steps)} steps, cost {float(cost):.8g}, {gn}, "
+        gn = f"Gauss-Newton step {np.max(gn_step):.2g} std errors"
+        gn = gn if np.all(accepted) else "step rejected"
+        progress(f"LM: {np.max(steps)} steps, cost {np.sum(cost):.8g}, {gn}, "
                  f"{time.perf_counter() - t0:.1f} s")  # fmt: skip
 
 
