@@ -336,6 +336,9 @@ def main(argv=None):
     import fit_chain  # benchmarks/fit_chain.py (issue 5: full-chain fit of Tables 4-7)
 
     results += fit_chain.run(quick=args.quick)
+    import fit_slip  # benchmarks/fit_slip.py (issue 13: slip-run fit on the one engine)
+
+    results += fit_slip.run(quick=args.quick)
 
     import discovery as discovery_benchmarks  # benchmarks/discovery.py (issue 6)
 
