@@ -8,14 +8,18 @@ import tribojax as tj
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_rank_promotion", "raise")
 
-CALIBRATED = dict(D=2.8821, G=4.3636e-8, M=1.0, mu_t=0.1416, sigma_s=1.893e9)
+_C = tj.WANG2022_CALIBRATED  # the Table 3 calibration (tribojax's presets, one home)
+CALIBRATED = dict(D=_C["D"], G=_C["G_m"], M=_C["M"], mu_t=_C["mu_t"], sigma_s=_C["sigma_s_Pa"])
 
 
-def make_model(D=CALIBRATED["D"], G=CALIBRATED["G"], M=1.0, mu_t=0.1416, sigma_s=1.893e9, **kw):
-    """The wang2022 reticle/chuck contact with Table-3-calibrated constants (see _reproduce)."""
+def make_model(
+    D=CALIBRATED["D"], G=CALIBRATED["G"], M=CALIBRATED["M"], mu_t=CALIBRATED["mu_t"],
+    sigma_s=CALIBRATED["sigma_s"], **kw,
+):  # fmt: skip
+    """The wang2022 reticle/chuck contact with Table-3-calibrated constants (tribojax presets)."""
     pair = tj.wang2022_pair(sigma_s=sigma_s)
-    kw.setdefault("tangential_load", 0.321)
-    kw.setdefault("mass", 0.321)
+    kw.setdefault("tangential_load", tj.WANG2022_TANGENTIAL_LOAD_N)
+    kw.setdefault("mass", tj.WANG2022_RETICLE_MASS_KG)
     return tj.FractalContact(tj.FractalSurface(D=D, G=G, M=M), pair, mu_t=mu_t, **kw)
 
 

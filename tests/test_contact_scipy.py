@@ -60,7 +60,7 @@ TANGENTIAL = dict(mu_t=0.14, tangential_load=0.321, mass=0.321)
 
 # (D, G [m], M, gamma)
 SURFACES = {
-    "calibrated": (2.8821, 7e-8, 2.0, 1.5),  # fits Table 3 (REPRODUCTION.md)
+    "calibrated": (2.8821, 7e-8, 2.0, 1.5),  # fits Table 3 (docs/reproduction.md)
     "published": (2.8821, 7.768e-12, 2.0, 1.5),  # wang2022 Table 1
     "D2.3": (2.3, 1e-9, 2.0, 1.5),  # a'_l below a'_ec: empty elastic regime
     "D2.5": (2.5, 1e-9, 2.0, 1.5),  # q = 0 for the elastic load law
@@ -377,8 +377,8 @@ def test_elastic_load_at_a_ec_is_the_critical_load(name):
 def test_ep1_law_jumps_by_two_percent_at_a_ec(name):
     """The printed 0.34 (Eq 9) is 1.02/3, so P_ep1(a'_ec) = 1.02 P_e(a'_ec).
 
-    REPRODUCTION.md calls the jump "about 3 %"; that is Kogut–Etsion's 1.03. With the printed
-    coefficient it is 2.0 % (this test pins the printed value; 1.03 would fail it).
+    Kogut–Etsion's unrounded coefficient would give 1.03 (a 3 % jump); with the printed one it is
+    2.0 % (docs/reproduction.md; this test pins the printed value, 1.03 would fail it).
     """
     surface = tj_surface(name)
     log_ec = log_critical_areas(surface, PAIR)[0]

@@ -74,7 +74,7 @@ def test_mindlin_kbar_against_scipy_quad():
 def test_limits_peaks_and_energy():
     small = jnp.asarray([1e-3, 1e-2]) * A0
     m = _batch(MINDLIN, small)
-    # small-amplitude expansion (REPRODUCTION.md): K̄ ≈ 1 − Ā/6, C̄ ≈ 2Ā/9, errors O(Ā²)
+    # small-amplitude expansion (docs/reproduction.md): K̄ ≈ 1 − Ā/6, C̄ ≈ 2Ā/9, errors O(Ā²)
     assert np.all(np.abs(m.K_bar - (1 - m.A_bar / 6)) < m.A_bar**2)
     assert np.all(np.abs(m.C_bar - 2 * m.A_bar / 9) < m.A_bar**2)
     # (the C̄ peaks are checked in test_wu2015.py, through the comparison that reports them)

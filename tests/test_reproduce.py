@@ -28,7 +28,7 @@ def test_calibration_converges_and_is_identifiable(fit):
     corr = fit.correlation
     np.testing.assert_allclose(np.diag(corr), 1.0, rtol=1e-12)
     np.testing.assert_allclose(corr, corr.T, rtol=1e-12)
-    # REPRODUCTION.md: G ≈ 7e-8 m at M ≈ 2, mu_t ≈ 0.14, sigma_s ≈ 1.9 GPa
+    # docs/reproduction.md: G ≈ 7e-8 m at M ≈ 2, mu_t ≈ 0.14, sigma_s ≈ 1.9 GPa
     G2 = tj.equivalent_G(fit.values[0], 1.0, 2.8821, 2.0)
     assert 3e-8 < G2 < 1.5e-7
     assert fit.values[1] == pytest.approx(0.14, rel=0.1)
@@ -44,7 +44,7 @@ def test_acceptance_calibrated_within_tolerance(result):
 
 
 def test_published_inputs_are_far_off(result):
-    # REPRODUCTION.md: with Table 1's G, K_tau comes out ~1e4 too large and F_s 20-115 % high
+    # docs/reproduction.md: with Table 1's G, K_tau comes out ~5e3-6e3 too large, F_s 2-3.5x
     for r in result["table3"]:
         ratio = r["published_inputs"]["Ktau_N_per_m"] / r["paper"]["Ktau_N_per_m"]
         assert 1e3 < ratio < 1e5
@@ -88,7 +88,7 @@ def test_cli_writes_json_and_figure(tmp_path, capsys):
     assert data["wu2015"]["cbar_peak"]["mindlin"]["Abar"] == pytest.approx(2.4, abs=1e-9)
     assert (out / "wu2015.png").stat().st_size > 10_000
     # issue 3: Tables 4-7 (slip). Acceptance: fitted alpha within 5 % of the paper's theory in
-    # Tables 4 and 6, alpha = 1 within 15 % (REPRODUCTION.md: ~2 % and ~13 % expected).
+    # Tables 4 and 6, alpha = 1 within 15 % (docs/reproduction.md: ~2 % and ~13 % expected).
     rows = data["tables4to7"]
     assert len(rows) == 24 and {r["table"] for r in rows} == {4, 5, 6, 7}
     keys = {"table", "vacuum_kPa", "paper_theory_nm", "paper_measured_nm", "model_alpha1_nm"}

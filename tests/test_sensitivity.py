@@ -117,7 +117,7 @@ def test_elasticity_identities_of_the_contact_and_loop():
 
 
 def test_mindlin_small_amplitude_limit():
-    # wu2015 Eq 2 at small Ā: K̄ ≈ 1 − Ā/6, C̄ ≈ 2Ā/9 (REPRODUCTION.md), so ∂lnC̄/∂lnA → 1 and
+    # wu2015 Eq 2 at small Ā: K̄ ≈ 1 − Ā/6, C̄ ≈ 2Ā/9 (docs/reproduction.md), so ∂lnC̄/∂lnA → 1 and
     # ∂lnK̄/∂lnA → −Ā/6; at A = 0.5 nm, Ā ≈ 0.014 and the next order is ~Ā
     e = tj.hysteresis_sensitivities(**REF, A=0.5e-9)
     row = dict(zip(e.outputs, e.elasticity))
@@ -231,7 +231,7 @@ def test_sensitivity_study_short_form(tmp_path, capsys):
     assert sweep["members"] == 10_000 and sweep["sharded_over"] == len(jax.devices())
     assert sweep["max_rel_diff_sharded_vs_one_device"] < 1e-12
     assert sweep["ranges"]["F_s"][0] > 0
-    # Mindlin's C̄ peaks at 5/6 (Ā = 2.4, REPRODUCTION.md); the grid's Ā spans 0.4-7.8
+    # Mindlin's C̄ peaks at 5/6 (Ā = 2.4, docs/reproduction.md); the grid's Ā spans 0.4-7.8
     assert sweep["ranges"]["A_bar"][0] < 2.4 < sweep["ranges"]["A_bar"][1]
     assert 0.8 < sweep["ranges"]["C_bar"][1] <= 5 / 6 + 1e-9
     assert "| T4 |" in (tmp_path / "elasticities.md").read_text()

@@ -1,6 +1,6 @@
 """The diffrax slip simulation against an independent SciPy solve_ivp implementation (3 loads).
 
-The reference is written here from wang2022 Eq 27 (REPRODUCTION.md's reading) with the exact
+The reference is written here from wang2022 Eq 27 (docs/reproduction.md's reading) with the exact
 sgn(v), state in nm, integrated segment by segment between the profile's kinks with Radau at
 rtol 1e-11; the window means come from dense output integrated with quad.
 """

@@ -29,7 +29,7 @@ def test_eq7_table_as_published():
 
 def test_rms_against_eq7_and_cbar_peaks(comparison):
     rms = comparison["eq7_rms"]
-    # REPRODUCTION.md (independent NumPy/SciPy re-computation) quotes these to 3 digits
+    # docs/reproduction.md (independent NumPy/SciPy re-computation) quotes these to 3 digits
     for model, q, want in [("jenkins", "K", 0.109), ("jenkins", "C", 0.167),
                            ("mindlin", "K", 0.053), ("mindlin", "C", 0.096)]:  # fmt: skip
         assert rms[model][q] == pytest.approx(want, abs=6e-4), (model, q)
