@@ -111,18 +111,8 @@ class ContactParameters(eqx.Module):
     values: Float[Array, "... 16"]
     flags: Bool[Array, "... 2"]
 
-    load = _packed("load")
-    F_s = _packed("F_s")
-    K_tau = _packed("K_tau")
-    C_tau = _packed("C_tau")
-    z_max = _packed("z_max")
-    a_l = _packed("a_l")
-    a_ec = _packed("a_ec")
-    a_epc = _packed("a_epc")
-    a_pc = _packed("a_pc")
-    psi = _packed("psi")
-    W_d = _packed("W_d")
-    W_s = _packed("W_s")
+    # one property per packed column, in _SCALARS order
+    load, F_s, K_tau, C_tau, z_max, a_l, a_ec, a_epc, a_pc, psi, W_d, W_s = map(_packed, _SCALARS)
 
     @property
     def load_share(self):

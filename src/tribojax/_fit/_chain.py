@@ -324,18 +324,10 @@ def fit_measured_slips(
     t0 = time.perf_counter()
     try:
         fit = least_squares_fit(
-            residuals,
-            theta_full0[idx],
-            args,
-            names=free,
-            transform=transform,
-            rtol=rtol,
-            atol=atol,
-            max_steps=max_steps,
-            jac=jac,
-            solver=NoiseFloorLM(float(rtol), float(atol)),
-            optimum_tol=GN_STEP_TOL,
-        )
+            residuals, theta_full0[idx], args, names=free, transform=transform, rtol=rtol,
+            atol=atol, max_steps=max_steps, jac=jac,
+            solver=NoiseFloorLM(float(rtol), float(atol)), optimum_tol=GN_STEP_TOL,
+        )  # fmt: skip
     except RuntimeError as err:  # equinox runtime errors inside the compiled fit
         _PROGRESS["on"] = False
         last = dict(zip(PARAMETERS, _PROGRESS.get("last", [])))
@@ -359,15 +351,8 @@ def fit_measured_slips(
     # the Gauss–Newton step still left, in standard errors (`least_squares_fit` checked it)
     gn_step = float(np.max(np.abs(np.asarray(gauss_newton_step(r, J)))))
     return ChainFit(
-        fit=fit,
-        parameters=dict(zip(PARAMETERS, phys.tolist())),
-        free=free,
-        model_nm=np.asarray(model),
-        target_nm=np.asarray(target),
-        scaled_singular_values=sv,
-        scaled_right_vectors=vt,
-        wall_s=wall,
-        evaluations=evaluations,
-        start=start_full,
+        fit=fit, parameters=dict(zip(PARAMETERS, phys.tolist())), free=free,
+        model_nm=np.asarray(model), target_nm=np.asarray(target), scaled_singular_values=sv,
+        scaled_right_vectors=vt, wall_s=wall, evaluations=evaluations, start=start_full,
         gauss_newton_step=gn_step,
-    )
+    )  # fmt: skip

@@ -141,19 +141,10 @@ def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps,
         std = np.sqrt(np.diag(cov))
         corr = cov / np.outer(std, std)
     return FitResult(
-        names=tuple(names),
-        values=np.asarray(transform(jnp.asarray(theta))),
-        std_errors=std,
-        covariance=cov,
-        correlation=corr,
-        theta=theta,
-        residuals=r,
-        singular_values=sv,
-        steps=int(steps),
-        message=message,
-        jacobian=J,
-        result=result,
-    )
+        names=tuple(names), values=np.asarray(transform(jnp.asarray(theta))), std_errors=std,
+        covariance=cov, correlation=corr, theta=theta, residuals=r, singular_values=sv,
+        steps=int(steps), message=message, jacobian=J, result=result,
+    )  # fmt: skip
 
 
 # Progress of the running fit: `NoiseFloorLM` reports each step through `report_step` (a

@@ -90,20 +90,10 @@ def analyse_loop(loop: HysteresisLoop, *, window: float = 0.05) -> LoopAnalysis:
     C_eq = float(-F_s / (A * omega))
     W = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(u))) / cycles
     return LoopAnalysis(
-        cycles=cycles,
-        omega=float(omega),
-        A=A,
-        mu_N=mu_N,
-        k1=k1,
-        k2=k2,
-        K_d=K_d,
-        K_eq=K_eq,
-        C_eq=C_eq,
-        K_bar=K_eq / K_d,
-        C_bar=float(np.pi * omega * C_eq / K_d),
-        A_bar=A * K_d / mu_N,
+        cycles=cycles, omega=float(omega), A=A, mu_N=mu_N, k1=k1, k2=k2, K_d=K_d, K_eq=K_eq,
+        C_eq=C_eq, K_bar=K_eq / K_d, C_bar=float(np.pi * omega * C_eq / K_d), A_bar=A * K_d / mu_N,
         W=W,
-    )
+    )  # fmt: skip
 
 
 def _reversal_slope(u, f, r, span) -> float:

@@ -347,13 +347,11 @@ def elasticities(fn, params: dict, *, mode: str = "fwd") -> Elasticities:
     return Elasticities(names, outputs, p, values, jac, jac * p[None, :] / values[:, None])
 
 
+_R = REFERENCE_POINT
+
+
 def slip_sensitivities(
-    D=REFERENCE_POINT["D"],
-    G=REFERENCE_POINT["G"],
-    mu_t=REFERENCE_POINT["mu_t"],
-    load=REFERENCE_POINT["load"],
-    a_max=REFERENCE_POINT["a_max"],
-    **chain_kw,
+    D=_R["D"], G=_R["G"], mu_t=_R["mu_t"], load=_R["load"], a_max=_R["a_max"], **chain_kw
 ) -> Elasticities:
     """Elasticities of F_s, K_τ, C_τ, z_max and the phase slips T4–T7 (wang2022 Tables 3–7).
 
@@ -369,11 +367,7 @@ def slip_sensitivities(
 
 
 def hysteresis_sensitivities(
-    D=REFERENCE_POINT["D"],
-    G=REFERENCE_POINT["G"],
-    mu_t=REFERENCE_POINT["mu_t"],
-    load=REFERENCE_POINT["load"],
-    a_max=REFERENCE_POINT["a_max"],
+    D=_R["D"], G=_R["G"], mu_t=_R["mu_t"], load=_R["load"], a_max=_R["a_max"],
     A=DEFAULT_AMPLITUDE,
     *,
     element: str = "mindlin",

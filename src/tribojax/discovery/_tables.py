@@ -139,42 +139,25 @@ class _TableEffect(AbstractEffect):
         return [_knob(self.knob, self.strength, self.unit, self.scale)]
 
 
-class TablePositionError(_TableEffect):
-    name: ClassVar[str] = "position_error"
-    knob: ClassVar[str] = "position_error"
-    strength: ClassVar[str] = "epsilon"
-    unit: ClassVar[str] = "m/m"
-    scale: ClassVar[float] = 1e-9
+# The one-knob effects: (effect name, knob, strength name, unit, scale of the strength)
+_ONE_KNOB = (
+    ("position_error", "position_error", "epsilon", "m/m", 1e-9),
+    ("sensor_drift", "sensor_drift", "rate", "nm/s", 1.0),
+    ("gross_sliding", "gross_sliding", "delta", "1 (F_s deficit at the lowest load)", 0.1),
+    ("load_coupling", "load_coupling", "kappa", "1 (per g)", 0.1),
+    ("viscous_friction", "viscous", "sigma2_over_C_tau", "1", 1.0),
+)
 
 
-class TableSensorDrift(_TableEffect):
-    name: ClassVar[str] = "sensor_drift"
-    knob: ClassVar[str] = "sensor_drift"
-    strength: ClassVar[str] = "rate"
-    unit: ClassVar[str] = "nm/s"
+def _one_knob_effect(name, knob, strength, unit, scale) -> type:
+    """The `_TableEffect` class of one row of `_ONE_KNOB`."""
+    attrs = dict(name=name, knob=knob, strength=strength, unit=unit, scale=scale)
+    notes = {k: ClassVar[type(v)] for k, v in attrs.items()}  # class constants, not fields
+    return type(f"Table_{name}", (_TableEffect,),
+                {**attrs, "__annotations__": notes, "__module__": __name__})  # fmt: skip
 
 
-class TableGrossSliding(_TableEffect):
-    name: ClassVar[str] = "gross_sliding"
-    knob: ClassVar[str] = "gross_sliding"
-    strength: ClassVar[str] = "delta"
-    unit: ClassVar[str] = "1 (F_s deficit at the lowest load)"
-    scale: ClassVar[float] = 0.1
-
-
-class TableLoadCoupling(_TableEffect):
-    name: ClassVar[str] = "load_coupling"
-    knob: ClassVar[str] = "load_coupling"
-    strength: ClassVar[str] = "kappa"
-    unit: ClassVar[str] = "1 (per g)"
-    scale: ClassVar[float] = 0.1
-
-
-class TableViscous(_TableEffect):
-    name: ClassVar[str] = "viscous_friction"
-    knob: ClassVar[str] = "viscous"
-    strength: ClassVar[str] = "sigma2_over_C_tau"
-    unit: ClassVar[str] = "1"
+_EFFECT_CLASSES = {row[0]: _one_knob_effect(*row) for row in _ONE_KNOB}
 
 
 class TableStribeck(AbstractEffect):
@@ -188,5 +171,6 @@ class TableStribeck(AbstractEffect):
 
 def wang2022_table_effects() -> list[AbstractEffect]:
     """The candidate effects for `wang2022_table_baseline` (not registered: pass explicitly)."""
-    return [TablePositionError(), TableSensorDrift(), TableGrossSliding(), TableLoadCoupling(),
-            TableStribeck(), TableViscous()]  # fmt: skip
+    c = _EFFECT_CLASSES
+    return [c["position_error"](), c["sensor_drift"](), c["gross_sliding"](), c["load_coupling"](),
+            TableStribeck(), c["viscous_friction"]()]  # fmt: skip
