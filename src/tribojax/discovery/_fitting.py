@@ -139,9 +139,11 @@ def _quiet(**kwargs):
 
 
 class _RelativeTrustRegion(optx.ClassicalTrustRegion):
-    """The textbook trust-region update (cutoffs 0.25/0.75, as `NoiseFloorLM`) of a radius in
-    units of the Gauss–Newton step length (`optx.IndirectDampedNewtonDescent`), capped at 1: a
-    rejection then shrinks the step at once instead of first undoing earlier growth."""
+    """Trust-region update (cutoffs 0.25/0.75 as `NoiseFloorLM`, growth 2 as MINPACK) of a radius
+    in units of the Gauss–Newton step length (`optx.IndirectDampedNewtonDescent`), capped at 1: a
+    rejection then shrinks the step at once instead of first undoing earlier growth. Growth 3.5
+    (optimistix's default) alternated accepted and rejected steps along the curved valley of a
+    Stribeck refit (32 steps against 19)."""
 
     def step(self, first_step, y, y_eval, f_info, f_eval_info, state):
         size, accept, result, state = super().step(first_step, y, y_eval, f_info, f_eval_info,
@@ -169,7 +171,7 @@ class _DiscoveryLM(optx.AbstractGaussNewton):
     def __init__(self, rtol, atol, max_rejections=12):
         self.rtol, self.atol, self.norm = rtol, atol, optx.max_norm
         self.descent = optx.IndirectDampedNewtonDescent()
-        self.search = _RelativeTrustRegion(high_cutoff=0.75, low_cutoff=0.25)
+        self.search = _RelativeTrustRegion(high_cutoff=0.75, low_cutoff=0.25, high_constant=2.0)
         self.verbose = _quiet
         self.max_rejections = max_rejections
 
