@@ -181,8 +181,10 @@ def _solve(residual_fn, theta0, args, solver, max_steps, jac):
 
 
 @eqx.filter_jit
-def _value_and_jacobian(residual_fn, theta, args):
-    # one forward pass gives both (the residual rides along as jacfwd's aux)
+def value_and_jacobian(residual_fn, theta, args):
+    """Residual and Jacobian of `residual_fn(θ, args)` at θ from one forward pass (jitted once
+    per `residual_fn` object and argument shapes: the statistics of `least_squares_fit` reuse it)."""
+
     def both(th):
         r = residual_fn(th, args)
         return r, r
@@ -248,7 +250,7 @@ def least_squares_fit(
         if progress is not None:
             _PROGRESS.pop()
     theta = sol.value
-    r, J = _value_and_jacobian(residual_fn, theta, args)
+    r, J = value_and_jacobian(residual_fn, theta, args)
     r, J = np.asarray(r), np.asarray(J)
     result, message = RESULTS.promote(sol.result), None
     if np.any(r == FAILED_RESIDUAL):

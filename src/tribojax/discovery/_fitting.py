@@ -17,8 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from .._fit._engine import least_squares_fit
-from .._fit._engine import FAILED_RESIDUAL
+from .._fit._engine import FAILED_RESIDUAL, least_squares_fit, value_and_jacobian
 from .._precision import ensure_x64
 from ._core import K_MAX, AbstractBaseline, EffectDesign
 from ._regions import ar1_inflation
@@ -71,8 +70,6 @@ def _residual_and_jac(x, a: _Padded):
     J_hold = jnp.concatenate([jnp.zeros((K_MAX, p)), jnp.diag(hold)], axis=1)
     return r, jnp.concatenate([jnp.where(ok, J, 0.0), J_hold], axis=0)
 
-
-_start_point = eqx.filter_jit(_residual_and_jac)
 
 
 @eqx.filter_custom_jvp
@@ -132,6 +129,7 @@ def _pack(baseline, designs):
 
 
 GAIN_TOL = 1e-2  # converged: a Gauss–Newton step would lower the cost by < 0.01 residual variances
+NOISE_TOL = 1.0  # stationary: a rejected step promised < 1 residual variance (evaluation noise)
 
 
 def _quiet(**kwargs):
@@ -155,10 +153,10 @@ class _RelativeTrustRegion(optx.ClassicalTrustRegion):
 class _DiscoveryLM(optx.AbstractGaussNewton):
     """Levenberg–Marquardt (trust region in Gauss–Newton step lengths) with the discovery stops,
     s² = RSS/(n − p) (at least 1; n and p without the held strengths): after an accepted step,
-    the Gauss–Newton gain gᵀ(JᵀJ)⁻¹g < `GAIN_TOL`·s² (converged); after a rejected step, the
-    next trial step's predicted gain < `GAIN_TOL`·s² (the trust region has shrunk below what
-    the noise resolves: stationary); `max_rejections` rejections in a row; optimistix's Cauchy
-    test (`rtol`, `atol`)."""
+    the Gauss–Newton gain gᵀ(JᵀJ)⁻¹g < `GAIN_TOL`·s² (converged); after a rejected step whose
+    predicted gain was < `NOISE_TOL`·s² (the improvement left is below one residual variance,
+    the size of the ODE evaluation noise: stationary); `max_rejections` rejections in a row;
+    optimistix's Cauchy test (`rtol`, `atol`)."""
 
     rtol: float
     atol: float
@@ -181,11 +179,12 @@ class _DiscoveryLM(optx.AbstractGaussNewton):
         n, p = r.size - K_MAX, J.shape[1] - K_MAX + jnp.sum(args.mask)
         s2 = jnp.maximum(r @ r / jnp.maximum(n - p, 1), 1.0)
         gn = jnp.sum((jnp.linalg.qr(J)[0].T @ r) ** 2)
-        # the next trial step (optimistix passes the previous iterate as `y`: recompute it)
-        step, _ = self.descent.step(state.search_state.step_size, state.descent_state)
-        trial = r @ r - jnp.sum((r + jac.mv(step)) ** 2)
+        # the step just rejected: a rejection shrank the radius by `low_constant`
+        radius = state.search_state.step_size / self.search.low_constant
+        step, _ = self.descent.step(radius, state.descent_state)
+        rejected = r @ r - jnp.sum((r + jac.mv(step)) ** 2)
         fresh = state.num_steps_since_acceptance == 0
-        done = ~state.first_step & (jnp.where(fresh, gn, trial) < GAIN_TOL * s2)
+        done = ~state.first_step & jnp.where(fresh, gn < GAIN_TOL * s2, rejected < NOISE_TOL * s2)
         stalled = state.num_steps_since_acceptance >= self.max_rejections
         return state.terminate | stalled | done, state.result
 
@@ -222,14 +221,16 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=256) -> _State
                       message)  # fmt: skip
 
     try:
-        r0, J0 = (np.asarray(v) for v in _start_point(jnp.asarray(x0), args))
+        # d = 1 here: u = x; the engine's statistics reuse this compile
+        r0, J0 = (np.asarray(v) for v in value_and_jacobian(_residual, jnp.asarray(x0), args))
         if not np.all(np.isfinite(r0)):
             return failed("the model is not finite at the start values")
         # a failed trial point costs more than the start (100x)
         bad = max(FAILED_RESIDUAL, 10.0 * float(np.max(np.abs(r0))))
         norms = np.linalg.norm(J0, axis=0)
         d = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
-        args = eqx.tree_at(lambda t: (t.bad, t.d), args, (jnp.asarray(bad), jnp.asarray(d)))
+        new = (jnp.asarray(bad, dtype=jnp.float64), jnp.asarray(d, dtype=jnp.float64))
+        args = eqx.tree_at(lambda t: (t.bad, t.d), args, new)
         res = least_squares_fit(_residual, x0 / d, args, names=(*baseline.param_names,
                                 *(f"s{i}" for i in range(K_MAX))), jac="fwd",
                                 solver=_SOLVER, max_steps=max_steps)  # fmt: skip
