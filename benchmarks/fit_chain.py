@@ -167,7 +167,7 @@ def run(quick=False):
         )
         scipy_info = {"scipy_chain_evaluations": nfev, "scipy_x": x.tolist(),
                       "scipy_rms_rel": float(np.sqrt(np.mean(sol.fun**2))),
-                      "scipy_message": str(sol.message), "scipy_success": bool(sol.success)}  # fmt: skip
+                      "scipy_message": str(sol.message), "scipy_success": bool(sol.success)}
     common = dict(
         steps=steps,
         residual_evaluations=fit.evaluations,

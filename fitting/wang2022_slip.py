@@ -23,7 +23,7 @@ import tribojax as tj
 # (D, G m, μ_t): Table 1's D with the Table 3 calibration, and two distinct starts. Every start
 # keeps F_s > m·a_max = 0.321 N at all six loads (no gross sliding, Eq 27's pre-sliding regime).
 STARTS = (
-    {k: tj.CHAIN_DEFAULTS[k] for k in ("D", "G_m", "mu_t")},  # the calibrated point (tj.CHAIN_DEFAULTS)
+    {k: tj.CHAIN_DEFAULTS[k] for k in ("D", "G_m", "mu_t")},  # the calibrated point
     {"D": 2.8, "G_m": 2e-8, "mu_t": 0.1},
     {"D": 2.75, "G_m": 3e-8, "mu_t": 0.11},
     # failed with the Kvaerno5 slip solver (a diverging stage Newton iteration under forward

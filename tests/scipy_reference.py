@@ -30,7 +30,7 @@ Model (equation numbers of papers/wang2022_reticle_slip.txt):
   times a'_ec in Eqs 10 and 12); plastic a = a'. With area="truncated", a = a' in every regime.
 * Eq 14 friction T = 8 a σ_s/(π(6-3ν)) + 8(2ν-1) P/(π(6-3ν)); Eq 18 stiffness
   k = 8 G' r (1-ψ)^(1/3) with r = (a/π)^(1/2); Eq 20 dissipation and Eq 22 stored energy per
-  cycle as printed, with ψ = T/(μ_t P) = tangential_load/(μ_t · load) (docs/reproduction.md reading).
+  cycle as printed, with ψ = T/(μ_t P) = tangential_load/(μ_t · load) (docs/reproduction.md).
 * Size distribution n(a') = (D-1)/(2a'_l) (a'_l/a')^((D+1)/2), 0 < a' <= a'_l (Eq 15).
   Regime integrals (Eqs 16, 19, 21, 23 and the load balance) are ∫ f(a') n(a') da' over the
   regime's range clipped to (0, a'_l], computed with quad in s = ln a' (the areas are

@@ -21,7 +21,10 @@ ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "tribojax"
 MAX_LINES = 400
 # optional dependencies: allowed only in these modules (each import guarded there)
-OPTIONAL = {"matplotlib": {"tribojax._plot"}, "SurfaceTopography": {"tribojax._roughness._topography"}}
+OPTIONAL = {
+    "matplotlib": {"tribojax._plot"},
+    "SurfaceTopography": {"tribojax._roughness._topography"},
+}
 # distribution name -> import name where they differ
 IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 

@@ -13,6 +13,8 @@ import pytest
 
 import tribojax as tj
 import tribojax.discovery as disc
+from tribojax.discovery import AbstractEffect, EffectDesign
+from tribojax.discovery._loop import cycle_noise
 from tribojax.discovery._loop_models import LoopSpec, loop_force, prepare_loop
 from tribojax.discovery._loop_synthetic import (
     LOAD_GRADIENT,
@@ -23,8 +25,6 @@ from tribojax.discovery._loop_synthetic import (
     hidden_effect_loop,
     rig,
 )
-from tribojax.discovery import AbstractEffect, EffectDesign
-from tribojax.discovery._loop import cycle_noise
 
 MUN, KD, A0, OMEGA = rig()
 _force = jax.jit(loop_force)

@@ -6,7 +6,7 @@ import tribojax as tj
 
 
 def test_wang2022_pair_equivalent_constants():
-    # docs/reproduction.md: E* = 41.28 GPa, G' = 9.158 GPa, H = 1.372 GPa, K = 0.5212 (4 digits printed)
+    # docs/reproduction.md: E* = 41.28 GPa, G' = 9.158 GPa, H = 1.372 GPa, K = 0.5212 (4 digits)
     pair = tj.wang2022_pair()
     assert float(pair.E_star) == pytest.approx(41.28e9, rel=2e-4)
     assert float(pair.G_star) == pytest.approx(9.158e9, rel=2e-4)

@@ -183,7 +183,7 @@ def _solve(residual_fn, theta0, args, solver, max_steps, jac):
 @eqx.filter_jit
 def value_and_jacobian(residual_fn, theta, args):
     """Residual and Jacobian of `residual_fn(θ, args)` at θ from one forward pass (jitted once
-    per `residual_fn` object and argument shapes: the statistics of `least_squares_fit` reuse it)."""
+    per `residual_fn` object and argument shapes: `least_squares_fit`'s statistics reuse it)."""
 
     def both(th):
         r = residual_fn(th, args)
