@@ -129,15 +129,16 @@ def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps,
     r, J = np.asarray(r, dtype=np.float64), np.asarray(J, dtype=np.float64)
     n, p = J.shape
     _, sv, vt = np.linalg.svd(J, full_matrices=False)
-    tiny = sv <= sv[0] * 1e-14
-    inv_s2 = np.where(tiny, np.inf, 1.0 / np.where(tiny, 1.0, sv) ** 2)
-    with np.errstate(invalid="ignore"):
-        cov_theta = (vt.T * inv_s2[None, :]) @ vt
-    cov_theta = np.where(np.isnan(cov_theta), np.inf, cov_theta)
+    tiny = sv <= (sv[0] if sv.size else 0.0) * 1e-14  # (no parameters: nothing is tiny)
     scale2 = 1.0 if sigma_known else float(r @ r) / max(n - p, 1)
     T = np.asarray(jax.jacfwd(transform)(jnp.asarray(theta)))
+    # T·V·S⁻¹ over the determined directions; a parameter that moves along an undetermined one
+    # (singular value ~0) gets infinite variance (and no NaN from 0·inf)
+    A = (T @ vt[~tiny].T) / sv[~tiny][None, :]
+    cov = scale2 * (A @ A.T)
+    free = np.any(T @ vt[tiny].T != 0.0, axis=1)
+    cov[np.ix_(free, free)] = np.inf
     with np.errstate(invalid="ignore"):
-        cov = T @ (cov_theta * scale2) @ T.T
         std = np.sqrt(np.diag(cov))
         corr = cov / np.outer(std, std)
     return FitResult(

@@ -10,7 +10,7 @@ import optimistix as optx
 from ._engine import FAILED_RESIDUAL, gauss_newton_step, report_step
 
 
-def _quiet(**kwargs):
+def quiet(**kwargs):
     """optimistix's `verbose` hook, silent (progress goes through `report_step`)."""
 
 
@@ -50,7 +50,7 @@ class NoiseFloorLM(optx.AbstractGaussNewton):
         # above 0.75) instead of optimistix's 0.01/0.99: with residuals from an ODE solve ρ
         # rarely exceeds 0.99, the region never grew and LM crept along flat valleys.
         self.search = optx.ClassicalTrustRegion(high_cutoff=0.75, low_cutoff=0.25)
-        self.verbose = _quiet
+        self.verbose = quiet
         self.max_rejections = max_rejections
         self.step_tol = step_tol
 

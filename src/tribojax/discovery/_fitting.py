@@ -17,7 +17,8 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from .._fit._engine import FAILED_RESIDUAL, least_squares_fit, value_and_jacobian
+from .._fit._engine import FAILED_RESIDUAL, fit_statistics, least_squares_fit, value_and_jacobian
+from .._fit._solver import quiet
 from .._precision import ensure_x64
 from ._core import K_MAX, AbstractBaseline, EffectDesign
 from ._regions import ar1_inflation
@@ -132,10 +133,6 @@ GAIN_TOL = 1e-2  # converged: a Gauss–Newton step would lower the cost by < 0.
 NOISE_TOL = 1.0  # stationary: a rejected step promised < 1 residual variance (evaluation noise)
 
 
-def _quiet(**kwargs):
-    return None
-
-
 class _RelativeTrustRegion(optx.ClassicalTrustRegion):
     """Trust-region update (cutoffs 0.25/0.75 as `NoiseFloorLM`, growth 2 as MINPACK) of a radius
     in units of the Gauss–Newton step length (`optx.IndirectDampedNewtonDescent`), capped at 1: a
@@ -170,7 +167,7 @@ class _DiscoveryLM(optx.AbstractGaussNewton):
         self.rtol, self.atol, self.norm = rtol, atol, optx.max_norm
         self.descent = optx.IndirectDampedNewtonDescent()
         self.search = _RelativeTrustRegion(high_cutoff=0.75, low_cutoff=0.25, high_constant=2.0)
-        self.verbose = _quiet
+        self.verbose = quiet
         self.max_rejections = max_rejections
 
     def terminate(self, fn, y, args, options, state, tags):
@@ -193,7 +190,7 @@ _SOLVER = _DiscoveryLM(rtol=1e-8, atol=1e-10)
 
 
 def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=256) -> _State:
-    """Fit [θ_b, s] minimising ‖(model − y)/scale‖² with `least_squares_fit` (`NoiseFloorLM`).
+    """Fit [θ_b, s] minimising ‖(model − y)/scale‖² with `least_squares_fit` (`_DiscoveryLM`).
 
     The strengths are padded to `K_MAX` (`_residual`), so the compiled solve is shared by every
     combination of effects on the same record shape; statistics use the active columns only.
@@ -259,7 +256,8 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=256) -> _State
         theta=x,
         yhat=y + scale * r,
         rss=cost,
-        cov=np.linalg.pinv(J.T @ J) * cost / max(n - npar, 1),
+        cov=fit_statistics(x, r, J, names=[""] * npar, transform=lambda t: t, sigma_known=False,
+                           result=res.result, steps=res.steps).covariance,  # fmt: skip
         jac=J,
         converged=bool(converged),
         steps=res.steps,
