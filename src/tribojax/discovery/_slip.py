@@ -24,6 +24,8 @@ Additive (measurement) effects, linear in their strengths:
 
 from __future__ import annotations
 
+import functools
+
 from typing import ClassVar
 
 import diffrax as dfx
@@ -218,13 +220,22 @@ class PositionError(AbstractEffect):
                              basis=(x / rms * ys)[:, None])]  # fmt: skip
 
 
+def _transition(M, h):
+    """exp(M·h) for every step length h (one matrix exponential when the sampling is uniform)."""
+    uniform = jnp.all(jnp.abs(h - h[0]) <= 1e-12 * jnp.abs(h[0]))
+    return jax.lax.cond(uniform, lambda: jnp.broadcast_to(expm(M * h[0]), (h.size, 4, 4)),
+                        lambda: jax.vmap(lambda hh: expm(M * hh))(h))  # fmt: skip
+
+
 @jax.jit
+@functools.partial(jax.vmap, in_axes=(None, None, 0, 0))
 def _oscillator(t, a, omega, zeta):
-    """q, q̇ of q̈ + 2ζωq̇ + ω²q = −a(t), a linear between samples (exact discretisation)."""
+    """q, q̇ of q̈ + 2ζωq̇ + ω²q = −a(t), a linear between samples (exact discretisation), for
+    each (ω, ζ) pair of the vectors `omega`, `zeta`: shape (pairs, n, 2)."""
     A = jnp.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]])
     M = jnp.zeros((4, 4)).at[:2, :2].set(A).at[1, 2].set(-1.0).at[2, 3].set(1.0)
     h = jnp.diff(t)
-    E = jax.vmap(lambda hh: expm(M * hh))(h)
+    E = _transition(M, h)
     slope = jnp.diff(a) / h
 
     def step(x, inp):
@@ -270,12 +281,16 @@ class Vibration(AbstractEffect):
     n_freq: int = 40
 
     def design(self, baseline, f, z):
+        return self._designs(baseline, [(f, z)])[0]
+
+    def _designs(self, baseline, pairs):
         ys = _y_scale(baseline)
-        q = np.asarray(_oscillator(baseline.t, baseline.accel, 2 * np.pi * f, z))
-        cols = np.stack([_unit_rms(q[:, 0]), _unit_rms(q[:, 1])], 1) * ys
-        return EffectDesign(("A_q", "A_qdot"), ("m", "m"), np.full(2, ys), basis=cols,
-                            nuisance={"f_Hz": float(f), "zeta": float(z)},
-                            n_nuisance=2)  # fmt: skip
+        f, z = np.asarray(pairs, dtype=float).reshape(-1, 2).T
+        qs = np.asarray(_oscillator(baseline.t, baseline.accel, 2 * np.pi * f, z))
+        return [EffectDesign(("A_q", "A_qdot"), ("m", "m"), np.full(2, ys),
+                             basis=np.stack([_unit_rms(q[:, 0]), _unit_rms(q[:, 1])], 1) * ys,
+                             nuisance={"f_Hz": float(fi), "zeta": float(zi)}, n_nuisance=2)
+                for q, fi, zi in zip(qs, f, z)]  # fmt: skip
 
     def frequencies(self, baseline):
         t = np.asarray(baseline.t)
@@ -283,8 +298,8 @@ class Vibration(AbstractEffect):
         return np.geomspace(3.0 / (t[-1] - t[0]), min(0.4 * fs, 500.0), self.n_freq)
 
     def designs(self, baseline):
-        return [self.design(baseline, f, z) for f in self.frequencies(baseline)
-                for z in self.zetas]  # fmt: skip
+        return self._designs(baseline, [(f, z) for f in self.frequencies(baseline)
+                                        for z in self.zetas])  # fmt: skip
 
     def refine(self, baseline, design, score):
         f0, z0 = design.nuisance["f_Hz"], design.nuisance["zeta"]
