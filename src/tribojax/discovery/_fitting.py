@@ -147,29 +147,6 @@ class _RelativeTrustRegion(optx.ClassicalTrustRegion):
         return size, accept, result, eqx.tree_at(lambda st: st.step_size, state, size)
 
 
-class _MarquardtSearch(optx.AbstractSearch):
-    """Marquardt's damping update as an optimistix search: a step is accepted when it lowers the
-    cost; the step size 1/λ (`optx.DampedNewtonDescent`) grows by 3 on acceptance and shrinks by
-    4 on rejection, from λ = 1e-3 (in variables scaled by the start Jacobian's column norms)."""
-
-    low_constant: float = 0.25
-    high_constant: float = 3.0
-    initial: float = 1e3
-
-    def init(self, y, f_info_struct):
-        return _SearchState(jnp.asarray(self.initial))
-
-    def step(self, first_step, y, y_eval, f_info, f_eval_info, state):
-        accept = first_step | (f_eval_info.as_min() < f_info.as_min())
-        mul = jnp.where(first_step, 1.0, jnp.where(accept, self.high_constant, self.low_constant))
-        size = mul * state.step_size
-        return size, accept, optx.RESULTS.successful, _SearchState(size)
-
-
-class _SearchState(eqx.Module):
-    step_size: jax.Array
-
-
 class _DiscoveryLM(optx.AbstractGaussNewton):
     """Levenberg–Marquardt (trust region in Gauss–Newton step lengths) with the discovery stops,
     s² = RSS/(n − p) (at least 1; n and p without the held strengths): after an accepted step,
@@ -181,20 +158,15 @@ class _DiscoveryLM(optx.AbstractGaussNewton):
     rtol: float
     atol: float
     norm: object
-    descent: object
-    search: object
+    descent: optx.IndirectDampedNewtonDescent
+    search: _RelativeTrustRegion
     verbose: object
     max_rejections: int = eqx.field(static=True)
 
     def __init__(self, rtol, atol, max_rejections=12):
         self.rtol, self.atol, self.norm = rtol, atol, optx.max_norm
-        import os
-        if os.environ.get("TJ_MQ"):
-            self.descent = optx.DampedNewtonDescent()
-            self.search = _MarquardtSearch()
-        else:
-            self.descent = optx.IndirectDampedNewtonDescent()
-            self.search = _RelativeTrustRegion(high_cutoff=0.75, low_cutoff=0.25, high_constant=2.0)
+        self.descent = optx.IndirectDampedNewtonDescent()
+        self.search = _RelativeTrustRegion(high_cutoff=0.75, low_cutoff=0.25, high_constant=2.0)
         self.verbose = quiet
         self.max_rejections = max_rejections
 
