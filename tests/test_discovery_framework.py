@@ -1,6 +1,7 @@
 """The discovery engine on a cheap analytic baseline (no ODE): selection, `none`, custom effects,
 regions, report contract."""
 
+import dataclasses
 from typing import ClassVar
 
 import jax
@@ -192,3 +193,20 @@ def test_fit_shares_one_compiled_solve_across_effects():
         fit = _core._fit(base, tuple(designs), th, y, 0.005)
         assert fit.converged and fit.theta.size == 2 + sum(d.k for d in designs)
     assert _engine._solve._cached._cache_size() == size
+
+
+def test_undetermined_parameter_gives_infinite_not_nan_std_error():
+    # a parameter along an undetermined direction has infinite variance; the physical standard
+    # errors of the others stayed NaN (0·inf in T·cov·Tᵀ) before
+    from tribojax.discovery import _discover, _fitting
+
+    base = _record("none")
+    y = np.asarray(base.y)
+    st = _fitting._fit(base, (), base.start(), y, 0.005)
+    cov = st.cov.copy()
+    cov[1, :] = cov[:, 1] = 0.0
+    cov[1, 1] = np.inf
+    out = _discover._fit_dict(base, dataclasses.replace(st, cov=cov), 0.005)
+    A, tau = out["std_errors"]["A"], out["std_errors"]["tau"]
+    assert tau == np.inf
+    assert np.isfinite(A) and A == pytest.approx(np.exp(st.theta[0]) * np.sqrt(st.cov[0, 0]))

@@ -121,7 +121,12 @@ def _fit_dict(baseline, state: _State, scale: float) -> dict:
     values = np.asarray(baseline.physical(theta_b))
     T = np.asarray(jax.jacfwd(baseline.physical)(theta_b))
     cov_b = state.cov[:p, :p]
-    std = np.sqrt(np.clip(np.diag(T @ cov_b @ T.T), 0, None))
+    # a physical parameter that depends on an undetermined one is undetermined (inf), not 0·inf
+    free = np.isfinite(np.diag(cov_b))
+    cov_f = np.where(np.isfinite(cov_b), cov_b, 0.0)
+    var = np.einsum("ij,jk,ik->i", T, cov_f, T)
+    var = np.where(np.any((T != 0) & ~free[None, :], axis=1), np.inf, var)
+    std = np.sqrt(np.clip(var, 0, None))
     return {
         "parameters": dict(zip(baseline.param_names, values.tolist())),
         "std_errors": dict(zip(baseline.param_names, std.tolist())),
