@@ -25,7 +25,6 @@ Additive (measurement) effects, linear in their strengths:
 from __future__ import annotations
 
 import functools
-
 from typing import ClassVar
 
 import diffrax as dfx
