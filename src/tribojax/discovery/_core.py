@@ -94,6 +94,11 @@ class AbstractBaseline(eqx.Module):
     def start(self) -> np.ndarray:
         """Start θ for the baseline fit (unconstrained)."""
 
+    def starts(self) -> list:
+        """Start points of the baseline fit; the lowest converged cost is kept. Default
+        `[self.start()]`."""
+        return [self.start()]
+
     @abc.abstractmethod
     def physical(self, theta):
         """θ → physical parameters (JAX, differentiable)."""

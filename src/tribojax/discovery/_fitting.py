@@ -189,7 +189,10 @@ class _DiscoveryLM(optx.AbstractGaussNewton):
 _SOLVER = _DiscoveryLM(rtol=1e-8, atol=1e-10)
 
 
-def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=256) -> _State:
+MAX_STEPS = 128  # step budget of every discovery fit (accepted and rejected; one compile)
+
+
+def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=MAX_STEPS) -> _State:
     """Fit [θ_b, s] minimising ‖(model − y)/scale‖² with `least_squares_fit` (`_DiscoveryLM`).
 
     The strengths are padded to `K_MAX` (`_residual`), so the compiled solve is shared by every

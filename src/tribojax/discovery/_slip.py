@@ -37,7 +37,7 @@ from jaxtyping import Array
 
 from .._dynamics._profiles import MeasuredProfile
 from .._dynamics._slip import simulate_slip
-from .._fit._start import slip_run_start
+from .._fit._start import C_TAU_START_FACTORS, slip_run_start
 from .._friction._lugre import DEFAULT_VELOCITY_SCALE, PreSlipLuGre
 from .._io._slip_run import SlipRun
 from .._presets import STANDARD_GRAVITY_WANG2022 as G_ACC  # m/s², wang2022 Eq 28
@@ -111,6 +111,11 @@ class SlipBaseline(AbstractBaseline):
 
     def start(self):
         return np.log(np.asarray(self.start_values))
+
+    def starts(self):
+        """The start and its C_τ multiplied by 0.1 and 10 (`C_TAU_START_FACTORS`), as
+        `fit_slip_run` does: the cost has separate minima in C_τ."""
+        return [self.start() + np.log([1.0, 1.0, c]) for c in C_TAU_START_FACTORS]
 
     def physical(self, theta):
         return jnp.exp(theta)
