@@ -66,6 +66,9 @@ def regime_integral(law: PowerLaw, log_lo, log_hi, log_al, D):
     return jnp.exp(log_pref + q * base) * span * _expm1_over_x(-jnp.abs(q) * span)
 
 
+_SURFACE = ("D", "G", "M", "gamma")
+
+
 def _regime_bounds(log_ec, log_epc, log_pc):
     """(lo, hi) in log a' for each regime, ELASTIC … PLASTIC; None = a'_l above, 0 below."""
     return ((log_ec, None), (log_epc, log_ec), (log_pc, log_epc), (None, log_pc))
@@ -236,7 +239,13 @@ class FractalContact(eqx.Module):
         inlined.
         """
         ensure_x64()
-        load = check_range(load, "load", 0.0, unit="N")
+        load = check_range(load, "load", 0.0, math.inf, unit="N")
+        for name, value in (("load", load), *((k, getattr(self.surface, k)) for k in _SURFACE)):
+            if not isinstance(value, jax.core.Tracer) and jnp.ndim(value) != 0:
+                raise ValueError(
+                    f"{name} has shape {jnp.shape(value)}; FractalContact evaluates one surface at "
+                    "one load (a scalar): use jax.vmap over loads, eqx.filter_vmap over surfaces"
+                )
         psi = self.tangential_load / (self.mu_t * load)
         fail_if(psi, psi >= 1.0, self._psi_message(load))
         return _evaluate(self, load)
@@ -304,6 +313,13 @@ class FractalContact(eqx.Module):
                 all_plastic,
                 "every asperity is fully plastic (a'_l <= a'_pc), so the fractal model carries no "
                 "tangential load: check G (too large?), M and the units of the load",
+            )
+            F_s = eqx.error_if(
+                F_s,
+                ~all_plastic & (log_al <= log_epc),
+                "no asperity is elastic or first elastic-plastic (a'_l <= a'_epc), so F_s and "
+                "z_max are 0 (wang2022 Eqs 14, 16): D is too close to 3 or G too large for this "
+                "load; check D, G, M and the units of the load (throw=False returns the zeros)",
             )
         # double-where: an all-plastic contact has K = W_s = 0; return zeros, not 0/0.
         safe_k = jnp.where(all_plastic, 1.0, K_tau)

@@ -39,18 +39,40 @@ def positive_or_none(value, name: str, source: str, unit: str, *, required=False
 # atomic writes
 
 
-def write_text_atomic(path, text: str) -> None:
-    """Write `text` (UTF-8) to `path` via a temporary file, so a failure leaves no partial file."""
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write_text_atomic(path, text: str, *, exclusive: bool = False) -> None:
+    """Write `text` (UTF-8) to `path` via a temporary file, so a failure leaves no partial file.
+
+    The file gets the permissions of a normally created file (0666 less the umask, 0644
+    usually). With `exclusive`, an existing `path` is never replaced (FileExistsError), even by a
+    writer that finishes at the same time: the temporary file is hard-linked into place.
+    """
     path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(21, "is a folder, not a file name", str(path))
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
+        os.chmod(tmp, 0o666 & ~_umask())
+        if exclusive:
+            try:
+                os.link(tmp, path)
+            except FileExistsError:
+                raise FileExistsError(
+                    17, "exists (written by another run meanwhile?); refusing to overwrite it",
+                    str(path),
+                ) from None
+        else:
+            os.replace(tmp, path)
+    finally:
         Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def _json_default(obj):
@@ -72,10 +94,11 @@ def _finite(obj):
     return obj
 
 
-def write_json_atomic(path, data) -> None:
-    """Write strict JSON (NaN/inf as null, NumPy values as numbers) to `path`, atomically."""
+def write_json_atomic(path, data, *, exclusive: bool = False) -> None:
+    """Write strict JSON (NaN/inf as null, NumPy values as numbers) to `path`, atomically
+    (`exclusive`: never replace an existing file, see `write_text_atomic`)."""
     text = json.dumps(_finite(data), indent=2, default=_json_default, allow_nan=False)
-    write_text_atomic(path, text + "\n")
+    write_text_atomic(path, text + "\n", exclusive=exclusive)
 
 
 def refuse_existing(targets) -> None:

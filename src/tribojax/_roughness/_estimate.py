@@ -78,6 +78,9 @@ class RoughnessEstimate:
         method: "structure", "psd" or "rms". band: (lo, hi) of the fit in metres (lags or
             wavelengths 1/f). slope, r2: the log-log fit. n_points: points in the band.
         source: the topography's source.
+        rms_residual: rms residual of the log10 fit over the band (the band's quality).
+        warning: non-empty when the band fails the scaling test and was used anyway (a band
+            given by the user, or `best_band=True`): the estimate is then only indicative.
     """
 
     D: float
@@ -91,6 +94,8 @@ class RoughnessEstimate:
     n_points: int
     M: int = 1
     source: str = ""
+    rms_residual: float = math.nan
+    warning: str = ""
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -237,6 +242,7 @@ def estimate_fractal(
     ridge_weights: str = "wang2022",
     axis: str = "x",
     max_rms: float = 0.15,
+    best_band: bool = False,
 ) -> RoughnessEstimate:
     """D and G of `topo` (wang2022 Eq 1 conventions) by one method, band chosen automatically.
 
@@ -249,9 +255,11 @@ def estimate_fractal(
         M, ridge_weights: the YK ridge count the G is referred to (through the direction factor).
         max_rms: largest acceptable rms residual of the log10 fit; above it there is no scaling.
             (0.15: a single measured profile's binned periodogram scatters by ~0.1 in log10.)
+        best_band: when no band passes the `max_rms` test, return the best band with 2 < D < 3
+            anyway, with `warning` set (a given `band` is always used, with a warning if poor).
     Raises:
-        ValueError for NaNs, flat or too-short data, or when no band shows power-law scaling
-        with 2 < D < 3.
+        ValueError for NaNs, flat or too-short data, when the fitted D is outside (2, 3), or
+        (unless `best_band` or `band`) when no band shows power-law scaling within `max_rms`.
     """
     if method not in METHODS:
         raise ValueError(f"method = {method!r}; choose one of {METHODS}")
@@ -278,11 +286,20 @@ def estimate_fractal(
     slope = float(coef[1])
     alpha = slope - shift
     D = 3.0 - 0.5 * alpha
-    if rms > max_rms or not (2.02 < D < 2.98):
+    lenient = best_band or band is not None
+    if (rms > max_rms and not lenient) or not (2.02 < D < 2.98):
+        which = "the given band" if band is not None else "the best band"
         raise ValueError(
-            f"{topo.source}: no fractal scaling band found by {method!r}: the best band "
-            f"{x[i]:.3g}-{x[j - 1]:.3g} m has slope {slope:.3f} (D = {D:.3f}) and rms log10 "
-            f"residual {rms:.3f} (limit {max_rms}); try another method, band or min_decades"
+            f"{topo.source}: no fractal scaling band found by {method!r}: {which} "
+            f"{x[i]:.3g}-{x[j - 1]:.3g} m has slope {slope:.3f} (D = {D:.3f}, the model needs "
+            f"2 < D < 3) and rms log10 residual {rms:.3f} (limit {max_rms}); try another method, "
+            "band or min_decades"
+        )
+    warning = ""
+    if rms > max_rms:
+        warning = (
+            f"the band {x[i]:.3g}-{x[j - 1]:.3g} m is not a clean power law by {method!r} (rms "
+            f"log10 residual {rms:.3f} > {max_rms}, r2 = {r2:.3f}): D and G are indicative only"
         )
     # G from the fitted line at the band's centre (log10 x_c), not by extrapolation to 1 m
     xc = 0.5 * (lx[i] + lx[j - 1])
@@ -322,4 +339,6 @@ def estimate_fractal(
         n_points=int(j - i),
         M=M,
         source=topo.source,
+        rms_residual=rms,
+        warning=warning,
     )
