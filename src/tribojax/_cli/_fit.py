@@ -143,6 +143,11 @@ def _summary(fit, kind, source, n_data, resid, unit, sigma, sigma_source) -> dic
         sigma_source=sigma_source,
         message=fit.message,
     )
+    if fit.noise_consistent is False:
+        d["uncertainty_model"] = (
+            f"the stated noise ({sigma_source}) is contradicted by the residuals (reduced chi2 = "
+            f"{fit.reduced_chi2:.4g}): standard errors are scaled by sqrt(reduced chi2)"
+        )
     return d
 
 

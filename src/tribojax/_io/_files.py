@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._tables import DataFileError
+from ._tables import DataFileError, read_text
 
 
 def positive_or_none(value, name: str, source: str, unit: str, *, required=False):
@@ -66,7 +66,8 @@ def write_text_atomic(path, text: str, *, exclusive: bool = False) -> None:
                 os.link(tmp, path)
             except FileExistsError:
                 raise FileExistsError(
-                    17, "exists (written by another run meanwhile?); refusing to overwrite it",
+                    17,
+                    "exists (written by another run meanwhile?); refusing to overwrite it",
                     str(path),
                 ) from None
         else:
@@ -151,10 +152,7 @@ def read_sidecar(csv_path, schema: dict[str, bool], units: dict[str, str], *, re
             f"{side}: sidecar not found; {Path(csv_path).name} needs a JSON file beside it with "
             f"{need} (optional: {', '.join(k for k, req in schema.items() if not req)})"
         )
-    try:
-        text = side.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataFileError(f"{side}: cannot be read ({err})") from err
+    text = read_text(side)
     try:
         data = json.loads(text)
     except json.JSONDecodeError as err:
@@ -204,7 +202,7 @@ def write_record_files(path, header, columns, sidecar: dict | None, *, overwrite
 def data_line_number(path, row: int) -> int:
     """1-based line number of data row `row` (0-based) of a CSV with comments and a header."""
     seen = -1  # the header is row -1
-    for lineno, raw in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), start=1):
+    for lineno, raw in enumerate(read_text(path).splitlines(), start=1):
         text = raw.strip()
         if not text or text.startswith("#"):
             continue
@@ -217,11 +215,7 @@ def data_line_number(path, row: int) -> int:
 def csv_header(path) -> tuple[str, ...]:
     """The header fields of a CSV (first line that is neither blank nor a `#` comment)."""
     path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataFileError(f"{path}: cannot be read ({err})") from err
-    for raw in lines:
+    for raw in read_text(path).splitlines():
         text = raw.strip()
         if text and not text.startswith("#"):
             return tuple(f.strip() for f in text.split(","))
