@@ -126,8 +126,9 @@ def claim_outputs(src, targets, *, force: bool):
     Checks (before any work): no target is the input `src` or its sidecar, the first target does
     not exist (unless `force`), the folder can be created and written. A lock file beside the
     first target keeps a second run with the same output from starting (CommandError naming it);
-    it is removed on exit. If the block raises, targets it created are removed, so a failed run
-    leaves no partial output. Write the first target with `exclusive=not force`.
+    it is removed on exit. If the block raises, targets it created are removed (and the folder,
+    if it was made here and is left empty), so a failed run leaves no partial output. Write the
+    first target with `exclusive=not force`.
     """
     targets = [Path(t) for t in targets]
     why = refused_outputs(src, targets, force=force)
@@ -136,6 +137,7 @@ def claim_outputs(src, targets, *, force: bool):
     folder = targets[0].parent
     if folder.exists() and not folder.is_dir():
         raise CommandError(f"{folder} is a file, not an output folder; choose another --out")
+    created = not folder.exists()
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as err:
@@ -163,3 +165,5 @@ def claim_outputs(src, targets, *, force: bool):
         raise
     finally:
         lock.unlink(missing_ok=True)
+        if created and not any(folder.iterdir()):
+            folder.rmdir()  # a folder made for outputs that were not written
