@@ -14,10 +14,12 @@ log a'_l with an optimistix Newton root find and differentiated by the implicit 
 """
 
 import math
+import warnings
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optimistix as optx
 from jaxtyping import Array, Bool, Float
 
@@ -109,6 +111,8 @@ class ContactParameters(eqx.Module):
         converged:  whether the load balance converged.
         all_plastic: every asperity is fully plastic (a'_l <= a'_pc): the model then carries no
                     tangential load, and F_s, K_τ, C_τ and z_max are returned as 0.
+        no_static_friction: F_s = z_max = 0 with K_τ > 0 (a'_l <= a'_epc); an eager call
+                    with throw=True warns (RuntimeWarning), an all-plastic contact raises.
     """
 
     values: Float[Array, "... 16"]
@@ -128,6 +132,12 @@ class ContactParameters(eqx.Module):
     @property
     def all_plastic(self):
         return self.flags[..., 1]
+
+    @property
+    def no_static_friction(self):
+        """F_s = z_max = 0 although the contact is not all plastic: no asperity is elastic or
+        first elastic–plastic (a'_l <= a'_epc), the only ones that carry static friction."""
+        return (self.values[..., 1] == 0.0) & ~self.flags[..., 1]
 
     def as_dict(self) -> dict:
         """Plain dict of NumPy values (for printing and JSON)."""
@@ -248,7 +258,18 @@ class FractalContact(eqx.Module):
                 )
         psi = self.tangential_load / (self.mu_t * load)
         fail_if(psi, psi >= 1.0, self._psi_message(load))
-        return _evaluate(self, load)
+        out = _evaluate(self, load)
+        if self.throw and not isinstance(out.values, jax.core.Tracer):
+            static_zero = np.asarray(out.no_static_friction)
+            if static_zero.any():
+                warnings.warn(
+                    "no asperity is elastic or first elastic-plastic (a'_l <= a'_epc), so F_s and "
+                    "z_max are 0 (wang2022 Eqs 14, 16) while K_tau is not: D is close to 3 or G "
+                    "large for this load; check D, G, M and the units of the load",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+        return out
 
     def _psi_message(self, load) -> str:
         msg = (
@@ -313,13 +334,6 @@ class FractalContact(eqx.Module):
                 all_plastic,
                 "every asperity is fully plastic (a'_l <= a'_pc), so the fractal model carries no "
                 "tangential load: check G (too large?), M and the units of the load",
-            )
-            F_s = eqx.error_if(
-                F_s,
-                ~all_plastic & (log_al <= log_epc),
-                "no asperity is elastic or first elastic-plastic (a'_l <= a'_epc), so F_s and "
-                "z_max are 0 (wang2022 Eqs 14, 16): D is too close to 3 or G too large for this "
-                "load; check D, G, M and the units of the load (throw=False returns the zeros)",
             )
         # double-where: an all-plastic contact has K = W_s = 0; return zeros, not 0/0.
         safe_k = jnp.where(all_plastic, 1.0, K_tau)

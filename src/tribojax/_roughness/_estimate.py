@@ -144,14 +144,15 @@ def psd_points(z, dx, ratio=1.5):
     return psd_bins(z, dx, ratio)[:2]
 
 
-def psd_bins(z, dx, ratio=1.5, tapers=5):
+def psd_bins(z, dx, ratio=1.5, tapers=3):
     """(wavelength 1/f, band-averaged one-sided PSD, FFT bins per band) by a multitaper estimate.
 
     The periodogram is averaged over `tapers` orthogonal sine tapers (Riedel & Sidorenko 1995,
     h_k(t) = √(2/(n+1)) sin(πkt/(n+1)), k = 1…K): each taper suppresses leakage as the Hann
     window does, and their average has 1/K of a single window's variance, where one window's
     estimate scatters by ~±15 % even over tens of bins (its neighbouring bins interfere with
-    random phases). Bands are contiguous with edges in the ratio `ratio`; the PSD is averaged
+    random phases). Three tapers keep the spectral smearing (±2 bins) inside the bands at low
+    frequency. Bands are contiguous with edges in the ratio `ratio`; the PSD is averaged
     over all FFT bins in each band (so line spectra are integrated, not sampled) and over rows.
     The default 1.5 is the γ of wang2022/wu2015: each line of a YK/W-M surface then falls in
     exactly one band; for a measured, continuous spectrum it only sets the resolution (5.7 bands
