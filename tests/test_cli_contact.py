@@ -4,7 +4,6 @@ import json
 
 import jax
 import numpy as np
-import pytest
 
 import tribojax as tj
 from tribojax._cli._main import main

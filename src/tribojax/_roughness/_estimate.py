@@ -140,43 +140,28 @@ def structure_points(z, dx):
 
 
 def psd_points(z, dx, ratio=1.5):
-    """(wavelength 1/f, band-averaged one-sided PSD): see `psd_bins`."""
-    return psd_bins(z, dx, ratio)[:2]
+    """(wavelength 1/f, band-averaged one-sided PSD) from Hann-windowed periodograms.
 
-
-def psd_bins(z, dx, ratio=1.5, tapers=3):
-    """(wavelength 1/f, band-averaged one-sided PSD, FFT bins per band) by a multitaper estimate.
-
-    The periodogram is averaged over `tapers` orthogonal sine tapers (Riedel & Sidorenko 1995,
-    h_k(t) = √(2/(n+1)) sin(πkt/(n+1)), k = 1…K): each taper suppresses leakage as the Hann
-    window does, and their average has 1/K of a single window's variance, where one window's
-    estimate scatters by ~±15 % even over tens of bins (its neighbouring bins interfere with
-    random phases). Three tapers keep the spectral smearing (±2 bins) inside the bands at low
-    frequency. Bands are contiguous with edges in the ratio `ratio`; the PSD is averaged
-    over all FFT bins in each band (so line spectra are integrated, not sampled) and over rows.
-    The default 1.5 is the γ of wang2022/wu2015: each line of a YK/W-M surface then falls in
-    exactly one band; for a measured, continuous spectrum it only sets the resolution (5.7 bands
-    a decade). Frequencies start at (K + 3)/(n Δx), above the tapers' half-bandwidth.
+    Bands are contiguous with edges in the ratio `ratio`; the PSD is averaged over all FFT bins
+    in each band (so line spectra are integrated, not sampled) and over rows. The default 1.5 is
+    the γ of wang2022/wu2015: each line of a YK/W-M surface then falls in exactly one band
+    (narrower bands leave some empty); for a measured, continuous spectrum it only sets the
+    resolution (5.7 bands a decade).
     """
     n = z.shape[-1]
-    zd = _detrend(z)
-    t = np.arange(1, n + 1)
-    spec = 0.0
-    for k in range(1, tapers + 1):
-        h = math.sqrt(2.0 / (n + 1)) * np.sin(np.pi * k * t / (n + 1))  # Σh² = 1
-        spec = spec + np.abs(np.fft.rfft(zd * h, axis=-1)) ** 2
-    p = 2.0 * dx * spec.mean(axis=0) / tapers
+    w = np.hanning(n)
+    spec = np.abs(np.fft.rfft(_detrend(z) * w, axis=-1)) ** 2
+    p = 2.0 * dx * spec.mean(axis=0) / np.sum(w**2)
     f = np.fft.rfftfreq(n, dx)
-    lo, hi = (tapers + 3.0) / (n * dx), 1.0 / (4.0 * dx)  # taper bandwidth below; sampling above
+    lo, hi = 4.0 / (n * dx), 1.0 / (4.0 * dx)  # Hann leakage below; sampling above
     edges = lo * ratio ** np.arange(int(np.log(hi / lo) / np.log(ratio)) + 1)
-    fc, pc, nc = [], [], []
+    fc, pc = [], []
     for a, b in zip(edges[:-1], edges[1:]):
         sel = (f >= a) & (f < b)
         if sel.any():
             fc.append(math.sqrt(a * b))
             pc.append(p[sel].mean())
-            nc.append(int(sel.sum()))
-    return 1.0 / np.asarray(fc)[::-1], np.asarray(pc)[::-1], np.asarray(nc)[::-1]
+    return 1.0 / np.asarray(fc)[::-1], np.asarray(pc)[::-1]
 
 
 def _rms_constant(alpha, n):
@@ -201,23 +186,18 @@ def rms_points(z, dx):
     return sizes * dx, np.asarray(out), sizes
 
 
-def _fit_line(x, y, w=None):
-    """Weighted least-squares line y = c0 + c1 x (weights normalised to mean 1): coefficients,
-    covariance, weighted rms residual and weighted r²."""
-    w = np.ones_like(x) if w is None else np.asarray(w, dtype=np.float64) / np.mean(w)
+def _fit_line(x, y):
     A = np.vstack([np.ones_like(x), x]).T
-    sw = np.sqrt(w)
-    coef, *_ = np.linalg.lstsq(A * sw[:, None], y * sw, rcond=None)
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
     r = y - A @ coef
-    rss = float(np.sum(w * r * r))
     dof = max(len(x) - 2, 1)
-    cov = rss / dof * np.linalg.inv(A.T @ (A * w[:, None]))
-    ym = float(np.sum(w * y) / np.sum(w))
-    ss = float(np.sum(w * (y - ym) ** 2))
-    return coef, cov, float(np.sqrt(rss / np.sum(w))), 1.0 - rss / ss if ss > 0 else 0.0
+    s2 = float(r @ r) / dof
+    cov = s2 * np.linalg.inv(A.T @ A)
+    ss = float(np.sum((y - y.mean()) ** 2))
+    return coef, cov, float(np.sqrt(np.mean(r**2))), 1.0 - float(r @ r) / ss if ss > 0 else 0.0
 
 
-def _choose_band(lx, ly, min_decades, band, slope_range, w=None):
+def _choose_band(lx, ly, min_decades, band, slope_range):
     """Index windows [i, j) over log10 x; return the accepted windows, best first.
 
     Candidates span at least `min_decades` and have a slope inside `slope_range` (2 < D < 3);
@@ -240,8 +220,7 @@ def _choose_band(lx, ly, min_decades, band, slope_range, w=None):
         for j in range(i + 4, n + 1)
         if lx[j - 1] - lx[i] >= min_decades - 1e-9
     ]
-    w = np.ones_like(lx) if w is None else w
-    fits = [_fit_line(lx[i:j], ly[i:j], w[i:j]) for i, j in wins]
+    fits = [_fit_line(lx[i:j], ly[i:j]) for i, j in wins]
     rms = np.array([f[2] for f in fits])
     slope = np.array([f[0][1] for f in fits])
     fractal = (slope > slope_range[0]) & (slope < slope_range[1])
@@ -289,24 +268,21 @@ def estimate_fractal(
     z = _detrend(z)
     if method == "structure":
         x, y = structure_points(z, dx)
-        w = np.ones_like(x)
-    elif method == "psd":  # log of a band average of N bins: variance ∝ 1/N
-        x, y, counts = psd_bins(z, dx)
-        w = counts.astype(np.float64)
+    elif method == "psd":
+        x, y = psd_points(z, dx)
     else:
         x, y, _ = rms_points(z, dx)
-        w = np.ones_like(x)
     keep = y > 0
-    x, y, w = x[keep], y[keep], w[keep]
+    x, y = x[keep], y[keep]
     if len(x) < 4:
         raise ValueError(f"{topo.source}: too few usable points ({len(x)}) for a fit")
     lx, ly = np.log10(x), np.log10(y)
     # slope → α = 6 - 2D: structure and rms: slope = α; psd (vs wavelength): slope = 1 + α
     shift = 1.0 if method == "psd" else 0.0
     # D within (2.02, 2.98): a slope indistinguishable from white noise (D = 3) is no scaling
-    wins = _choose_band(lx, ly, min_decades, band, (shift + 0.04, 1.96 + shift), w)
+    wins = _choose_band(lx, ly, min_decades, band, (shift + 0.04, 1.96 + shift))
     i, j = wins[0]
-    coef, cov, rms, r2 = _fit_line(lx[i:j], ly[i:j], w[i:j])
+    coef, cov, rms, r2 = _fit_line(lx[i:j], ly[i:j])
     slope = float(coef[1])
     alpha = slope - shift
     D = 3.0 - 0.5 * alpha
@@ -344,7 +320,7 @@ def estimate_fractal(
     # uncertainty: regression error ⊕ spread over the accepted windows
     Ds = []
     for a, b in wins[:20]:
-        s = _fit_line(lx[a:b], ly[a:b], w[a:b])[0][1]
+        s = _fit_line(lx[a:b], ly[a:b])[0][1]
         Ds.append(3.0 - 0.5 * (s - 1.0 if method == "psd" else s))
     D_std = math.hypot(0.5 * math.sqrt(cov[1, 1]), float(np.std(Ds)))
     # dlog10G/dD at fixed fitted value yc: -(log10 G - xc)·2/(2D-4) (+ the constant's drift)
