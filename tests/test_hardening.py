@@ -24,7 +24,7 @@ SHARED = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "topog
 
 
 def _loop(tmp_path, name="loop.csv", f_scale=1.0, noise_std=None):
-    loop = tj.synthetic_loop(tj.Mindlin(MU, N, KD), 3 * MU * N / KD, OMEGA, noise=0.004, seed=4,
+    loop = tj.synthetic_loop(tj.Jenkins(MU, N, KD), 3 * MU * N / KD, OMEGA, noise=0.004, seed=4,
                              normal_load=N)  # fmt: skip
     loop = dataclasses.replace(loop, f=loop.f * f_scale, noise_std=noise_std)
     path = tmp_path / name
@@ -90,19 +90,19 @@ def test_stated_noise_contradicted_scales_the_errors(tmp_path, capsys):
     # force noise 0.004 N, but the sidecar claims 4e-13 N (10^10 times too small)
     src = _loop(tmp_path, noise_std=4e-13)
     out = tmp_path / "o"
-    assert main(["fit", str(src), "--out", str(out), "--element", "mindlin"]) == 0
+    assert main(["fit", str(src), "--out", str(out), "--element", "jenkins"]) == 0
     res = json.loads((out / "fit.json").read_text())
     assert res["noise_consistent"] is False and res["reduced_chi2"] > 1e18
     assert "reduced chi2" in capsys.readouterr().err
     assert "scaled" in res["uncertainty_model"]
     # the same errors as a fit that estimates the noise from the residuals (within 1 %)
-    free = tj.fit_loop(tj.read_loop(src), "mindlin", sigma=None)
-    ref = tj.fit_loop(dataclasses.replace(tj.read_loop(src), noise_std=None), "mindlin")
+    free = tj.fit_loop(tj.read_loop(src), "jenkins", sigma=None)
+    ref = tj.fit_loop(dataclasses.replace(tj.read_loop(src), noise_std=None), "jenkins")
     for k, name in enumerate(ref.names):
         assert res["std_errors"][name] == pytest.approx(ref.std_errors[k], rel=1e-2)
         assert free.std_errors[k] == pytest.approx(ref.std_errors[k], rel=1e-2)
     # a stated noise that is right keeps its own errors and says so
-    good = tj.fit_loop(dataclasses.replace(tj.read_loop(src), noise_std=0.004), "mindlin")
+    good = tj.fit_loop(dataclasses.replace(tj.read_loop(src), noise_std=0.004), "jenkins")
     assert good.noise_consistent is True and 0.5 < good.reduced_chi2 < 2
 
 
@@ -125,7 +125,7 @@ def test_unidentifiable_direction_is_reported():
 
 
 def test_identified_fit_reports_no_direction(tmp_path):
-    fit = tj.fit_loop(tj.read_loop(_loop(tmp_path)), "mindlin")
+    fit = tj.fit_loop(tj.read_loop(_loop(tmp_path)), "jenkins")
     d = fit.as_dict()
     assert d["identified"] and d["unidentifiable"] == [] and d["noise_consistent"] is None
 
@@ -157,7 +157,7 @@ def test_contact_cli_warns_when_F_s_is_zero(capsys):
 def test_fit_start_from_the_command_line(tmp_path, capsys):
     src = _loop(tmp_path)
     out = tmp_path / "o"
-    assert main(["fit", str(src), "--out", str(out), "--element", "mindlin",
+    assert main(["fit", str(src), "--out", str(out), "--element", "jenkins",
                  "--start", "mu_N=0.5", "K_d=3e6"]) == 0  # fmt: skip
     res = json.loads((out / "fit.json").read_text())
     assert res["parameters"]["K_d"] == pytest.approx(KD, rel=0.05)
