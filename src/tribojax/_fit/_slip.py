@@ -162,7 +162,7 @@ def fit_slip_run(
             raise ValueError(
                 f"{run.source}: the slip solver fails at the start values "
                 + ", ".join(f"{key} = {st[key]:.5g}" for key in names)
-                + "; give a start closer to the data (or none: slip_run_start)"
+                + "; give a start closer to the data (start=, or tribojax fit --start NAME=VALUE)"
             )
         fit = least_squares_fit(fn, theta0, args, names=names, transform=jnp.exp,
                                 sigma_known=sigma_known, max_steps=max_steps, jac="fwd",
@@ -172,7 +172,10 @@ def fit_slip_run(
         if best is None or key < best[0]:
             best = (key, fit)
     if best is None:
-        raise ValueError(f"{run.source}: the slip solver fails at every start; give a start")
+        raise ValueError(
+            f"{run.source}: the slip solver fails at every start; give a start (start=, or "
+            "tribojax fit --start F_s=VALUE K_tau=VALUE C_tau=VALUE)"
+        )
     fit = best[1]
     if not free_alpha:
         fit = _with_fixed(fit, {"alpha": float(alpha)})
