@@ -35,8 +35,8 @@ PROFILE_GRIDS = {
 def _row(f, wall):
     d = f.as_dict()
     keep = ("loss", "log_likelihood", "n_parameters", "aic", "bic", "parameters", "std_errors",
-            "flagged_cells", "rms_relative_residual_unflagged",
-            "paper_theory_rms_relative_residual_unflagged", "converged", "em_iterations")  # fmt: skip
+            "flagged_cells", "rms_relative_residual_unflagged", "converged", "em_iterations",
+            "paper_theory_rms_relative_residual_unflagged")  # fmt: skip
     out = {k: d[k] for k in keep}
     out["wall_s"] = wall
     return out

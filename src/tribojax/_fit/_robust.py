@@ -16,7 +16,9 @@ Eq 1); ν = ∞ gives the Gaussian Σ_i [−½ ln 2π − ln(s σ_i) − r_i²/(
 
 Fit. For fixed ν, EM is iteratively reweighted least squares (Lange et al., Eqs 4–5): E-step
 u_i = (ν+1)/(ν + r_i²/s²); M-step θ = argmin Σ u_i r_i² (`fit_measured_slips` with weights u:
-the one engine, warm after the first call) and s² = Σ u_i r_i²/n. Every EM step raises ℓ.
+the one engine, warm after the first call) and s² = Σ u_i r_i²/Σ u_i (the parameter-expanded
+form, Kent, Tyler & Vardi 1994: the same fixed point, since Σ u_i = n at the optimum). EM stops
+when one step raises ℓ by less than `tol`.
 
 Outliers. The standardized residual of a cell is z_i = r_i/(s·√(1 − h_ii)), h the leverage of
 the weighted fit (hat matrix of √u·J). A cell is flagged when |z_i| exceeds the two-sided 5 %
@@ -38,6 +40,8 @@ from ._chain import TABLES, ChainFit, fit_measured_slips, measured_slips, paper_
 
 NOISE_MODELS = ("relative", "absolute", "mixed")
 DEFAULT_NU = 4.0  # Student-t degrees of freedom (Lange et al.'s common robust choice)
+# The headline robust fit of `tribojax reproduce` (chosen by `python -m fitting.wang2022_robust`)
+HEADLINE_NOISE, HEADLINE_FLOOR_NM, HEADLINE_NU = "relative", None, 4.0
 FLAG_ALPHA = 0.05  # family-wise level of the outlier flags (Bonferroni over the cells)
 
 
@@ -254,7 +258,9 @@ def student_t_em(m_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3):
         u = em_weights(r, scale, nu)
         fit, model = m_step(u, fit)
         r = (y - np.asarray(model)) / sigma
-        scale = math.sqrt(float(np.sum(u * r**2) / y.size))
+        # Σu instead of n (PX-EM, Kent, Tyler & Vardi 1994): same fixed point (Σu = n at the
+        # optimum), fewer steps
+        scale = math.sqrt(float(np.sum(u * r**2) / np.sum(u)))
         history.append(student_t_loglik(r, scale, sigma, nu))
         if not fit.converged:
             result = fit.result
