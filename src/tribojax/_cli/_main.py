@@ -158,7 +158,8 @@ def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = Non
         f"{block['plain_rms_relative_residual_unflagged']:.3f}); converged: {robust.converged}, "
         f"{len(robust.history) - 1} EM steps"
     )
-    if out_dir is not None and plot_fit_measured(fit, robust, out_dir / "fit_measured.png"):
+    fig_path = None if out_dir is None else out_dir / "fit_measured.png"
+    if fig_path and plot_fit_measured(fit.model_nm, robust.model_nm, robust.flagged, fig_path):
         print(f"wrote {out_dir / 'fit_measured.png'}")
     if not robust.converged:
         print(f"ERROR: the robust full-chain fit did not converge: {rd['result']} "

@@ -20,10 +20,11 @@ the one engine, warm after the first call) and s² = Σ u_i r_i²/Σ u_i (the pa
 form, Kent, Tyler & Vardi 1994: the same fixed point, since Σ u_i = n at the optimum). EM stops
 when one step raises ℓ by less than `tol`.
 
-Outliers. The standardized residual of a cell is z_i = r_i/(s·√(1 − h_ii)), h the leverage of
-the weighted fit (hat matrix of √u·J). A cell is flagged when |z_i| exceeds the two-sided 5 %
-point of a Gaussian core of scale s with a Bonferroni correction over the n cells,
-Φ⁻¹(1 − 0.025/n) (3.08 for 24 cells).
+Outliers. The standardized residual of a cell is z_i = r_i/(ŝ·√(1 − h_ii)), h the leverage of
+the weighted fit (hat matrix of √u·J) and ŝ = 1.4826·median|r_i| the robust standard deviation
+of the residuals' Gaussian core (not the t scale s, which is smaller than that core's standard
+deviation for small ν). A cell is flagged when |z_i| exceeds the two-sided 5 % point of that
+core with a Bonferroni correction over the n cells, Φ⁻¹(1 − 0.025/n) (3.08 for 24 cells).
 """
 
 from __future__ import annotations
@@ -82,9 +83,17 @@ def flag_threshold(n: int, alpha: float = FLAG_ALPHA) -> float:
     return float(stats.norm.ppf(1.0 - alpha / (2.0 * n)))
 
 
-def standardized_residuals(r, Jw, scale) -> np.ndarray:
-    """z_i = r_i/(s√(1 − h_ii)), h the hat matrix of the weighted Jacobian Jw = √u·∂r/∂θ."""
+def core_scale(r) -> float:
+    """Robust standard deviation of the residuals' Gaussian core: 1.4826·median|r_i| (the
+    normalised median absolute deviation about the fit; Hampel 1974)."""
+    return float(1.482602218505602 * np.median(np.abs(np.asarray(r, dtype=float))))
+
+
+def standardized_residuals(r, Jw, scale=None) -> np.ndarray:
+    """z_i = r_i/(ŝ√(1 − h_ii)), h the hat matrix of the weighted Jacobian Jw = √u·∂r/∂θ and ŝ
+    `scale` (default `core_scale(r)`, which outliers do not inflate)."""
     r, Jw = np.asarray(r, dtype=float), np.asarray(Jw, dtype=float)
+    scale = core_scale(r) if scale is None else scale
     h = np.sum(Jw * np.linalg.pinv(Jw).T, axis=1).reshape(r.shape)  # diag(Jw (JwᵀJw)⁺ Jwᵀ)
     return r / (scale * np.sqrt(np.clip(1.0 - h, 1e-12, None)))
 
@@ -117,7 +126,8 @@ class RobustChainFit:
             freedom; inf: Gaussian).
         scale: s (a fraction for relative/mixed, nm for absolute).
         residuals: r = (measured − model)/σ, (n, 4). weights: the EM weights u, (n, 4).
-        standardized: z, (n, 4). threshold: the flag level on |z|.
+        standardized: z, (n, 4) (core scale `core_scale(residuals)`). threshold: the flag
+            level on |z|.
         log_likelihood: ℓ at the optimum; history: ℓ after each EM step.
         result: `tribojax.RESULTS` (successful when EM and the last inner fit converged).
     """
@@ -214,6 +224,7 @@ class RobustChainFit:
             aic=self.aic,
             bic=self.bic,
             flag_threshold=self.threshold,
+            core_scale=core_scale(self.residuals),
             flagged_cells=self.flagged_cells(),
             rms_relative_residual=self.rms_relative_residual,
             rms_relative_residual_unflagged=self.rms_relative_residual_unflagged,
@@ -318,7 +329,7 @@ def robust_fit_measured_slips(
     fit, r, u, scale, history, result = student_t_em(
         m_step, y, sigma, nu, (fit, fit.model_nm, u0), max_iterations=max_iterations, tol=tol
     )
-    z = standardized_residuals(r, fit.fit.jacobian, scale)
+    z = standardized_residuals(r, fit.fit.jacobian)
     return RobustChainFit(
         chain=fit, noise=noise, floor_nm=None if noise != "mixed" else float(floor_nm),
         nu=float(nu), scale=scale, residuals=r, weights=u, standardized=z,
