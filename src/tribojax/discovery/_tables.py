@@ -16,11 +16,15 @@ Knobs (null in brackets) and the effects of kind "wang2022_table" that move them
     load_coupling    κ [0]: N(t) = N(1 + κa/g) (as on the slip side)
     stribeck         δ_s [0], v_s on a grid: velocity weakening (as on the slip side)
     viscous_friction ν [0]: σ2 = ν·C_τ (as on the slip side)
-    position_step    δ [0] (nm), cell k on a grid: + δ in one phase of one run — a step in the
-                     interferometer reading between two windows of that run (a transient position
-                     error such as the fibre bending the paper reports for Table 5 at 20 kPa:
-                     "from the stable acceleration phase to the uniform motion phase"). A step
-                     between the windows of phase k moves that phase's slip only.
+
+and one measurement effect with an additive basis (no knob):
+    position_step    s [0] on cell k (a grid over the 24 cells): ln|T| + s in that one cell — a
+                     step in the interferometer reading of one run between two windows moves the
+                     slip of one phase only (a transient position error such as the fibre bending
+                     the paper reports for Table 5 at 20 kPa, "from the stable acceleration phase
+                     to the uniform motion phase"). In log form a free factor on one cell is the
+                     same fit as a free additive step in nm there; the cell index is one nuisance
+                     parameter in ΔBIC.
 """
 
 from __future__ import annotations
@@ -40,7 +44,7 @@ from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign
 from ._slip import VS_GRID, AugmentedPreSlip
 
 TABLE_KNOBS = ("position_error", "sensor_drift", "gross_sliding", "load_coupling", "stribeck",
-               "log10_v_s", "viscous", "position_step", "step_cell")  # fmt: skip
+               "log10_v_s", "viscous")  # fmt: skip
 
 
 def _travel_columns(profile: TrapezoidProfile, t_end=2.3):
@@ -73,7 +77,7 @@ class Wang2022TableBaseline(AbstractBaseline):
     centres: Array  # (4,) s per phase
 
     def knob_null(self):
-        return np.array([0.0, 0.0, 0.0, 0.0, 0.0, -5.0, 0.0, 0.0, -1.0])
+        return np.array([0.0, 0.0, 0.0, 0.0, 0.0, -5.0, 0.0])
 
     def start(self):
         return np.zeros(0)
@@ -83,7 +87,7 @@ class Wang2022TableBaseline(AbstractBaseline):
 
     def predict(self, theta, knobs):
         prof = TrapezoidProfile()
-        eps, rate, dgs, kappa, strib, lvs, visc, step, cell = (knobs[i] for i in range(9))
+        eps, rate, dgs, kappa, strib, lvs, visc = (knobs[i] for i in range(7))
         w = jnp.min(self.load) / self.load
 
         def one(F, K, C, wi):
@@ -93,8 +97,6 @@ class Wang2022TableBaseline(AbstractBaseline):
 
         phases = jax.vmap(one)(self.F_s, self.K_tau, self.C_tau, w) * 1e9  # (6, 4) nm
         phases = phases + eps * self.travel[None, :] * 1e9 + rate * self.centres[None, :]
-        k = jnp.arange(phases.size, dtype=phases.dtype).reshape(phases.shape[::-1]).T  # table-major
-        phases = phases + jnp.where(k == cell, step, 0.0)
         return jnp.log(jnp.abs(phases.T.ravel()))
 
     def data(self):
@@ -177,8 +179,7 @@ class TableStribeck(AbstractEffect):
 
 
 class TablePositionStep(AbstractEffect):
-    """A step of δ nm in the position reading of one run between two windows: it moves the
-    slip of one phase (cell) only. Nuisance: the cell (table, vacuum level), 24 grid points."""
+    """A reading step in one phase of one run: a free factor on one cell (module docstring)."""
 
     name: ClassVar[str] = "position_step"
     kind: ClassVar[str] = "wang2022_table"
@@ -186,9 +187,15 @@ class TablePositionStep(AbstractEffect):
     def designs(self, baseline):
         vac = np.asarray(wang2022_table(4)["vacuum_kPa"])
         n = len(vac)
-        return [_knob("position_step", "delta", "nm", 1.0, {"step_cell": float(k)},
-                      {"table": 4 + k // n, "vacuum_kPa": float(vac[k % n])}, 2)
-                for k in range(4 * n)]  # fmt: skip
+        out = []
+        for k in range(4 * n):  # table-major cells, as `predict`
+            basis = np.zeros((4 * n, 1))
+            basis[k, 0] = 1.0
+            out.append(EffectDesign(("log_step",), ("1 (ln of the cell's factor)",), np.ones(1),
+                                    basis=basis, nuisance={"table": 4 + k // n,
+                                                           "vacuum_kPa": float(vac[k % n])},
+                                    n_nuisance=1))  # fmt: skip
+        return out
 
 
 def wang2022_table_effects() -> list[AbstractEffect]:
