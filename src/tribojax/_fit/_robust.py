@@ -306,8 +306,8 @@ def robust_fit_measured_slips(
         nu: Student-t degrees of freedom, > 0 (inf: the Gaussian likelihood, one weighted fit).
         target, loads: data and loads (default: wang2022 Tables 4–7 at Table 3's loads).
         initial: a `ChainFit` of the same data and free parameters to start EM from (its
-            parameters and model; saves the first fit); `initial_weights` the weights it was
-            fitted with (default 1).
+            model gives the first weights; saves the first fit; any noise shape);
+            `initial_weights` the weights it was fitted with (default 1).
         max_iterations, tol: EM stops when ℓ rose by less than `tol` (nats) in one step.
         fit_kw: passed to `fit_measured_slips` (max_steps, rtol, atol, jac, progress).
     Returns:
