@@ -127,13 +127,16 @@ def _announce(phys):
 
 
 def _residuals(theta, args, adjoint):
-    # (model − y)/σ·√w per cell: σ = y gives model/y − 1 (the default); the robust fit passes
-    # its noise model's σ and IRLS weights w (one compiled solve serves both)
-    theta_full0, idx, mu_min_, y, sigma, sqrt_w, loads = args
+    # (model − y)/σ·√w per cell (σ = y: model/y − 1, the default), or (ln|model| − ln|y|)/σ·√w
+    # in log form; the robust fit passes its noise model's σ, form and IRLS weights w (one
+    # compiled solve serves all)
+    theta_full0, idx, mu_min_, y, sigma, sqrt_w, log_form, loads = args
     phys = to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_min_)
     jax.debug.callback(_announce, jax.lax.stop_gradient(phys))
     slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
-    r = jnp.where(ok[:, None], sqrt_w * (slips - y) / sigma, FAILED_RESIDUAL).ravel()
+    safe = jnp.where(slips == 0, 1.0, slips)  # double-where: ln|0| is not used
+    d = jnp.where(log_form > 0.5, jnp.log(jnp.abs(safe)) - jnp.log(jnp.abs(y)), slips - y)
+    r = jnp.where(ok[:, None], sqrt_w * d / sigma, FAILED_RESIDUAL).ravel()
     jax.debug.callback(_report, jax.lax.stop_gradient(r @ r), jax.lax.stop_gradient(phys))
     return r
 
@@ -262,6 +265,7 @@ def fit_measured_slips(
     progress=False,
     sigma=None,
     weights=None,
+    log_residuals=False,
 ) -> ChainFit:
     """Fit the free chain parameters to measured phase slips by Levenberg–Marquardt.
 
@@ -283,6 +287,8 @@ def fit_measured_slips(
             residuals model/measured − 1); the common scale is estimated from the fit.
         weights: (n, 4) positive weights per cell (default 1): residuals are multiplied by
             √weight (iteratively reweighted least squares, `robust_fit_measured_slips`).
+        log_residuals: residuals (ln|model| − ln|target|)/sigma instead of (model − target)/sigma
+            (a relative error model whose heavy-tailed form is a proper density).
     Returns:
         ChainFit; `result` a `tribojax.RESULTS` member, `converged` False (with `fit.message`)
         when LM did not succeed or stopped short of the optimum (`RESULTS.short_of_optimum`:
@@ -330,7 +336,7 @@ def fit_measured_slips(
     theta_full0 = jnp.asarray(to_theta([start_full[k] for k in PARAMETERS], PARAMETERS, mu_lo))
     idx = jnp.array([PARAMETERS.index(n) for n in free])
     args = (theta_full0, idx, jnp.asarray(mu_lo), jnp.asarray(target), jnp.asarray(sigma),
-            jnp.asarray(np.sqrt(weights)), loads)  # fmt: skip
+            jnp.asarray(np.sqrt(weights)), jnp.asarray(float(log_residuals)), loads)  # fmt: skip
     residuals = _residuals_fwd if jac == "fwd" else _residuals_bwd
 
     def transform(theta):
@@ -359,7 +365,8 @@ def fit_measured_slips(
     theta = jnp.asarray(fit.theta)
     phys = np.asarray(to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo))
     r, J = fit.residuals, fit.jacobian  # at the optimum, from least_squares_fit's statistics
-    model = r.reshape(target.shape) / np.sqrt(weights) * sigma + target
+    d = r.reshape(target.shape) / np.sqrt(weights) * sigma
+    model = target * np.exp(d) if log_residuals else d + target
     # scaled Jacobian: ∂r/∂log p = J_θ (dp/dθ)^-1 diag(p) (transform is diagonal)
     dpdth = np.diag(np.asarray(jax.jacfwd(transform)(jnp.asarray(fit.theta))))
     S = J / dpdth[None, :] * np.asarray(fit.values)[None, :]

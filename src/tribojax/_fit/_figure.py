@@ -42,6 +42,10 @@ def plot_fit_measured(plain_nm, robust_nm, flagged, path=None, *, files=True):
                     label="flagged")  # fmt: skip
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(plt.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.yaxis.set_minor_formatter(  # label 2 and 5 times a power of ten
+            plt.FuncFormatter(lambda v, _: f"{v:g}" if f"{v:e}"[0] in "25" else "")
+        )
         ax.set_title(f"Table {n} (T{n})")
         ax.set_xlabel("vacuum (kPa)")
     axes[0].set_ylabel("|phase slip| (nm)")

@@ -16,7 +16,7 @@ import numpy as np
 from scipy import stats
 
 from ._chain import fit_measured_slips
-from ._robust import RobustChainFit, noise_shape, robust_fit_measured_slips
+from ._robust import RobustChainFit, residual_form, robust_fit_measured_slips
 
 CHI2_95 = float(stats.chi2.ppf(0.95, 1))  # 3.84
 
@@ -63,14 +63,14 @@ def profile_likelihood(
     best = float(robust.parameters[name])
     grid = np.unique(np.append(np.asarray(values, dtype=float), best))
     y = robust.target_nm if target is None else np.asarray(target, dtype=float)
-    sigma = noise_shape(y, robust.noise, robust.floor_nm)
+    form = residual_form(y, robust.noise, robust.floor_nm)
     keep = ~robust.flagged
     points = {best: (robust.log_likelihood, robust, True)}
     for side in (grid[grid > best], grid[grid < best][::-1]):  # outward from the optimum
         start = dict(robust.parameters)
         for v in side:
             start[name] = float(v)
-            first = fit_measured_slips(start, free=others, target=y, loads=loads, sigma=sigma,
+            first = fit_measured_slips(start, free=others, target=y, loads=loads, **form,
                                        weights=robust.weights, **fit_kw)  # fmt: skip
             fit = robust_fit_measured_slips(
                 free=others, noise=robust.noise, floor_nm=robust.floor_nm, nu=robust.nu,

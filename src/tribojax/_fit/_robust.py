@@ -1,18 +1,22 @@
 """Robust full-chain fit of wang2022's measured slips: Student-t noise fitted by EM (IRLS).
 
-Noise model. Each measured phase slip y_i of Tables 4–7 is model_i + s·σ_i·e_i with e_i
-Student-t distributed with ν degrees of freedom (ν = ∞: Gaussian) and σ_i the noise *shape*:
+Noise model. Each measured phase slip y_i of Tables 4–7 is its model value with a Student-t
+error of ν degrees of freedom (ν = ∞: Gaussian) and scale s, in one of three shapes:
 
-    relative   σ_i = |y_i|              a percentage error; the scale s is a fraction
-    absolute   σ_i = 1 nm               a resolution; s in nm
-    mixed      σ_i = √(y_i² + c²)       relative above the floor c (nm), absolute below it
+    relative   ln|y_i| = ln|model_i| + s·e_i      a percentage error; r_i = ln|y_i/model_i|
+    absolute   y_i = model_i + s·e_i (nm)         a resolution; r_i = y_i − model_i
+    mixed      y_i = model_i + s·σ_i·e_i          σ_i = √(y_i² + c²): relative above the floor
+                                                  c (nm), absolute below; r_i = (y_i − model_i)/σ_i
 
-The log-likelihood of the slips (a density in nm; σ_i taken at the measured values) is
+The log-likelihood of the slips (a density in nm) is
 
     ℓ = Σ_i [ln Γ((ν+1)/2) − ln Γ(ν/2) − ½ ln(νπ) − ln(s σ_i) − (ν+1)/2 · ln(1 + r_i²/(ν s²))]
 
-with r_i = (y_i − model_i)/σ_i (Lange, Little & Taylor 1989, J. Am. Stat. Assoc. 84, 881,
-Eq 1); ν = ∞ gives the Gaussian Σ_i [−½ ln 2π − ln(s σ_i) − r_i²/(2s²)].
+(Lange, Little & Taylor 1989, J. Am. Stat. Assoc. 84, 881, Eq 1) with σ_i = |y_i| for the
+relative shape (the Jacobian of the logarithm), 1 nm for the absolute one; ν = ∞ gives the
+Gaussian Σ_i [−½ ln 2π − ln(s σ_i) − r_i²/(2s²)]. The relative and absolute densities are
+proper; the mixed one takes σ_i at the measured values, which for ν < ∞ leaves tails ∝ 1/|y|
+that do not normalise (its ℓ is then only indicative).
 
 Fit. For fixed ν, EM is iteratively reweighted least squares (Lange et al., Eqs 4–5): E-step
 u_i = (ν+1)/(ν + r_i²/s²); M-step θ = argmin Σ u_i r_i² (`fit_measured_slips` with weights u:
@@ -60,6 +64,14 @@ def noise_shape(measured, noise: str = "relative", floor_nm: float | None = None
     raise ValueError(f"noise = {noise!r} is outside the allowed values {NOISE_MODELS}")
 
 
+def residual_form(measured, noise: str = "relative", floor_nm: float | None = None) -> dict:
+    """`fit_measured_slips` keywords (sigma, log_residuals) of the noise shape's residuals."""
+    y = np.asarray(measured, dtype=float)
+    if noise == "relative":
+        return {"sigma": np.ones_like(y), "log_residuals": True}
+    return {"sigma": noise_shape(y, noise, floor_nm), "log_residuals": False}
+
+
 def student_t_loglik(r, scale, sigma, nu) -> float:
     """ℓ of residuals r (in units of σ) with scale s and shapes σ (nm); ν = inf: Gaussian."""
     r, sigma = np.asarray(r, dtype=float), np.asarray(sigma, dtype=float)
@@ -99,11 +111,12 @@ def standardized_residuals(r, Jw, scale=None) -> np.ndarray:
 
 
 def _cell_list(values, mask=None, key="value") -> list[dict]:
-    """[{table, vacuum_kPa, key: value}] over the (6, 4) cells (where `mask`)."""
+    """[{table, vacuum_kPa, key: value}] over the (n, 4) cells (where `mask`), load by load
+    (the order of `ChainFit.as_dict`'s cells)."""
     vac = wang2022_table(3)["vacuum_kPa"]
     out = []
-    for j, n in enumerate(TABLES):
-        for i in range(values.shape[0]):
+    for i in range(values.shape[0]):
+        for j, n in enumerate(TABLES):
             if mask is None or mask[i, j]:
                 kpa = float(vac[i]) if values.shape[0] == len(vac) else float(i)
                 out.append({"table": n, "vacuum_kPa": kpa, key: float(values[i, j])})
@@ -125,7 +138,7 @@ class RobustChainFit:
         noise, floor_nm, nu: the noise model (shape, floor c in nm for "mixed", degrees of
             freedom; inf: Gaussian).
         scale: s (a fraction for relative/mixed, nm for absolute).
-        residuals: r = (measured − model)/σ, (n, 4). weights: the EM weights u, (n, 4).
+        residuals: r (module docstring), (n, 4). weights: the EM weights u, (n, 4).
         standardized: z, (n, 4) (core scale `core_scale(residuals)`). threshold: the flag
             level on |z|.
         log_likelihood: ℓ at the optimum; history: ℓ after each EM step.
@@ -232,9 +245,9 @@ class RobustChainFit:
                 dict(cell, model_nm=float(m), weight=float(w), standardized_residual=float(z))
                 for cell, m, w, z in zip(
                     _cell_list(self.target_nm, key="measured_nm"),
-                    self.model_nm.T.ravel(),
-                    self.weights.T.ravel(),
-                    self.standardized.T.ravel(),
+                    self.model_nm.ravel(),
+                    self.weights.ravel(),
+                    self.standardized.ravel(),
                 )
             ],  # fmt: skip
         )
@@ -245,13 +258,22 @@ class RobustChainFit:
         return out
 
 
-def student_t_em(m_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3):
+def _lin_resid(y, model, sigma):
+    return (y - np.asarray(model)) / sigma
+
+
+def _log_resid(y, model, sigma):
+    return np.log(np.abs(y / np.asarray(model)))
+
+
+def student_t_em(m_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3, log=False):
     """EM for Student-t noise around a weighted least-squares fit (Lange et al. 1989, Eqs 4–5).
 
     Args:
         m_step: (weights, previous fit) -> (fit, model): the weighted least-squares fit of
             Σ u_i r_i² (weights u enter its residual function as √u) and its model values.
-        y, sigma: data and noise shapes (same shape); r = (y − model)/σ.
+        y, sigma: data and noise shapes (same shape); r = (y − model)/σ, or ln|y/model| if
+            `log` (σ then enters ℓ only, as the Jacobian |y|).
         nu: degrees of freedom (inf: Gaussian, one weighted fit).
         first: (fit, model, weights) to start from (e.g. the unweighted fit, weights 1).
         max_iterations, tol: stop when one EM step raised ℓ by less than `tol` (nats).
@@ -260,7 +282,8 @@ def student_t_em(m_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3):
     """
     y, sigma = np.asarray(y, dtype=float), np.asarray(sigma, dtype=float)
     fit, model, u = first
-    r = (y - np.asarray(model)) / sigma
+    resid = _log_resid if log else _lin_resid
+    r = resid(y, model, sigma)
     u = np.broadcast_to(np.asarray(u, dtype=float), y.shape)
     scale = math.sqrt(float(np.sum(u * r**2) / y.size))
     history = [student_t_loglik(r, scale, sigma, nu)]
@@ -268,7 +291,7 @@ def student_t_em(m_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3):
     for _ in range(int(max_iterations)):
         u = em_weights(r, scale, nu)
         fit, model = m_step(u, fit)
-        r = (y - np.asarray(model)) / sigma
+        r = resid(y, model, sigma)
         # Σu instead of n (PX-EM, Kent, Tyler & Vardi 1994): same fixed point (Σu = n at the
         # optimum), fewer steps
         scale = math.sqrt(float(np.sum(u * r**2) / np.sum(u)))
@@ -317,8 +340,10 @@ def robust_fit_measured_slips(
     if not (nu > 0):
         raise ValueError(f"nu = {nu} is outside the allowed range (0, inf]")
     y = measured_slips() if target is None else np.asarray(target, dtype=float)
-    sigma = noise_shape(y, noise, floor_nm)
-    kw = dict(free=tuple(free), target=y, loads=loads, sigma=sigma, **fit_kw)
+    sigma = noise_shape(y, noise, floor_nm)  # σ_i of the density
+    log = noise == "relative"
+    kw = dict(free=tuple(free), target=y, loads=loads, **residual_form(y, noise, floor_nm),
+              **fit_kw)  # fmt: skip
     fit = initial if initial is not None else fit_measured_slips(start, **kw)
 
     def m_step(u, previous):
@@ -327,8 +352,9 @@ def robust_fit_measured_slips(
 
     u0 = 1.0 if initial_weights is None else initial_weights
     fit, r, u, scale, history, result = student_t_em(
-        m_step, y, sigma, nu, (fit, fit.model_nm, u0), max_iterations=max_iterations, tol=tol
-    )
+        m_step, y, sigma, nu, (fit, fit.model_nm, u0), max_iterations=max_iterations, tol=tol,
+        log=log,
+    )  # fmt: skip
     z = standardized_residuals(r, fit.fit.jacobian)
     return RobustChainFit(
         chain=fit, noise=noise, floor_nm=None if noise != "mixed" else float(floor_nm),
