@@ -44,8 +44,8 @@ from .._results import RESULTS, result_name
 from ._chain import TABLES, ChainFit, fit_measured_slips, measured_slips, paper_theory_slips
 
 NOISE_MODELS = ("relative", "absolute", "mixed")
-DEFAULT_NU = 4.0  # Student-t degrees of freedom (Lange et al.'s common robust choice)
-# The headline robust fit of `tribojax reproduce` (chosen by `python -m fitting.wang2022_robust`)
+# The headline robust fit (the defaults; `tribojax reproduce`): relative errors, Student-t with
+# ν = 4 (Lange et al.'s robust choice), tied best by AIC (`python -m fitting.wang2022_robust`)
 HEADLINE_NOISE, HEADLINE_FLOOR_NM, HEADLINE_NU = "relative", None, 4.0
 FLAG_ALPHA = 0.05  # family-wise level of the outlier flags (Bonferroni over the cells)
 
@@ -309,9 +309,9 @@ def robust_fit_measured_slips(
     start=None,
     *,
     free=("D", "G_m", "mu_t"),
-    noise: str = "relative",
-    floor_nm: float | None = None,
-    nu: float = DEFAULT_NU,
+    noise: str = HEADLINE_NOISE,
+    floor_nm: float | None = HEADLINE_FLOOR_NM,
+    nu: float = HEADLINE_NU,
     target=None,
     loads=None,
     initial: ChainFit | None = None,
