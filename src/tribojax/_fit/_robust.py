@@ -330,7 +330,9 @@ def robust_fit_measured_slips(
         target, loads: data and loads (default: wang2022 Tables 4–7 at Table 3's loads).
         initial: a `ChainFit` of the same data and free parameters to start EM from (its
             model gives the first weights; saves the first fit; any noise shape);
-            `initial_weights` the weights it was fitted with (default 1).
+            `initial_weights` the weights it was fitted with (default 1). Without `initial`,
+            the first fit from `start` uses `initial_weights` (e.g. another fit's EM weights:
+            a start away from the outlier's pull).
         max_iterations, tol: EM stops when ℓ rose by less than `tol` (nats) in one step.
         fit_kw: passed to `fit_measured_slips` (max_steps, rtol, atol, jac, progress).
     Returns:
@@ -344,7 +346,9 @@ def robust_fit_measured_slips(
     log = noise == "relative"
     kw = dict(free=tuple(free), target=y, loads=loads, **residual_form(y, noise, floor_nm),
               **fit_kw)  # fmt: skip
-    fit = initial if initial is not None else fit_measured_slips(start, **kw)
+    if initial is None:  # weighted by `initial_weights` if given (e.g. another fit's EM weights)
+        initial = fit_measured_slips(start, weights=initial_weights, **kw)
+    fit = initial
 
     def m_step(u, previous):
         new = fit_measured_slips(previous.parameters, weights=u, **kw)
