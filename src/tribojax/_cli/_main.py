@@ -21,6 +21,8 @@ from pathlib import Path
 
 from .. import __version__
 from .._fit import _chain as chain_fit
+from .._fit import _robust as robust_fit
+from .._fit._figure import plot_fit_measured
 from .._plot import pyplot, save_figure
 from .._reproduce._table3 import calibrate_table3, max_rel_error, reproduce_table3
 from .._reproduce._tables4to7 import plot_figure10, print_tables4to7, reproduce_tables4to7
@@ -87,15 +89,17 @@ def _reproduce_slip_tables(result: dict, out_dir: Path) -> None:
         print(f"wrote {out_dir / 'figure10.png'}")
 
 
-def _reproduce_fit_measured(result: dict, start=None) -> bool:
-    """The full-chain fit to the measured Tables 4–7 into result["fit_measured"]; True if it
-    converged. One start here; the multi-start study is `python -m fitting.wang2022_slip`."""
+def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = None) -> bool:
+    """The full-chain fits to the measured Tables 4–7 into result["fit_measured"]: the plain
+    relative least-squares fit (the block's issue-5 keys) and the robust Student-t fit (issue 19:
+    "loss", "flagged_cells", "rms_relative_residual_unflagged", ..., and "robust"); True if
+    both converged. One start here; the studies are `python -m fitting.wang2022_slip` and
+    `python -m fitting.wang2022_robust`."""
     print("wang2022 Tables 4-7 (measured): full-chain fit of D, G, mu_t (LM through diffrax) ...")
     fit = chain_fit.fit_measured_slips(start, progress=True)
     block = fit.as_dict()
-    block["paper_theory_rms_relative_residual"] = chain_fit.rms_relative(
-        chain_fit.paper_theory_slips(), chain_fit.measured_slips()
-    )
+    measured, paper = chain_fit.measured_slips(), chain_fit.paper_theory_slips()
+    block["paper_theory_rms_relative_residual"] = chain_fit.rms_relative(paper, measured)
     block["symmetric_model_bound_rms_relative_residual"] = chain_fit.symmetric_bound()[
         "rms_relative_residual"
     ]
@@ -104,7 +108,6 @@ def _reproduce_fit_measured(result: dict, start=None) -> bool:
         "(residual = model/measured - 1); metric: RMS relative residual over the 24 cells"
     )
     block["multistart_study"] = "python -m fitting.wang2022_slip"
-    result["fit_measured"] = block
     print(
         "fit_measured: "
         + ", ".join(
@@ -115,12 +118,50 @@ def _reproduce_fit_measured(result: dict, start=None) -> bool:
         f"{block['symmetric_model_bound_rms_relative_residual']:.3f}); converged: "
         f"{fit.converged}, {fit.fit.steps} steps, {fit.wall_s:.1f} s"
     )
-    if not fit.converged:
-        print(
-            f"ERROR: the full-chain fit to the measured slips did not converge: {fit.fit.message}",
-            file=sys.stderr,
-        )
-    return fit.converged
+    result["fit_measured"] = block
+    if not fit.converged:  # the robust fit starts from it: not attempted
+        print(f"ERROR: the full-chain fit to the measured slips did not converge: "
+              f"{fit.fit.message}", file=sys.stderr)  # fmt: skip
+        return False
+    print("robust fit (Student-t noise by EM on the same engine) ...")
+    t0 = time.perf_counter()
+    robust = robust_fit.robust_fit_measured_slips(
+        noise=robust_fit.HEADLINE_NOISE, floor_nm=robust_fit.HEADLINE_FLOOR_NM,
+        nu=robust_fit.HEADLINE_NU, initial=fit,
+    )  # fmt: skip
+    rd = robust.as_dict()
+    keep = ~robust.flagged
+    block["loss"] = rd["loss"]
+    block["flagged_cells"] = rd["flagged_cells"]
+    block["rms_relative_residual_unflagged"] = rd["rms_relative_residual_unflagged"]
+    block["paper_theory_rms_relative_residual_unflagged"] = rd[
+        "paper_theory_rms_relative_residual_unflagged"
+    ]
+    block["plain_rms_relative_residual_unflagged"] = robust_fit.rms_relative_masked(
+        fit.model_nm, measured, keep
+    )
+    block["robust"] = rd
+    block["robust_study"] = "python -m fitting.wang2022_robust"
+    flagged = ", ".join(
+        f"Table {c['table']} at {c['vacuum_kPa']:g} kPa (z = {c['standardized_residual']:.1f})"
+        for c in rd["flagged_cells"]
+    )
+    print(
+        "robust fit: "
+        + ", ".join(f"{k} = {rd['parameters'][k]:.4g}" for k in robust.free)
+        + f"; flagged: {flagged or 'none'}; RMS rel. residual over the unflagged cells "
+        f"{rd['rms_relative_residual_unflagged']:.3f} (paper theory "
+        f"{rd['paper_theory_rms_relative_residual_unflagged']:.3f}, plain fit "
+        f"{block['plain_rms_relative_residual_unflagged']:.3f}); converged: {robust.converged}, "
+        f"{len(robust.history) - 1} EM steps, {time.perf_counter() - t0:.1f} s"
+    )
+    fig_path = None if out_dir is None else out_dir / "fit_measured.png"
+    if fig_path and plot_fit_measured(fit.model_nm, robust.model_nm, robust.flagged, fig_path):
+        print(f"wrote {out_dir / 'fit_measured.png'}")
+    if not robust.converged:
+        print(f"ERROR: the robust full-chain fit did not converge: {rd['result']} "
+              f"({robust.chain.fit.message})", file=sys.stderr)  # fmt: skip
+    return robust.converged
 
 
 def cmd_reproduce(args) -> int:
@@ -163,7 +204,7 @@ def _reproduce(out_dir: Path) -> int:
     if not cal["converged"]:
         print(f"WARNING: the calibration did not converge: {cal['message']}", file=sys.stderr)
     _reproduce_slip_tables(result, out_dir)
-    measured_ok = _reproduce_fit_measured(result)
+    measured_ok = _reproduce_fit_measured(result, out_dir=out_dir)
     result["tribojax_version"] = __version__
     result["wu2015"] = _reproduce_wu2015(out_dir)
     json_path = out_dir / "reproduction.json"
