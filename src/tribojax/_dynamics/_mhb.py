@@ -100,11 +100,12 @@ class FrictionSystem(eqx.Module):
             raise ValueError(f"n_time = {n_time} must be even and > 2·max harmonic = {2 * h_max}")
         self.n_time = int(n_time)
         ex = self.excitation
-        if 0 not in self.harmonics and np.any(np.asarray(ex.static) != 0):
-            raise ValueError("a static force needs harmonic 0 in the harmonic set")
-        first = np.any(np.asarray(ex.cosine) != 0) or np.any(np.asarray(ex.sine) != 0)
-        if 1 not in self.harmonics and (first or np.any(np.asarray(ex.base) != 0)):
-            raise ValueError("a first-harmonic excitation needs harmonic 1 in the harmonic set")
+        if not any(isinstance(v, jax.core.Tracer) for v in jax.tree.leaves(ex)):
+            if 0 not in self.harmonics and np.any(np.asarray(ex.static) != 0):
+                raise ValueError("a static force needs harmonic 0 in the harmonic set")
+            first = [np.any(np.asarray(v) != 0) for v in (ex.cosine, ex.sine, ex.base)]
+            if 1 not in self.harmonics and any(first):
+                raise ValueError("a first-harmonic excitation needs harmonic 1 in the harmonic set")
 
     @property
     def n_dof(self) -> int:
@@ -114,7 +115,8 @@ class FrictionSystem(eqx.Module):
     def n_coef(self) -> int:
         return harmonic_layout(self.harmonics)[0].size
 
-    def _index(self, k: int, sine: bool = False) -> int:
+    def index(self, k: int, sine: bool = False) -> int:
+        """Position of a_k (or b_k when `sine`) in a DOF's coefficient vector."""
         ks, sn, _ = harmonic_layout(self.harmonics)
         return int(np.flatnonzero((ks == k) & (sn == sine))[0])
 
@@ -142,11 +144,11 @@ class FrictionSystem(eqx.Module):
         """F(ω) in coefficient form (N, n_coef), N."""
         ex, F = self.excitation, jnp.zeros((self.n_dof, self.n_coef))
         if 0 in self.harmonics:
-            F = F.at[:, self._index(0)].set(ex.static)
+            F = F.at[:, self.index(0)].set(ex.static)
         if 1 in self.harmonics:
             base = omega**2 * (self.structure.M @ ex.base)
-            F = F.at[:, self._index(1)].set(ex.cosine + base)
-            F = F.at[:, self._index(1, True)].set(ex.sine)
+            F = F.at[:, self.index(1)].set(ex.cosine + base)
+            F = F.at[:, self.index(1, True)].set(ex.sine)
         return F
 
     def contact_forces(self, X, omega) -> Array:
@@ -184,8 +186,8 @@ class FrictionSystem(eqx.Module):
     def amplitude(self, X, k: int = 1) -> Array:
         """Amplitude √(a_k² + b_k²) (m) of harmonic k of each DOF (N,); a₀'s magnitude for k = 0."""
         if k == 0:
-            return jnp.abs(X[..., self._index(0)])
-        return jnp.hypot(X[..., self._index(k)], X[..., self._index(k, True)])
+            return jnp.abs(X[..., self.index(0)])
+        return jnp.hypot(X[..., self.index(k)], X[..., self.index(k, True)])
 
 
 class HBMSolution(eqx.Module):

@@ -19,6 +19,7 @@ from __future__ import annotations
 import abc
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
@@ -38,7 +39,7 @@ def _square(a, name: str, n: int | None = None) -> Array:
         raise ValueError(f"{name} must be a square matrix, got shape {tuple(a.shape)}")
     if n is not None and a.shape[0] != n:
         raise ValueError(f"{name} must be {n}×{n} like M, got shape {tuple(a.shape)}")
-    if not np.all(np.isfinite(np.asarray(a))):
+    if not isinstance(a, jax.core.Tracer) and not np.all(np.isfinite(np.asarray(a))):
         raise ValueError(f"{name} has non-finite entries")
     return a
 
@@ -55,6 +56,9 @@ class Structure(eqx.Module):
         M = _square(M, "M")
         n = M.shape[0]
         self.C, self.K = _square(C, "C", n), _square(K, "K", n)
+        self.M = M
+        if isinstance(M, jax.core.Tracer):
+            return
         m = np.asarray(M)
         if not np.allclose(m, m.T, rtol=1e-12, atol=0.0):
             raise ValueError("M must be symmetric")
@@ -63,7 +67,6 @@ class Structure(eqx.Module):
             raise ValueError(
                 f"M must be positive definite; its smallest eigenvalue is {eig.min():g} kg"
             )
-        self.M = M
 
     @property
     def n_dof(self) -> int:
@@ -110,6 +113,14 @@ class AbstractContact(eqx.Module):
     def forces(self, x: Array, period) -> Array:
         """Force history (n_time, N) in N over one period from displacements x (n_time, N), m."""
 
+    @abc.abstractmethod
+    def initial_state(self, n_dof: int):
+        """History state of the unloaded contact at x = 0 (for `step`)."""
+
+    @abc.abstractmethod
+    def step(self, state, x):
+        """Time stepping: (new state, force vector (N,) in N) after moving to displacement x."""
+
 
 def _periodic_history(u, cycles: int):
     """[0, u, u, ...]: from rest at 0 through `cycles` periods of the samples u (n_time, ...)."""
@@ -145,10 +156,24 @@ class FrictionContact(AbstractContact):
             t = period / n * jnp.arange(-1, self.cycles * n, dtype=jnp.float64)
             f = drive(self.element, hist, t, substeps=self.substeps)
         f = f[-n:]
-        out = jnp.zeros_like(x).at[:, self.dof].add(f)
+        return self._spread(jnp.zeros_like(x), f)
+
+    def _spread(self, out, f):
+        out = out.at[..., self.dof].add(f)
         if self.ref_dof is not None:
-            out = out.at[:, self.ref_dof].add(-f)
+            out = out.at[..., self.ref_dof].add(-f)
         return out
+
+    def initial_state(self, n_dof):
+        if not isinstance(self.element, AbstractHysteresisElement):
+            raise TypeError("time stepping needs a rate-independent (hysteresis) element")
+        return (self.element.initial_state(), jnp.zeros(()))
+
+    def step(self, state, x):
+        z, u_old = state
+        u = self.relative(x[None])[0]
+        z = self.element.increment(z, u - u_old)
+        return (z, u), self._spread(jnp.zeros_like(x), self.element.force(z, 0.0))
 
 
 class DryFrictionContact2D(AbstractContact):
@@ -170,6 +195,14 @@ class DryFrictionContact2D(AbstractContact):
         f_t, f_n, _ = self.element.forces(u_t, u_n)
         out = jnp.zeros_like(x).at[:, self.tangential_dof].add(f_t[-n:])
         return out.at[:, self.normal_dof].add(f_n[-n:])
+
+    def initial_state(self, n_dof):
+        return self.element.initial_state()
+
+    def step(self, state, x):
+        w, f_t, f_n = self.element.step(state, x[self.tangential_dof], x[self.normal_dof])
+        out = jnp.zeros_like(x).at[self.tangential_dof].add(f_t)
+        return w, out.at[self.normal_dof].add(f_n)
 
 
 def check_contacts(contacts, n_dof: int) -> tuple:
