@@ -54,7 +54,7 @@ def amplitude_at(system: FrictionSystem, omega, dof: int = 0, X0=None, *, solver
 
 def _slope(omega, args):
     system, dof, X0 = args
-    return jax.grad(amplitude_at, argnums=1)(system, omega, dof, X0, solver=_newton())
+    return jax.grad(amplitude_at, argnums=1)(system, omega, dof, X0)
 
 
 class Peak(eqx.Module):
@@ -66,19 +66,24 @@ class Peak(eqx.Module):
 
 
 def resonance_peak(system: FrictionSystem, omega_guess, dof: int = 0, X0=None, *,
-                   tol: float = 1e-9, max_steps: int = 40) -> Peak:  # fmt: skip
+                   bracket=None, tol: float = 1e-9, max_steps: int = 40) -> Peak:  # fmt: skip
     """The resonance peak of `dof` near ω = omega_guess (rad/s): root of ∂a/∂ω by Newton.
 
     X0: the MHB coefficients near the peak (default the linear solution; give them from a
-    continuation for strongly nonlinear cases). Derivatives of `Peak.omega` and
+    continuation for strongly nonlinear cases). `bracket` (lo, hi): the peak must lie inside,
+    otherwise the result is `nonlinear_divergence` at the guess. Derivatives of `Peak.omega` and
     `Peak.amplitude` by the implicit function theorem (module docstring).
     """
     w0 = jnp.asarray(omega_guess, dtype=jnp.float64)
     sol = optx.root_find(_slope, _newton(tol), w0, (system, dof, X0), max_steps=max_steps,
                          throw=False)  # fmt: skip
     ok = (sol.result == optx.RESULTS.successful) & jnp.isfinite(sol.value)
+    if bracket is not None:
+        ok = ok & (sol.value >= bracket[0]) & (sol.value <= bracket[1])
+    code = RESULTS.where(sol.result == optx.RESULTS.successful, RESULTS.nonlinear_divergence,
+                         RESULTS.promote(sol.result))  # fmt: skip
     omega = jnp.where(ok, sol.value, w0)
-    result = RESULTS.where(ok, RESULTS.successful, RESULTS.promote(sol.result))
+    result = RESULTS.where(ok, RESULTS.successful, code)
     return Peak(omega=omega, amplitude=amplitude_at(system, omega, dof, X0), result=result)
 
 
@@ -96,4 +101,42 @@ def peak_on_grid(system: FrictionSystem, omegas, dof: int = 0) -> Peak:
     X0 = system.linear_solution(omegas[0]) * 0.0
     _, (Xs, amps) = jax.lax.scan(body, X0, omegas)
     i = jnp.argmax(amps)
-    return resonance_peak(system, omegas[i], dof, jax.lax.stop_gradient(Xs[i]))
+    n = omegas.shape[0]
+    lo, hi = omegas[jnp.maximum(i - 1, 0)], omegas[jnp.minimum(i + 1, n - 1)]
+    return resonance_peak(system, omegas[i], dof, jax.lax.stop_gradient(Xs[i]), bracket=(lo, hi))
+
+
+class PeakDesign(eqx.Module):
+    """A minimised resonance peak: params (the optimum, in the units of `make_system`'s
+    argument), peak (`Peak` there), result (`RESULTS`), steps (optimiser steps)."""
+
+    params: jax.Array
+    peak: Peak
+    result: RESULTS
+    steps: jax.Array
+
+
+def _log_peak(log_p, args):
+    make_system, omegas, dof = args
+    return jnp.log(peak_on_grid(make_system(jnp.exp(log_p)), omegas, dof).amplitude)
+
+
+def minimise_peak(make_system, p0, omegas, dof: int = 0, *, rtol: float = 1e-6,
+                  max_steps: int = 60) -> PeakDesign:  # fmt: skip
+    """Gradient-based design: the positive parameters p (e.g. [N] or [N, K_d]) minimising the
+    resonant amplitude of `dof`, by BFGS (optimistix) on log p with the implicit-function-theorem
+    gradient of `peak_on_grid(make_system(p), omegas)`.
+
+    make_system(p) builds the `FrictionSystem` with JAX operations; p0 (> 0) the start; omegas
+    the frequency grid (rad/s) spanning the peak for every p visited.
+    """
+    p0 = jnp.atleast_1d(jnp.asarray(p0, dtype=jnp.float64))
+    if not isinstance(p0, jax.core.Tracer) and not bool(jnp.all(p0 > 0)):
+        raise ValueError(f"p0 = {np.asarray(p0)} must be > 0 (log-parametrised)")
+    args = (make_system, jnp.asarray(omegas, dtype=jnp.float64), dof)
+    sol = optx.minimise(_log_peak, optx.BFGS(rtol=rtol, atol=rtol), jnp.log(p0), args,
+                        max_steps=max_steps, throw=False)  # fmt: skip
+    p = jnp.exp(sol.value)
+    peak = peak_on_grid(make_system(p), args[1], dof)
+    return PeakDesign(params=p, peak=peak, result=RESULTS.promote(sol.result),
+                      steps=sol.stats["num_steps"])  # fmt: skip

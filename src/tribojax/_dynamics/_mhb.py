@@ -124,9 +124,9 @@ class FrictionSystem(eqx.Module):
         """x at t_j = j·T/n_time, j < n_time (shape (n_time, N)) from coefficients X (N, n_coef)."""
         ks, sine, _ = harmonic_layout(self.harmonics)
         n = self.n_time
-        cos_part = jnp.where(jnp.asarray(~sine), X, 0.0)
-        sin_part = jnp.where(jnp.asarray(sine), X, 0.0)
-        weight = jnp.asarray(np.where(ks == 0, n, n / 2))
+        cos_part = jnp.where(jnp.asarray(~sine)[None, :], X, 0.0)
+        sin_part = jnp.where(jnp.asarray(sine)[None, :], X, 0.0)
+        weight = jnp.asarray(np.where(ks == 0, n, n / 2))[None, :]
         spec = weight * (cos_part - 1j * sin_part)  # a_k − i b_k per coefficient
         full = jnp.zeros((X.shape[0], n // 2 + 1), dtype=jnp.complex128)
         full = full.at[:, jnp.asarray(ks)].add(spec)
@@ -137,8 +137,8 @@ class FrictionSystem(eqx.Module):
         ks, sine, _ = harmonic_layout(self.harmonics)
         n = self.n_time
         spec = jnp.fft.rfft(x, axis=0).T[:, jnp.asarray(ks)]
-        scale = jnp.asarray(np.where(ks == 0, 1.0 / n, 2.0 / n))
-        return scale * jnp.where(jnp.asarray(sine), -spec.imag, spec.real)
+        scale = jnp.asarray(np.where(ks == 0, 1.0 / n, 2.0 / n))[None, :]
+        return scale * jnp.where(jnp.asarray(sine)[None, :], -spec.imag, spec.real)
 
     def forcing(self, omega) -> Array:
         """F(ω) in coefficient form (N, n_coef), N."""
