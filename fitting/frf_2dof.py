@@ -18,7 +18,6 @@ Writes DIR/frf_2dof.json (default fitting-out/frf_2dof): per F (key str(F)) "ome
 """
 
 import argparse
-import json
 import time
 from pathlib import Path
 
@@ -42,7 +41,8 @@ def time_check(system, fr, n_points=3, periods=150, steps=1024):
         th = 2 * np.pi * np.arange(steps) / steps
         amp = np.hypot(2 * np.mean(x[:, 0] * np.cos(th)), 2 * np.mean(x[:, 0] * np.sin(th)))
         mhb = float(fr.amplitude[i, 0])
-        rows.append({"omega": w, "mhb": mhb, "time_integration": amp, "rel_diff": abs(mhb - amp) / amp})
+        rel = abs(mhb - amp) / amp
+        rows.append({"omega": w, "mhb": mhb, "time_integration": amp, "rel_diff": rel})
     return rows
 
 

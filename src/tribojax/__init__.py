@@ -58,14 +58,14 @@ from ._dynamics._profiles import PiecewiseLinearProfile as PiecewiseLinearProfil
 from ._dynamics._profiles import TrapezoidProfile as TrapezoidProfile
 from ._dynamics._rodas4 import Rodas4 as Rodas4
 from ._dynamics._slip import SlipSolution as SlipSolution
+from ._dynamics._slip import simulate_slip as simulate_slip
+from ._dynamics._slip import slip_phase_averages as slip_phase_averages
 from ._dynamics._structure import AbstractContact as AbstractContact
 from ._dynamics._structure import DryFrictionContact2D as DryFrictionContact2D
 from ._dynamics._structure import Excitation as Excitation
 from ._dynamics._structure import FrictionContact as FrictionContact
 from ._dynamics._structure import Structure as Structure
 from ._dynamics._transient import integrate_steady as integrate_steady
-from ._dynamics._slip import simulate_slip as simulate_slip
-from ._dynamics._slip import slip_phase_averages as slip_phase_averages
 from ._fit._chain import DEFAULT_FREE as CHAIN_DEFAULT_FREE  # noqa: F401
 from ._fit._chain import PARAMETERS as CHAIN_PARAMETERS  # noqa: F401
 from ._fit._chain import ChainFit as ChainFit

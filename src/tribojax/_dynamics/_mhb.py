@@ -209,7 +209,8 @@ def solve_hbm(system: FrictionSystem, omega, X0=None, *, rtol=1e-10, atol=1e-10,
 
     `solver` (default `optimistix.Dogleg`: Newton steps inside a trust region, which keeps plain
     Newton from cycling between the stick and slip pieces of a friction residual; pass
-    `optimistix.Newton(...)` from a close start). Start from X0 (default: the structure without its contacts). Differentiable: gradients with
+    `optimistix.Newton(...)` from a close start). Start from X0 (default: the structure without
+    its contacts). Differentiable: gradients with
     respect to any leaf of `system` (μ, N, K_d, M, C, K, forcing) and ω follow from the implicit
     function theorem (optimistix's implicit adjoint), not from unrolled iterations. The outcome is
     in `result` (no exception under jit); X is NaN-free but meaningless when it is not successful.

@@ -9,8 +9,8 @@ compression). Forces (N) transmitted to the structure at those DOFs, resisting t
 
 with w the slider's anchor position (m), the element's history state. After each step the anchor
 is moved so that f_t = k_t·(u_t − w); in separation (f_n = 0) f_t = 0 and the anchor follows u_t.
-This is the elastic dry-friction law of the harmonic-balance literature (e.g. Krack & Gross, "Harmonic
-Balance for Nonlinear Vibration Problems", 2019, Section 5.1: the return-mapping form of Coulomb's
+This is the elastic dry-friction law of the harmonic-balance literature (e.g. Krack & Gross,
+"Harmonic Balance for Nonlinear Vibration Problems", 2019: the return-mapping form of Coulomb's
 law with a tangential penalty stiffness), exact for a piecewise-linear displacement history.
 """
 
