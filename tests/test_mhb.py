@@ -101,6 +101,7 @@ def test_hill_exponents_of_a_linear_structure():
         assert np.allclose(lam.real, -C / 4.0, atol=1e-9)
         # imaginary parts are defined up to multiples of ω: compare modulo ω
         w_d = np.sqrt(25.0 - C**2 / 16.0)
+
         def dist(x):
             return np.abs((x + 1.5) % 3.0 - 1.5)
 

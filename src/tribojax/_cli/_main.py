@@ -29,7 +29,7 @@ from .._reproduce._tables4to7 import plot_figure10, print_tables4to7, reproduce_
 from .._reproduce._wu2015 import plot_wu2015, wu2015_comparison
 from .._roughness._estimate import estimate_fractal
 from .._roughness._topography import read_topography
-from . import _discover, _fit, _hysteresis
+from . import _discover, _fit, _frf, _hysteresis
 from ._common import write_json_atomic
 
 __all__ = ["main", "write_json_atomic"]
@@ -300,6 +300,9 @@ def main(argv=None) -> int:
     fit = sub.add_parser("fit", help="fit a slip run or hysteresis loop CSV (+ sidecar JSON)")
     _fit.add_arguments(fit)
     fit.set_defaults(func=_fit.run_fit)
+    frf = sub.add_parser("frf", help="forced response of a structure with friction contacts")
+    _frf.add_arguments(frf)
+    frf.set_defaults(func=_frf.run_frf)
     args = parser.parse_args(argv)
     return args.func(args)
 
