@@ -5,7 +5,8 @@ unknowns (X / x_ref, λ / |λ_end − λ₀|). Each step predicts z + Δs·t alo
 (the null vector of ∂R/∂z, oriented by the previous tangent) and corrects with Newton on
 [R(z) = 0, t·(z − z_pred) = 0] (Keller's pseudo-arclength condition), so turning points are passed
 without special treatment. The step Δs adapts to the Newton count (×1.5 for ≤ 3 steps, ×0.6 for
-> 6, halved on a failed corrector); the whole loop is one jitted `lax.while_loop`.
+> 6, halved on a failed corrector or when the tangent turns by more than 0.2 rad), capped at ds_max·max(1, ‖y‖∞) so that a high resonance peak
+takes steps relative to its size; the whole loop is one jitted `lax.while_loop`.
 
 The result is a `FrequencyResponse`; every point's stability comes from Hill's method (`_mhb`).
 """
@@ -21,6 +22,9 @@ import optimistix as optx
 from .._precision import ensure_x64
 from .._results import RESULTS, result_name
 from ._mhb import FrictionSystem, floquet_exponents, solve_hbm
+
+
+_COS_MAX_TURN = 0.98  # cos(0.2 rad)
 
 
 def _tangent(full, z, prev, args):
@@ -66,10 +70,13 @@ def _arclength(fn, y0, lam0, lam_end, args, ds, ds_min, ds_max, max_points, max_
         ok = ok & (jnp.dot(z_new - z, t) > 0.0)
         t_new = _tangent(full, jnp.where(ok, z_new, z), t, args)
         ok = ok & jnp.all(jnp.isfinite(t_new))
+        # curvature control: the tangent may turn by at most ~0.2 rad per step
+        ok = ok & ((jnp.dot(t_new, t) > _COS_MAX_TURN) | (ds <= 2.0 * ds_min))
         nsteps = sol.stats["num_steps"]
         i = c["i"] + jnp.where(ok, 1, 0)
         factor = jnp.where(nsteps <= 3, 1.5, jnp.where(nsteps > 6, 0.6, 1.0))
-        ds_new = jnp.where(ok, jnp.clip(ds * factor, ds_min, ds_max), 0.5 * ds)
+        size = jnp.maximum(1.0, jnp.max(jnp.abs(z_new[:-1])))  # steps relative on large branches
+        ds_new = jnp.where(ok, jnp.clip(ds * factor, ds_min, ds_max * size), 0.5 * ds)
         reached = ok & ((z_new[-1] * lam_scale * direction) >= lam_scale)
         code = jnp.where(reached, 0, -1)
         code = jnp.where((code < 0) & (i >= max_points - 1), 2, code)
