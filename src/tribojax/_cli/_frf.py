@@ -105,6 +105,8 @@ def build(cfg: dict):
     r = cfg["range"]
     if len(r["omega"]) != 2:
         raise ValueError(f"range omega = {r['omega']} must be [start, end] in rad/s")
+    if min(r["omega"]) <= 0 or r["omega"][0] == r["omega"][1]:
+        raise ValueError(f"frequency range omega = {r['omega']} rad/s must be > 0 and non-empty")
     opts = {"max_points": r.get("max_points", 400), "ds_max": r.get("ds_max", 0.3)}
     return system, tuple(r["omega"]), opts
 
