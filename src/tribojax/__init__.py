@@ -39,8 +39,10 @@ from ._dynamics._continuation import FrequencyResponse as FrequencyResponse
 from ._dynamics._continuation import frequency_response as frequency_response
 from ._dynamics._continuation import parameter_response as parameter_response
 from ._dynamics._design import Peak as Peak
+from ._dynamics._design import PeakDesign as PeakDesign
 from ._dynamics._design import amplitude_at as amplitude_at
 from ._dynamics._design import frf_2dof_system as frf_2dof_system
+from ._dynamics._design import minimise_peak as minimise_peak
 from ._dynamics._design import peak_on_grid as peak_on_grid
 from ._dynamics._design import resonance_peak as resonance_peak
 from ._dynamics._harmonic import HarmonicCoefficients as HarmonicCoefficients
