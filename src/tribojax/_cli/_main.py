@@ -27,7 +27,7 @@ from .._plot import pyplot, save_figure
 from .._reproduce._table3 import calibrate_table3, max_rel_error, reproduce_table3
 from .._reproduce._tables4to7 import plot_figure10, print_tables4to7, reproduce_tables4to7
 from .._reproduce._wu2015 import plot_wu2015, wu2015_comparison
-from . import _contact, _discover, _fit, _hysteresis
+from . import _contact, _discover, _fit, _frf, _hysteresis
 from ._common import claim_outputs, run_command, write_json_atomic
 from ._contact import CONTACT_DEFAULTS as CONTACT_DEFAULTS
 
@@ -253,6 +253,8 @@ SUBCOMMANDS = [
      _discover.run_discover),
     ("fit", "fit a slip run or hysteresis loop CSV (+ sidecar JSON)", _fit.add_arguments,
      _fit.run_fit),
+    ("frf", "forced response of a structure with friction contacts", _frf.add_arguments,
+     _frf.run_frf),
 ]  # fmt: skip
 
 
