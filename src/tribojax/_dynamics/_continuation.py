@@ -5,8 +5,9 @@ unknowns (X / x_ref, λ / |λ_end − λ₀|). Each step predicts z + Δs·t alo
 (the null vector of ∂R/∂z, oriented by the previous tangent) and corrects with Newton on
 [R(z) = 0, t·(z − z_pred) = 0] (Keller's pseudo-arclength condition), so turning points are passed
 without special treatment. The step Δs adapts to the Newton count (×1.5 for ≤ 3 steps, ×0.6 for
-> 6, halved on a failed corrector or when the tangent turns by more than 0.2 rad), capped at ds_max·max(1, ‖y‖∞) so that a high resonance peak
-takes steps relative to its size; the whole loop is one jitted `lax.while_loop`.
+> 6, halved on a failed corrector or when the tangent turns by more than 0.2 rad), capped at
+ds_max·max(1, ‖y‖∞) so that a high resonance peak takes steps relative to its size; the whole
+loop is one jitted `lax.while_loop`.
 
 The result is a `FrequencyResponse`; every point's stability comes from Hill's method (`_mhb`).
 """
@@ -22,7 +23,6 @@ import optimistix as optx
 from .._precision import ensure_x64
 from .._results import RESULTS, result_name
 from ._mhb import FrictionSystem, floquet_exponents, solve_hbm
-
 
 _COS_MAX_TURN = 0.98  # cos(0.2 rad)
 
