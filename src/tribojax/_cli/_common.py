@@ -189,7 +189,7 @@ def add_decimation_arguments(parser) -> None:
     )
 
 
-def reduce_record(record, args):
+def reduce_record(record, args, *, whole_cycles: bool = False):
     """(the record reduced as `--decimate` asks, the `Decimation`): `tribojax.decimate_record`.
 
     A reduction is announced on stdout in one line."""
@@ -209,9 +209,13 @@ def reduce_record(record, args):
     if args.max_samples < 4:
         raise CommandError(f"--max-samples = {args.max_samples} is outside the allowed range "
                            "[4, inf)")  # fmt: skip
-    record, how = decimate_record(record, factor, max_samples=args.max_samples)
+    record, how = decimate_record(record, factor, max_samples=args.max_samples,
+                                  whole_cycles=whole_cycles)  # fmt: skip
+    if how.cycles_kept is not None:
+        print(f"{record.source}: kept the first {how.cycles_kept} whole cycles "
+              f"({how.samples_used} of {how.samples_in_record} samples)")  # fmt: skip
     if how.factor > 1:
-        print(f"{record.source}: {how.samples_in_record} samples reduced to {how.samples} (blocks "
+        print(f"{record.source}: {how.samples_used} samples reduced to {how.samples} (blocks "
               f"of {how.factor}, {how.method}; noise sd {how.noise_std_original:.3g} -> "
               f"{how.noise_std:.3g})")  # fmt: skip
     return record, how

@@ -6,7 +6,8 @@ to the loop baseline (`tribojax.discovery.loop_baseline`). Writes
 DIR/discovery.json (keys: effect, effects, baseline_rmse, final_rmse, regions, candidates, ...)
 and DIR/discovery.png, and prints a summary. A long record is first reduced to at most
 `--max-samples` samples by block local quadratics (`tribojax.decimate_record`; "decimation" in
-discovery.json says how, `--decimate off` keeps every sample).
+discovery.json says how, `--decimate off` keeps every sample); a loop of many cycles keeps only
+its first whole cycles that fit.
 
 Exit codes: 0 done; 2 malformed input or refused output; 3 the baseline fit did not converge
 (discovery.json is still written, with "converged": false).
@@ -53,7 +54,7 @@ def run_discover(args, out=None, err=None) -> int:
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
     with claim_outputs(src, [target, figure], force=args.force):
-        record, reduction = reduce_record(read_record(src), args)
+        record, reduction = reduce_record(read_record(src), args, whole_cycles=True)
         try:
             baseline = baseline_for(record)
             report = discover(baseline, max_effects=args.max_effects)
