@@ -10,8 +10,9 @@ Records (made here, seeded, written to a scratch folder):
 
 Each command runs in a fresh process (compilation included, as a user meets it); wall time and
 peak RSS (the child's own `resource.getrusage(RUSAGE_SELF)` at exit) are recorded, with the
-fit's parameters against the truth in standard errors. Targets: ≤ 60 s and ≤ 2 GiB on 2 cores. The baseline is the same
-command with `--decimate off` (every sample), where affordable (`--with-baseline`): on 10^6
+fit's parameters against the truth in standard errors. Targets: ≤ 60 s and ≤ 2 GiB on 2 cores.
+The baseline is the same command with `--decimate off` (every sample), where affordable
+(`--with-baseline`): on 10^6
 samples it is the issue's "did not finish" case, so it runs under a time limit.
 
     python benchmarks/long_records.py [--out DIR] [--with-baseline] [--only NAME ...]

@@ -172,7 +172,7 @@ def claim_outputs(src, targets, *, force: bool):
             folder.rmdir()  # a folder made for outputs that were not written
 
 
-def add_decimation_arguments(parser) -> None:
+def add_decimation_arguments(parser, max_samples: int = DECIMATION_MAX_SAMPLES) -> None:
     """`--decimate auto|off|N` and `--max-samples` of the commands that take a record."""
     parser.add_argument(
         "--decimate",
@@ -184,8 +184,8 @@ def add_decimation_arguments(parser) -> None:
     parser.add_argument(
         "--max-samples",
         type=int,
-        default=DECIMATION_MAX_SAMPLES,
-        help=f"the size 'auto' reduces to (default {DECIMATION_MAX_SAMPLES})",
+        default=max_samples,
+        help=f"the size 'auto' reduces to (default {max_samples})",
     )
 
 

@@ -5,9 +5,9 @@ slip_m) goes to the pre-slip LuGre baseline; a hysteresis loop (time_s, displace
 to the loop baseline (`tribojax.discovery.loop_baseline`). Writes
 DIR/discovery.json (keys: effect, effects, baseline_rmse, final_rmse, regions, candidates, ...)
 and DIR/discovery.png, and prints a summary. A long record is first reduced to at most
-`--max-samples` samples by block local quadratics (`tribojax.decimate_record`; "decimation" in
-discovery.json says how, `--decimate off` keeps every sample); a loop of many cycles keeps only
-its first whole cycles that fit.
+`--max-samples` samples (default 5,000) by block local quadratics (`tribojax.decimate_record`;
+"decimation" in discovery.json says how, `--decimate off` keeps every sample); a loop of many
+cycles keeps only its first whole cycles that fit.
 
 Exit codes: 0 done; 2 malformed input or refused output; 3 the baseline fit did not converge
 (discovery.json is still written, with "converged": false).
@@ -18,6 +18,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from .._fit._decimate import DISCOVER_MAX_SAMPLES
 from .._io._loop import HysteresisLoop
 from .._io._records import read_record
 from ..discovery import discover, loop_baseline, plot_discovery, slip_baseline
@@ -36,7 +37,7 @@ def add_arguments(parser) -> None:
                         "discovery-out)")  # fmt: skip
     parser.add_argument("--force", action="store_true", help="replace an existing discovery.json")
     parser.add_argument("--max-effects", type=int, default=3, help="greedy rounds (default 3)")
-    add_decimation_arguments(parser)
+    add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
 
 
 def baseline_for(record):
