@@ -158,7 +158,7 @@ def decimate_record(
     if factor is None:
         if int(max_samples) < 4:
             raise ValueError(f"max_samples = {max_samples} is outside the allowed range [4, inf)")
-        factor = _factor(record, n, int(max_samples))
+        factor = _factor(record, len(t), int(max_samples))
     if isinstance(factor, bool) or int(factor) != factor or factor < 1:
         raise ValueError(f"factor = {factor!r} must be an integer >= 1")
     factor = int(factor)
@@ -168,10 +168,10 @@ def decimate_record(
                                   None if sigma is None else "the record's noise_std", sigma,
                                   sigma, cycles_kept=None if len(t) == n else
                                   len(cycle_starts(t, drive)) - 1)  # fmt: skip
-    if n // factor < 4:
+    if len(t) // factor < 4:
         raise ValueError(
-            f"{record.source}: factor = {factor} leaves {n // factor} samples of {n}; at least 4 "
-            "are needed"
+            f"{record.source}: factor = {factor} leaves {len(t) // factor} samples of "
+            f"{len(t)}; at least 4 are needed"
         )
     tc, (dc, rc), g, (_, rss) = _block_quadratics(t, (drive, resp), factor)
     dof = (len(tc) * (factor - 3)) if factor > 3 else 0
