@@ -18,7 +18,7 @@ from pathlib import Path
 from .._io._loop import HysteresisLoop
 from .._io._records import read_record
 from ..discovery import discover, loop_baseline, plot_discovery, slip_baseline
-from ._common import claim_outputs, error, write_json_atomic
+from ._common import claim_outputs, error, progress, write_json_atomic
 
 
 def add_arguments(parser) -> None:
@@ -47,7 +47,8 @@ def run_discover(args, out=None, err=None) -> int:
         record = read_record(src)
         try:
             baseline = baseline_for(record)
-            report = discover(baseline, max_effects=args.max_effects)
+            with progress(args, "discover"):
+                report = discover(baseline, max_effects=args.max_effects)
         except ValueError as exc:
             if str(src) in str(exc) or Path(str(record.source)).name in str(exc):
                 raise

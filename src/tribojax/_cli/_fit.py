@@ -23,7 +23,15 @@ from .._fit._start import noise_scale
 from .._io._records import read_record
 from .._io._slip_run import SlipRun
 from .._plot import pyplot, save_figure
-from ._common import FAILED, CommandError, claim_outputs, error, warn, write_json_atomic
+from ._common import (
+    FAILED,
+    CommandError,
+    claim_outputs,
+    error,
+    progress,
+    warn,
+    write_json_atomic,
+)
 
 
 def add_arguments(parser) -> None:
@@ -74,12 +82,13 @@ def run_fit(args) -> int:
     with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force):
         record = read_record(path)
         t0 = time.perf_counter()
-        if isinstance(record, SlipRun):
-            result, curves = _fit_slip(record, args, start)
-        else:
-            if args.alpha is not None:
-                return error(f"--alpha is for slip runs; {path} is a hysteresis loop")
-            result, curves = _fit_loop(record, args, start)
+        with progress(args, "fit") as bar:
+            if isinstance(record, SlipRun):
+                result, curves = _fit_slip(record, args, start, bar.note)
+            else:
+                if args.alpha is not None:
+                    return error(f"--alpha is for slip runs; {path} is a hysteresis loop")
+                result, curves = _fit_loop(record, args, start)
         result["wall_time_s"] = time.perf_counter() - t0
         write_json_atomic(out / "fit.json", result, exclusive=not args.force)
         drew = _plot(curves, result, out / "fit.png")
@@ -151,7 +160,7 @@ def _summary(fit, kind, source, n_data, resid, unit, sigma, sigma_source) -> dic
     return d
 
 
-def _fit_slip(run, args, start):
+def _fit_slip(run, args, start, note=None):
     if args.alpha in (None, "free"):
         alpha = None
     else:
@@ -164,7 +173,7 @@ def _fit_slip(run, args, start):
     else:
         sigma, how = None, "estimated from the residuals"
     fit = fit_slip_run(run, alpha=alpha, max_steps=args.max_steps, start=start or None,
-                       progress=lambda m: print(f"  {m}", flush=True))  # fmt: skip
+                       progress=note)  # fmt: skip
     scale = run.noise_std if run.noise_std is not None else noise_scale(run.slip)
     resid = fit.residuals * scale  # model − data, m
     if sigma is None:
