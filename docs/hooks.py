@@ -32,27 +32,62 @@ NOTEBOOK_DIR = REPO / "notebooks"
 STAGE = REPO / "build" / "docs-staged"  # staged notebooks live under STAGE / "examples"
 EXAMPLES = "examples"
 CELL_TIMEOUT_S = 600
+# Figures go inline into the executed copy (the kernel would inherit MPLBACKEND=Agg from a test
+# environment and then keep no figure); part of the staged copy's key.
+MPL_BACKEND = "module://matplotlib_inline.backend_inline"
 ANSI_ESCAPE = re.compile(r"\x1b\[[0-9;]*m")  # IPython colours its tracebacks
 
 log = logging.getLogger("mkdocs.hooks.tribojax")
 
 # API pages: (page, title, home subpackages of the names it lists, introduction)
 API_PAGES = [
-    ("contact", "Contact", ("_contact",), "Materials, fractal surface, asperity laws and the "
-     "contact model of wang2022 Sections 2–3 (Eqs 1–24, 26, 28)."),
-    ("roughness", "Surfaces", ("_roughness",), "Topography records and readers, fractal "
-     "estimates of D and G, seeded surface synthesis (wang2022 Eq 1, wu2015 Eq 3)."),
-    ("friction", "Friction elements", ("_friction",), "LuGre and pre-slip LuGre (wang2022 "
-     "Eqs 25, 27), Jenkins and Mindlin (wu2015 Eqs 1–2), the Iwan bank, 2D elastic dry "
-     "friction."),
-    ("dynamics", "Dynamics", ("_dynamics",), "Stage profiles, slip simulation, harmonic "
-     "balance, multi-harmonic balance, continuation and structures with friction contacts."),
-    ("io", "Data and records", ("_io",), "Published tables, slip runs, hysteresis loops, "
-     "atomic writes."),
-    ("fit", "Fitting and sensitivity", ("_fit",), "The one least-squares engine and the fits "
-     "and sensitivities built on it."),
-    ("reproduce", "Reproduction and presets", ("_reproduce", "_presets", "_results", "_sweep"),
-     "The papers' constants, the reproduced tables, result codes and sweeps."),
+    (
+        "contact",
+        "Contact",
+        ("_contact",),
+        "Materials, fractal surface, asperity laws and the "
+        "contact model of wang2022 Sections 2–3 (Eqs 1–24, 26, 28).",
+    ),
+    (
+        "roughness",
+        "Surfaces",
+        ("_roughness",),
+        "Topography records and readers, fractal "
+        "estimates of D and G, seeded surface synthesis (wang2022 Eq 1, wu2015 Eq 3).",
+    ),
+    (
+        "friction",
+        "Friction elements",
+        ("_friction",),
+        "LuGre and pre-slip LuGre (wang2022 "
+        "Eqs 25, 27), Jenkins and Mindlin (wu2015 Eqs 1–2), the Iwan bank, 2D elastic dry "
+        "friction.",
+    ),
+    (
+        "dynamics",
+        "Dynamics",
+        ("_dynamics",),
+        "Stage profiles, slip simulation, harmonic "
+        "balance, multi-harmonic balance, continuation and structures with friction contacts.",
+    ),
+    (
+        "io",
+        "Data and records",
+        ("_io",),
+        "Published tables, slip runs, hysteresis loops, atomic writes.",
+    ),
+    (
+        "fit",
+        "Fitting and sensitivity",
+        ("_fit",),
+        "The one least-squares engine and the fits and sensitivities built on it.",
+    ),
+    (
+        "reproduce",
+        "Reproduction and presets",
+        ("_reproduce", "_presets", "_results", "_sweep"),
+        "The papers' constants, the reproduced tables, result codes and sweeps.",
+    ),
 ]
 DISCOVERY_PAGE = ("discovery", "Discovery", "`tribojax.discovery`: baselines, named effects, "
                   "region tests and the greedy discovery loop.")  # fmt: skip
@@ -65,6 +100,7 @@ def source_key(notebook: Path) -> str:
     """Hash of the notebook and of every package source: a staged copy with another key is
     stale."""
     h = hashlib.sha256(notebook.read_bytes())
+    h.update(MPL_BACKEND.encode())
     for path in sorted(PACKAGE.rglob("*.py")):
         h.update(path.relative_to(PACKAGE).as_posix().encode())
         h.update(path.read_bytes())
@@ -96,7 +132,7 @@ class NotebookError(Exception):
 
 def execute_notebook(notebook: Path) -> Path:
     """Run `notebook` top to bottom in a fresh "python3" kernel (from the notebooks folder, with
-    the Agg backend) and stage the executed copy; its path. NotebookError if a cell raises (the
+    figures inline) and stage the executed copy; its path. NotebookError if a cell raises (the
     stale staged copy is removed)."""
     import nbclient
     import nbformat
@@ -110,7 +146,7 @@ def execute_notebook(notebook: Path) -> Path:
         timeout=CELL_TIMEOUT_S,
         resources={"metadata": {"path": str(NOTEBOOK_DIR)}},
     )
-    env = dict(os.environ, MPLBACKEND="Agg")  # the kernel is a subprocess and inherits it
+    env = dict(os.environ, MPLBACKEND=MPL_BACKEND)  # the kernel is a subprocess
     try:
         client.execute(cwd=str(NOTEBOOK_DIR), env=env)
     except nbclient.exceptions.CellExecutionError as err:
@@ -155,8 +191,7 @@ def public_names() -> dict[str, list[str]]:
             raise PluginError(f"tribojax.{name} comes from {module}, which no API page covers")
         pages[page].append(f"tribojax.{name}")
     pages[DISCOVERY_PAGE[0]] = [
-        f"tribojax.discovery.{name}"
-        for name, _ in reexports(PACKAGE / "discovery" / "__init__.py")
+        f"tribojax.discovery.{name}" for name, _ in reexports(PACKAGE / "discovery" / "__init__.py")
     ]
     return pages
 
@@ -196,8 +231,12 @@ def on_files(files, config):
             except NotebookError as err:
                 raise PluginError(str(err)) from None
         files.append(
-            File(f"{EXAMPLES}/{notebook.name}", str(STAGE), config["site_dir"],
-                 config["use_directory_urls"])  # fmt: skip
+            File(
+                f"{EXAMPLES}/{notebook.name}",
+                str(STAGE),
+                config["site_dir"],
+                config["use_directory_urls"],
+            )  # fmt: skip
         )
     pages = public_names()
     for name in missing_docstrings([n for group in pages.values() for n in group]):
