@@ -113,7 +113,7 @@ def test_site_builds_strict(site):
     for page in ("index.html", "api/contact/index.html", "reproduction/index.html"):
         assert (out / page).exists(), page
     api = (out / "api" / "contact" / "index.html").read_text()
-    assert "FractalContact" in api and "Eq 28" in api  # rendered docstrings
+    assert "FractalContact" in api and "Eq 4" in api  # rendered docstrings
     for nb in NOTEBOOKS:
         html = (out / "examples" / nb.stem / "index.html").read_text()
         figures = len(re.findall(r'<img[^>]+src="data:image/png', html))
@@ -131,16 +131,31 @@ def test_search_index_lists_the_pages(site):
     assert "Levenberg" in text and "least_squares_fit" in text
 
 
-# Shows only the notebook's output images, in flow, on white (everything else hidden): the
-# screenshot's non-white blocks are the rendered figures.
+# Shows only the notebook's output images, stacked on white, each in a magenta frame: the
+# screenshot's frames locate the rendered figures.
 FIGURES_ONLY = """<style>
 .md-header, .md-tabs, .md-sidebar, .md-footer, .jp-InputArea, .jp-MarkdownCell,
-.jp-InputPrompt, .jp-OutputPrompt, .md-content__button { display: none !important; }
-body, .md-main, .md-content, .jp-Cell, .jp-OutputArea, .jp-OutputArea-output {
-  background: #fff !important; }
-body * { visibility: hidden !important; }
-.jp-OutputArea-output img { visibility: visible !important; }
+.jp-InputPrompt, .jp-OutputPrompt, .md-content__button,
+.jp-OutputArea-output:not(:has(img)) { display: none !important; }
+body * { visibility: hidden !important; background: #fff !important; }
+.jp-OutputArea-output img { visibility: visible !important; outline: 4px solid #f0f !important;
+  outline-offset: 2px; margin: 12px !important; max-width: 1100px !important;
+  height: auto !important; }
 </style></head>"""
+FRAME = 4  # px
+
+
+def _frames(shot: np.ndarray) -> list[tuple[int, int, int, int]]:
+    """(top, bottom, left, right) of the inside of each magenta frame, top to bottom."""
+    magenta = (shot[..., 0] > 230) & (shot[..., 1] < 30) & (shot[..., 2] > 230)
+    edges = _blocks(magenta.sum(axis=1) > 100, gap=1)  # the frames' top and bottom edges
+    frames = []
+    for (_, top), (bottom, _) in zip(edges[::2], edges[1::2]):
+        cols = np.flatnonzero(magenta[(top + bottom) // 2])
+        left = cols[cols < cols.mean()].max() if cols.size else 0
+        right = cols[cols > cols.mean()].min() if cols.size else 0
+        frames.append((top + 1 + FRAME, bottom - FRAME, left + 1 + FRAME, right - FRAME))
+    return frames
 
 
 def _png_heights(html: str) -> list[int]:
@@ -189,14 +204,13 @@ def test_pages_render_their_figures_in_chromium(site, tmp_path):
         probe = page.with_name("figures-only.html")
         probe.write_text(html.replace("</head>", FIGURES_ONLY, 1))
         shot = _screenshot(probe, tmp_path / f"{nb.stem}.png", sum(heights) + 60 * expected + 300)
-        ink = (shot < 235).any(axis=2)  # not white
-        blocks = [(a, b) for a, b in _blocks(ink.mean(axis=1) > 0.002) if b - a >= 100]
-        assert len(blocks) >= expected, (
-            f"{nb.name}: {expected} figures in the HTML, {len(blocks)} rendered plot regions"
+        frames = _frames(shot)
+        assert len(frames) == expected, (
+            f"{nb.name}: {expected} figures in the HTML, {len(frames)} rendered"
         )
-        for a, b in blocks:
-            region, cols = ink[a : b + 1], np.flatnonzero(ink[a : b + 1].any(axis=0))
-            box = region[:, cols.min() : cols.max() + 1]
-            assert 0.01 < box.mean() < 0.9, f"{nb.name}: a blank or solid plot region"
-            colours = shot[a : b + 1][region]
-            assert np.ptp(colours, axis=0).max() > 100, f"{nb.name}: a featureless region"
+        for i, (top, bottom, left, right) in enumerate(frames):
+            plot = shot[top:bottom, left:right]
+            assert plot.shape[0] > 100 and plot.shape[1] > 100, f"{nb.name}: figure {i} too small"
+            ink = (plot < 200).any(axis=2).mean()  # lines, text, markers: not background
+            assert 0.01 < ink < 0.9, f"{nb.name}: figure {i} is blank or solid (ink {ink:.3f})"
+            assert np.ptp(plot.reshape(-1, 3), axis=0).max() > 100, f"{nb.name}: figure {i} flat"
