@@ -30,6 +30,20 @@ def test_progress_on_a_terminal_draws_bar_and_notes():
     assert sys.stdout is stdout  # restored
 
 
+def test_output_lines_stay_whole_on_a_shared_terminal(monkeypatch):
+    # stdout and stderr on one terminal: a printed line is never erased or split by the display
+    term = FakeTerminal()
+    monkeypatch.setattr(sys, "stdout", term)
+    with Progress("fit", stream=term) as bar:
+        print("first result line")
+        bar.note("LM: 2 steps")
+        print("second", "line")
+    text = term.getvalue()
+    assert "\r\x1b[Kfirst result line\n\r\x1b[Kfit" in text
+    assert "\r\x1b[Ksecond line\n" in text
+    assert text.endswith("\r\x1b[K")
+
+
 @pytest.mark.parametrize("stream, quiet", [(io.StringIO(), False), (FakeTerminal(), True)],
                          ids=["pipe", "quiet"])  # fmt: skip
 def test_progress_silent_in_a_pipe_and_when_quiet(stream, quiet):

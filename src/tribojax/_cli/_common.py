@@ -198,6 +198,8 @@ class Progress:
         self._stop = threading.Event()
         self._thread = None
         self._stdout = None
+        self._shown = False  # the display line is on screen
+        self._midline = False  # stdout has written part of a line: do not draw over it
 
     def line(self) -> str:
         """The display's current text (without control characters)."""
@@ -215,14 +217,18 @@ class Progress:
     def _draw(self) -> None:
         if self.enabled:
             with self._lock:
-                self.stream.write("\r\x1b[K" + self.line())
-                self.stream.flush()
+                if not self._midline:
+                    self.stream.write("\r\x1b[K" + self.line())
+                    self.stream.flush()
+                    self._shown = True
 
     def _clear(self) -> None:
         if self.enabled:
             with self._lock:
-                self.stream.write("\r\x1b[K")
-                self.stream.flush()
+                if self._shown:
+                    self.stream.write("\r\x1b[K")
+                    self.stream.flush()
+                    self._shown = False
 
     def step(self, note: str | None = None) -> None:
         """One more step done (and the text shown beside the bar, if given)."""
@@ -259,8 +265,8 @@ class Progress:
 
 
 class _AboveProgress:
-    """stdout while a Progress is shown: each write clears the display line first and redraws
-    it after a complete line."""
+    """stdout while a Progress is shown: a write clears the display line first, and the display
+    is drawn again once the line is complete."""
 
     def __init__(self, progress: Progress, out):
         self._progress, self._out = progress, out
@@ -270,8 +276,9 @@ class _AboveProgress:
             self._progress._clear()
             n = self._out.write(text)
             self._out.flush()
-            if text.endswith("\n"):
-                self._progress._draw()
+            if text:
+                self._progress._midline = not text.endswith("\n")
+            self._progress._draw()
         return n
 
     def __getattr__(self, name):
