@@ -19,6 +19,7 @@ from pathlib import Path
 
 import equinox as eqx
 
+from .._fit._decimate import DECIMATION_MAX_SAMPLES, decimate_record
 from .._io._files import sidecar_path, write_json_atomic
 
 __all__ = [
@@ -27,9 +28,11 @@ __all__ = [
     "INTERRUPTED",
     "CommandError",
     "Progress",
+    "add_decimation_arguments",
     "claim_outputs",
     "error",
     "progress",
+    "reduce_record",
     "refused_outputs",
     "run_command",
     "warn",
@@ -289,3 +292,52 @@ def progress(args, label: str, total: int | None = None, stream=None) -> Progres
     """The progress display of a subcommand: off with `--quiet` (`args.quiet`) or when stderr is
     not a terminal."""
     return Progress(label, total, quiet=bool(getattr(args, "quiet", False)), stream=stream)
+
+
+def add_decimation_arguments(parser, max_samples: int = DECIMATION_MAX_SAMPLES) -> None:
+    """`--decimate auto|off|N` and `--max-samples` of the commands that take a record."""
+    parser.add_argument(
+        "--decimate",
+        default="auto",
+        metavar="auto|off|N",
+        help="long records: fit blocks of N samples reduced by local quadratics (noise "
+        "scaled); auto (default) reduces a record to at most --max-samples samples",
+    )
+    parser.add_argument(
+        "--max-samples",
+        type=int,
+        default=max_samples,
+        help=f"the size 'auto' reduces to (default {max_samples})",
+    )
+
+
+def reduce_record(record, args, *, whole_cycles: bool = False):
+    """(the record reduced as `--decimate` asks, the `Decimation`): `tribojax.decimate_record`.
+
+    A reduction is announced on stdout in one line."""
+    text = str(args.decimate).strip().lower()
+    if text == "auto":
+        factor = None
+    elif text == "off":
+        factor = 1
+    else:
+        try:
+            factor = int(text)
+        except ValueError:
+            raise CommandError(f"--decimate = {args.decimate!r}: expected auto, off or an integer "
+                               ">= 1") from None  # fmt: skip
+        if factor < 1:
+            raise CommandError(f"--decimate = {factor} is outside the allowed range [1, inf)")
+    if args.max_samples < 4:
+        raise CommandError(f"--max-samples = {args.max_samples} is outside the allowed range "
+                           "[4, inf)")  # fmt: skip
+    record, how = decimate_record(record, factor, max_samples=args.max_samples,
+                                  whole_cycles=whole_cycles)  # fmt: skip
+    if how.cycles_kept is not None:
+        print(f"{record.source}: kept the first {how.cycles_kept} whole cycles "
+              f"({how.samples_used} of {how.samples_in_record} samples)")  # fmt: skip
+    if how.factor > 1:
+        print(f"{record.source}: {how.samples_used} samples reduced to {how.samples} (blocks "
+              f"of {how.factor}, {how.method}; noise sd {how.noise_std_original:.3g} -> "
+              f"{how.noise_std:.3g})")  # fmt: skip
+    return record, how
