@@ -34,7 +34,8 @@ from ._contact import CONTACT_DEFAULTS as CONTACT_DEFAULTS
 __all__ = ["SUBCOMMANDS", "build_parser", "main", "write_json_atomic"]
 
 
-def _print_table3(rows, out=sys.stdout) -> None:
+def _print_table3(rows, out=None) -> None:
+    out = sys.stdout if out is None else out  # at call time: the progress display wraps it
     head = (
         f"{'kPa':>5} {'F/N':>8} | {'F_s paper':>9} {'calib':>7} {'publ.':>7} | "
         f"{'K_tau paper':>11} {'calib':>9} {'publ.':>9} | {'C_tau paper':>11} {'calib':>7} | "
