@@ -85,7 +85,7 @@ API_PAGES = [
     (
         "reproduce",
         "Reproduction and presets",
-        ("_reproduce", "_presets", "_results", "_sweep"),
+        ("_reproduce", "_presets", "_results", "_sweep", "_chain"),
         "The papers' constants, the reproduced tables, result codes and sweeps.",
     ),
 ]
