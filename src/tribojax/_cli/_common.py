@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import sys
+import threading
+import time
 from pathlib import Path
 
 import equinox as eqx
@@ -24,9 +27,11 @@ __all__ = [
     "FAILED",
     "INTERRUPTED",
     "CommandError",
+    "Progress",
     "add_decimation_arguments",
     "claim_outputs",
     "error",
+    "progress",
     "reduce_record",
     "refused_outputs",
     "run_command",
@@ -170,6 +175,123 @@ def claim_outputs(src, targets, *, force: bool):
         lock.unlink(missing_ok=True)
         if created and not any(folder.iterdir()):
             folder.rmdir()  # a folder made for outputs that were not written
+
+
+class Progress:
+    """A one-line progress display on stderr for a long subcommand.
+
+    Shown only when the stream is a terminal and not `quiet`; otherwise every method does
+    nothing, so CI logs, pipes and files stay clean. `step(note)` counts a step (a bar when
+    `total` is known), `note(text)` shows a solver's latest message in place (a callback for
+    `progress=` arguments); a ticker redraws the elapsed time while a compiled computation runs.
+    While shown, the command's own stdout lines are printed above the display.
+    """
+
+    TICK_S = 0.5
+
+    def __init__(self, label: str, total: int | None = None, *, quiet: bool = False,
+                 stream=None):  # fmt: skip
+        self.stream = sys.stderr if stream is None else stream
+        isatty = getattr(self.stream, "isatty", None)
+        self.enabled = not quiet and bool(isatty and isatty())
+        self.label, self.total = label, total
+        self.count, self.text = 0, ""
+        self._t0 = time.perf_counter()
+        self._lock = threading.RLock()
+        self._stop = threading.Event()
+        self._thread = None
+        self._stdout = None
+        self._shown = False  # the display line is on screen
+        self._midline = False  # stdout has written part of a line: do not draw over it
+
+    def line(self) -> str:
+        """The display's current text (without control characters)."""
+        elapsed = f"{time.perf_counter() - self._t0:5.1f} s"
+        if self.total:
+            done = min(self.count, self.total)
+            bar = "#" * (20 * done // self.total) + "-" * (20 - 20 * done // self.total)
+            head = f"{self.label} [{bar}] {done}/{self.total} {elapsed}"
+        else:
+            spin = "|/-\\"[int(2 * (time.perf_counter() - self._t0)) % 4]
+            head = f"{self.label} {spin} {elapsed}"
+        width = shutil.get_terminal_size((100, 20)).columns - 1
+        return f"{head}  {self.text}"[:width].rstrip()
+
+    def _draw(self) -> None:
+        if self.enabled:
+            with self._lock:
+                if not self._midline:
+                    self.stream.write("\r\x1b[K" + self.line())
+                    self.stream.flush()
+                    self._shown = True
+
+    def _clear(self) -> None:
+        if self.enabled:
+            with self._lock:
+                if self._shown:
+                    self.stream.write("\r\x1b[K")
+                    self.stream.flush()
+                    self._shown = False
+
+    def step(self, note: str | None = None) -> None:
+        """One more step done (and the text shown beside the bar, if given)."""
+        self.count += 1
+        if note is not None:
+            self.text = note
+        self._draw()
+
+    def note(self, text: str) -> None:
+        """Show `text` (a solver's progress line) beside the bar."""
+        self.text = " ".join(str(text).split())
+        self._draw()
+
+    def _tick(self) -> None:
+        while not self._stop.wait(self.TICK_S):
+            self._draw()
+
+    def __enter__(self):
+        if self.enabled:
+            self._draw()
+            self._thread = threading.Thread(target=self._tick, daemon=True)
+            self._thread.start()
+            self._stdout = sys.stdout
+            sys.stdout = _AboveProgress(self, self._stdout)
+        return self
+
+    def __exit__(self, *exc):
+        if self.enabled:
+            self._stop.set()
+            self._thread.join()
+            sys.stdout = self._stdout
+            self._clear()
+        return False
+
+
+class _AboveProgress:
+    """stdout while a Progress is shown: a write clears the display line first, and the display
+    is drawn again once the line is complete."""
+
+    def __init__(self, progress: Progress, out):
+        self._progress, self._out = progress, out
+
+    def write(self, text: str) -> int:
+        with self._progress._lock:
+            self._progress._clear()
+            n = self._out.write(text)
+            self._out.flush()
+            if text:
+                self._progress._midline = not text.endswith("\n")
+            self._progress._draw()
+        return n
+
+    def __getattr__(self, name):
+        return getattr(self._out, name)
+
+
+def progress(args, label: str, total: int | None = None, stream=None) -> Progress:
+    """The progress display of a subcommand: off with `--quiet` (`args.quiet`) or when stderr is
+    not a terminal."""
+    return Progress(label, total, quiet=bool(getattr(args, "quiet", False)), stream=stream)
 
 
 def add_decimation_arguments(parser, max_samples: int = DECIMATION_MAX_SAMPLES) -> None:

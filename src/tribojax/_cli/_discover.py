@@ -26,6 +26,7 @@ from ._common import (
     add_decimation_arguments,
     claim_outputs,
     error,
+    progress,
     reduce_record,
     write_json_atomic,
 )
@@ -58,7 +59,8 @@ def run_discover(args, out=None, err=None) -> int:
         record, reduction = reduce_record(read_record(src), args, whole_cycles=True)
         try:
             baseline = baseline_for(record)
-            report = discover(baseline, max_effects=args.max_effects)
+            with progress(args, "discover"):
+                report = discover(baseline, max_effects=args.max_effects)
         except ValueError as exc:
             if str(src) in str(exc) or Path(str(record.source)).name in str(exc):
                 raise

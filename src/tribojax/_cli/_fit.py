@@ -32,6 +32,7 @@ from ._common import (
     add_decimation_arguments,
     claim_outputs,
     error,
+    progress,
     reduce_record,
     warn,
     write_json_atomic,
@@ -90,10 +91,11 @@ def run_fit(args) -> int:
             return error(f"--alpha is for slip runs; {path} is a hysteresis loop")
         t0 = time.perf_counter()
         record, reduction = reduce_record(full, args)
-        if isinstance(record, SlipRun):
-            result, curves = _fit_slip(record, args, start, reduction)
-        else:
-            result, curves = _fit_loop(record, args, start, reduction)
+        with progress(args, "fit") as bar:
+            if isinstance(record, SlipRun):
+                result, curves = _fit_slip(record, args, start, reduction, bar.note)
+            else:
+                result, curves = _fit_loop(record, args, start, reduction)
         result["decimation"] = reduction.as_dict()
         if reduction.factor > 1:
             result["full_record"] = _full_record(full, result, args, reduction)
@@ -200,7 +202,7 @@ def _reduced_sigma_source(reduction, default):
     return f"decimation: {reduction.noise_source}, scaled to the reduced samples"
 
 
-def _fit_slip(run, args, start, reduction):
+def _fit_slip(run, args, start, reduction, note=None):
     if args.alpha in (None, "free"):
         alpha = None
     else:
@@ -213,7 +215,7 @@ def _fit_slip(run, args, start, reduction):
     else:
         sigma, how = None, "estimated from the residuals"
     fit = fit_slip_run(run, alpha=alpha, max_steps=args.max_steps, start=start or None,
-                       progress=lambda m: print(f"  {m}", flush=True))  # fmt: skip
+                       progress=note)  # fmt: skip
     scale = run.noise_std if run.noise_std is not None else noise_scale(run.slip)
     resid = fit.residuals * scale  # model − data, m
     if sigma is None:
