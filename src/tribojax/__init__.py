@@ -98,6 +98,7 @@ from ._fit._sensitivity import slip_sensitivities as slip_sensitivities
 from ._fit._slip import fit_slip_run as fit_slip_run
 from ._fit._start import slip_run_start as slip_run_start
 from ._fit._surface import fit_surface_from_runs as fit_surface_from_runs
+from ._friction._bouc_wen import BoucWen as BoucWen
 from ._friction._elastic2d import ElasticDryFriction2D as ElasticDryFriction2D
 from ._friction._element import AbstractFrictionElement as AbstractFrictionElement
 from ._friction._lugre import LuGre as LuGre
