@@ -82,6 +82,9 @@ from ._fit._chain import wang2022_loads as wang2022_loads
 from ._fit._engine import FitResult as FitResult
 from ._fit._engine import least_squares_fit as least_squares_fit
 from ._fit._figure import plot_fit_measured as plot_fit_measured
+from ._fit._history import HistoryFit as HistoryFit
+from ._fit._history import fit_history as fit_history
+from ._fit._history import predict_history as predict_history
 from ._fit._loop import LoopAnalysis as LoopAnalysis
 from ._fit._loop import analyse_loop as analyse_loop
 from ._fit._loop import fit_loop as fit_loop
