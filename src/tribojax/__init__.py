@@ -79,6 +79,9 @@ from ._fit._chain import paper_theory_slips as wang2022_theory_slips  # noqa: F4
 from ._fit._chain import rms_relative as rms_relative
 from ._fit._chain import symmetric_bound as symmetric_bound
 from ._fit._chain import wang2022_loads as wang2022_loads
+from ._fit._curve import fit_steady_curve as fit_steady_curve
+from ._fit._curve import fit_transient as fit_transient
+from ._fit._curve import transient_nrmse as transient_nrmse
 from ._fit._engine import FitResult as FitResult
 from ._fit._engine import least_squares_fit as least_squares_fit
 from ._fit._figure import plot_fit_measured as plot_fit_measured
