@@ -126,8 +126,9 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         model: "jenkins" (μN N, K_d N/m), "mindlin" (μN, K_d; Iwan form with 64 elements),
             "lugre" (σ0 N/m, F_c N, F_s N, v_s m/s; σ1 = σ2 = 0, α = 1, β = 2) or
             "bouc_wen" (K N/m, F_y N, n; b = 1/2); each with f0.
-        start: dict of start values (missing keys from the data: the force's 2–98 % half range
-            as the slip force, a stiffness 40 times its ratio to the displacement range).
+        start: dict of start values (missing keys: from a Jenkins fit to the same records, which
+            starts at the force's 2–98 % half range as the slip force and a stiffness 40 times
+            its ratio to the displacement range).
         decimate: keep every `decimate`-th sample (1: all).
         max_steps, rtol: the Levenberg–Marquardt budget and relative tolerance (atol 1e-3 rtol);
             `NoiseFloorLM` also stops when the step left is below 0.05 standard errors.
@@ -141,7 +142,16 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
     loops = [loops] if isinstance(loops, HysteresisLoop) else list(loops)
     records = _records(loops, decimate)
     spec = HISTORY_MODELS[model]
-    init = {**_default_start(model, records), **(start or {})}
+    init = _default_start(model, records)
+    if model != "jenkins" and set(init) - set(start or {}):
+        # the Jenkins fit (exact increments, fast) gives the slip force, stiffness and offset
+        pre = fit_history(loops, "jenkins", decimate=decimate).fit.values
+        jen = dict(zip(("mu_N", "K_d", "f0"), pre))
+        shared = {"mu_N": jen["mu_N"], "K_d": jen["K_d"], "K": jen["K_d"], "F_y": jen["mu_N"],
+                  "sigma0": jen["K_d"], "F_c": 0.9 * jen["mu_N"], "F_s": 1.1 * jen["mu_N"],
+                  "f0": jen["f0"]}  # fmt: skip
+        init.update({k: v for k, v in shared.items() if k in init})
+    init.update(start or {})
     unknown = set(init) - {n for n, _ in spec}
     if unknown:
         raise ValueError(f"start has unknown key(s) {sorted(unknown)} for model {model!r}")
