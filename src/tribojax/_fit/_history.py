@@ -95,8 +95,10 @@ def _default_start(model: str, records) -> dict:
     u = np.concatenate([np.asarray(r[1]) for r in records])
     lo, hi = np.percentile(f, [2, 98])
     F, K = 0.5 * (hi - lo), 40.0 * 0.5 * (hi - lo) / max(np.ptp(u), 1e-12)
-    v = max(max(float(np.max(np.abs(np.diff(np.asarray(r[1])) / np.diff(np.asarray(r[0]))))))
-                for r in records), 1e-9)  # fmt: skip
+    speeds = [
+        np.max(np.abs(np.diff(np.asarray(r[1])) / np.diff(np.asarray(r[0])))) for r in records
+    ]
+    v = max(float(max(speeds)), 1e-9)
     base = {"mu_N": F, "K_d": K, "K": K, "F_y": F, "n": 2.0, "sigma0": K, "F_c": 0.9 * F,
             "F_s": 1.1 * F, "v_s": 0.1 * v, "f0": 0.5 * (hi + lo)}  # fmt: skip
     return {name: base[name] for name, _ in HISTORY_MODELS[model]}
