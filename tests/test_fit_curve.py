@@ -71,3 +71,20 @@ def test_constant_velocity_step_is_exact():
         assert float(el.constant_velocity_step(0.01, v, 0.2)) == pytest.approx(
             sol.y[0, -1], rel=1e-9
         )
+
+
+def test_constant_velocity_step_grad_and_jit():
+    import jax
+    import jax.numpy as jnp
+
+    def z_end(p):
+        el = tj.LuGre(p[0], 0.0, 0.0, p[1], p[2], 0.5, 1.0, 2.0)
+        return el.constant_velocity_step(0.0, 0.4, 0.05)
+
+    p = jnp.array([50.0, 2.0, 3.0])
+    g = jax.grad(z_end)(p)
+    for i in range(3):
+        e = jnp.zeros(3).at[i].set(1e-6 * p[i])
+        fd = (z_end(p + e) - z_end(p - e)) / (2e-6 * p[i])
+        assert float(g[i]) == pytest.approx(float(fd), rel=1e-6)
+    assert float(jax.jit(z_end)(p)) == pytest.approx(float(z_end(p)), rel=1e-14)
