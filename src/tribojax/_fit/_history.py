@@ -34,6 +34,7 @@ HISTORY_MODELS = {
     "bouc_wen": (("K", True), ("F_y", True), ("n", True), ("f0", False)),
 }
 MINDLIN_IWAN = 64  # Iwan elements of the Mindlin rate form in the history fits
+BOUC_WEN_STARTS = (0.5, 2.0, 10.0)  # start values of the Bouc–Wen sharpness n
 
 
 def history_element(model: str, p):
@@ -131,7 +132,8 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
             "bouc_wen" (K N/m, F_y N, n; b = 1/2); each with f0.
         start: dict of start values (missing keys: from a Jenkins fit to the same records, which
             starts at the force's 2–98 % half range as the slip force and a stiffness 40 times
-            its ratio to the displacement range).
+            its ratio to the displacement range). Bouc–Wen without a start for n is started
+            at n = 0.5, 2 and 10 and the lowest residual kept.
         decimate: keep every `decimate`-th sample (1: all).
         max_steps, rtol: the Levenberg–Marquardt budget and relative tolerance (atol 1e-3 rtol);
             `NoiseFloorLM` also stops when the step left is below 0.05 standard errors.
@@ -160,17 +162,27 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         raise ValueError(f"start has unknown key(s) {sorted(unknown)} for model {model!r}")
     scale = float(max(abs(init["f0"]), max(r[3] for r in records)))
     tr = _Transform(tuple(pos for _, pos in spec), scale)
-    theta0 = [np.log(init[n]) if pos else init[n] / scale for n, pos in spec]
-    theta = jnp.asarray(theta0)
-    for _ in range(3):  # a noise-floor stop short of the optimum restarts from where it stopped
-        solver = NoiseFloorLM(rtol, 1e-3 * rtol)
-        fit = least_squares_fit(_HistoryResiduals(model, tr), theta, records,
-                                names=tuple(n for n, _ in spec), transform=tr,
-                                max_steps=max_steps, jac="fwd", solver=solver,
-                                optimum_tol=1.0)  # fmt: skip
-        if fit.result != RESULTS.short_of_optimum:
-            break
-        theta = jnp.asarray(fit.theta)
+    fn = _HistoryResiduals(model, tr)
+
+    def solve(values):
+        theta = jnp.asarray([np.log(values[n]) if pos else values[n] / scale for n, pos in spec])
+        for _ in range(3):  # a noise-floor stop short of the optimum restarts where it stopped
+            fit = least_squares_fit(fn, theta, records, names=tuple(n for n, _ in spec),
+                                    transform=tr, max_steps=max_steps, jac="fwd",
+                                    solver=NoiseFloorLM(rtol, 1e-3 * rtol),
+                                    optimum_tol=1.0)  # fmt: skip
+            if fit.result != RESULTS.short_of_optimum:
+                break
+            theta = jnp.asarray(fit.theta)
+        return fit
+
+    if model == "bouc_wen" and "n" not in (start or {}):
+        # the sharpness n has separate local optima (soft n < 1, near-Jenkins n ≫ 1): the
+        # lowest residual of three starts is kept
+        fits = [solve({**init, "n": n}) for n in BOUC_WEN_STARTS]
+        fit = min(fits, key=lambda f: float(np.sum(f.residuals**2)))
+    else:
+        fit = solve(init)
     return HistoryFit(model, fit, _nrmse(fit.residuals, records), decimate)
 
 
