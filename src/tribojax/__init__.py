@@ -85,6 +85,7 @@ from ._fit._curve import transient_nrmse as transient_nrmse
 from ._fit._engine import FitResult as FitResult
 from ._fit._engine import least_squares_fit as least_squares_fit
 from ._fit._figure import plot_fit_measured as plot_fit_measured
+from ._fit._history import BOUC_WEN_STARTS as BOUC_WEN_STARTS
 from ._fit._history import HistoryFit as HistoryFit
 from ._fit._history import fit_history as fit_history
 from ._fit._history import predict_history as predict_history

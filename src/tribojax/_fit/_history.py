@@ -34,7 +34,7 @@ HISTORY_MODELS = {
     "bouc_wen": (("K", True), ("F_y", True), ("n", True), ("f0", False)),
 }
 MINDLIN_IWAN = 64  # Iwan elements of the Mindlin rate form in the history fits
-BOUC_WEN_STARTS = (0.5, 2.0, 10.0)  # start values of the Bouc–Wen sharpness n
+BOUC_WEN_STARTS = (0.5, 2.0, 10.0)  # starts of the Bouc–Wen sharpness n for a thorough fit
 
 
 def history_element(model: str, p):
@@ -121,7 +121,8 @@ class HistoryFit:
 
 
 def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
-                max_steps: int = 300, rtol: float = 1e-8) -> HistoryFit:  # fmt: skip
+                max_steps: int = 300, rtol: float = 1e-8,
+                n_starts=(2.0,)) -> HistoryFit:  # fmt: skip
     """Fit one friction element (+ a force offset f0, N) to one or several measured histories.
 
     Args:
@@ -132,8 +133,11 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
             "bouc_wen" (K N/m, F_y N, n; b = 1/2); each with f0.
         start: dict of start values (missing keys: from a Jenkins fit to the same records, which
             starts at the force's 2–98 % half range as the slip force and a stiffness 40 times
-            its ratio to the displacement range). Bouc–Wen without a start for n is started
-            at n = 0.5, 2 and 10 and the lowest residual kept.
+            its ratio to the displacement range).
+        n_starts: Bouc–Wen only, without a start for n: the sharpness n has separate local
+            optima (n < 1 soft, n ≫ 1 close to Jenkins); each value given is a start and the
+            lowest residual is kept (default one start, n = 2; `BOUC_WEN_STARTS` = (0.5, 2, 10)
+            for a thorough fit, three times the work).
         decimate: keep every `decimate`-th sample (1: all).
         max_steps, rtol: the Levenberg–Marquardt budget and relative tolerance (atol 1e-3 rtol);
             `NoiseFloorLM` also stops when the step left is below 0.05 standard errors.
@@ -177,9 +181,8 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         return fit
 
     if model == "bouc_wen" and "n" not in (start or {}):
-        # the sharpness n has separate local optima (soft n < 1, near-Jenkins n ≫ 1): the
-        # lowest residual of three starts is kept
-        fits = [solve({**init, "n": n}) for n in BOUC_WEN_STARTS]
+        # the sharpness n has separate local optima (soft n < 1, near-Jenkins n ≫ 1)
+        fits = [solve({**init, "n": float(n)}) for n in n_starts]
         fit = min(fits, key=lambda f: float(np.sum(f.residuals**2)))
     else:
         fit = solve(init)
