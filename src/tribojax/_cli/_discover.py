@@ -16,9 +16,10 @@ import sys
 from pathlib import Path
 
 from .._io._loop import HysteresisLoop
+from .._io._curve import FrictionCurve, FrictionTransient
 from .._io._records import read_record
 from ..discovery import discover, loop_baseline, plot_discovery, slip_baseline
-from ._common import claim_outputs, error, write_json_atomic
+from ._common import CommandError, claim_outputs, error, write_json_atomic
 
 
 def add_arguments(parser) -> None:
@@ -45,6 +46,9 @@ def run_discover(args, out=None, err=None) -> int:
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
     with claim_outputs(src, [target, figure], force=args.force):
         record = read_record(src)
+        if isinstance(record, FrictionCurve | FrictionTransient):
+            raise CommandError(f"{src}: discovery has no baseline for a {type(record).__name__} "
+                               "yet; fit it with `tribojax fit`")  # fmt: skip
         try:
             baseline = baseline_for(record)
             report = discover(baseline, max_effects=args.max_effects)
