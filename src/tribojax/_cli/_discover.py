@@ -15,8 +15,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .._io._loop import HysteresisLoop
 from .._io._curve import FrictionCurve, FrictionTransient
+from .._io._loop import HysteresisLoop
 from .._io._records import read_record
 from ..discovery import discover, loop_baseline, plot_discovery, slip_baseline
 from ._common import CommandError, claim_outputs, error, write_json_atomic
