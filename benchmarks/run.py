@@ -349,6 +349,9 @@ def main(argv=None):
     import long_records  # benchmarks/long_records.py (issue 18: records of 10^6 samples)
 
     results += long_records.run(quick=args.quick)
+    import real_data  # benchmarks/real_data.py (issue 15: history fits of a measured record)
+
+    results += real_data.run(quick=args.quick)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(results, indent=2) + "\n")

@@ -192,3 +192,13 @@ FRF_2DOF = MappingProxyType(
         "omega_range": (0.01, 6.0),  # rad/s
     }
 )
+
+
+# Units of the measured rig data (exact definitions: 1 in = 25.4 mm, 1 lbf = 4.4482216152605 N)
+INCH_M = 0.0254  # m per inch
+LBF_N = 4.4482216152605  # N per pound-force
+KIP_N = 1000.0 * LBF_N  # N per kip (1000 lbf)
+RPM_RAD_S = 2.0 * 3.141592653589793 / 60.0  # rad/s per revolution per minute
+# Maxon motor of the screw-drive rig (Mablekos-Alexiou, da Cruz, Bergeles, IEEE T-RO 37(4) 2021):
+# the EPOS export gives torque in % of this nominal torque (the source's sd_1dof.m, 9.84 mN m)
+EPOS_NOMINAL_TORQUE_NM = 9.84e-3

@@ -19,10 +19,12 @@ import sys
 from pathlib import Path
 
 from .._fit._decimate import DISCOVER_MAX_SAMPLES
+from .._io._curve import FrictionCurve, FrictionTransient
 from .._io._loop import HysteresisLoop
 from .._io._records import read_record
 from ..discovery import discover, loop_baseline, plot_discovery, slip_baseline
 from ._common import (
+    CommandError,
     add_decimation_arguments,
     claim_outputs,
     error,
@@ -56,7 +58,11 @@ def run_discover(args, out=None, err=None) -> int:
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
     with claim_outputs(src, [target, figure], force=args.force):
-        record, reduction = reduce_record(read_record(src), args, whole_cycles=True)
+        record = read_record(src)
+        if isinstance(record, FrictionCurve | FrictionTransient):
+            raise CommandError(f"{src}: discovery has no baseline for a {type(record).__name__} "
+                               "yet; fit it with `tribojax fit`")  # fmt: skip
+        record, reduction = reduce_record(record, args, whole_cycles=True)
         try:
             baseline = baseline_for(record)
             with progress(args, "discover"):

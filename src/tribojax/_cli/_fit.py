@@ -2,8 +2,11 @@
 
     tribojax fit run.csv [--out DIR] [--alpha free|VALUE]          # PreSlipLuGre F_s, K_τ, C_τ, α
     tribojax fit loop.csv [--out DIR] [--element jenkins|mindlin]  # μN and K_d
+    tribojax fit RECORD --model jenkins|mindlin|lugre|bouc_wen|best  # through the history
+    tribojax fit DRIVE/steady_state/0.096kg [--format epos_steady]   # LuGre steady law
 
-The record type comes from the CSV header (`tribojax.read_record`). Writes DIR/fit.json
+The record type comes from the file (`tribojax.read_record`: CSV header, brfd JSON, EPOS export
+or a folder of them) or `--format`; measured records are fitted by `_fit_real`. Writes DIR/fit.json
 (parameters, standard errors, correlation, converged, steps, rms residual, number of data, what was
 fitted, the source file; "decimation": how a long record was reduced before the fit;
 "full_record": the fitted model's residuals on every original sample) and DIR/fit.png (data and
@@ -23,7 +26,8 @@ from .._fit._loop import fit_loop, loop_residuals
 from .._fit._slip import fit_slip_run
 from .._fit._start import noise_scale
 from .._friction._lugre import PreSlipLuGre
-from .._io._records import read_record
+from .._io._curve import FrictionCurve, FrictionTransient
+from .._io._records import RECORD_FORMATS, read_record
 from .._io._slip_run import SlipRun, simulate_run
 from .._plot import pyplot, save_figure
 from ._common import (
@@ -37,13 +41,15 @@ from ._common import (
     warn,
     write_json_atomic,
 )
+from ._fit_real import ELEMENT_MODELS, fit_curve_record, fit_history_record
 
 
 def add_arguments(parser) -> None:
     parser.add_argument(
         "file",
         help="CSV: a slip run (time_s,stage_accel_m_s2,slip_m) or a loop "
-        "(time_s,displacement_m,force_N), each with its <stem>.json sidecar",
+        "(time_s,displacement_m,force_N), each with its <stem>.json sidecar; a brfd JSON; an "
+        "EPOS export or a folder of EPOS steady-state exports (one friction curve)",
     )
     parser.add_argument("--out", default=None, help="output folder (default tribojax-out/fit-STEM)")
     parser.add_argument(
@@ -66,10 +72,15 @@ def add_arguments(parser) -> None:
     )
     parser.add_argument(
         "--model",
-        choices=("steady", "history"),
-        default="steady",
-        help="loops: fit the steady loop or drive the element through the record",
+        choices=("steady", "history", *ELEMENT_MODELS, "best"),
+        default=None,
+        help="loops: 'steady' (default for a periodic loop) or 'history' fit --element; "
+        "jenkins|mindlin|lugre|bouc_wen drive that element (+ force offset) through the measured "
+        "history, best: all four, lowest BIC (default for a non-periodic history); friction "
+        "curves: lugre (the steady law, default) or best",
     )
+    parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
+                        help="the record's format (default: detected)")  # fmt: skip
     parser.add_argument("--max-steps", type=int, default=200, help="LM step budget (default 200)")
     parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
     add_decimation_arguments(parser)
@@ -86,19 +97,32 @@ def run_fit(args) -> int:
         return error(f"--max-steps = {args.max_steps} must be at least 1")
     start = _parse_start(args.start)
     with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force):
-        full = read_record(path)
+        full = read_record(path, args.format)
+        if isinstance(full, FrictionTransient):
+            return error(f"{path} is a friction transient: fit its steady curve first "
+                         "(tribojax.fit_transient in Python)")  # fmt: skip
         if args.alpha is not None and not isinstance(full, SlipRun):
-            return error(f"--alpha is for slip runs; {path} is a hysteresis loop")
+            kind = "a friction curve" if isinstance(full, FrictionCurve) else "a hysteresis loop"
+            return error(f"--alpha is for slip runs; {path} is {kind}")
         t0 = time.perf_counter()
-        record, reduction = reduce_record(full, args)
+        model = args.model
+        history = not isinstance(full, SlipRun | FrictionCurve) and (
+            model in (*ELEMENT_MODELS, "best") or (model is None and not full.periodic)
+        )
         with progress(args, "fit") as bar:
-            if isinstance(record, SlipRun):
-                result, curves = _fit_slip(record, args, start, reduction, bar.note)
+            if isinstance(full, FrictionCurve):
+                result, curves = fit_curve_record(full, model or "lugre", args, _summary)
+            elif history:
+                result, curves = fit_history_record(full, model or "best", args, start, _summary)
             else:
-                result, curves = _fit_loop(record, args, start, reduction)
-        result["decimation"] = reduction.as_dict()
-        if reduction.factor > 1:
-            result["full_record"] = _full_record(full, result, args, reduction)
+                record, reduction = reduce_record(full, args)
+                if isinstance(record, SlipRun):
+                    result, curves = _fit_slip(record, args, start, reduction, bar.note)
+                else:
+                    result, curves = _fit_loop(record, args, start, reduction)
+                result["decimation"] = reduction.as_dict()
+                if reduction.factor > 1:
+                    result["full_record"] = _full_record(full, result, args, reduction)
         result["wall_time_s"] = time.perf_counter() - t0
         write_json_atomic(out / "fit.json", result, exclusive=not args.force)
         drew = _plot(curves, result, out / "fit.png")
@@ -222,6 +246,7 @@ def _fit_slip(run, args, start, reduction, note=None):
         sigma = float(np.sqrt(np.sum(resid**2) / max(len(run) - len(fit.names), 1)))
     d = _summary(fit, "slip_run", run.source, len(run), resid, "m", sigma, how)
     d["model"] = "PreSlipLuGre (wang2022 Eq 27), slip at every sample"
+    d["nrmse"] = float(np.sqrt(np.mean(resid**2)) / np.std(run.slip))
     d["mass_kg"] = run.mass
     curves = dict(x=run.t, data=run.slip, model=run.slip + resid, xlabel="t (s)",
                   ylabel="slip Δx (m)", resid_x=run.t, resid=resid)  # fmt: skip
@@ -231,7 +256,7 @@ def _fit_slip(run, args, start, reduction, note=None):
 def _fit_loop(loop, args, start, reduction):
     if len(loop.t) <= 2:
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
-    fit = fit_loop(loop, args.element, model=args.model, max_steps=args.max_steps,
+    fit = fit_loop(loop, args.element, model=args.model or "steady", max_steps=args.max_steps,
                    start=start or None)  # fmt: skip
     scale = loop.noise_std if loop.noise_std is not None else 1.0
     resid = fit.residuals * scale  # N, on the fitted samples (the last len(resid))
@@ -243,8 +268,10 @@ def _fit_loop(loop, args, start, reduction):
         sigma = float(np.sqrt(np.sum(resid**2) / max(m - 2, 1)))
     d = _summary(fit, "loop", loop.source, m, resid, "N", sigma, how)
     d["model"] = (
-        f"{args.element} ({args.model} loop, wu2015 Eq {1 if args.element == 'jenkins' else 2})"
+        f"{args.element} ({args.model or 'steady'} loop, wu2015 Eq "
+        f"{1 if args.element == 'jenkins' else 2})"
     )
+    d["nrmse"] = float(np.sqrt(np.mean(resid**2)) / np.std(loop.f[-m:]))
     d["normal_load_N"], d["frequency_Hz"] = loop.normal_load, loop.frequency
     if loop.normal_load is not None:
         d["mu"] = float(fit.values[0] / loop.normal_load)

@@ -237,6 +237,10 @@ def _rk4(element, state, vel, t0, h, substeps):
         )
         return new, None
 
+    if substeps <= 4:  # unrolled: a nested scan of a few steps costs more than its body
+        for i in range(substeps):
+            state, _ = one(state, float(i))
+        return state
     new, _ = jax.lax.scan(one, state, jnp.arange(substeps, dtype=jnp.float64))
     return new
 

@@ -126,6 +126,18 @@ class LuGre(AbstractFrictionElement):
             + self.sigma2 * velocity
         )
 
+    def constant_velocity_step(self, state, velocity, h) -> Array:
+        """Exact z after a time h (s) at constant velocity v, for α = 1 (wang2022 Eq 25).
+
+        With α = 1 the bristle law dz/dt = v − |v|σ0 z/g(v) is linear in z at fixed v, so
+        z(h) = z_ss + (z − z_ss)·exp(−σ0|v|h/g(v)) with z_ss = sgn(v)·g(v)/σ0: stable for any
+        step, unlike RK4 when σ0|v|h/g ≳ 2.8 (coarse samples, stiff bristles). Needs α = 1.
+        """
+        v = jnp.asarray(velocity)
+        g = self.stribeck(v)
+        z_ss = jnp.sign(v) * g / self.sigma0
+        return z_ss + (state - z_ss) * jnp.exp(-self.sigma0 * jnp.abs(v) * h / g)
+
     def steady_force(self, velocity: ArrayLike) -> Array:
         """The constant-velocity limit g(v)·sgn(v) + σ2·v, N (α-independent)."""
         v = jnp.asarray(velocity)

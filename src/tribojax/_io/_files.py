@@ -130,13 +130,37 @@ def _key_line(text: str, key: str) -> int | None:
     return None
 
 
-def read_sidecar(csv_path, schema: dict[str, bool], units: dict[str, str], *, required=True):
+def sidecar_text(csv_path, key: str, allowed: tuple[str, ...]) -> str | None:
+    """The text value of `key` in the sidecar of `csv_path` (None if the sidecar or the key is
+    absent); DataFileError naming the sidecar and the line for a value outside `allowed`."""
+    side = sidecar_path(csv_path)
+    if not side.is_file():
+        return None
+    text = read_text(side)
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError:
+        return None  # read_sidecar reports it
+    if not isinstance(data, dict) or key not in data:
+        return None
+    if data[key] not in allowed:
+        raise DataFileError(
+            f"{side}, line {_key_line(text, key)}: {key!r} = {data[key]!r} is not one of "
+            f"{list(allowed)}"
+        )
+    return data[key]
+
+
+def read_sidecar(
+    csv_path, schema: dict[str, bool], units: dict[str, str], *, required=True, text_keys=()
+):
     """Read and validate the sidecar of `csv_path`: a JSON object of positive numbers.
 
     Args:
         schema: key -> whether it is required. Keys outside it (and "comment") are refused.
         units: key -> unit, for messages.
         required: whether the sidecar file itself must exist.
+        text_keys: keys allowed besides the schema, with text values (read by `sidecar_text`).
     Returns:
         dict key -> float (absent optional keys are None), or None when the file is absent and
         not required.
@@ -161,7 +185,7 @@ def read_sidecar(csv_path, schema: dict[str, bool], units: dict[str, str], *, re
         raise DataFileError(
             f"{side}, line 1: must be a JSON object {{...}}, got {type(data).__name__}"
         )
-    unknown = [k for k in data if k not in schema and k != "comment"]
+    unknown = [k for k in data if k not in schema and k != "comment" and k not in text_keys]
     if unknown:
         raise DataFileError(
             f"{side}, line {_key_line(text, unknown[0])}: unknown key {unknown[0]!r}; "

@@ -19,7 +19,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._dynamics._profiles import DisplacementHistory
-from ._files import csv_header, data_line_number, positive_or_none, read_sidecar, write_record_files
+from ._files import (
+    csv_header,
+    data_line_number,
+    positive_or_none,
+    read_sidecar,
+    sidecar_text,
+    write_record_files,
+)
 from ._tables import DataFileError, read_table
 
 LOOP_COLUMNS = ("t_s", "u_m", "f_N")  # the legacy format, no sidecar needed
@@ -34,7 +41,9 @@ class HysteresisLoop:
     (Hz) and `noise_std` (N), the standard deviation of the force noise (`fit_loop` uses it as
     the residual scale when given). Construction checks lengths, finiteness, increasing time,
     positive metadata and that at least one whole cycle of u is present (ValueError). `source`
-    names the file it came from, if any.
+    names the file it came from, if any. `periodic=False` marks an arbitrary displacement
+    history (an earthquake record, a ramped sine): no whole cycle is required, and only the
+    history (time-domain) route applies to it (`fit_loop(model="history")`, `fit_history`).
     """
 
     t: np.ndarray
@@ -44,6 +53,7 @@ class HysteresisLoop:
     normal_load: float | None = dataclasses.field(default=None, kw_only=True)
     frequency: float | None = dataclasses.field(default=None, kw_only=True)
     noise_std: float | None = dataclasses.field(default=None, kw_only=True)
+    periodic: bool = dataclasses.field(default=True, kw_only=True)
 
     def __post_init__(self):
         arrays = [np.asarray(x, dtype=np.float64) for x in (self.t, self.u, self.f)]
@@ -65,7 +75,8 @@ class HysteresisLoop:
             raise ValueError(
                 f"{self.source}: time is not increasing at sample {i} (t = {self.t[i]})"
             )
-        if len(cycle_starts(self.t, self.u)) < 2:
+        object.__setattr__(self, "periodic", bool(self.periodic))
+        if self.periodic and len(cycle_starts(self.t, self.u)) < 2:
             raise ValueError(
                 f"{self.source}: fewer than one whole cycle of u (need two upward crossings of "
                 "its mean); record a longer stretch"
@@ -80,7 +91,10 @@ class HysteresisLoop:
         return DisplacementHistory(self.t, self.u)
 
 
-_LOOP_SIDECAR = {"normal_load_N": True, "frequency_Hz": True, "noise_std_N": False}
+_LOOP_SIDECAR = {"normal_load_N": False, "frequency_Hz": True, "noise_std_N": False}
+# an arbitrary history ("drive": "history" in the sidecar) needs neither key
+_HISTORY_SIDECAR = {"normal_load_N": False, "frequency_Hz": False, "noise_std_N": False}
+LOOP_DRIVES = ("harmonic", "history")
 _LOOP_UNITS = {"normal_load_N": "N", "frequency_Hz": "Hz", "noise_std_N": "N"}
 FREQUENCY_TOLERANCE = 0.1  # relative mismatch allowed between the sidecar and the record
 
@@ -88,10 +102,12 @@ FREQUENCY_TOLERANCE = 0.1  # relative mismatch allowed between the sidecar and t
 def read_loop(path) -> HysteresisLoop:
     """Load a loop: CSV `time_s,displacement_m,force_N` plus sidecar `<stem>.json`, or legacy.
 
-    The issue's format needs the sidecar {"normal_load_N", "frequency_Hz" (required, > 0),
+    The issue's format needs the sidecar {"frequency_Hz" (required, > 0), "normal_load_N" and
     "noise_std_N" (optional, > 0)}; the legacy columns `t_s,u_m,f_N` take the same sidecar if
     present. SI units, `#` comment lines allowed. The sidecar's frequency must agree with the
-    record's cycle spacing within 10 % (catches rad/s given as Hz).
+    record's cycle spacing within 10 % (catches rad/s given as Hz). A sidecar with
+    `"drive": "history"` marks an arbitrary displacement history (`periodic=False`): then
+    "normal_load_N" and "frequency_Hz" are optional.
 
     Raises DataFileError naming the file (and the line) for NaN/non-numeric entries, time that
     does not increase, fewer than one whole cycle, or a missing/malformed/inconsistent sidecar.
@@ -108,7 +124,9 @@ def read_loop(path) -> HysteresisLoop:
         raise DataFileError(
             f"{path}, line {lineno}: time {cols[0]} = {t[steps[0] + 1]} does not increase"
         )
-    side = read_sidecar(path, _LOOP_SIDECAR, _LOOP_UNITS, required=new) or {}
+    drive = sidecar_text(path, "drive", LOOP_DRIVES) or "harmonic"
+    schema = _LOOP_SIDECAR if drive == "harmonic" else _HISTORY_SIDECAR
+    side = read_sidecar(path, schema, _LOOP_UNITS, required=new, text_keys=("drive",)) or {}
     try:
         loop = HysteresisLoop(
             t,
@@ -118,10 +136,11 @@ def read_loop(path) -> HysteresisLoop:
             normal_load=side.get("normal_load_N"),
             frequency=side.get("frequency_Hz"),
             noise_std=side.get("noise_std_N"),
+            periodic=drive == "harmonic",
         )
     except ValueError as err:
         raise DataFileError(str(err)) from None
-    if loop.frequency is not None:
+    if loop.frequency is not None and loop.periodic:
         starts = cycle_starts(loop.t, loop.u)
         measured = (len(starts) - 1) / (starts[-1] - starts[0])
         if abs(loop.frequency / measured - 1) > FREQUENCY_TOLERANCE:
@@ -138,21 +157,23 @@ def write_loop(
 ) -> None:
     """Write a loop as CSV (17 digits) with optional `#` comment lines, atomically.
 
-    With `normal_load` and `frequency` set, the issue's format `time_s,displacement_m,force_N`
-    plus a sidecar `<stem>.json`; otherwise (or with legacy=True) the legacy `t_s,u_m,f_N`
-    without one. Refuses (FileExistsError) if a target exists, unless `overwrite=True`.
+    With `frequency` set, the issue's format `time_s,displacement_m,force_N` plus a sidecar
+    `<stem>.json` (an arbitrary history, `periodic=False`, always takes this format, with
+    `"drive": "history"` in its sidecar); otherwise (or with legacy=True) the legacy
+    `t_s,u_m,f_N` without one. Refuses (FileExistsError) if a target exists, unless
+    `overwrite=True`.
     """
-    has_meta = loop.normal_load is not None and loop.frequency is not None
+    has_meta = not loop.periodic or loop.frequency is not None
     legacy = (not has_meta) if legacy is None else bool(legacy)
     if not legacy and not has_meta:
-        raise ValueError(
-            "the time_s,displacement_m,force_N format needs the loop's normal_load and frequency"
-        )
+        raise ValueError("the time_s,displacement_m,force_N format needs the loop's frequency")
     side = None
     if not legacy:
-        side = {"normal_load_N": loop.normal_load, "frequency_Hz": loop.frequency}
-        if loop.noise_std is not None:
-            side["noise_std_N"] = loop.noise_std
+        side = {} if loop.periodic else {"drive": "history"}
+        for key, value in (("normal_load_N", loop.normal_load), ("frequency_Hz", loop.frequency),
+                           ("noise_std_N", loop.noise_std)):  # fmt: skip
+            if value is not None:
+                side[key] = value
     header = LOOP_COLUMNS if legacy else LOOP_FILE_COLUMNS
     write_record_files(path, header, (loop.t, loop.u, loop.f), side, overwrite=overwrite,
                        comment=comment)  # fmt: skip

@@ -1,0 +1,204 @@
+"""Study: friction models fitted to measured rig data and asked to predict what was not fitted.
+
+    python -m fitting.real_data --out DIR [--src PATH/TO/real] [--short]
+
+Data (../shared/data/real by default; see data/README.md for sources and licences):
+* brfd — a banded rotary friction damper (30 lbf band tension) driven by ramped sines (0.5–1.5 in,
+  0.25–2 Hz) and two earthquake displacement histories. Every sinusoidal test is fitted with
+  Jenkins, Mindlin (Iwan form), LuGre and Bouc–Wen through the measured displacement history
+  (`tribojax.fit_history`, + a force offset f0), at 512 Hz (every 2nd sample). Then
+  (a) fit on the 0.25 and 1 Hz tests, predict the 0.5 and 2 Hz tests; (b) fit on the 0.5 and
+  1.5 in tests, predict the 1 in tests; (c) fit on all ten sinusoidal tests, predict the two
+  earthquake histories. NRMSE = rms(model − measured)/std(measured) per test and model.
+* screwdrive — steady friction curves of two lead-screw drives: the LuGre steady law per
+  direction and jointly with a direction asymmetry (`tribojax.fit_steady_curve`), then the LuGre
+  dynamic parameters from the start–stop transients with the steady law fixed
+  (`tribojax.fit_transient`).
+Writes DIR/real_data.json (keys "brfd_fits", "slip_force_vs_test", "prediction", "screwdrive",
+"discovery" — the last left for the discovery runs) and DIR/real_data_prediction.png.
+"""
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+import tribojax as tj
+from tribojax._plot import pyplot, save_figure
+
+MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen")
+DECIMATE = 2
+SPLITS = {
+    "frequency": (lambda f, a: f in (0.25, 1.0), "fit 0.25 and 1 Hz, predict 0.5 and 2 Hz"),
+    "amplitude": (lambda f, a: a in (0.5, 1.5), "fit 0.5 and 1.5 in, predict 1 in"),
+}
+
+
+def _load_brfd(src: Path):
+    sines, quakes = {}, {}
+    for path in sorted((src / "brfd").glob("*.json")):
+        loop = tj.read_brfd(path)
+        (sines if loop.periodic else quakes)[path.stem] = loop
+    return sines, quakes
+
+
+def _test_key(name: str):
+    f, rest = name.split("Hz30lbtension")
+    return float(f), float(rest.replace("amplitude", ""))
+
+
+def _summary(h) -> dict:
+    d = h.fit
+    return {"model": h.model, "nrmse": h.nrmse, "converged": d.converged, "result": d.message,
+            "parameters": dict(zip(d.names, d.values.tolist())),
+            "std_errors": dict(zip(d.names, d.std_errors.tolist())), "steps": d.steps}  # fmt: skip
+
+
+def brfd_study(src: Path, short: bool, log) -> dict:
+    sines, quakes = _load_brfd(src)
+    if short:
+        sines = {k: v for k, v in sines.items() if _test_key(k)[0] >= 1.0}
+    fits, trend = {}, []
+    for name, loop in sines.items():
+        f_hz, a_in = _test_key(name)
+        fits[name] = {}
+        for model in MODELS:
+            t0 = time.perf_counter()
+            h = tj.fit_history(loop, model, decimate=DECIMATE, **_starts(model))
+            fits[name][model] = {**_summary(h), "seconds": time.perf_counter() - t0}
+            log(f"{name:34s} {model:9s} NRMSE {h.nrmse:.3f} {h.fit.message[:40]}")
+        p = {m: fits[name][m]["parameters"] for m in MODELS}
+        trend.append({"test": name, "frequency_Hz": f_hz, "amplitude_in": a_in,
+                      "amplitude_m": a_in * 0.0254,
+                      "jenkins_slip_force_N": p["jenkins"]["mu_N"],
+                      "jenkins_stiffness_N_per_m": p["jenkins"]["K_d"],
+                      "mindlin_slip_force_N": p["mindlin"]["mu_N"],
+                      "mindlin_stiffness_N_per_m": p["mindlin"]["K_d"],
+                      "bouc_wen_F_y_N": p["bouc_wen"]["F_y"],
+                      "bouc_wen_stiffness_N_per_m": p["bouc_wen"]["K"],
+                      "bouc_wen_n": p["bouc_wen"]["n"],
+                      "lugre_F_c_N": p["lugre"]["F_c"],
+                      "lugre_sigma0_N_per_m": p["lugre"]["sigma0"],
+                      "f0_N": p["jenkins"]["f0"]})  # fmt: skip
+    prediction = {}
+    splits = dict(SPLITS)
+    if short:
+        splits = {}
+    for key, (train_of, text) in splits.items():
+        train = [n for n in sines if train_of(*_test_key(n))]
+        rows = _predict(sines, train, [n for n in sines if n not in train], log)
+        prediction[key] = {"description": text, "train": train, "rows": rows}
+    rows = _predict({**sines, **quakes}, list(sines), list(quakes), log)
+    prediction["earthquake"] = {"description": "fit all sinusoidal tests, predict the earthquake "
+                                "histories", "train": list(sines), "rows": rows}  # fmt: skip
+    return {"brfd_fits": fits, "slip_force_vs_test": trend, "prediction": prediction,
+            "_records": {**sines, **quakes}}  # fmt: skip
+
+
+def _starts(model) -> dict:
+    """Bouc–Wen from three starts of n (separate local optima), the others from one."""
+    return {"n_starts": tj.BOUC_WEN_STARTS} if model == "bouc_wen" else {}
+
+
+def _predict(records, train, test, log) -> list:
+    rows = []
+    for model in MODELS:
+        t0 = time.perf_counter()
+        h = tj.fit_history([records[n] for n in train], model, decimate=DECIMATE, **_starts(model))
+        seconds = time.perf_counter() - t0
+        for name in train + test:
+            force, nrmse = tj.predict_history(h, records[name])
+            rows.append({"model": model, "test": name, "role": "fit" if name in train else
+                         "predicted", "nrmse": nrmse, "joint_fit": _summary(h),
+                         "fit_seconds": seconds, "_force": force})  # fmt: skip
+        log(f"joint {model:9s} on {len(train)} tests: NRMSE {h.nrmse:.3f}; predicted " + ", ".join(
+            f"{r['test'][:12]} {r['nrmse']:.3f}" for r in rows[-len(test):]))  # fmt: skip
+    return rows
+
+
+def screwdrive_study(src: Path, log) -> dict:
+    out = {}
+    for drive in sorted((src / "screwdrive").glob("driveNo*")):
+        curve = tj.read_epos_steady(drive / "steady_state" / "0.096kg")
+        res = {"points": len(curve.velocity), "units": curve.units}
+        for label, sign in (("positive", 1), ("negative", -1)):
+            fit = tj.fit_steady_curve(curve, direction=sign)
+            res[label] = fit.as_dict()
+            log(f"{drive.name} {label}: " + _fmt(fit))
+        joint = tj.fit_steady_curve(curve)
+        res["joint"] = joint.as_dict()
+        log(f"{drive.name} joint: " + _fmt(joint))
+        res["transients"] = {}
+        for path in sorted((drive / "start_stop").glob("*.csv")):
+            tr = tj.read_epos_transient(path)
+            dyn = tj.fit_transient(tr, joint, sigma=float(np.median(curve.friction_scatter)))
+            res["transients"][path.stem] = {**dyn.as_dict(), "nrmse": tj.transient_nrmse(dyn, tr)}
+            log(f"{drive.name} start-stop {path.stem}: " + _fmt(dyn))
+        out[drive.name] = res
+    return out
+
+
+def _fmt(fit) -> str:
+    terms = zip(fit.names, fit.values, fit.std_errors)
+    text = ", ".join(f"{n} {v:.4g} ± {s:.2g}" for n, v, s in terms)
+    return text + f"; chi2/dof {fit.reduced_chi2:.3g}"
+
+
+def _figure(study, out: Path) -> None:
+    plt = pyplot("prediction figure")
+    if plt is None:
+        return
+    rows = study["prediction"]["earthquake"]["rows"]
+    quakes = [n for n in dict.fromkeys(r["test"] for r in rows if r["role"] == "predicted")]
+    fig, axes = plt.subplots(len(quakes), 1, figsize=(11, 3.2 * len(quakes)), squeeze=False)
+    for ax, name in zip(axes[:, 0], quakes):
+        rec = study["_records"][name]
+        t, f = rec.t[::DECIMATE], rec.f[::DECIMATE]
+        ax.plot(t, f / 1e3, "k", lw=0.6, label="measured")
+        for r in rows:
+            if r["test"] == name:
+                ax.plot(t, r["_force"] / 1e3, lw=0.6, label=f"{r['model']} ({r['nrmse']:.2f})")
+        ax.set(title=f"{name}: predicted from the sinusoidal tests", xlabel="t (s)",
+               ylabel="force (kN)")  # fmt: skip
+        ax.legend(fontsize=7, ncol=5)
+    fig.tight_layout()
+    save_figure(fig, out / "real_data_prediction.png")
+
+
+def _clean(obj):
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items() if not k.startswith("_")}
+    if isinstance(obj, list):
+        return [_clean(v) for v in obj]
+    return obj
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path("fitting-out/real_data"))
+    shared = Path(__file__).resolve().parents[1].parent / "shared/data/real"
+    parser.add_argument("--src", type=Path, default=shared)
+    parser.add_argument("--short", action="store_true", help="1 and 2 Hz tests only, no splits")
+    parser.add_argument("--skip-brfd", action="store_true")
+    args = parser.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+
+    def log(msg):
+        print(f"[{time.perf_counter() - t0:7.1f} s] {msg}", flush=True)
+
+    study = {} if args.skip_brfd else brfd_study(args.src, args.short, log)
+    study["screwdrive"] = screwdrive_study(args.src, log)
+    study["discovery"] = None  # filled by the discovery runs on these records (issue 15, point 5)
+    study["decimate"] = DECIMATE
+    study["seconds"] = time.perf_counter() - t0
+    if "prediction" in study:
+        _figure(study, args.out)
+    tj.write_json_atomic(args.out / "real_data.json", _clean(study))
+    print(json.dumps({"wrote": str(args.out / "real_data.json")}))
+
+
+if __name__ == "__main__":
+    main()

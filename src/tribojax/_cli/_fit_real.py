@@ -1,0 +1,75 @@
+"""`tribojax fit` on measured records: history fits of loops and friction-curve fits.
+
+`--model jenkins|mindlin|lugre|bouc_wen` drives that element through the record's measured
+displacement (`tribojax.fit_history`, + a force offset f0); `--model best` fits all four and keeps
+the lowest BIC = n·ln(RSS/n) + p·ln(n). A friction curve (a folder of EPOS steady-state exports,
+or a curve CSV) is fitted with the LuGre steady law and a direction asymmetry
+(`tribojax.fit_steady_curve`; `--model lugre` or `best`). Each returns the fit.json dictionary
+(with "model" the fitted model's name and "nrmse" = rms(residual)/std(measured)) and the plot
+curves.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._fit._curve import fit_steady_curve
+from .._fit._history import HISTORY_MODELS, fit_history, predict_history
+from .._io._curve import FrictionCurve
+from ._common import CommandError
+
+ELEMENT_MODELS = tuple(HISTORY_MODELS)  # jenkins, mindlin, lugre, bouc_wen
+
+
+def bic(rss: float, n: int, p: int) -> float:
+    """Bayesian information criterion for Gaussian residuals, n·ln(RSS/n) + p·ln(n)."""
+    return float(n * np.log(rss / n) + p * np.log(n))
+
+
+def fit_history_record(loop, model: str, args, start, summary):
+    """Fit `model` (or every element for "best") through the loop's displacement history."""
+    names = ELEMENT_MODELS if model == "best" else (model,)
+    fits = {}
+    for name in names:
+        given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
+        fits[name] = fit_history(loop, name, start=given or None, max_steps=args.max_steps)
+    pred = {k: predict_history(h, loop)[0] for k, h in fits.items()}
+    n = len(loop.f)
+    scores = {k: bic(float(np.sum((pred[k] - loop.f) ** 2)), n, len(h.fit.names))
+              for k, h in fits.items()}  # fmt: skip
+    best = min(scores, key=scores.get)
+    h = fits[best]
+    resid = pred[best] - loop.f
+    sigma = float(np.sqrt(np.sum(resid**2) / max(n - len(h.fit.names), 1)))
+    d = summary(h.fit, "loop", loop.source, n, resid, "N", sigma, "estimated from the residuals")
+    d.update(model=best, nrmse=h.nrmse, route="history", bic=scores[best],
+             normal_load_N=loop.normal_load, frequency_Hz=loop.frequency)  # fmt: skip
+    if model == "best":
+        d["candidates"] = {k: {"nrmse": f.nrmse, "bic": scores[k], "converged": f.fit.converged,
+                               "parameters": dict(zip(f.fit.names, f.fit.values.tolist()))}
+                           for k, f in fits.items()}  # fmt: skip
+    curves = dict(x=loop.u, data=loop.f, model=pred[best], xlabel="displacement u (m)",
+                  ylabel="force f (N)", resid_x=loop.t, resid=resid)  # fmt: skip
+    return d, curves
+
+
+def fit_curve_record(curve: FrictionCurve, model: str, args, summary):
+    """Fit the LuGre steady law with a direction asymmetry to a friction curve."""
+    if model not in ("lugre", "best"):
+        raise CommandError(f"--model {model} does not apply to a friction curve; use lugre or best")
+    fit = fit_steady_curve(curve, max_steps=args.max_steps)
+    resid = fit.residuals * curve.friction_error
+    unit = curve.units["friction_unit"]
+    sigma = float(np.median(curve.friction_error))
+    d = summary(fit, "friction_curve", curve.source, len(curve.velocity), resid, unit, sigma,
+                "per-point scatter / sqrt(samples)")  # fmt: skip
+    sides = {}
+    for side, sign in (("positive", 1), ("negative", -1)):
+        sides[side] = fit_steady_curve(curve, direction=sign, max_steps=args.max_steps).as_dict()
+    d.update(model="lugre", nrmse=float(np.sqrt(np.mean(resid**2)) / np.std(curve.friction)),
+             route="steady law with direction asymmetry T0", units=curve.units,
+             per_direction=sides)  # fmt: skip
+    curves = dict(x=curve.velocity, data=curve.friction, model=curve.friction + resid,
+                  xlabel=f"velocity ({curve.units['velocity_unit']})",
+                  ylabel=f"friction ({unit})", resid_x=curve.velocity, resid=resid)  # fmt: skip
+    return d, curves

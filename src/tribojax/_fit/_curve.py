@@ -1,0 +1,173 @@
+"""Fits to steady friction curves (the LuGre steady law) and to friction transients.
+
+Steady law (wang2022 Eq 25 at constant velocity; the Stribeck curve of Canudas de Wit et al.):
+
+    F(v) = sgn(v)·[F_c + (F_s − F_c)·exp(−|v/v_s|^β)] + σ2·v (+ T0)
+
+fitted per direction (a curve's points of one velocity sign) or jointly over both directions
+with a direction asymmetry T0, a constant force (torque) that adds to the friction in both
+directions (a load such as gravity on the driven mass, or a sensor offset): the friction
+magnitudes then differ by 2·T0 between the directions. Each point is weighted by the standard
+error of its mean (`FrictionCurve.friction_error`), so the reduced χ² says whether the law
+explains the points within their scatter (`least_squares_fit` inflates the standard errors when
+it does not). The LuGre dynamic parameters σ0 and σ1 are then fitted to a transient with the
+steady law held fixed (`fit_transient`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._friction._lugre import LuGre, stribeck_curve
+from .._io._curve import FrictionCurve, FrictionTransient
+from ._engine import FitResult, least_squares_fit
+
+STEADY_NAMES = ("F_c", "F_s", "v_s", "beta", "sigma2")
+
+
+class _SteadyResiduals(eqx.Module):
+    joint: bool = eqx.field(static=True)
+
+    def __call__(self, theta, args):
+        v, f, err = args
+        p = jnp.exp(theta[:5])
+        model = jnp.sign(v) * stribeck_curve(v, p[0], p[1], p[2], p[3]) + p[4] * v
+        if self.joint:
+            model = model + theta[5] * jnp.std(f)
+        return (model - f) / err
+
+
+def _steady_transform(joint):
+    def transform(theta):
+        out = jnp.exp(theta[:5])
+        return jnp.concatenate([out, theta[5:]]) if joint else out
+
+    return transform
+
+
+def _steady_start(v, f) -> np.ndarray:
+    a, s = np.abs(v), np.abs(f)
+    order = np.argsort(a)
+    F_c = float(np.min(s))
+    F_s = float(max(s[order[0]], 1.05 * F_c))
+    v_s = float(max(a[np.argmin(s)] / 2.0, a[order[0]]))
+    top = order[-max(3, len(a) // 4) :]
+    slope = np.polyfit(a[top], s[top], 1)[0] if len(top) > 1 else 0.0
+    sigma2 = float(max(slope, 1e-3 * F_c / a.max()))
+    return np.log([F_c, F_s, v_s, 2.0, sigma2])
+
+
+def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 500) -> FitResult:
+    """Fit the LuGre steady law to a friction curve (see the module docstring).
+
+    Args:
+        curve: a `FrictionCurve` (any consistent units; the parameters take the curve's units:
+            F_c, F_s, T0 in the friction unit, v_s in the velocity unit, σ2 in friction per
+            velocity unit, β dimensionless).
+        direction: +1 or −1 fits the points of that velocity sign alone; None fits both
+            directions with the asymmetry T0.
+    Returns:
+        FitResult with names (F_c, F_s, v_s, beta, sigma2) [+ T0]; positive parameters fitted
+        as logarithms, standard errors from the per-point scatter (inflated by the residual if
+        the reduced χ² exceeds the noise limit, then `noise_consistent` is False);
+        `fixed` holds the direction and the units.
+    """
+    if direction not in (None, 1, -1):
+        raise ValueError(f"direction must be +1, -1 or None (both), got {direction!r}")
+    c = curve if direction is None else curve.direction(direction)
+    if len(c.velocity) < 5 + (direction is None):
+        raise ValueError(f"{curve.source}: {len(c.velocity)} points are too few for this fit")
+    v, f, err = (jnp.asarray(x) for x in (c.velocity, c.friction, c.friction_error))
+    joint = direction is None
+    theta0 = _steady_start(np.asarray(v), np.asarray(f))
+    if joint:
+        pos, neg = np.abs(c.friction[c.velocity > 0]), np.abs(c.friction[c.velocity < 0])
+        if not (pos.size and neg.size):
+            raise ValueError(f"{curve.source}: a joint fit needs points in both directions")
+        T0 = 0.5 * (np.median(pos) - np.median(neg))
+        theta0 = np.append(theta0, T0 / float(np.std(c.friction)))
+    names = STEADY_NAMES + (("T0",) if joint else ())
+    tr = _steady_transform(joint)
+    if joint:
+        scale = float(np.std(c.friction))
+
+        def tr(theta, _s=scale):  # T0 in the friction unit
+            return jnp.concatenate([jnp.exp(theta[:5]), theta[5:] * _s])
+
+    fit = least_squares_fit(_SteadyResiduals(joint), jnp.asarray(theta0), (v, f, err),
+                            names=names, transform=tr, sigma_known=True, max_steps=max_steps,
+                            jac="fwd")  # fmt: skip
+    fixed = {"direction": "both" if joint else int(direction), **c.units}
+    return dataclasses.replace(fit, fixed=fixed)
+
+
+def steady_element(fit: FitResult, sigma0=1.0, sigma1=0.0) -> tuple[LuGre, float]:
+    """(LuGre with the fitted steady law and σ0, σ1; the asymmetry T0, 0 if none)."""
+    p = dict(zip(fit.names, fit.values))
+    el = LuGre(sigma0, sigma1, p["sigma2"], p["F_c"], p["F_s"], p["v_s"], 1.0, p["beta"])
+    return el, float(p.get("T0", 0.0))
+
+
+class _TransientResiduals(eqx.Module):
+    """LuGre (α = 1) stepped exactly at each interval's mean velocity; θ = log(σ0, σ1)."""
+
+    def __call__(self, theta, args):
+        law, T0, v, h, f, moving, err = args  # moving: indices of the fitted samples
+        el = dataclasses.replace(law, sigma0=jnp.exp(theta[0]), sigma1=jnp.exp(theta[1]))
+        vm = 0.5 * (v[1:] + v[:-1])
+
+        def step(z, inp):
+            vel, dt = inp
+            z = el.constant_velocity_step(z, vel, dt)
+            return z, el.force(z, vel)
+
+        _, force = jax.lax.scan(step, el.initial_state(), (vm, h))
+        model = jnp.concatenate([jnp.zeros(1), force]) + T0
+        return ((model - f) / err)[moving]
+
+
+def _transient_args(tr: FrictionTransient, steady: FitResult, curve_error=None):
+    law, T0 = steady_element(steady)
+    moving = jnp.asarray(np.flatnonzero(tr.velocity != 0.0))  # at rest the drive is off
+    err = curve_error if curve_error is not None else float(np.std(tr.friction[tr.velocity != 0]))
+    return (law, T0, jnp.asarray(tr.velocity), jnp.asarray(np.diff(tr.t)),
+            jnp.asarray(tr.friction), moving, err)  # fmt: skip
+
+
+def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start=(1.0, 1e-3),
+                  max_steps: int = 300) -> FitResult:  # fmt: skip
+    """Fit LuGre's bristle stiffness σ0 and damping σ1 to a start–stop transient, the steady
+    law (and asymmetry T0) fixed from `fit_steady_curve`.
+
+    The bristle state is stepped exactly over each sample interval at the interval's mean
+    measured velocity (`LuGre.constant_velocity_step`, α = 1) from rest; only samples where the
+    measured velocity is non-zero are fitted (the drive is switched off at rest and reads 0).
+    sigma: the friction noise (default: the standard deviation of the moving samples' friction).
+    start: (σ0, σ1) in the record's units (friction per angle or length, and per velocity).
+    Returns FitResult with names (sigma0, sigma1), fitted as logarithms; the sampling of the
+    record bounds what can be resolved (standard errors and `unidentifiable` say so).
+    """
+    args = _transient_args(tr, steady, sigma)
+    fit = least_squares_fit(_TransientResiduals(), jnp.log(jnp.asarray(start)), args,
+                            names=("sigma0", "sigma1"), transform=jnp.exp,
+                            sigma_known=sigma is not None, max_steps=max_steps,
+                            jac="fwd")  # fmt: skip
+    law = dict(zip(steady.names, steady.values.tolist()))
+    return dataclasses.replace(fit, fixed={"steady": law})
+
+
+def transient_nrmse(fit: FitResult, tr: FrictionTransient) -> float:
+    """NRMSE of a `fit_transient` result over the record's moving samples."""
+    steady = fit.fixed["steady"]
+    names = tuple(steady)
+    fake = FitResult(names=names, values=np.asarray(list(steady.values())), std_errors=None,
+                     covariance=None, correlation=None, theta=None, residuals=None,
+                     singular_values=None, converged=True)  # fmt: skip
+    args = _transient_args(tr, fake, 1.0)
+    r = np.asarray(_TransientResiduals()(jnp.asarray(fit.theta), args))
+    return float(np.sqrt(np.mean(r**2)) / np.std(tr.friction[tr.velocity != 0]))

@@ -1,0 +1,213 @@
+"""Fits of friction elements to measured displacement histories (the time-domain route).
+
+Each model is driven through the measured displacement u(t) from rest at the first sample
+(`tribojax.drive`: exact increments for the rate-independent Jenkins and Mindlin elements, RK4
+for LuGre and Bouc–Wen) and its force, plus a constant force offset f0 (the load cell's zero and
+any mean asymmetry), is compared with the measured force. One parameter set may be fitted to
+several records at once and predicts others (`predict_history`). The figure of merit is the
+normalised RMS error NRMSE = rms(model − measured) / std(measured).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from .._checks import check_range
+from .._dynamics._harmonic import drive
+from .._friction._bouc_wen import BoucWen
+from .._friction._lugre import LuGre
+from .._friction._rate_independent import Jenkins, Mindlin
+from .._io._loop import HysteresisLoop
+from .._results import RESULTS
+from ._engine import FitResult, least_squares_fit
+from ._solver import NoiseFloorLM
+
+# parameters of each model: (name, positive?) — positive ones are fitted as logarithms
+HISTORY_MODELS = {
+    "jenkins": (("mu_N", True), ("K_d", True), ("f0", False)),
+    "mindlin": (("mu_N", True), ("K_d", True), ("f0", False)),
+    "lugre": (("sigma0", True), ("F_c", True), ("F_s", True), ("v_s", True), ("f0", False)),
+    "bouc_wen": (("K", True), ("F_y", True), ("n", True), ("f0", False)),
+}
+MINDLIN_IWAN = 64  # Iwan elements of the Mindlin rate form in the history fits
+BOUC_WEN_STARTS = (0.5, 2.0, 10.0)  # starts of the Bouc–Wen sharpness n for a thorough fit
+
+
+def history_element(model: str, p):
+    """The element of `model` for the physical parameter vector p (order of HISTORY_MODELS)."""
+    if model == "jenkins":
+        return Jenkins(p[0], 1.0, p[1])
+    if model == "mindlin":
+        return Mindlin(p[0], 1.0, p[1], n_iwan=MINDLIN_IWAN)
+    if model == "lugre":  # σ1 = σ2 = 0: neither is resolved by these loops (σ2 drifts to 0)
+        return LuGre(p[0], 0.0, 0.0, p[1], p[2], p[3], 1.0, 2.0)
+    if model == "bouc_wen":
+        return BoucWen(p[0], p[1], p[2], 0.5)
+    raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
+
+
+class _Transform(eqx.Module):
+    """θ → physical: exp for positive parameters, θ·scale for the signed offset."""
+
+    positive: tuple = eqx.field(static=True)
+    scale: float = eqx.field(static=True)
+
+    def __call__(self, theta):
+        mask = jnp.asarray(self.positive)
+        return jnp.where(mask, jnp.exp(jnp.where(mask, theta, 0.0)), theta * self.scale)
+
+
+class _HistoryResiduals(eqx.Module):
+    """(model + f0 − measured)/std(measured) over every record in args (a tuple of records)."""
+
+    model: str = eqx.field(static=True)
+    transform: _Transform
+
+    def __call__(self, theta, args):
+        p = self.transform(theta)
+        el = history_element(self.model, p)
+        out = []
+        for t, u, f, scale in args:
+            if self.model in ("jenkins", "mindlin"):
+                force = drive(el, u)
+            else:  # RK4, one step per sample interval (h·rate ≪ 1 at 1 kHz for these rigs)
+                force = drive(el, u, t, substeps=1)
+            out.append((force + p[-1] - f) / scale)
+        return jnp.concatenate(out)
+
+
+def _records(loops, decimate: int):
+    out = []
+    for loop in loops:
+        if not isinstance(loop, HysteresisLoop):
+            raise ValueError(f"fit_history needs HysteresisLoop records, got {type(loop).__name__}")
+        sl = slice(None, None, decimate)
+        f = jnp.asarray(loop.f[sl])
+        out.append((jnp.asarray(loop.t[sl]), jnp.asarray(loop.u[sl]), f, float(jnp.std(f))))
+    return tuple(out)
+
+
+def _default_start(model: str, records) -> dict:
+    f = np.concatenate([np.asarray(r[2]) for r in records])
+    u = np.concatenate([np.asarray(r[1]) for r in records])
+    lo, hi = np.percentile(f, [2, 98])
+    F, K = 0.5 * (hi - lo), 40.0 * 0.5 * (hi - lo) / max(np.ptp(u), 1e-12)
+    speeds = [
+        np.max(np.abs(np.diff(np.asarray(r[1])) / np.diff(np.asarray(r[0])))) for r in records
+    ]
+    v = max(float(max(speeds)), 1e-9)
+    base = {"mu_N": F, "K_d": K, "K": K, "F_y": F, "n": 2.0, "sigma0": K, "F_c": 0.9 * F,
+            "F_s": 1.1 * F, "v_s": 0.1 * v, "f0": 0.5 * (hi + lo)}  # fmt: skip
+    return {name: base[name] for name, _ in HISTORY_MODELS[model]}
+
+
+@dataclasses.dataclass(frozen=True)
+class HistoryFit:
+    """A history fit: the model name, the `FitResult` (parameters with standard errors), the
+    NRMSE over the fitted records and the decimation used."""
+
+    model: str
+    fit: FitResult
+    nrmse: float
+    decimate: int
+
+    def as_dict(self) -> dict:
+        return {"model": self.model, "nrmse": self.nrmse, "decimate": self.decimate,
+                **self.fit.as_dict()}  # fmt: skip
+
+
+def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
+                max_steps: int = 300, rtol: float = 1e-8,
+                n_starts=(2.0,)) -> HistoryFit:  # fmt: skip
+    """Fit one friction element (+ a force offset f0, N) to one or several measured histories.
+
+    Args:
+        loops: a `HysteresisLoop` or a sequence of them (one parameter set for all); any
+            displacement history (periodic or not). Each is driven from rest at its first sample.
+        model: "jenkins" (μN N, K_d N/m), "mindlin" (μN, K_d; Iwan form with 64 elements),
+            "lugre" (σ0 N/m, F_c N, F_s N, v_s m/s; σ1 = σ2 = 0, α = 1, β = 2) or
+            "bouc_wen" (K N/m, F_y N, n; b = 1/2); each with f0.
+        start: dict of start values (missing keys: from a Jenkins fit to the same records, which
+            starts at the force's 2–98 % half range as the slip force and a stiffness 40 times
+            its ratio to the displacement range).
+        n_starts: Bouc–Wen only, without a start for n: the sharpness n has separate local
+            optima (n < 1 soft, n ≫ 1 close to Jenkins); each value given is a start and the
+            lowest residual is kept (default one start, n = 2; `BOUC_WEN_STARTS` = (0.5, 2, 10)
+            for a thorough fit, three times the work).
+        decimate: keep every `decimate`-th sample (1: all).
+        max_steps, rtol: the Levenberg–Marquardt budget and relative tolerance (atol 1e-3 rtol);
+            `NoiseFloorLM` also stops when the step left is below 0.05 standard errors.
+    Returns:
+        `HistoryFit`: parameters and standard errors (`least_squares_fit`, the noise scale
+        estimated from the residuals; positive parameters fitted as logarithms) and the NRMSE.
+    """
+    if model not in HISTORY_MODELS:
+        raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
+    decimate = int(check_range(decimate, "decimate", 1, None, lo_open=False))
+    loops = [loops] if isinstance(loops, HysteresisLoop) else list(loops)
+    records = _records(loops, decimate)
+    spec = HISTORY_MODELS[model]
+    init = _default_start(model, records)
+    if model != "jenkins" and set(init) - set(start or {}):
+        # the Jenkins fit (exact increments, fast) gives the slip force, stiffness and offset
+        pre = fit_history(loops, "jenkins", decimate=decimate).fit.values
+        jen = dict(zip(("mu_N", "K_d", "f0"), pre))
+        shared = {"mu_N": jen["mu_N"], "K_d": jen["K_d"], "K": jen["K_d"], "F_y": jen["mu_N"],
+                  "sigma0": jen["K_d"], "F_c": 0.9 * jen["mu_N"], "F_s": 1.1 * jen["mu_N"],
+                  "f0": jen["f0"]}  # fmt: skip
+        init.update({k: v for k, v in shared.items() if k in init})
+    init.update(start or {})
+    unknown = set(init) - {n for n, _ in spec}
+    if unknown:
+        raise ValueError(f"start has unknown key(s) {sorted(unknown)} for model {model!r}")
+    scale = float(max(abs(init["f0"]), max(r[3] for r in records)))
+    tr = _Transform(tuple(pos for _, pos in spec), scale)
+    fn = _HistoryResiduals(model, tr)
+
+    def solve(values):
+        theta = jnp.asarray([np.log(values[n]) if pos else values[n] / scale for n, pos in spec])
+        for _ in range(3):  # a noise-floor stop short of the optimum restarts where it stopped
+            fit = least_squares_fit(fn, theta, records, names=tuple(n for n, _ in spec),
+                                    transform=tr, max_steps=max_steps, jac="fwd",
+                                    solver=NoiseFloorLM(rtol, 1e-3 * rtol),
+                                    optimum_tol=1.0)  # fmt: skip
+            if fit.result != RESULTS.short_of_optimum:
+                break
+            theta = jnp.asarray(fit.theta)
+        return fit
+
+    if model == "bouc_wen" and "n" not in (start or {}):
+        # the sharpness n has separate local optima (soft n < 1, near-Jenkins n ≫ 1)
+        fits = [solve({**init, "n": float(n)}) for n in n_starts]
+        fit = min(fits, key=lambda f: float(np.sum(f.residuals**2)))
+    else:
+        fit = solve(init)
+    return HistoryFit(model, fit, _nrmse(fit.residuals, records), decimate)
+
+
+def _nrmse(residuals, records) -> float:
+    """rms(residual)/std(measured) over all records (residuals are divided by each std)."""
+    r = np.asarray(residuals)
+    scales = np.concatenate([np.full(len(rec[2]), rec[3]) for rec in records])
+    f = np.concatenate([np.asarray(rec[2]) for rec in records])
+    return float(np.sqrt(np.mean((r * scales) ** 2)) / np.std(f))
+
+
+def predict_history(fit: HistoryFit, loop: HysteresisLoop, *, decimate=None):
+    """(predicted force N, NRMSE) of a fitted model on another record, driven from rest.
+
+    `decimate` defaults to the fit's. The NRMSE is rms(predicted − measured)/std(measured).
+    """
+    dec = fit.decimate if decimate is None else int(decimate)
+    records = _records([loop], dec)
+    spec = HISTORY_MODELS[fit.model]
+    scale = 1.0  # θ for f0 is rebuilt in physical units here
+    tr = _Transform(tuple(pos for _, pos in spec), scale)
+    theta = [np.log(v) if pos else v for v, (_, pos) in zip(fit.fit.values, spec)]
+    r = np.asarray(_HistoryResiduals(fit.model, tr)(jnp.asarray(theta), records))
+    t, u, f, s = records[0]
+    return np.asarray(f) + r * s, _nrmse(r, records)

@@ -1,0 +1,200 @@
+"""Steady friction curves and friction transients: records, the EPOS folder reader and files.
+
+A `FrictionCurve` is a set of steady operating points (velocity, friction, the scatter of each
+point); a `FrictionTransient` a time series of velocity and friction (a start–stop run). Units
+are carried with the record (a sidecar on disk): the screw-drive rig gives motor-side angular
+velocity (rad/s) and motor torque (N m). A folder of EPOS steady-state exports, one file per
+commanded speed, reads as one curve (`read_epos_steady`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ._epos import read_epos
+from ._files import csv_header, refuse_existing, sidecar_path, write_text_atomic
+from ._tables import DataFileError, read_table, read_text
+
+CURVE_COLUMNS = ("velocity", "friction", "friction_scatter", "velocity_scatter", "samples")
+TRANSIENT_COLUMNS = ("time_s", "velocity", "friction")
+_UNIT_KEYS = ("velocity_unit", "friction_unit")
+
+
+def _checked(source, **arrays):
+    out = {}
+    n = None
+    for name, x in arrays.items():
+        x = np.asarray(x, dtype=np.float64)
+        if x.ndim != 1:
+            raise ValueError(f"{source}: {name} must be 1-D, got shape {x.shape}")
+        bad = np.flatnonzero(~np.isfinite(x))
+        if bad.size:
+            raise ValueError(f"{source}: {name}[{bad[0]}] is {x[bad[0]]}")
+        if n is not None and len(x) != n:
+            raise ValueError(f"{source}: {name} has {len(x)} entries, expected {n}")
+        n = len(x)
+        out[name] = x
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class FrictionCurve:
+    """Steady friction versus velocity: per point the mean `velocity`, the mean `friction`, the
+    standard deviation of the friction samples `friction_scatter` (> 0) and of the velocity
+    samples `velocity_scatter` (>= 0), and the number of `samples` (>= 1) averaged.
+
+    `units` {"velocity_unit", "friction_unit"} (SI, e.g. "rad/s" and "N m" for a motor, "m/s"
+    and "N" for a slider); `source` the file or folder it came from. The friction has the sign
+    of the velocity for a dissipative contact. Construction checks shapes, finiteness, the
+    scatter's sign and at least two points (ValueError).
+    """
+
+    velocity: np.ndarray
+    friction: np.ndarray
+    friction_scatter: np.ndarray
+    velocity_scatter: np.ndarray
+    samples: np.ndarray
+    units: dict = dataclasses.field(
+        default_factory=lambda: {"velocity_unit": "m/s", "friction_unit": "N"}
+    )
+    source: str = "<array>"
+
+    def __post_init__(self):
+        cols = _checked(self.source, **{c: getattr(self, c) for c in CURVE_COLUMNS})
+        for name, x in cols.items():
+            object.__setattr__(self, name, x)
+        if len(self.velocity) < 2:
+            raise ValueError(f"{self.source}: a friction curve needs at least two points")
+        if np.any(self.friction_scatter <= 0) or np.any(self.velocity_scatter < 0):
+            raise ValueError(f"{self.source}: friction_scatter must be > 0, velocity_scatter >= 0")
+        if np.any(self.samples < 1):
+            raise ValueError(f"{self.source}: samples must be >= 1")
+        if set(self.units) != set(_UNIT_KEYS):
+            raise ValueError(f"{self.source}: units must have the keys {list(_UNIT_KEYS)}")
+
+    @property
+    def friction_error(self) -> np.ndarray:
+        """Standard error of each mean friction, scatter/√samples (same unit as friction)."""
+        return self.friction_scatter / np.sqrt(self.samples)
+
+    def direction(self, sign: int) -> FrictionCurve:
+        """The points whose velocity has the sign of `sign` (+1 or −1)."""
+        keep = np.sign(self.velocity) == np.sign(sign)
+        return dataclasses.replace(self, **{c: getattr(self, c)[keep] for c in CURVE_COLUMNS})
+
+
+@dataclasses.dataclass(frozen=True)
+class FrictionTransient:
+    """A measured friction transient: times t (s, increasing), velocity and friction samples in
+    `units` (as for `FrictionCurve`). A start–stop run: rest, one direction, rest, the other."""
+
+    t: np.ndarray
+    velocity: np.ndarray
+    friction: np.ndarray
+    units: dict = dataclasses.field(
+        default_factory=lambda: {"velocity_unit": "m/s", "friction_unit": "N"}
+    )
+    source: str = "<array>"
+
+    def __post_init__(self):
+        cols = _checked(self.source, t=self.t, velocity=self.velocity, friction=self.friction)
+        for name, x in cols.items():
+            object.__setattr__(self, name, x)
+        steps = np.flatnonzero(np.diff(self.t) <= 0)
+        if steps.size:
+            raise ValueError(f"{self.source}: time is not increasing at sample {steps[0] + 1}")
+
+
+EPOS_UNITS_SI = {"velocity_unit": "rad/s", "friction_unit": "N m"}
+
+
+def read_epos_steady(folder) -> FrictionCurve:
+    """One steady friction curve from a folder of EPOS steady-state exports (`*.csv`, one per
+    commanded speed): each file gives one point, the means and scatters of its velocity (rad/s)
+    and torque (N m) samples. The direction is the measured velocity's sign (not the file name).
+    Points are sorted by velocity. DataFileError (naming the file and line) for a bad export or
+    a folder without exports."""
+    folder = Path(folder)
+    files = sorted(folder.glob("*.csv"))
+    if not files:
+        raise DataFileError(f"{folder}: no EPOS exports (*.csv) in this folder")
+    rows = []
+    for path in files:
+        ex = read_epos(path)
+        scatter = float(np.std(ex.torque, ddof=1))
+        if not scatter > 0:
+            raise DataFileError(f"{path}, line {ex.units_line + 1}: the torque is constant")
+        rows.append((float(np.mean(ex.velocity)), float(np.mean(ex.torque)), scatter,
+                     float(np.std(ex.velocity, ddof=1)), len(ex.t)))  # fmt: skip
+    rows.sort()
+    cols = dict(zip(CURVE_COLUMNS, np.asarray(rows).T))
+    return FrictionCurve(**cols, units=dict(EPOS_UNITS_SI), source=str(folder))
+
+
+def read_epos_transient(path) -> FrictionTransient:
+    """A start–stop EPOS export as a `FrictionTransient` (t s, velocity rad/s, torque N m)."""
+    ex = read_epos(path)
+    return FrictionTransient(ex.t, ex.velocity, ex.torque, dict(EPOS_UNITS_SI), str(path))
+
+
+def _read_units(path, extra=()) -> dict:
+    side = sidecar_path(path)
+    if not side.is_file():
+        raise DataFileError(f"{side}: sidecar not found; it must give {list(_UNIT_KEYS)}")
+    text = read_text(side)
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise DataFileError(f"{side}, line {err.lineno}: not valid JSON ({err.msg})") from None
+    if not isinstance(data, dict) or not all(isinstance(data.get(k), str) for k in _UNIT_KEYS):
+        raise DataFileError(f"{side}, line 1: needs text values for {list(_UNIT_KEYS)}")
+    return {k: data[k] for k in _UNIT_KEYS}
+
+
+def _write(path, header, columns, units, comment, provenance, overwrite):
+    path = Path(path)
+    if path.suffix.lower() != ".csv":
+        raise ValueError(f"{path}: a record file must end in .csv (its sidecar is <stem>.json)")
+    if not overwrite:
+        refuse_existing([path, sidecar_path(path)])
+    lines = [f"# {c}" for c in comment.splitlines()] + [",".join(header)]
+    lines += [",".join(f"{v:.12g}" for v in row) for row in zip(*columns)]
+    side = {**units, **(provenance or {})}
+    write_text_atomic(sidecar_path(path), json.dumps(side, indent=2) + "\n")
+    write_text_atomic(path, "\n".join(lines) + "\n")
+
+
+def write_friction_curve(curve: FrictionCurve, path, comment="", *, provenance=None,
+                         overwrite=False) -> None:  # fmt: skip
+    """Write a curve as CSV `velocity,friction,friction_scatter,velocity_scatter,samples` plus a
+    sidecar {"velocity_unit", "friction_unit", provenance...}, atomically; refuses to replace
+    existing files unless `overwrite`."""
+    cols = [getattr(curve, c) for c in CURVE_COLUMNS]
+    _write(path, CURVE_COLUMNS, cols, curve.units, comment, provenance, overwrite)
+
+
+def write_friction_transient(tr: FrictionTransient, path, comment="", *, provenance=None,
+                             overwrite=False) -> None:  # fmt: skip
+    """Write a transient as CSV `time_s,velocity,friction` plus the units sidecar, atomically."""
+    cols = [tr.t, tr.velocity, tr.friction]
+    _write(path, TRANSIENT_COLUMNS, cols, tr.units, comment, provenance, overwrite)
+
+
+def read_friction_curve(path) -> FrictionCurve | FrictionTransient:
+    """Load a curve CSV (`write_friction_curve`) or a transient CSV (`write_friction_transient`)
+    with its units sidecar; DataFileError naming file and line for anything malformed."""
+    path = Path(path)
+    transient = set(TRANSIENT_COLUMNS) <= set(csv_header(path))
+    cols = TRANSIENT_COLUMNS if transient else CURVE_COLUMNS
+    table = read_table(path, columns=cols)
+    units = _read_units(path)
+    try:
+        if transient:
+            return FrictionTransient(*(table[c] for c in cols), units=units, source=str(path))
+        return FrictionCurve(**{c: table[c] for c in cols}, units=units, source=str(path))
+    except ValueError as err:
+        raise DataFileError(str(err)) from None

@@ -1,0 +1,54 @@
+"""`tribojax fit` on measured records (issue 15): format detection, --model, --format, fit.json."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from tribojax._cli import main
+
+REAL = Path(__file__).resolve().parents[1] / "data" / "real"
+
+
+def test_fit_brfd_history_with_model(tmp_path, capsys):
+    out = tmp_path / "o"
+    src = REAL / "brfd" / "2Hz30lbtension0.5amplitude.csv"
+    assert main(["fit", str(src), "--out", str(out), "--model", "jenkins"]) == 0
+    res = json.loads((out / "fit.json").read_text())
+    assert res["model"] == "jenkins" and res["route"] == "history"
+    assert res["fitted"] == ["mu_N", "K_d", "f0"] and 0.1 < res["nrmse"] < 0.6
+    assert res["n_data"] == 3585 and res["converged"]
+
+
+def test_fit_epos_folder_as_one_curve(tmp_path, capsys):
+    folder = tmp_path / "0.1kg"
+    folder.mkdir()
+    head = "Date:;x\n;Velocity actual value averaged;Torque actual value averaged\nms;rpm;%\n"
+    for rpm in (2, 5, 10, 20, 40, 80, 120, 160):
+        for sign in (1, -1):
+            mag = 25 + 8 * 2.718 ** (-((rpm / 10) ** 2)) + 0.05 * rpm + 3 * sign
+            rows = [f"{i * 51.2:.1f};{sign * rpm};{sign * mag + 0.5 * (-1) ** i:.2f}"
+                    for i in range(40)]  # fmt: skip
+            name = f"{'n' if sign < 0 else ''}{rpm}.csv"
+            (folder / name).write_text(head + "\n".join(rows) + "\n")
+    out = tmp_path / "o"
+    assert main(["fit", str(folder), "--out", str(out)]) == 0
+    res = json.loads((out / "fit.json").read_text())
+    assert res["kind"] == "friction_curve" and res["model"] == "lugre"
+    assert res["units"] == {"velocity_unit": "rad/s", "friction_unit": "N m"}
+    # the asymmetry: +3 % of 9.84 mN m in both directions
+    assert res["parameters"]["T0"] == pytest.approx(0.03 * 9.84e-3, rel=0.02)
+    assert set(res["per_direction"]) == {"positive", "negative"} and "nrmse" in res
+    # a model that does not apply to a curve, and a wrong --format, are bad input (2)
+    assert main(["fit", str(folder), "--out", str(tmp_path / "p"), "--model", "jenkins"]) == 2
+    assert "does not apply to a friction curve" in capsys.readouterr().err
+    assert main(["fit", str(folder / "n2.csv"), "--out", str(tmp_path / "q"),
+                 "--format", "brfd"]) == 2  # fmt: skip
+    assert "n2.csv, line 1: not valid JSON" in capsys.readouterr().err
+
+
+def test_discover_refuses_a_friction_curve_cleanly(tmp_path, capsys):
+    src = REAL / "screwdrive" / "driveNo1_steady_0.096kg.csv"
+    assert main(["discover", str(src), "--out", str(tmp_path / "d")]) == 2
+    assert "no baseline for a FrictionCurve" in capsys.readouterr().err
+    assert not (tmp_path / "d").exists()

@@ -1,0 +1,157 @@
+"""Readers of the measured rig data (issue 15): units, round trips, format detection, bad files."""
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tribojax as tj
+
+REPO = Path(__file__).resolve().parents[1]
+REAL = REPO / "data" / "real"
+SHARED = REPO.parent / "shared" / "data" / "real"
+needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/data/real is absent")
+
+EPOS_HEAD = "Date:;2020-07-08 21:24:28\nRecorded samples:;4\nSampling period:;51.200\n"
+EPOS_COLS = ";Velocity actual value averaged;Torque actual value averaged\nms;rpm;%\n"
+
+
+def _brfd(tmp_path, rows, name="1Hz30lbtension1amplitude.json", **extra):
+    path = tmp_path / name
+    obj = {"data": rows, "dt": 1 / 1024, "displacement units": "in",
+           "friction force units": "kip", **extra}  # fmt: skip
+    path.write_text(json.dumps(obj).replace("], [", "],\n["))
+    return path
+
+
+def test_brfd_units_and_kind(tmp_path):
+    t = np.arange(3000) / 1024
+    u_in = 0.5 * np.sin(2 * np.pi * t)
+    rows = [[a, b, 2.0 * b, 0.0, 1.0, 1.0] for a, b in zip(t, u_in)]
+    loop = tj.read_brfd(_brfd(tmp_path, rows))
+    np.testing.assert_allclose(loop.u, u_in * 0.0254, rtol=1e-15)
+    np.testing.assert_allclose(loop.f, 2.0 * u_in * 4448.2216152605, rtol=1e-15)
+    assert loop.periodic and loop.frequency == 1.0 and loop.normal_load is None
+    hist = tj.read_brfd(_brfd(tmp_path, rows[:40], name="earthquake_X.json"))
+    assert not hist.periodic and hist.frequency is None
+    assert tj.detect_format(tmp_path / "earthquake_X.json") == "brfd"
+
+
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ('{"data": [[0, 0, 0, 0, 0, 0],\n[0.001, 0, 0', r"line 2: not valid JSON.*truncated"),
+        (
+            '{"data": [[0, 0, 0, 0, 0, 0],\n[0.001, 0, 0, 0, 0],\n[0.002, 0, 0, 0, 0, 0]]}',
+            r"line 2: data row 1 is .*expected 6 finite numbers",
+        ),
+        (
+            '{"data": [[0, 0, 0, 0, 0, 0],\n[0.001, 0, 0, 0, 0, 0],\n[0.001, 0, 0, 0, 0, 0]]}',
+            r"line 3: time 0.001 s of data row 2 does not increase",
+        ),
+        ('{"data": [[0, 0, 0, 0, 0, 0]], "displacement units": "mm"}', r"line 1: .*'mm'"),
+    ],
+)
+def test_brfd_bad_files_name_file_and_line(tmp_path, text, match):
+    path = tmp_path / "bad.json"
+    path.write_text(text)
+    with pytest.raises(tj.DataFileError, match=r"bad.json, " + match):
+        tj.read_brfd(path)
+
+
+def _epos(folder, name, rows):
+    folder.mkdir(exist_ok=True)
+    path = folder / name
+    body = "\n".join(f"{i * 51.2:.3f};{v};{q}" for i, (v, q) in enumerate(rows))
+    path.write_text(EPOS_HEAD + EPOS_COLS + body + "\n")
+    return path
+
+
+def test_epos_folder_is_one_curve_in_si(tmp_path):
+    folder = tmp_path / "0.1kg"
+    _epos(folder, "10.csv", [(-10, -30.0), (-10, -32.0), (-11, -31.0)])  # sign from the data
+    _epos(folder, "n10.csv", [(10, 35.0), (10, 36.0), (9, 37.0)])
+    curve = tj.read_record(folder)
+    assert isinstance(curve, tj.FrictionCurve) and tj.detect_format(folder) == "epos_steady"
+    w = 2 * np.pi / 60
+    np.testing.assert_allclose(curve.velocity, [-31 / 3 * w, 29 / 3 * w])
+    np.testing.assert_allclose(curve.friction, [-31e-2 * 9.84e-3, 36e-2 * 9.84e-3])
+    np.testing.assert_allclose(curve.friction_scatter, [1e-2 * 9.84e-3] * 2)
+    assert curve.units == {"velocity_unit": "rad/s", "friction_unit": "N m"}
+    # round trip through the CSV + sidecar, and no overwrite
+    tj.write_friction_curve(curve, tmp_path / "c.csv", provenance={"licence": "MIT"})
+    back = tj.read_record(tmp_path / "c.csv")
+    np.testing.assert_allclose(back.friction, curve.friction, rtol=1e-11)
+    assert back.units == curve.units
+    with pytest.raises(FileExistsError):
+        tj.write_friction_curve(curve, tmp_path / "c.csv")
+
+
+@pytest.mark.parametrize(
+    "body, match",
+    [
+        (EPOS_COLS + "0.000;1;2.0\n51.200;1;2", None),  # a short last line is still 3 numbers
+        (EPOS_COLS + "0.000;1;2.0\n51.200;1\n", r"line 7: '51.200;1' is not three numbers"),
+        (EPOS_COLS + "0.000;1;2.0\n0.000;1;2.5\n", r"line 7: time does not increase"),
+        (";a;b\nms;rad;%\n0;1;2\n", r"line 6: no units line ms;rpm;%"),
+    ],
+)
+def test_epos_bad_files_name_file_and_line(tmp_path, body, match):
+    path = tmp_path / "e.csv"
+    path.write_text(EPOS_HEAD + body)
+    assert tj.detect_format(path) == "epos"
+    if match is None:
+        assert len(tj.read_record(path).t) == 2
+        return
+    with pytest.raises(tj.DataFileError, match=r"e.csv, " + match):
+        tj.read_record(path)
+
+
+def test_history_loop_round_trip(tmp_path):
+    t = np.linspace(0.0, 1.0, 50)
+    loop = tj.HysteresisLoop(t, 1e-3 * t**2, 5.0 * t, periodic=False)  # no whole cycle
+    tj.write_loop(loop, tmp_path / "h.csv")
+    back = tj.read_loop(tmp_path / "h.csv")
+    assert not back.periodic and back.frequency is None
+    np.testing.assert_array_equal(back.u, loop.u)
+    (tmp_path / "h.json").write_text('{"drive": "sine"}')
+    with pytest.raises(tj.DataFileError, match=r"h.json, line 1: 'drive' = 'sine' is not one"):
+        tj.read_loop(tmp_path / "h.csv")
+
+
+def test_converted_copies_load_and_match_manifest():
+    manifest = json.loads((REAL / "MANIFEST.json").read_text())
+    for entry in manifest["files"]:
+        path = REAL / entry["file"]
+        assert hashlib.sha256(path.read_bytes()).hexdigest() == entry["sha256"], entry["file"]
+        rec = tj.read_record(path)
+        assert "licence" in entry and entry["original_sha256"]
+        if entry["file"].startswith("brfd/"):
+            assert "CC BY-SA 4.0" in entry["licence"] and isinstance(rec, tj.HysteresisLoop)
+    curve = tj.read_record(REAL / "screwdrive" / "driveNo1_steady_0.096kg.csv")
+    # both directions, friction with the sign of the velocity, about 25-40 % of 9.84 mN m
+    assert np.all(np.sign(curve.friction) == np.sign(curve.velocity))
+    assert np.all((np.abs(curve.friction) > 2e-3) & (np.abs(curve.friction) < 4.5e-3))
+
+
+@needs_shared
+def test_manifest_hashes_are_the_originals():
+    manifest = json.loads((REAL / "MANIFEST.json").read_text())
+    for entry in manifest["files"]:
+        digests = entry["original_sha256"]
+        if isinstance(digests, str):
+            digests = {"": digests}
+        for name, digest in digests.items():
+            path = SHARED / entry["original"] / name if name else SHARED / entry["original"]
+            assert hashlib.sha256(path.read_bytes()).hexdigest() == digest
+
+
+@needs_shared
+def test_converted_brfd_equals_reader_output():
+    name = "2Hz30lbtension0.5amplitude"
+    fresh = tj.read_record(SHARED / "brfd" / f"{name}.json")
+    copy = tj.read_record(REAL / "brfd" / f"{name}.csv")
+    np.testing.assert_allclose(copy.f, fresh.f, rtol=1e-15)
+    assert copy.frequency == fresh.frequency == 2.0 and copy.periodic
