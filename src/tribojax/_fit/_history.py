@@ -34,7 +34,9 @@ HISTORY_MODELS = {
     "bouc_wen": (("K", True), ("F_y", True), ("n", True), ("f0", False)),
 }
 MINDLIN_IWAN = 64  # Iwan elements of the Mindlin rate form in the history fits
-BOUC_WEN_STARTS = (0.5, 2.0, 10.0)  # starts of the Bouc–Wen sharpness n for a thorough fit
+BOUC_WEN_STARTS = (0.5, 2.0, 10.0)
+"""Starts of the Bouc–Wen sharpness n for a thorough history fit: its optima fall in separate
+families (n < 1, soft; n of tens, close to Jenkins), so one start can miss the better one."""
 
 
 def history_element(model: str, p):
