@@ -170,7 +170,9 @@ def make_record(spec: RecordSpec) -> tj.SlipRun:
     add = np.zeros_like(ts)
     if e == "sensor_drift":
         if sh == "polynomial":
-            add = rng.uniform(-1, 1) * tau + rng.uniform(-1, 1) * tau**2 + rng.uniform(-1, 1) * tau**3
+            add = (
+                rng.uniform(-1, 1) * tau + rng.uniform(-1, 1) * tau**2 + rng.uniform(-1, 1) * tau**3
+            )
         elif sh == "thermal":
             add = 1 - np.exp(-ts / rng.uniform(0.4, 2.0))
         else:
@@ -233,8 +235,9 @@ def study_specs() -> list[RecordSpec]:
         seed += 1
         specs.append(RecordSpec("clean", "-", load, "fast", "low", False, seed))
     for e in OUT_OF_VOCAB:
-        for j, (load, drive) in enumerate([(0.6, "paper"), (2.0, "paper"), (7.0, "fast"),
-                                              (10.0, "paper")]):
+        for j, (load, drive) in enumerate(
+            [(0.6, "paper"), (2.0, "paper"), (7.0, "fast"), (10.0, "paper")]
+        ):
             seed += 1
             specs.append(RecordSpec(e, "-", load, drive, ("low", "high")[j % 2], j != 1, seed))
     return specs

@@ -120,6 +120,17 @@ class AbstractBaseline(eqx.Module):
         default none."""
         return {}
 
+    def unidentified(self, values: dict, std_errors: dict) -> dict:
+        """Parameters the record does not determine, {name: {"lower_bound", "upper_bound",
+        "unit"}}, from the fitted values and standard errors; default none."""
+        return {}
+
+    def signals(self) -> dict:
+        """Measured signals (name → (n,) array) a remaining misfit is correlated with; default
+        the abscissa."""
+        d = self.data()
+        return {d.x_label: np.asarray(d.x, dtype=float)}
+
     def solver_ok(self, theta, knobs) -> bool:
         """False when the model could not be evaluated (e.g. ODE failure); default True."""
         return True

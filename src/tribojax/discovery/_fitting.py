@@ -72,7 +72,6 @@ def _residual_and_jac(x, a: _Padded):
     return r, jnp.concatenate([jnp.where(ok, J, 0.0), J_hold], axis=0)
 
 
-
 @eqx.filter_custom_jvp
 def _residual(u, a):
     """The residual function of every discovery fit, in scaled variables u = x/d (module level:
@@ -256,8 +255,16 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=256) -> _State
         theta=x,
         yhat=y + scale * r,
         rss=cost,
-        cov=fit_statistics(x, r, J, names=[""] * npar, transform=lambda t: t, sigma_known=False,
-                           result=res.result, steps=res.steps).covariance,  # fmt: skip
+        cov=fit_statistics(
+            x,
+            r,
+            J,
+            names=[""] * npar,
+            transform=lambda t: t,
+            sigma_known=False,
+            result=res.result,
+            steps=res.steps,
+        ).covariance,  # fmt: skip
         jac=J,
         converged=bool(converged),
         steps=res.steps,

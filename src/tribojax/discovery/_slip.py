@@ -25,7 +25,6 @@ Additive (measurement) effects, linear in their strengths:
 from __future__ import annotations
 
 import functools
-
 from typing import ClassVar
 
 import diffrax as dfx
@@ -46,11 +45,22 @@ from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign
 from ._regions import noise_estimate
 
 KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling")
+F_MAX_OVER_DRIVE = 100.0  # bound of F_s in units of m·max|a| (beyond: slip ∝ (m a/F_s)², tiny)
 VS_GRID = tuple(10.0 ** np.arange(-7.0, -3.4, 0.5))  # m/s, Stribeck velocity grid
 
 
-def AugmentedPreSlip(F_s, K_tau, C_tau, sigma2, stribeck, v_s, kappa, profile,  # noqa: N802
-                     *, velocity_scale=DEFAULT_VELOCITY_SCALE) -> PreSlipLuGre:
+def AugmentedPreSlip(
+    F_s,
+    K_tau,
+    C_tau,
+    sigma2,
+    stribeck,
+    v_s,
+    kappa,
+    profile,  # noqa: N802
+    *,
+    velocity_scale=DEFAULT_VELOCITY_SCALE,
+) -> PreSlipLuGre:
     """Discovery's pre-slip element: `PreSlipLuGre` (wang2022 Eq 27, α = 1) with its knobs.
 
         N(t)/N₀ = 1 + κ·a(t)/g,   K = K_τ·N/N₀,   g(v) = F_s·N/N₀·(1 − δ(1 − exp(−(v/v_s)²)))
@@ -104,6 +114,7 @@ class SlipBaseline(AbstractBaseline):
     noise_std: Array  # m, NaN when unknown
     start_values: Array  # (F_s, K_τ, C_τ) start
     sigma_ref: Array  # N s/m: unit of the viscous knob (the start C_τ)
+    f_max: Array  # N: F_s above this is reported unidentified (`F_MAX_OVER_DRIVE` × m·max|a|)
     profile: MeasuredProfile
     t_end: float = eqx.field(static=True)  # s, the last sample (a solver setting)
 
@@ -115,6 +126,16 @@ class SlipBaseline(AbstractBaseline):
 
     def physical(self, theta):
         return jnp.exp(theta)
+
+    def unidentified(self, values: dict, std_errors: dict) -> dict:
+        """Parameters the record does not determine, with their bound: F_s within 10 % of
+        `f_max` or with a standard error above its value (m·a_max/F_s too small to show it)."""
+        F, sd = values["F_s"], std_errors["F_s"]
+        fm = float(self.f_max)
+        if F > 0.9 * fm or not sd < F:
+            return {"F_s": {"lower_bound": float(min(F, fm) / 2 if not sd < F else F - 2 * sd),
+                            "upper_bound": fm, "unit": "N"}}  # fmt: skip
+        return {}
 
     def element(self, theta, knobs):
         F_s, K, C = jnp.exp(theta[0]), jnp.exp(theta[1]), jnp.exp(theta[2])
@@ -130,6 +151,12 @@ class SlipBaseline(AbstractBaseline):
 
     def solver_ok(self, theta, knobs):
         return bool(_ok(self, theta, knobs))
+
+    def signals(self):
+        t, a = np.asarray(self.t), np.asarray(self.accel)
+        v, x = stage_travel(t, a)
+        return {"time": t, "accel": a, "jerk": np.gradient(a, t), "stage_velocity": v,
+                "stage_travel": x}  # fmt: skip
 
     def data(self):
         sd = float(self.noise_std)
@@ -167,6 +194,7 @@ def slip_baseline(run, start=None) -> SlipBaseline:
         noise_std=jnp.asarray(np.nan if noise is None else float(noise)),
         start_values=jnp.asarray(sv, dtype=jnp.float64),
         sigma_ref=jnp.asarray(float(sv[2])),
+        f_max=jnp.asarray(F_MAX_OVER_DRIVE * float(run.mass) * float(np.max(np.abs(run.accel)))),
         profile=record.profile(),
         t_end=float(t[-1]),
     )
@@ -332,24 +360,16 @@ class LoadCoupling(AbstractEffect):
 
 @register_effect
 class Stribeck(AbstractEffect):
-    """Velocity weakening g(v) = F_s(1 − δ(1 − exp(−(v/v_s)²))); v_s on a grid (`VS_GRID`)."""
+    """Velocity weakening g(v) = F_s(1 − δ(1 − exp(−(v/v_s)²))) (wang2022 Eq 25, β = 2); the
+    v_s on the grid `VS_GRID`; the refit starts from the best grid points by score."""
 
     name: ClassVar[str] = "stribeck"
     kind: ClassVar[str] = "slip"
 
     def designs(self, baseline):
-        return [
-            _knob_design(
-                "stribeck",
-                "delta",
-                "1",
-                1.0,
-                knob_set={"log10_v_s": np.log10(vs)},
-                nuisance={"v_s_m_per_s": vs},
-                n_nuisance=1,
-            )  # fmt: skip
-            for vs in VS_GRID
-        ]
+        return [_knob_design("stribeck", "delta", "1", 1.0, knob_set={"log10_v_s": np.log10(vs)},
+                             nuisance={"v_s_m_per_s": vs}, n_nuisance=1)
+                for vs in VS_GRID]  # fmt: skip
 
 
 @register_effect
