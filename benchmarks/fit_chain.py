@@ -165,13 +165,9 @@ def run(quick=False):
             "measured: scipy.optimize.least_squares (MINPACK lm, default tolerances) in the JAX "
             f"fit's coordinates from the same start, forward differences with step {FD_STEP} in θ"
         )
-        scipy_info = {
-            "scipy_chain_evaluations": nfev,
-            "scipy_x": x.tolist(),
-            "scipy_rms_rel": float(np.sqrt(np.mean(sol.fun**2))),
-            "scipy_message": str(sol.message),
-            "scipy_success": bool(sol.success),
-        }
+        scipy_info = {"scipy_chain_evaluations": nfev, "scipy_x": x.tolist(),
+                      "scipy_rms_rel": float(np.sqrt(np.mean(sol.fun**2))),
+                      "scipy_message": str(sol.message), "scipy_success": bool(sol.success)}
     common = dict(
         steps=steps,
         residual_evaluations=fit.evaluations,
