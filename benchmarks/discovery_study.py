@@ -31,9 +31,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks import discovery_records as dr  # noqa: E402
 
 # the CI subset: one record of every in-vocabulary shape class, clean, two out-of-vocabulary
-CI_LABELS = ("sensor_drift/thermal 0.6kPa", "vibration/jerk_driven 0.6kPa",
-             "load_coupling/exponents_1_0.6 2kPa", "stribeck/lorentzian 0.6kPa paper",
-             "clean/- 0.6kPa paper low", "readout_step/- 0.6kPa", "mains_pickup/- 2kPa")  # fmt: skip
+CI_LABELS = (
+    "sensor_drift/thermal 0.6kPa",
+    "vibration/jerk_driven 0.6kPa",
+    "load_coupling/exponents_1_0.6 2kPa",
+    "stribeck/lorentzian 0.6kPa paper",
+    "clean/- 0.6kPa paper low",
+    "readout_step/- 0.6kPa",
+    "mains_pickup/- 2kPa",
+)
 
 
 def score(spec, verdict, effect, e0, e1) -> bool:
@@ -111,6 +117,8 @@ def main(argv=None):
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent))
     ap.add_argument("--subset", choices=["all", "ci"], default="all")
     ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--table-only", action="store_true",
+                    help="write the table from the records in the .jsonl so far")  # fmt: skip
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -119,10 +127,12 @@ def main(argv=None):
         specs = [s for s in specs if any(s.label.startswith(c) for c in CI_LABELS)]
     log = out / "discovery_study.jsonl"
     done = {}
-    if args.resume and log.exists():
+    if (args.resume or args.table_only) and log.exists():
         done = {json.loads(x)["label"]: json.loads(x) for x in log.read_text().splitlines()}
     elif log.exists():
         log.unlink()
+    if args.table_only:
+        specs = [s for s in specs if s.label in done]
     rows = []
     for spec in specs:
         row = done.get(spec.label) or run_one(spec)
@@ -135,7 +145,8 @@ def main(argv=None):
               f"{'ok' if row['ok'] else 'FAIL'} {row['seconds']:.0f}s", flush=True)  # fmt: skip
     summary, table = summarise(rows)
     total_s = float(np.sum([r["seconds"] for r in rows]))
-    res = {"summary": summary, "rows": rows, "discover_seconds_total": total_s}
+    res = {"summary": summary, "rows": rows, "discover_seconds_total": total_s,
+           "records_planned": len(dr.study_specs()), "records_run": len(rows)}  # fmt: skip
     (out / "discovery_study.json").write_text(json.dumps(res, indent=1))
     (out / "discovery_study.md").write_text(table + "\n")
     print(table)
