@@ -267,4 +267,5 @@ def discover(
         baseline_y=base_state.yhat,
         final_y=state.yhat,
         segment=np.asarray(data.segment),
+        signals={**baseline.signals(), "model": np.asarray(state.yhat)},
     )

@@ -32,7 +32,7 @@ class DiscoveryReport:
     misfit: where a remaining misfit lives: noise-test p-values of the baseline and final
         residuals, the final residual's flagged regions, its correlations with the measured
         signals and a flexible (linear-spline) correction in the best signal.
-    x, y, baseline_y, final_y, segment: arrays for plots (not in as_dict).
+    x, y, baseline_y, final_y, segment, signals: arrays for plots (not in as_dict).
     """
 
     kind: str
@@ -59,6 +59,7 @@ class DiscoveryReport:
     baseline_y: np.ndarray = dataclasses.field(repr=False)
     final_y: np.ndarray = dataclasses.field(repr=False)
     segment: np.ndarray = dataclasses.field(repr=False)
+    signals: dict = dataclasses.field(repr=False, default_factory=dict)  # measured, for plots
 
     @property
     def effect(self) -> str:

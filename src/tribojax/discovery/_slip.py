@@ -114,7 +114,7 @@ class SlipBaseline(AbstractBaseline):
     noise_std: Array  # m, NaN when unknown
     start_values: Array  # (F_s, K_τ, C_τ) start
     sigma_ref: Array  # N s/m: unit of the viscous knob (the start C_τ)
-    f_max: Array  # N: F_s above this is reported unidentified (`F_MAX_OVER_DRIVE` × m·max|a|)
+    f_max: Array  # N: upper bound of F_s (`F_MAX_OVER_DRIVE` × m·max|a|)
     profile: MeasuredProfile
     t_end: float = eqx.field(static=True)  # s, the last sample (a solver setting)
 
@@ -122,10 +122,18 @@ class SlipBaseline(AbstractBaseline):
         return np.array([0.0, 0.0, -5.0, 0.0])
 
     def start(self):
-        return np.log(np.asarray(self.start_values))
+        F, K, C = np.asarray(self.start_values, dtype=float)
+        cap = np.log(float(self.f_max))
+        u = min(np.log(F), cap - 0.7)  # invert the cap (F below half the bound)
+        return np.array([cap - np.log(np.expm1(cap - u)), np.log(K), np.log(C)])
 
     def physical(self, theta):
-        return jnp.exp(theta)
+        """θ → (F_s, K_τ, C_τ): F_s = exp(L − softplus(L − θ₀)), L = log `f_max` (≈ exp θ₀ below
+        the bound, never above it: a fit that cannot see F_s stops at the bound instead of
+        running it off), K_τ = exp θ₁, C_τ = exp θ₂."""
+        cap = jnp.log(self.f_max)
+        return jnp.stack([jnp.exp(cap - jax.nn.softplus(cap - theta[0])), jnp.exp(theta[1]),
+                          jnp.exp(theta[2])])  # fmt: skip
 
     def unidentified(self, values: dict, std_errors: dict) -> dict:
         """Parameters the record does not determine, with their bound: F_s within 10 % of
@@ -138,7 +146,7 @@ class SlipBaseline(AbstractBaseline):
         return {}
 
     def element(self, theta, knobs):
-        F_s, K, C = jnp.exp(theta[0]), jnp.exp(theta[1]), jnp.exp(theta[2])
+        F_s, K, C = self.physical(theta)
         return AugmentedPreSlip(F_s, K, C, knobs[0] * self.sigma_ref, knobs[1],
                                 10.0 ** knobs[2], knobs[3], self.profile)  # fmt: skip
 
