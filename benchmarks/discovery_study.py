@@ -117,6 +117,7 @@ def main(argv=None):
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent))
     ap.add_argument("--subset", choices=["all", "ci"], default="all")
     ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--shard", default="0/1", help="i/n: run records i, i+n, ... (one log each)")
     ap.add_argument("--table-only", action="store_true",
                     help="write the table from the records in the .jsonl so far")  # fmt: skip
     args = ap.parse_args(argv)
@@ -125,12 +126,16 @@ def main(argv=None):
     specs = dr.study_specs()
     if args.subset == "ci":
         specs = [s for s in specs if any(s.label.startswith(c) for c in CI_LABELS)]
-    log = out / "discovery_study.jsonl"
+    i_shard, n_shard = (int(v) for v in args.shard.split("/"))
+    log = out / ("discovery_study.jsonl" if n_shard == 1 else f"discovery_study.{i_shard}.jsonl")
     done = {}
-    if (args.resume or args.table_only) and log.exists():
-        done = {json.loads(x)["label"]: json.loads(x) for x in log.read_text().splitlines()}
+    if args.resume or args.table_only:
+        for f in out.glob("discovery_study*.jsonl"):
+            done.update({json.loads(x)["label"]: json.loads(x) for x in f.read_text().splitlines()})
     elif log.exists():
         log.unlink()
+    if not args.table_only:
+        specs = specs[i_shard::n_shard]
     if args.table_only:
         specs = [s for s in specs if s.label in done]
     rows = []
