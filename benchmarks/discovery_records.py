@@ -156,8 +156,9 @@ def _simulate(spec, rng, tk, ak, ts):
     return out[0] * 1e-9, out[4], out[5], (f_mode, zeta)
 
 
-def make_record(spec: RecordSpec) -> tj.SlipRun:
-    """The record of `spec` (its hidden truth in `truth(spec)`), generated with seed spec.seed."""
+def make_record(spec: RecordSpec, *, with_noise: bool = True) -> tj.SlipRun:
+    """The record of `spec`, generated with seed spec.seed (`with_noise=False`: the same record
+    without its noise draw)."""
     rng = np.random.default_rng(spec.seed)
     F_s, _, _ = table3(spec.load)
     tk, ak = drive_knots(spec.drive, F_s)
@@ -205,7 +206,7 @@ def make_record(spec: RecordSpec) -> tj.SlipRun:
         add = add - add[0]
         slip = slip + add * peak / np.max(np.abs(add))
     sd = NOISE[spec.noise]
-    slip = slip + rng.normal(0.0, sd, ts.size)
+    slip = slip + rng.normal(0.0, sd, ts.size) * with_noise
     return tj.SlipRun(t=ts, accel=accel, slip=slip, mass=MASS,
                       noise_std=sd if spec.sidecar else None, source=spec.label)  # fmt: skip
 

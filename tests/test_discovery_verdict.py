@@ -2,7 +2,6 @@
 the flexible correction, and the independent record generator (benchmarks/discovery_records.py,
 SciPy LSODA with the exact sign: shares no code with the candidate effects)."""
 
-import dataclasses
 import os
 
 import numpy as np
@@ -70,15 +69,14 @@ def test_independent_generator_matches_the_library_slip_model():
     # clean record, no noise: SciPy LSODA (exact sign) vs tribojax.simulate_slip (Rodas4, smooth
     # sign with ε = 1e-12 m/s) on the paper's drive at 0.6 kPa
     spec = dr.RecordSpec("clean", "-", 0.6, "paper", "low", True, 5)
-    rec = dr.make_record(dataclasses.replace(spec))
-    noise = np.random.default_rng(5).normal(0.0, dr.NOISE["low"], N)
+    rec = dr.make_record(spec, with_noise=False)
     F, K, C = dr.table3(0.6)
     tk, ak = dr.drive_knots("paper", F)
     prof = tj.PiecewiseLinearProfile(tk, ak)
     ref = np.asarray(tj.simulate_slip(tj.PreSlipLuGre(F, K, C), prof, dr.MASS, ts=T,
                                       t_end=2.3).slip)  # fmt: skip
-    slip = rec.slip - noise
-    assert np.max(np.abs(slip - ref)) < 2e-3 * np.max(np.abs(ref))
+    # measured: 2e-5 of the peak (LSODA rtol 1e-9 vs Rodas4 rtol 1e-6); the noise is 1e-3 of it
+    assert np.max(np.abs(rec.slip - ref)) < 2e-4 * np.max(np.abs(ref))
     assert np.max(np.abs(ref)) > 20e-9  # m: m·a_max/F_s = 0.66 at 0.6 kPa
 
 

@@ -53,10 +53,9 @@ def _misfit(baseline, data, r0, rf, state, sigma, rho, alpha, n_windows):
     p = len(baseline.param_names)
     n_final = p + sum(d.k + d.n_nuisance for d in state.designs)
     seg, x = data.segment, data.x
-    base_ok, p0, _ = noise_consistent(r0, sigma, rho, seg, x, p, alpha=alpha,
-                                      n_windows=n_windows)  # fmt: skip
-    final_ok, p1, remaining = noise_consistent(rf, sigma, rho, seg, x, n_final, alpha=alpha,
-                                               n_windows=n_windows)  # fmt: skip
+    kw = {"alpha": alpha, "n_windows": n_windows, "estimated": not data.noise_std}
+    base_ok, p0, _ = noise_consistent(r0, sigma, rho, seg, x, p, **kw)
+    final_ok, p1, remaining = noise_consistent(rf, sigma, rho, seg, x, n_final, **kw)
     e0, e1 = excess_rmse(r0, sigma), excess_rmse(rf, sigma)
     v = verdict(len(state.names), base_ok, final_ok, e0, e1)
     misfit = {"baseline_noise_p_value": p0, "final_noise_p_value": p1,
@@ -221,7 +220,7 @@ def discover(
         rounds.append(_public(cands))
         state = min(accepted, key=lambda a: a[0]["delta_bic_common"])[1]
     if noise_consistent(r0, sigma, rho_n, data.segment, data.x, len(baseline.param_names),
-                        alpha=alpha, n_windows=n_windows)[0]:  # fmt: skip
+                        alpha=alpha, n_windows=n_windows, estimated=estimated)[0]:  # fmt: skip
         state = base_state  # the baseline is consistent with the noise: nothing is added
     rf = y - state.yhat
     for rg in regions:

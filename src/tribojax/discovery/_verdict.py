@@ -12,7 +12,10 @@ the final residual): with noise sd σ and AR(1) ρ (sidecar or first-difference 
     frequencies strictly between 0 and Nyquist, p ≈ m(1 − g)^(m−1) (Fisher 1929), at level α/3
     (a line such as mains pickup that a first-difference noise estimate absorbs).
 
-The χ² test is at level α/3 too.
+The χ² test is at level α/3 too. When σ is estimated from the residual's first differences, the
+whole-record test is the normal approximation of mean(r²)/σ̂² − 1 with the estimator's own
+variance added (≈ 8/n relative for σ̂²), not χ² (which would flag a σ̂ two of its standard errors
+low).
 
 Excess misfit (beyond the noise): e = sqrt(max(mean(r²) − σ², 0)), output units.
 
@@ -27,6 +30,8 @@ term that is a function of that signal alone could explain.
 
 from __future__ import annotations
 
+from math import erfc
+
 import numpy as np
 
 from ._regions import chi2_sf, find_regions
@@ -40,14 +45,23 @@ def excess_rmse(r, sigma) -> float:
     return float(np.sqrt(max(float(np.mean(r * r)) - float(sigma) ** 2, 0.0)))
 
 
-def noise_consistent(r, sigma, rho, segment, x, n_params, *, alpha=0.01, n_windows=32):
-    """(consistent, p_value, regions): the module's noise-consistency test of residual r."""
+def noise_consistent(r, sigma, rho, segment, x, n_params, *, alpha=0.01, n_windows=32,
+                     estimated=False):  # fmt: skip
+    """(consistent, p_value, regions): the module's noise-consistency test of residual r;
+    `estimated`: σ is the first-difference estimate from r itself, not the sidecar's."""
     r = np.asarray(r, dtype=float)
     n = r.size
     rho = float(np.clip(rho, 0.0, 0.95))
     c = (1.0 + rho**2) / (1.0 - rho**2)
     q = float(np.sum((r / sigma) ** 2))
-    p_global = chi2_sf(q / c, max(n - n_params, 1) / c)
+    if estimated:
+        # σ̂ from first differences carries its own error: relative variance of σ̂² ≈ 8/n
+        # (MAD scale: 1.36σ²/n for σ̂, ×1.5 for the lag-1 correlation −½ of differences);
+        # normal approximation of mean(r²)/σ̂² − 1 with both variances
+        z = (q / max(n - n_params, 1) - 1.0) / np.sqrt(2.0 * c / n + 8.0 / n)
+        p_global = float(0.5 * erfc(z / np.sqrt(2.0)))
+    else:
+        p_global = chi2_sf(q / c, max(n - n_params, 1) / c)
     regions = find_regions(r, x, segment, sigma, rho, n_windows=n_windows, alpha=alpha / 3)
     p_line = fisher_g(r[1:] - rho * r[:-1])
     ok = p_global >= alpha / 3 and p_line >= alpha / 3 and not regions
