@@ -10,6 +10,7 @@ Default DIR: benchmarks/ (the stored table that notebooks/05_discovery.ipynb rea
 Scoring (issue 14 targets):
 - in-vocabulary: success when the effect is named first (`effect` equal to the hidden name,
   verdict explained or partly_explained) and the excess misfit at least halved;
+  (also over the records whose baseline residual is not noise-consistent: "visible");
 - clean: success when the verdict is "none";
 - out-of-vocabulary: success when the verdict is neither "explained" nor "none".
 """
@@ -80,11 +81,15 @@ def summarise(rows) -> tuple[dict, str]:
             else "in_vocabulary"
         )
         groups[kind].append(r)  # fmt: skip
+    # an in-vocabulary effect the baseline absorbs (baseline residual consistent with the noise:
+    # e.g. the quasi-static part of a stiff mode, q ≈ −a/ω², is a slip ∝ a, taken up by K_τ)
+    # has nothing left to find: counted apart as well
+    groups["in_vocabulary_visible"] = [r for r in groups["in_vocabulary"] if r["verdict"] != "none"]
     summary = {
         k: {
             "n": len(v),
             "success": sum(r["ok"] for r in v),
-            "rate": sum(r["ok"] for r in v) / len(v),
+            "rate": sum(r["ok"] for r in v) / max(len(v), 1),
         }
         for k, v in groups.items()
     }
