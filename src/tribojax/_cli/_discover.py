@@ -3,7 +3,8 @@
 The sidecar `<stem>.json` is read from beside the CSV. A slip run (time_s, stage_accel_m_s2,
 slip_m) goes to the pre-slip LuGre baseline; a hysteresis loop (time_s, displacement_m, force_N)
 to the loop baseline (`tribojax.discovery.loop_baseline`). Writes
-DIR/discovery.json (keys: effect, effects, baseline_rmse, final_rmse, regions, candidates, ...)
+DIR/discovery.json (keys: effect, verdict, effects, excess_rmse_before, excess_rmse_after, misfit,
+baseline_rmse, final_rmse, regions, candidates, ...)
 and DIR/discovery.png, and prints a summary.
 
 Exit codes: 0 done; 2 malformed input or refused output; 3 the baseline fit did not converge
