@@ -122,6 +122,11 @@ def main(argv=None):
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent))
     ap.add_argument("--subset", choices=["all", "ci"], default="all")
     ap.add_argument("--resume", action="store_true")
+    ap.add_argument(
+        "--reverse",
+        action="store_true",
+        help="last record first, skipping those any log in --out holds already",
+    )
     ap.add_argument("--shard", default="0/1", help="i/n: run records i, i+n, ... (one log each)")
     ap.add_argument("--table-only", action="store_true",
                     help="write the table from the records in the .jsonl so far")  # fmt: skip
@@ -141,10 +146,19 @@ def main(argv=None):
         log.unlink()
     if not args.table_only:
         specs = specs[i_shard::n_shard]
+    if args.reverse:
+        specs = specs[::-1]
+        log = out / "discovery_study.rev.jsonl"
     if args.table_only:
         specs = [s for s in specs if s.label in done]
     rows = []
     for spec in specs:
+        if args.reverse:
+            for f in out.glob("discovery_study*.jsonl"):
+                done.update({json.loads(x)["label"]: json.loads(x)
+                             for x in f.read_text().splitlines()})  # fmt: skip
+            if spec.label in done:
+                continue
         row = done.get(spec.label) or run_one(spec)
         if spec.label not in done:
             with log.open("a") as fh:
