@@ -286,6 +286,9 @@ def run(quick=False):
         "jax": jax.__version__,
         "tribojax": tj.__version__,
     }
+    import frf  # benchmarks/frf.py: MHB forced response (issue 16)
+
+    results.extend(frf.run(quick))
     import topography as _topography  # benchmarks/topography.py (surface characterisation)
 
     results.extend(_topography.run())

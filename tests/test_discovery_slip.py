@@ -48,17 +48,19 @@ def test_load_coupling_breaks_the_accel_decel_symmetry():
     assert np.mean(coup[acc]) < np.mean(base[acc])
 
 
-@pytest.mark.parametrize("uniform", [True, False])
-def test_oscillator_matches_scipy_radau(uniform):
-    # uniform sampling shares one transition matrix; non-uniform takes one per step
-    ts = TS if uniform else np.sort(np.concatenate([TS, 0.5 * (TS[1:40] + TS[:39])]))
-    a = np.asarray(syn.HIDDEN_PROFILE.acceleration(ts))
+def test_oscillator_matches_scipy_radau():
+    # uniform sampling shares one transition matrix, non-uniform takes one per step (the same
+    # number of samples: one compile serves both)
+    shifted = TS.copy()
+    shifted[1:-1] += 0.3 * np.diff(TS)[:-1] * np.sin(np.arange(1, TS.size - 1))
     omega, zeta = 2 * np.pi * np.array([40.0, 61.3]), np.array([0.03, 0.011])
-    q = np.asarray(ds._oscillator(jnp.asarray(ts), jnp.asarray(a), omega, zeta))[..., 0]
-    for qi, f, z in zip(q, (40.0, 61.3), zeta):
-        ref = syn._oscillator_scipy(ts, syn.HIDDEN_PROFILE, f, z)
-        # exact discretisation vs Radau at rtol 1e-10: agreement to ~1e-7 of the peak
-        assert np.max(np.abs(qi - ref)) < 1e-6 * np.max(np.abs(ref))
+    for ts in (TS, shifted):
+        a = np.asarray(syn.HIDDEN_PROFILE.acceleration(ts))
+        q = np.asarray(ds._oscillator(jnp.asarray(ts), jnp.asarray(a), omega, zeta))[..., 0]
+        for qi, f, z in zip(q, (40.0, 61.3), zeta):
+            ref = syn._oscillator_scipy(ts, syn.HIDDEN_PROFILE, f, z)
+            # exact discretisation vs Radau at rtol 1e-10: agreement to ~1e-7 of the peak
+            assert np.max(np.abs(qi - ref)) < 1e-6 * np.max(np.abs(ref))
 
 
 def test_stage_travel_is_exact_for_piecewise_linear_drive():
@@ -119,18 +121,10 @@ def _check(row):
 
 
 FULL = os.environ.get("TRIBOJAX_FULL") == "1"
-# CI form: clean (must give none), one measurement and two physics effects (position_error runs in
-# the CLI test); TRIBOJAX_FULL=1: every effect and clean x 2 noise levels x 2 loads
-CASES = (
-    [(h, None, None) for h in ("clean", *syn.SLIP_EFFECTS)]
-    if FULL
-    else [
-        ("clean", "high", 2.0),
-        ("vibration", "high", 0.6),
-        ("load_coupling", "low", 2.0),
-        ("viscous_friction", "high", 2.0),  # the closest call of the grid (shrink 2.1)
-    ]
-)
+# TRIBOJAX_FULL=1: every effect and clean x 2 noise levels x 2 loads on the library's own hidden
+# effect records (self-consistency). The CI form of discovery on hidden effects is the independent
+# records of tests/test_discovery_verdict.py (it replaced four cases here).
+CASES = [(h, None, None) for h in ("clean", *syn.SLIP_EFFECTS)] if FULL else []
 
 
 @pytest.mark.slow
@@ -152,7 +146,8 @@ def test_wang2022_table_discovery_short():
 
     from tribojax._reproduce._tables4to7 import table3_phase_slips
 
-    res = run(short=True)
+    # the robust full-chain fit's flag (test_reproduce.py checks the fit itself)
+    res = run(short=True, flagged=[{"table": 5, "vacuum_kPa": 20.0}])
     rep = res.pop("_report")
     # the baseline is the published model: its residuals are ln(measured/model) cell by cell
     model = np.asarray(table3_phase_slips(1.0)).T.ravel()
@@ -161,7 +156,15 @@ def test_wang2022_table_discovery_short():
     # forward-mode solve vs the default adjoint: same steps, same numbers to ~1e-9
     assert np.allclose(rep.y - rep.baseline_y, expected, atol=1e-6)
     assert res["baseline_rmse"] == pytest.approx(np.sqrt(np.mean(expected**2)), rel=1e-6)
-    assert res["effect"] in ("none", "position_error", "gross_sliding")
+    assert res["effect"] in ("none", "position_error", "gross_sliding", "position_step")
     if res["effects"]:
         assert res["final_rmse"] < res["baseline_rmse"]
     assert len(res["cells"]) == 24
+    # issue 19: the flagged cell's effect is named from the vocabulary — a reading step in that
+    # one phase (the paper: fibre bending from the acceleration to the uniform-motion phase), not
+    # the run-wide position error, which the other cells at 20 kPa contradict
+    (cell,) = res["flagged_cells"]
+    assert cell["effect"] == "position_step"
+    assert rep.strengths["position_step"]["nuisance"] == {"table": 5.0, "vacuum_kPa": 20.0}
+    assert cell["with_effect_nm"] == pytest.approx(cell["measured_nm"], rel=1e-6)
+    assert cell["baseline_nm"] == pytest.approx(-2.367, abs=0.01)  # the published model

@@ -1,6 +1,7 @@
 """The fitting/ studies run (short form) and show what they claim."""
 
 import json
+import os
 
 import pytest
 from fitting import wang2022_table3
@@ -49,3 +50,21 @@ def test_wu2015_loops_study_short_form(tmp_path):
         if r["A_bar_true"] == 3.0:
             assert abs(r["K_bar"] - r["K_bar_eq7"]) < 0.03
     assert (tmp_path / "wu2015_loops.csv").read_text().count("\n") == 5
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(
+    os.environ.get("TRIBOJAX_FULL") != "1",
+    reason="several full-chain EM fits (minutes); short CI form: the robust fit in the reproduce "
+    "CLI test and tests/test_fit_robust.py",
+)
+def test_wang2022_robust_study_short_form(tmp_path):
+    from fitting import wang2022_robust
+
+    assert wang2022_robust.main(["--short", "--out", str(tmp_path)]) == 0
+    res = json.loads((tmp_path / "wang2022_robust.json").read_text())
+    ll = {(r["loss"]["noise"], r["loss"]["nu"]): r["log_likelihood"] for r in res["noise_models"]}
+    # heavy tails win over Gaussian errors for both shapes (the one 20 kPa cell, the 0.6 kPa ones)
+    assert ll[("relative", 4.0)] > ll[("relative", None)] + 5
+    assert ll[("absolute", 4.0)] > ll[("absolute", None)]
+    assert wang2022_robust.main(["--short", "--out", str(tmp_path)]) == 2  # no overwrite

@@ -107,6 +107,27 @@ def test_cli_writes_json_and_figure(tmp_path, capsys):
     assert set(fm["std_errors"]) == set(fm["free_parameters"]) == {"D", "G_m", "mu_t"}
     assert fm["rms_relative_residual"] < fm["paper_theory_rms_relative_residual"]
     assert fm["symmetric_model_bound_rms_relative_residual"] <= fm["rms_relative_residual"]
+    # issue 19: the robust fit flags Table 5 at 20 kPa (the paper's fibre bending) and, on the
+    # cells it keeps, beats the paper's own theory (0.215 on the 23 other cells)
+    assert {"loss", "flagged_cells", "rms_relative_residual_unflagged", "robust"} <= set(fm)
+    assert fm["loss"]["kind"] in ("student_t", "gaussian") and fm["robust"]["converged"] is True
+    flagged = {
+        (c["table"], c["vacuum_kPa"]): c["standardized_residual"] for c in fm["flagged_cells"]
+    }
+    # ln|measured/model| far below the others (measured −0.47 nm, the model ~ −2.6 nm)
+    assert flagged[(5, 20.0)] < -5
+    keep = [r for r in rows if (r["table"], r["vacuum_kPa"]) not in flagged]
+    paper = np.sqrt(
+        np.mean([(r["paper_theory_nm"] / r["paper_measured_nm"] - 1) ** 2 for r in keep])
+    )
+    assert fm["paper_theory_rms_relative_residual_unflagged"] == pytest.approx(paper, rel=1e-9)
+    if set(flagged) == {(5, 20.0)}:
+        assert paper == pytest.approx(0.2145, abs=5e-4)  # the tables' error columns, 23 cells
+    assert (
+        fm["rms_relative_residual_unflagged"] < fm["paper_theory_rms_relative_residual_unflagged"]
+    )
+    assert fm["rms_relative_residual_unflagged"] < fm["plain_rms_relative_residual_unflagged"]
+    assert (out / "fit_measured.png").stat().st_size > 10_000
 
 
 def test_reproduce_reports_a_fit_that_does_not_converge(monkeypatch, capsys):

@@ -35,10 +35,24 @@ from ._contact._materials import (
 )
 from ._contact._surface import FractalSurface as FractalSurface
 from ._dynamics._adjoint import ForwardJacobianAdjoint as ForwardJacobianAdjoint
+from ._dynamics._continuation import FrequencyResponse as FrequencyResponse
+from ._dynamics._continuation import frequency_response as frequency_response
+from ._dynamics._continuation import parameter_response as parameter_response
+from ._dynamics._design import Peak as Peak
+from ._dynamics._design import PeakDesign as PeakDesign
+from ._dynamics._design import amplitude_at as amplitude_at
+from ._dynamics._design import frf_2dof_system as frf_2dof_system
+from ._dynamics._design import minimise_peak as minimise_peak
+from ._dynamics._design import peak_on_grid as peak_on_grid
+from ._dynamics._design import resonance_peak as resonance_peak
 from ._dynamics._harmonic import HarmonicCoefficients as HarmonicCoefficients
 from ._dynamics._harmonic import drive as drive
 from ._dynamics._harmonic import harmonic_balance as harmonic_balance
 from ._dynamics._harmonic import harmonic_response as harmonic_response
+from ._dynamics._mhb import FrictionSystem as FrictionSystem
+from ._dynamics._mhb import HBMSolution as HBMSolution
+from ._dynamics._mhb import floquet_exponents as floquet_exponents
+from ._dynamics._mhb import solve_hbm as solve_hbm
 from ._dynamics._profiles import AbstractProfile as AbstractProfile
 from ._dynamics._profiles import DisplacementHistory as DisplacementHistory
 from ._dynamics._profiles import MeasuredProfile as MeasuredProfile
@@ -48,6 +62,12 @@ from ._dynamics._rodas4 import Rodas4 as Rodas4
 from ._dynamics._slip import SlipSolution as SlipSolution
 from ._dynamics._slip import simulate_slip as simulate_slip
 from ._dynamics._slip import slip_phase_averages as slip_phase_averages
+from ._dynamics._structure import AbstractContact as AbstractContact
+from ._dynamics._structure import DryFrictionContact2D as DryFrictionContact2D
+from ._dynamics._structure import Excitation as Excitation
+from ._dynamics._structure import FrictionContact as FrictionContact
+from ._dynamics._structure import Structure as Structure
+from ._dynamics._transient import integrate_steady as integrate_steady
 from ._fit._chain import DEFAULT_FREE as CHAIN_DEFAULT_FREE  # noqa: F401
 from ._fit._chain import PARAMETERS as CHAIN_PARAMETERS  # noqa: F401
 from ._fit._chain import ChainFit as ChainFit
@@ -61,9 +81,14 @@ from ._fit._chain import symmetric_bound as symmetric_bound
 from ._fit._chain import wang2022_loads as wang2022_loads
 from ._fit._engine import FitResult as FitResult
 from ._fit._engine import least_squares_fit as least_squares_fit
+from ._fit._figure import plot_fit_measured as plot_fit_measured
 from ._fit._loop import LoopAnalysis as LoopAnalysis
 from ._fit._loop import analyse_loop as analyse_loop
 from ._fit._loop import fit_loop as fit_loop
+from ._fit._profile import profile_likelihood as chain_profile_likelihood  # noqa: F401
+from ._fit._robust import NOISE_MODELS as CHAIN_NOISE_MODELS  # noqa: F401
+from ._fit._robust import RobustChainFit as RobustChainFit
+from ._fit._robust import robust_fit_measured_slips as robust_fit_measured_slips
 from ._fit._sensitivity import Elasticities as Elasticities
 from ._fit._sensitivity import LoopChain as LoopChain
 from ._fit._sensitivity import ReticleChain as ReticleChain
@@ -73,6 +98,7 @@ from ._fit._sensitivity import slip_sensitivities as slip_sensitivities
 from ._fit._slip import fit_slip_run as fit_slip_run
 from ._fit._start import slip_run_start as slip_run_start
 from ._fit._surface import fit_surface_from_runs as fit_surface_from_runs
+from ._friction._elastic2d import ElasticDryFriction2D as ElasticDryFriction2D
 from ._friction._element import AbstractFrictionElement as AbstractFrictionElement
 from ._friction._lugre import LuGre as LuGre
 from ._friction._lugre import PreSlipLuGre as PreSlipLuGre

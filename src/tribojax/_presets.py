@@ -164,3 +164,22 @@ def wang2022_table3_model(G, mu_t, sigma_s, *, M=CALIBRATED_M, D=None, gamma=WAN
     return FractalContact(
         surface, pair, mu_t=mu_t, tangential_load=tangential_load, mass=mass, throw=throw
     )
+
+
+# The two-DOF elastic dry-friction benchmark of the harmonic-balance literature (tmdsimpy's and
+# NLvib's examples; Krack & Gross 2019): DOF 0 tangential, DOF 1 normal, both against ground.
+FRF_2DOF = MappingProxyType(
+    {
+        "M": ((1.0, 0.0), (0.0, 1.0)),  # kg
+        "K": ((12.0, 0.0), (0.0, 21.0)),  # N/m
+        "C_diag": (2 * 0.05 * 12**0.5, 2 * 0.1 * 100**0.5),  # N s/m, as specified (√100)
+        "k_t": 5.0,  # N/m, tangential contact stiffness
+        "k_n": 21.0,  # N/m, normal contact stiffness (no preload; separation when pulled)
+        "mu": 0.85,
+        "static": (0.0, 100.0),  # N
+        "direction": (1.0, 0.1),  # first-harmonic cosine force per unit F
+        "F": (0.5, 1.0, 10.0, 25.0, 50.0, 80.0, 100.0, 300.0),  # N
+        "H": 8,  # harmonics 0–8
+        "omega_range": (0.01, 6.0),  # rad/s
+    }
+)

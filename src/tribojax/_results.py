@@ -23,6 +23,8 @@ class RESULTS(optx.RESULTS):  # pyright: ignore
       Gauss-Newton step still left is above the fit's tolerance in standard errors.
     - `not_converged`: the fit did not converge, cause not recorded (a `FitResult` built with
       `converged=False` and no result).
+    - `continuation_failed`, `continuation_incomplete`: a pseudo-arclength continuation
+      (`frequency_response`) stopped on a failed corrector, or ran out of points.
 
     `RESULTS[member]` is the message; `result_name(member)` the member's name.
     """
@@ -39,6 +41,14 @@ class RESULTS(optx.RESULTS):  # pyright: ignore
         "large (in standard errors): not at an optimum. Try another start or more steps."
     )
     not_converged = "The fit did not converge."
+    continuation_failed = (
+        "The continuation stopped: the corrector did not converge even at the minimum step. Try a "
+        "smaller minimum step, more harmonics or AFT samples, or another start."
+    )
+    continuation_incomplete = (
+        "The continuation used all its points before reaching the end of the parameter range. "
+        "Give more points or a larger maximum step."
+    )
 
 
 def result_name(result) -> str:

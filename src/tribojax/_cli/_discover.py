@@ -18,9 +18,8 @@ from pathlib import Path
 
 from .._io._loop import HysteresisLoop
 from .._io._records import read_record
-from .._io._tables import DataFileError
 from ..discovery import discover, loop_baseline, plot_discovery, slip_baseline
-from ._common import error, refused_outputs, write_json_atomic
+from ._common import claim_outputs, error, write_json_atomic
 
 
 def add_arguments(parser) -> None:
@@ -45,25 +44,24 @@ def run_discover(args, out=None, err=None) -> int:
     src = Path(args.file)
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
-    why = refused_outputs(src, [target, figure], force=args.force)
-    if why:
-        return error(why, err)
-    try:
+    with claim_outputs(src, [target, figure], force=args.force):
         record = read_record(src)
-        baseline = baseline_for(record)
-        report = discover(baseline, max_effects=args.max_effects)
-    except (DataFileError, ValueError, OSError) as exc:
-        return error(str(exc), err)
-    data = report.as_dict()
-    data["source"] = str(src)
-    write_json_atomic(target, data)
-    drew = plot_discovery(report, figure)
+        try:
+            baseline = baseline_for(record)
+            report = discover(baseline, max_effects=args.max_effects)
+        except ValueError as exc:
+            if str(src) in str(exc) or Path(str(record.source)).name in str(exc):
+                raise
+            raise ValueError(f"{src}: {exc}") from exc
+        data = report.as_dict()
+        data["source"] = str(src)
+        write_json_atomic(target, data, exclusive=not args.force)
+        drew = plot_discovery(report, figure)
     print(f"{src}: {report.kind} record, {len(report.y)} samples", file=out)
     print(report.summary(), file=out)
     print(f"wrote {target}" + (f" and {figure}" if drew else " (no figure: matplotlib missing)"),
           file=out)  # fmt: skip
     if not report.converged:
-        print(f"error: the baseline fit did not converge: {report.baseline_fit['message']}",
-              file=err)  # fmt: skip
-        return 3
+        return error(f"the baseline fit did not converge: {report.baseline_fit['message']}",
+                     err, status=3)  # fmt: skip
     return 0

@@ -12,7 +12,6 @@ fewer data than parameters, an output that exists or would overwrite the input).
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
@@ -23,9 +22,8 @@ from .._fit._slip import fit_slip_run
 from .._fit._start import noise_scale
 from .._io._records import read_record
 from .._io._slip_run import SlipRun
-from .._io._tables import DataFileError
 from .._plot import pyplot, save_figure
-from ._common import error, refused_outputs, write_json_atomic
+from ._common import FAILED, CommandError, claim_outputs, error, warn, write_json_atomic
 
 
 def add_arguments(parser) -> None:
@@ -37,8 +35,15 @@ def add_arguments(parser) -> None:
     parser.add_argument("--out", default=None, help="output folder (default tribojax-out/fit-STEM)")
     parser.add_argument(
         "--alpha",
-        default="free",
+        default=None,
         help="slip runs: 'free' (default) to fit the bristle exponent α, or a fixed value",
+    )
+    parser.add_argument(
+        "--start",
+        nargs="+",
+        default=None,
+        metavar="NAME=VALUE",
+        help="start values, SI units: slip runs F_s, K_tau, C_tau, alpha; loops mu_N, K_d",
     )
     parser.add_argument(
         "--element",
@@ -57,28 +62,27 @@ def add_arguments(parser) -> None:
 
 
 def run_fit(args) -> int:
-    """Run `tribojax fit` with parsed `args`; the exit status (see the module docstring)."""
+    """Run `tribojax fit` with parsed `args`; the exit status (see the module docstring).
+
+    The destination is checked (and reserved against a concurrent run) before the fit.
+    """
     path = Path(args.file)
     out = Path(args.out) if args.out is not None else Path("tribojax-out") / f"fit-{path.stem}"
-    why = refused_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force)
-    if why:
-        return error(why)
     if args.max_steps < 1:
         return error(f"--max-steps = {args.max_steps} must be at least 1")
-    try:
+    start = _parse_start(args.start)
+    with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force):
         record = read_record(path)
-    except DataFileError as err:
-        return error(str(err))
-    t0 = time.perf_counter()
-    try:
+        t0 = time.perf_counter()
         if isinstance(record, SlipRun):
-            result, curves = _fit_slip(record, args)
+            result, curves = _fit_slip(record, args, start)
         else:
-            result, curves = _fit_loop(record, args)
-    except ValueError as err:
-        return error(str(err))
-    result["wall_time_s"] = time.perf_counter() - t0
-    write_json_atomic(out / "fit.json", result)
+            if args.alpha is not None:
+                return error(f"--alpha is for slip runs; {path} is a hysteresis loop")
+            result, curves = _fit_loop(record, args, start)
+        result["wall_time_s"] = time.perf_counter() - t0
+        write_json_atomic(out / "fit.json", result, exclusive=not args.force)
+        drew = _plot(curves, result, out / "fit.png")
     fit = result
     print(f"{result['kind']} {path}: {result['n_data']} samples, fitted {', '.join(fit['fitted'])}")
     for name in fit["fitted"]:
@@ -87,13 +91,43 @@ def run_fit(args) -> int:
     unit = result["residual_unit"]
     print(f"  rms residual {result['rms_residual']:.4g} {unit}; converged: {fit['converged']} "
           f"({fit['steps']} steps, {result['wall_time_s']:.1f} s)")  # fmt: skip
-    print(f"wrote {out / 'fit.json'}")
-    if _plot(curves, result, out / "fit.png"):
-        print(f"wrote {out / 'fit.png'}")
+    print(f"wrote {out / 'fit.json'}" + (f" and {out / 'fit.png'}" if drew else ""))
+    for text in uncertainty_warnings(result):
+        warn(text)
     if not fit["converged"]:
-        print(f"error: the fit did not converge: {fit['message']}", file=sys.stderr)
-        return 1
+        return error(f"the fit did not converge: {fit['message']}", status=FAILED)
     return 0
+
+
+def _parse_start(items) -> dict:
+    """`--start NAME=VALUE ...` as a dict of floats (CommandError naming a malformed item)."""
+    start = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        try:
+            start[name.strip()] = float(value)
+        except ValueError:
+            sep = ""
+        if not sep or not name.strip():
+            raise CommandError(f"--start {item!r}: expected NAME=VALUE with a number")
+    return start
+
+
+def uncertainty_warnings(result: dict) -> list[str]:
+    """Warnings for a fit result whose noise or identifiability is in doubt."""
+    out = []
+    if result.get("noise_consistent") is False:
+        out.append(
+            f"the residuals contradict the stated noise (reduced chi2 = "
+            f"{result['reduced_chi2']:.3g}): standard errors are scaled by the residual"
+        )
+    for d in result.get("unidentifiable", []):
+        combo = " ".join(f"{v:+.3g}*{k}" for k, v in d["direction"].items() if abs(v) > 1e-3)
+        out.append(
+            f"not identifiable from these data: the direction {combo} (relative singular value "
+            f"{d['relative_singular_value']:.2g}); its standard errors are not finite"
+        )
+    return out
 
 
 def _summary(fit, kind, source, n_data, resid, unit, sigma, sigma_source) -> dict:
@@ -109,11 +143,16 @@ def _summary(fit, kind, source, n_data, resid, unit, sigma, sigma_source) -> dic
         sigma_source=sigma_source,
         message=fit.message,
     )
+    if fit.noise_consistent is False:
+        d["uncertainty_model"] = (
+            f"the stated noise ({sigma_source}) is contradicted by the residuals (reduced chi2 = "
+            f"{fit.reduced_chi2:.4g}): standard errors are scaled by sqrt(reduced chi2)"
+        )
     return d
 
 
-def _fit_slip(run, args):
-    if args.alpha == "free":
+def _fit_slip(run, args, start):
+    if args.alpha in (None, "free"):
         alpha = None
     else:
         try:
@@ -124,7 +163,7 @@ def _fit_slip(run, args):
         sigma, how = run.noise_std, "sidecar noise_std_m"
     else:
         sigma, how = None, "estimated from the residuals"
-    fit = fit_slip_run(run, alpha=alpha, max_steps=args.max_steps,
+    fit = fit_slip_run(run, alpha=alpha, max_steps=args.max_steps, start=start or None,
                        progress=lambda m: print(f"  {m}", flush=True))  # fmt: skip
     scale = run.noise_std if run.noise_std is not None else noise_scale(run.slip)
     resid = fit.residuals * scale  # model − data, m
@@ -138,10 +177,11 @@ def _fit_slip(run, args):
     return d, curves
 
 
-def _fit_loop(loop, args):
+def _fit_loop(loop, args, start):
     if len(loop.t) <= 2:
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
-    fit = fit_loop(loop, args.element, model=args.model, max_steps=args.max_steps)
+    fit = fit_loop(loop, args.element, model=args.model, max_steps=args.max_steps,
+                   start=start or None)  # fmt: skip
     scale = loop.noise_std if loop.noise_std is not None else 1.0
     resid = fit.residuals * scale  # N, on the fitted samples (the last len(resid))
     m = len(resid)

@@ -25,10 +25,9 @@ from .._friction._lugre import PreSlipLuGre
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._files import write_text_atomic
 from .._io._loop import read_loop
-from .._io._tables import DataFileError
 from .._plot import pyplot, save_figure
 from .._reproduce._wu2015 import wu2015_eq5_stiffness
-from ._common import error, write_json_atomic
+from ._common import claim_outputs, error, write_json_atomic
 
 
 def add_arguments(parser) -> None:
@@ -65,7 +64,11 @@ def add_arguments(parser) -> None:
 
 
 def run_hysteresis(args) -> int:
-    """Run `tribojax hysteresis`: 0 done, 1 the loop fit did not converge, 2 bad input."""
+    """Run `tribojax hysteresis`: 0 done, 1 the loop fit did not converge, 2 bad input.
+
+    Everything is computed (and a --loop read and fitted) before the first file is written, so
+    a refused input leaves no output behind.
+    """
     out = Path(args.out)
     if args.loop is not None and out.resolve() == Path(args.loop).resolve().parent:
         return error("--out must not be the folder of the --loop file")
@@ -73,17 +76,20 @@ def run_hysteresis(args) -> int:
         return error(f"--n = {args.n} must be at least 2")
     if args.loop is not None and args.element == "lugre":
         return error("--loop fits a jenkins or mindlin element, not lugre")
+    loop_result = _fit_loop(args) if args.loop is not None else None
     K_d = args.K_d if args.K_d is not None else float(wu2015_eq5_stiffness(args.N))
-    try:
-        if args.element == "lugre":
-            element = PreSlipLuGre(args.mu * args.N, K_d, args.C_tau)
-            A0 = float(element.z_max)
-        else:
-            element = {"jenkins": Jenkins, "mindlin": Mindlin}[args.element](args.mu, args.N, K_d)
-            A0 = float(element.A0)
-        lo, hi = args.A if args.A is not None else [a * A0 for a in (args.abar or (0.05, 4.5))]
-        if not 0 < lo < hi:
-            raise ValueError(f"amplitude range ({lo:g}, {hi:g}) m must satisfy 0 < min < max")
+    if args.element == "lugre":
+        element = PreSlipLuGre(args.mu * args.N, K_d, args.C_tau)
+        A0 = float(element.z_max)
+    else:
+        element = {"jenkins": Jenkins, "mindlin": Mindlin}[args.element](args.mu, args.N, K_d)
+        A0 = float(element.A0)
+    lo, hi = args.A if args.A is not None else [a * A0 for a in (args.abar or (0.05, 4.5))]
+    if not 0 < lo < hi < math.inf:
+        raise ValueError(f"amplitude range ({lo:g}, {hi:g}) m must satisfy 0 < min < max < inf")
+    targets = [out / "hysteresis.csv", out / "hysteresis.png"]
+    targets += [out / "loop_fit.json"] if loop_result is not None else []
+    with claim_outputs(args.loop, targets, force=True):
         A = jnp.linspace(lo, hi, args.n)
         if args.element == "lugre":
             hb = _lugre_response(element, A, args.omega, K_d, A0)
@@ -91,29 +97,28 @@ def run_hysteresis(args) -> int:
             hb = jax.jit(jax.vmap(harmonic_balance, in_axes=(None, 0, None)))(
                 element, A, args.omega
             )
-    except ValueError as err:
-        return error(str(err))
-    out.mkdir(parents=True, exist_ok=True)
-    cols = ("A", "A_bar", "K_eq", "C_eq", "K_bar", "C_bar", "W")
-    header = "A_m,A_bar,K_eq_N_per_m,C_eq_Ns_per_m,K_bar,C_bar,W_J"
-    table = np.stack([np.asarray(getattr(hb, c)) for c in cols], axis=1)
-    comment = (
-        f"# tribojax hysteresis: {args.element}, mu = {args.mu:g}, N = {args.N:g} N, "
-        f"K_d = {K_d:.6g} N/m, A0 = {A0:.6g} m, omega = {args.omega:.6g} rad/s"
-    )
-    csv_path = out / "hysteresis.csv"
-    text = io.StringIO()
-    np.savetxt(text, table, delimiter=",", header=header, comments=comment + "\n", fmt="%.12g")
-    write_text_atomic(csv_path, text.getvalue())
-    print(comment[2:])
-    print(f"K_bar {float(hb.K_bar[0]):.4f} .. {float(hb.K_bar[-1]):.4f}; C_bar max ", end="")
-    print(f"{float(hb.C_bar.max()):.4f} at A_bar {float(hb.A_bar[int(hb.C_bar.argmax())]):.3f}")
-    print(f"wrote {csv_path}")
-    if _plot(hb, args.element, out / "hysteresis.png"):
-        print(f"wrote {out / 'hysteresis.png'}")
-    if args.loop is not None:
-        return _fit_loop(args, out)
-    return 0
+        cols = ("A", "A_bar", "K_eq", "C_eq", "K_bar", "C_bar", "W")
+        header = "A_m,A_bar,K_eq_N_per_m,C_eq_Ns_per_m,K_bar,C_bar,W_J"
+        table = np.stack([np.asarray(getattr(hb, c)) for c in cols], axis=1)
+        comment = (
+            f"# tribojax hysteresis: {args.element}, mu = {args.mu:g}, N = {args.N:g} N, "
+            f"K_d = {K_d:.6g} N/m, A0 = {A0:.6g} m, omega = {args.omega:.6g} rad/s"
+        )
+        csv_path = out / "hysteresis.csv"
+        text = io.StringIO()
+        np.savetxt(text, table, delimiter=",", header=header, comments=comment + "\n", fmt="%.12g")
+        write_text_atomic(csv_path, text.getvalue())
+        print(comment[2:])
+        print(f"K_bar {float(hb.K_bar[0]):.4f} .. {float(hb.K_bar[-1]):.4f}; C_bar max ", end="")
+        print(f"{float(hb.C_bar.max()):.4f} at A_bar {float(hb.A_bar[int(hb.C_bar.argmax())]):.3f}")
+        print(f"wrote {csv_path}")
+        if _plot(hb, args.element, out / "hysteresis.png"):
+            print(f"wrote {out / 'hysteresis.png'}")
+        if loop_result is None:
+            return 0
+        write_json_atomic(out / "loop_fit.json", loop_result)
+    print(f"wrote {out / 'loop_fit.json'}")
+    return 0 if loop_result["fit"]["converged"] else 1
 
 
 def _lugre_response(element, A, omega, K_d, A0):
@@ -134,17 +139,14 @@ def _lugre_response(element, A, omega, K_d, A0):
     return jax.jit(jax.vmap(one))(A)
 
 
-def _fit_loop(args, out: Path) -> int:
-    try:
-        loop = read_loop(args.loop)
-        analysis = analyse_loop(loop)
-        fit = fit_loop(loop, args.element, model=args.fit_model)
-    except (DataFileError, ValueError) as err:
-        return error(str(err))
+def _fit_loop(args) -> dict:
+    """Read, analyse and fit the --loop file; the loop_fit.json content (printed summary)."""
+    loop = read_loop(args.loop)
+    analysis = analyse_loop(loop)
+    fit = fit_loop(loop, args.element, model=args.fit_model)
     result = {"loop": str(args.loop), "analysis": analysis.as_dict(), "fit": fit.as_dict()}
     result["fit"]["element"] = args.element
     result["fit"]["model"] = args.fit_model
-    write_json_atomic(out / "loop_fit.json", result)
     a = analysis
     print(
         f"loop: A = {a.A:.4g} m, muN = {a.mu_N:.4g} N, K_d (Eq 6) = {a.K_d:.4g} N/m, "
@@ -157,8 +159,7 @@ def _fit_loop(args, out: Path) -> int:
         )
         + f" (converged: {fit.converged}, {fit.steps} steps)"
     )
-    print(f"wrote {out / 'loop_fit.json'}")
-    return 0 if fit.converged else 1
+    return result
 
 
 def _plot(hb, element: str, path: Path) -> bool:

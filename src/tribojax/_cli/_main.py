@@ -6,6 +6,10 @@ tribojax reproduce [--out DIR]   wang2022 Table 3 (published inputs and calibrat
 tribojax contact (--topography FILE | --D D --G G) --load N [...]   surface → D, G → F_s, K_τ, C_τ
 tribojax hysteresis [...]        K̄, C̄ (and K_eq, C_eq) of a Jenkins/Mindlin/LuGre element
 tribojax fit FILE.csv [--out DIR] fit a user's slip run or hysteresis loop: JSON + plot
+tribojax discover FILE.csv        find the effect a record's model is missing
+
+Errors: one line `tribojax <cmd>: error: <message>` and exit status 2 (bad input) or 1 (failed
+computation); `--debug` shows the traceback; Ctrl-C exits 130.
 """
 
 from __future__ import annotations
@@ -15,24 +19,19 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from .. import __version__
-from .. import _presets as P
-from .._contact._contact import FractalContact
-from .._contact._surface import FractalSurface
 from .._fit import _chain as chain_fit
+from .._fit import _robust as robust_fit
+from .._fit._figure import plot_fit_measured
 from .._plot import pyplot, save_figure
-from .._presets import wang2022_pair
 from .._reproduce._table3 import calibrate_table3, max_rel_error, reproduce_table3
 from .._reproduce._tables4to7 import plot_figure10, print_tables4to7, reproduce_tables4to7
 from .._reproduce._wu2015 import plot_wu2015, wu2015_comparison
-from .._roughness._estimate import estimate_fractal
-from .._roughness._topography import read_topography
-from . import _discover, _fit, _hysteresis
-from ._common import write_json_atomic
+from . import _contact, _discover, _fit, _frf, _hysteresis
+from ._common import claim_outputs, run_command, write_json_atomic
+from ._contact import CONTACT_DEFAULTS as CONTACT_DEFAULTS
 
-__all__ = ["main", "write_json_atomic"]
+__all__ = ["SUBCOMMANDS", "build_parser", "main", "write_json_atomic"]
 
 
 def _print_table3(rows, out=sys.stdout) -> None:
@@ -90,15 +89,17 @@ def _reproduce_slip_tables(result: dict, out_dir: Path) -> None:
         print(f"wrote {out_dir / 'figure10.png'}")
 
 
-def _reproduce_fit_measured(result: dict, start=None) -> bool:
-    """The full-chain fit to the measured Tables 4–7 into result["fit_measured"]; True if it
-    converged. One start here; the multi-start study is `python -m fitting.wang2022_slip`."""
+def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = None) -> bool:
+    """The full-chain fits to the measured Tables 4–7 into result["fit_measured"]: the plain
+    relative least-squares fit (the block's issue-5 keys) and the robust Student-t fit (issue 19:
+    "loss", "flagged_cells", "rms_relative_residual_unflagged", ..., and "robust"); True if
+    both converged. One start here; the studies are `python -m fitting.wang2022_slip` and
+    `python -m fitting.wang2022_robust`."""
     print("wang2022 Tables 4-7 (measured): full-chain fit of D, G, mu_t (LM through diffrax) ...")
     fit = chain_fit.fit_measured_slips(start, progress=True)
     block = fit.as_dict()
-    block["paper_theory_rms_relative_residual"] = chain_fit.rms_relative(
-        chain_fit.paper_theory_slips(), chain_fit.measured_slips()
-    )
+    measured, paper = chain_fit.measured_slips(), chain_fit.paper_theory_slips()
+    block["paper_theory_rms_relative_residual"] = chain_fit.rms_relative(paper, measured)
     block["symmetric_model_bound_rms_relative_residual"] = chain_fit.symmetric_bound()[
         "rms_relative_residual"
     ]
@@ -107,7 +108,6 @@ def _reproduce_fit_measured(result: dict, start=None) -> bool:
         "(residual = model/measured - 1); metric: RMS relative residual over the 24 cells"
     )
     block["multistart_study"] = "python -m fitting.wang2022_slip"
-    result["fit_measured"] = block
     print(
         "fit_measured: "
         + ", ".join(
@@ -118,17 +118,61 @@ def _reproduce_fit_measured(result: dict, start=None) -> bool:
         f"{block['symmetric_model_bound_rms_relative_residual']:.3f}); converged: "
         f"{fit.converged}, {fit.fit.steps} steps, {fit.wall_s:.1f} s"
     )
-    if not fit.converged:
-        print(
-            f"ERROR: the full-chain fit to the measured slips did not converge: {fit.fit.message}",
-            file=sys.stderr,
-        )
-    return fit.converged
+    result["fit_measured"] = block
+    if not fit.converged:  # the robust fit starts from it: not attempted
+        print(f"ERROR: the full-chain fit to the measured slips did not converge: "
+              f"{fit.fit.message}", file=sys.stderr)  # fmt: skip
+        return False
+    print("robust fit (Student-t noise by EM on the same engine) ...")
+    t0 = time.perf_counter()
+    robust = robust_fit.robust_fit_measured_slips(
+        noise=robust_fit.HEADLINE_NOISE, floor_nm=robust_fit.HEADLINE_FLOOR_NM,
+        nu=robust_fit.HEADLINE_NU, initial=fit,
+    )  # fmt: skip
+    rd = robust.as_dict()
+    keep = ~robust.flagged
+    block["loss"] = rd["loss"]
+    block["flagged_cells"] = rd["flagged_cells"]
+    block["rms_relative_residual_unflagged"] = rd["rms_relative_residual_unflagged"]
+    block["paper_theory_rms_relative_residual_unflagged"] = rd[
+        "paper_theory_rms_relative_residual_unflagged"
+    ]
+    block["plain_rms_relative_residual_unflagged"] = robust_fit.rms_relative_masked(
+        fit.model_nm, measured, keep
+    )
+    block["robust"] = rd
+    block["robust_study"] = "python -m fitting.wang2022_robust"
+    flagged = ", ".join(
+        f"Table {c['table']} at {c['vacuum_kPa']:g} kPa (z = {c['standardized_residual']:.1f})"
+        for c in rd["flagged_cells"]
+    )
+    print(
+        "robust fit: "
+        + ", ".join(f"{k} = {rd['parameters'][k]:.4g}" for k in robust.free)
+        + f"; flagged: {flagged or 'none'}; RMS rel. residual over the unflagged cells "
+        f"{rd['rms_relative_residual_unflagged']:.3f} (paper theory "
+        f"{rd['paper_theory_rms_relative_residual_unflagged']:.3f}, plain fit "
+        f"{block['plain_rms_relative_residual_unflagged']:.3f}); converged: {robust.converged}, "
+        f"{len(robust.history) - 1} EM steps, {time.perf_counter() - t0:.1f} s"
+    )
+    fig_path = None if out_dir is None else out_dir / "fit_measured.png"
+    if fig_path and plot_fit_measured(fit.model_nm, robust.model_nm, robust.flagged, fig_path):
+        print(f"wrote {out_dir / 'fit_measured.png'}")
+    if not robust.converged:
+        print(f"ERROR: the robust full-chain fit did not converge: {rd['result']} "
+              f"({robust.chain.fit.message})", file=sys.stderr)  # fmt: skip
+    return robust.converged
 
 
 def cmd_reproduce(args) -> int:
     """`tribojax reproduce`: 0 when every fit converged, else 1."""
     out_dir = Path(args.out)
+    names = ("reproduction.json", "table3.png", "figure10.png", "wu2015.png")
+    with claim_outputs(None, [out_dir / n for n in names], force=True):
+        return _reproduce(out_dir)
+
+
+def _reproduce(out_dir: Path) -> int:
     t0 = time.perf_counter()
     print("wang2022 Table 3: calibrating G, mu_t, sigma_s (optimistix Levenberg-Marquardt) ...")
     fit = calibrate_table3()
@@ -160,7 +204,7 @@ def cmd_reproduce(args) -> int:
     if not cal["converged"]:
         print(f"WARNING: the calibration did not converge: {cal['message']}", file=sys.stderr)
     _reproduce_slip_tables(result, out_dir)
-    measured_ok = _reproduce_fit_measured(result)
+    measured_ok = _reproduce_fit_measured(result, out_dir=out_dir)
     result["tribojax_version"] = __version__
     result["wu2015"] = _reproduce_wu2015(out_dir)
     json_path = out_dir / "reproduction.json"
@@ -173,98 +217,6 @@ def cmd_reproduce(args) -> int:
     if not alpha_ok:
         print("WARNING: the alpha fit to Tables 4 and 6 did not converge", file=sys.stderr)
     return 0 if cal["converged"] and alpha_ok and measured_ok else 1
-
-
-CONTACT_DEFAULTS = dict(
-    M=P.CALIBRATED_M,
-    gamma=P.WANG2022_GAMMA,
-    sigma_s=P.CALIBRATED_SIGMA_S,
-    mu_t=P.CALIBRATED_MU_T,
-    tangential_load=P.WANG2022_TANGENTIAL_LOAD_N,
-    mass=P.WANG2022_RETICLE_MASS_KG,
-)  # wang2022 pair, Table-3-calibrated constants (tribojax._presets)
-
-
-def cmd_contact(args) -> int:
-    """`tribojax contact`: F_s, K_τ, C_τ at each load; 0 when every contact solve converged."""
-    result = {"assumed": {}}
-    if args.topography is not None:
-        if args.D is not None or args.G is not None:
-            raise SystemExit("give either --topography or --D/--G, not both")
-        topo = read_topography(args.topography, unit=args.unit, dx=args.dx)
-        est = estimate_fractal(
-            topo, args.method, band=args.band, M=int(args.M), min_decades=args.min_decades
-        )
-        D, G = est.D, est.G
-        result["surface"] = est.as_dict()
-        print(
-            f"{topo.source}: D = {D:.4f} ± {est.D_std:.4f}, G = {G:.4g} m (± {est.log10G_std:.2f} "
-            f"in log10) by {est.method}, band {est.band[0]:.3g}-{est.band[1]:.3g} m"
-        )
-    elif args.D is not None and args.G is not None:
-        D, G = args.D, args.G
-        result["surface"] = {"D": D, "G": G, "method": "given"}
-    else:
-        raise SystemExit("give --topography FILE, or both --D and --G")
-    for k in CONTACT_DEFAULTS:
-        result["assumed"][k] = getattr(args, k)
-    result["assumed"]["materials"] = (
-        "wang2022 Table 2 pair (E* 41.28 GPa, G' 9.158 GPa, H 1.372 GPa)"
-    )
-    print(
-        "assumed: "
-        + ", ".join(f"{k} = {v:g}" for k, v in result["assumed"].items() if not isinstance(v, str))
-        + "; wang2022 Table 2 materials"
-    )
-    pair = wang2022_pair(sigma_s=args.sigma_s)
-    model = FractalContact(
-        FractalSurface(D, G, args.M, gamma=args.gamma),
-        pair,
-        mu_t=args.mu_t,
-        tangential_load=args.tangential_load,
-        mass=args.mass,
-    )
-    rows = []
-    print(f"{'load/N':>9} {'F_s/N':>10} {'K_tau/(N/m)':>12} {'C_tau/(Ns/m)':>12} {'z_max/nm':>9}")
-    for load in args.load:
-        out = model(load)
-        row = {
-            "load_N": load,
-            "Fs_N": float(out.F_s),
-            "Ktau_N_per_m": float(out.K_tau),
-            "Ctau_Ns_per_m": float(out.C_tau),
-            "zmax_m": float(out.z_max),
-            "load_share": np.asarray(out.load_share).tolist(),
-            "converged": bool(out.converged),
-            "all_plastic": bool(out.all_plastic),
-        }
-        rows.append(row)
-        print(
-            f"{load:9.4g} {row['Fs_N']:10.4g} {row['Ktau_N_per_m']:12.4g} "
-            f"{row['Ctau_Ns_per_m']:12.4g} {1e9 * row['zmax_m']:9.4g}"
-        )
-    result["contact"] = rows
-    if args.json:
-        write_json_atomic(Path(args.json), result)
-        print(f"wrote {args.json}")
-    return 0 if all(r["converged"] for r in rows) else 1
-
-
-def _add_contact_parser(sub) -> None:
-    con = sub.add_parser("contact", help="contact parameters from a topography file or D, G")
-    con.add_argument("--topography", help="profile/height map (.csv, .txt, .npy, instrument files)")
-    con.add_argument("--unit", default="m", help="length unit of a plain file (m, mm, um, nm)")
-    con.add_argument("--dx", type=float, help="sampling interval (in --unit) for .npy/matrices")
-    con.add_argument("--method", default="psd", choices=("psd", "structure", "rms"))
-    con.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"), help="fit band, m")
-    con.add_argument("--min-decades", type=float, default=1.0)
-    con.add_argument("--D", type=float, help="surface fractal dimension (2, 3)")
-    con.add_argument("--G", type=float, help="fractal roughness, m")
-    con.add_argument("--load", type=float, nargs="+", required=True, help="normal load(s), N")
-    for k, v in CONTACT_DEFAULTS.items():
-        con.add_argument("--" + k.replace("_", "-"), dest=k, type=float, default=v)
-    con.add_argument("--json", help="write the results to this JSON file")
-    con.set_defaults(func=cmd_contact)
 
 
 def _reproduce_wu2015(out_dir: Path) -> dict:
@@ -282,26 +234,53 @@ def _reproduce_wu2015(out_dir: Path) -> dict:
     return {"eq7_rms": comparison["eq7_rms"], "cbar_peak": comparison["cbar_peak"]}
 
 
-def main(argv=None) -> int:
+def _add_reproduce_arguments(parser) -> None:
+    parser.add_argument(
+        "--out", default="tribojax-out", help="output folder (default tribojax-out)"
+    )
+
+
+# The subcommands: (name, help, add_arguments(parser), run(args) -> exit status). A new
+# subcommand is one line here and one module in this package; errors go through `run_command`.
+SUBCOMMANDS = [
+    ("reproduce", "reproduce wang2022 Tables 3-7 and wu2015 K̄, C̄", _add_reproduce_arguments,
+     cmd_reproduce),
+    ("contact", "contact parameters from a topography file or D, G", _contact.add_arguments,
+     _contact.run_contact),
+    ("hysteresis", "K̄, C̄ of a Jenkins or Mindlin element (wu2015)", _hysteresis.add_arguments,
+     _hysteresis.run_hysteresis),
+    ("discover", "find the effect a slip run or loop's model is missing", _discover.add_arguments,
+     _discover.run_discover),
+    ("fit", "fit a slip run or hysteresis loop CSV (+ sidecar JSON)", _fit.add_arguments,
+     _fit.run_fit),
+    ("frf", "forced response of a structure with friction contacts", _frf.add_arguments,
+     _frf.run_frf),
+]  # fmt: skip
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The `tribojax` argument parser with every subcommand of `SUBCOMMANDS`."""
     parser = argparse.ArgumentParser(
         prog="tribojax", description="Rough-surface contact and friction models (JAX)."
     )
+    parser.add_argument("--version", action="version", version=f"tribojax {__version__}")
+    debug = dict(action="store_true", help="show the traceback of an error")
+    parser.add_argument("--debug", **debug)
     sub = parser.add_subparsers(dest="command", required=True)
-    rep = sub.add_parser("reproduce", help="reproduce wang2022 Tables 3-7 and wu2015 K̄, C̄")
-    rep.add_argument("--out", default="tribojax-out", help="output folder (default tribojax-out)")
-    rep.set_defaults(func=cmd_reproduce)
-    _add_contact_parser(sub)
-    hys = sub.add_parser("hysteresis", help="K̄, C̄ of a Jenkins or Mindlin element (wu2015)")
-    _hysteresis.add_arguments(hys)
-    hys.set_defaults(func=_hysteresis.run_hysteresis)
-    dis = sub.add_parser("discover", help="find the effect a slip run or loop's model is missing")
-    _discover.add_arguments(dis)
-    dis.set_defaults(func=_discover.run_discover)
-    fit = sub.add_parser("fit", help="fit a slip run or hysteresis loop CSV (+ sidecar JSON)")
-    _fit.add_arguments(fit)
-    fit.set_defaults(func=_fit.run_fit)
-    args = parser.parse_args(argv)
-    return args.func(args)
+    for name, help_text, add_arguments, run in SUBCOMMANDS:
+        cmd = sub.add_parser(name, help=help_text)
+        add_arguments(cmd)
+        cmd.add_argument("--debug", dest="debug_here", **debug)
+        cmd.set_defaults(func=run)
+    return parser
+
+
+def main(argv=None) -> int:
+    """`tribojax`: the exit status of the subcommand (0 done, 1 failed computation, 2 bad
+    input, 130 interrupted); errors are one line `tribojax <cmd>: error: ...`."""
+    args = build_parser().parse_args(argv)
+    debug = args.debug or args.debug_here
+    return run_command(args.command, args.func, args, debug=debug)
 
 
 if __name__ == "__main__":

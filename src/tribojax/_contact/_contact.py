@@ -14,10 +14,12 @@ log a'_l with an optimistix Newton root find and differentiated by the implicit 
 """
 
 import math
+import warnings
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optimistix as optx
 from jaxtyping import Array, Bool, Float
 
@@ -66,6 +68,9 @@ def regime_integral(law: PowerLaw, log_lo, log_hi, log_al, D):
     return jnp.exp(log_pref + q * base) * span * _expm1_over_x(-jnp.abs(q) * span)
 
 
+_SURFACE = ("D", "G", "M", "gamma")
+
+
 def _regime_bounds(log_ec, log_epc, log_pc):
     """(lo, hi) in log a' for each regime, ELASTIC … PLASTIC; None = a'_l above, 0 below."""
     return ((log_ec, None), (log_epc, log_ec), (log_pc, log_epc), (None, log_pc))
@@ -106,6 +111,8 @@ class ContactParameters(eqx.Module):
         converged:  whether the load balance converged.
         all_plastic: every asperity is fully plastic (a'_l <= a'_pc): the model then carries no
                     tangential load, and F_s, K_τ, C_τ and z_max are returned as 0.
+        no_static_friction: F_s = z_max = 0 with K_τ > 0 (a'_l <= a'_epc); an eager call
+                    with throw=True warns (RuntimeWarning), an all-plastic contact raises.
     """
 
     values: Float[Array, "... 16"]
@@ -125,6 +132,12 @@ class ContactParameters(eqx.Module):
     @property
     def all_plastic(self):
         return self.flags[..., 1]
+
+    @property
+    def no_static_friction(self):
+        """F_s = z_max = 0 although the contact is not all plastic: no asperity is elastic or
+        first elastic–plastic (a'_l <= a'_epc), the only ones that carry static friction."""
+        return (self.values[..., 1] == 0.0) & ~self.flags[..., 1]
 
     def as_dict(self) -> dict:
         """Plain dict of NumPy values (for printing and JSON)."""
@@ -236,10 +249,27 @@ class FractalContact(eqx.Module):
         inlined.
         """
         ensure_x64()
-        load = check_range(load, "load", 0.0, unit="N")
+        load = check_range(load, "load", 0.0, math.inf, unit="N")
+        for name, value in (("load", load), *((k, getattr(self.surface, k)) for k in _SURFACE)):
+            if not isinstance(value, jax.core.Tracer) and jnp.ndim(value) != 0:
+                raise ValueError(
+                    f"{name} has shape {jnp.shape(value)}; FractalContact evaluates one surface at "
+                    "one load (a scalar): use jax.vmap over loads, eqx.filter_vmap over surfaces"
+                )
         psi = self.tangential_load / (self.mu_t * load)
         fail_if(psi, psi >= 1.0, self._psi_message(load))
-        return _evaluate(self, load)
+        out = _evaluate(self, load)
+        if self.throw and not isinstance(out.values, jax.core.Tracer):
+            static_zero = np.asarray(out.no_static_friction)
+            if static_zero.any():
+                warnings.warn(
+                    "no asperity is elastic or first elastic-plastic (a'_l <= a'_epc), so F_s and "
+                    "z_max are 0 (wang2022 Eqs 14, 16) while K_tau is not: D is close to 3 or G "
+                    "large for this load; check D, G, M and the units of the load",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+        return out
 
     def _psi_message(self, load) -> str:
         msg = (

@@ -127,11 +127,16 @@ def _announce(phys):
 
 
 def _residuals(theta, args, adjoint):
-    theta_full0, idx, mu_min_, y, loads = args
+    # (model − y)/σ·√w per cell (σ = y: model/y − 1, the default), or (ln|model| − ln|y|)/σ·√w
+    # in log form; the robust fit passes its noise model's σ, form and IRLS weights w (one
+    # compiled solve serves all)
+    theta_full0, idx, mu_min_, y, sigma, sqrt_w, log_form, loads = args
     phys = to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_min_)
     jax.debug.callback(_announce, jax.lax.stop_gradient(phys))
     slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
-    r = jnp.where(ok[:, None], slips / y - 1.0, FAILED_RESIDUAL).ravel()
+    safe = jnp.where(slips == 0, 1.0, slips)  # double-where: ln|0| is not used
+    d = jnp.where(log_form > 0.5, jnp.log(jnp.abs(safe)) - jnp.log(jnp.abs(y)), slips - y)
+    r = jnp.where(ok[:, None], sqrt_w * d / sigma, FAILED_RESIDUAL).ravel()
     jax.debug.callback(_report, jax.lax.stop_gradient(r @ r), jax.lax.stop_gradient(phys))
     return r
 
@@ -258,6 +263,9 @@ def fit_measured_slips(
     rtol=1e-3,
     atol=1e-4,
     progress=False,
+    sigma=None,
+    weights=None,
+    log_residuals=False,
 ) -> ChainFit:
     """Fit the free chain parameters to measured phase slips by Levenberg–Marquardt.
 
@@ -275,6 +283,12 @@ def fit_measured_slips(
             the chain's accuracy (slips to ~2e-4 relative, `SLIP_ATOL`); tighter ones make LM
             wander along the flat D–G valley without lowering the misfit.
         progress: print one line per residual evaluation to stderr (long fits).
+        sigma: (n, 4) uncertainty shape per cell, nm (default: the target itself, i.e. relative
+            residuals model/measured − 1); the common scale is estimated from the fit.
+        weights: (n, 4) positive weights per cell (default 1): residuals are multiplied by
+            √weight (iteratively reweighted least squares, `robust_fit_measured_slips`).
+        log_residuals: residuals (ln|model| − ln|target|)/sigma instead of (model − target)/sigma
+            (a relative error model whose heavy-tailed form is a proper density).
     Returns:
         ChainFit; `result` a `tribojax.RESULTS` member, `converged` False (with `fit.message`)
         when LM did not succeed or stopped short of the optimum (`RESULTS.short_of_optimum`:
@@ -306,6 +320,13 @@ def fit_measured_slips(
             f"{target.size} data for {len(free)} free parameters: a fit needs more data than "
             "parameters"
         )
+    sigma = target if sigma is None else np.asarray(sigma, dtype=float)
+    weights = np.ones_like(target) if weights is None else np.asarray(weights, dtype=float)
+    for name, a in (("sigma", sigma), ("weights", weights)):
+        if a.shape != target.shape or not np.all(np.isfinite(a)):
+            raise ValueError(f"{name} must be finite with the target's shape {target.shape}")
+    if np.any(sigma == 0) or np.any(weights <= 0):
+        raise ValueError("sigma must be non-zero and weights > 0 in every cell")
     start_full = dict(DEFAULTS)
     for k, v in dict(start or {}).items():
         if k not in PARAMETERS:
@@ -314,7 +335,8 @@ def fit_measured_slips(
     mu_lo = mu_min(loads)
     theta_full0 = jnp.asarray(to_theta([start_full[k] for k in PARAMETERS], PARAMETERS, mu_lo))
     idx = jnp.array([PARAMETERS.index(n) for n in free])
-    args = (theta_full0, idx, jnp.asarray(mu_lo), jnp.asarray(target), loads)
+    args = (theta_full0, idx, jnp.asarray(mu_lo), jnp.asarray(target), jnp.asarray(sigma),
+            jnp.asarray(np.sqrt(weights)), jnp.asarray(float(log_residuals)), loads)  # fmt: skip
     residuals = _residuals_fwd if jac == "fwd" else _residuals_bwd
 
     def transform(theta):
@@ -343,7 +365,8 @@ def fit_measured_slips(
     theta = jnp.asarray(fit.theta)
     phys = np.asarray(to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo))
     r, J = fit.residuals, fit.jacobian  # at the optimum, from least_squares_fit's statistics
-    model = (r.reshape(target.shape) + 1.0) * target
+    d = r.reshape(target.shape) / np.sqrt(weights) * sigma
+    model = target * np.exp(d) if log_residuals else d + target
     # scaled Jacobian: ∂r/∂log p = J_θ (dp/dθ)^-1 diag(p) (transform is diagonal)
     dpdth = np.diag(np.asarray(jax.jacfwd(transform)(jnp.asarray(fit.theta))))
     S = J / dpdth[None, :] * np.asarray(fit.values)[None, :]

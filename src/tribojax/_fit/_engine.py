@@ -22,6 +22,17 @@ import optimistix as optx
 from .._precision import ensure_x64
 from .._results import RESULTS, result_name
 
+# A direction of θ whose singular value is below this fraction of the largest is reported as not
+# identifiable (the Jacobian is numerically rank-deficient at the square root of float64's eps).
+IDENTIFIABLE_RTOL = 1e-8
+
+
+def noise_limit(dof: int) -> float:
+    """Largest reduced χ² still consistent with the stated noise: 2, or 1 + 5·√(2/dof) for few
+    degrees of freedom (χ²/dof has standard deviation √(2/dof))."""
+    return max(2.0, 1.0 + 5.0 * (2.0 / max(dof, 1)) ** 0.5)
+
+
 # Residual (in units of the uncertainty) of a row where the model could not be evaluated (ODE
 # budget, failed load balance, all-plastic contact): far above any real misfit, so that LM
 # rejects the trial point.
@@ -47,6 +58,13 @@ class FitResult:
         fixed: constants held fixed in the fit (set by the caller, e.g. {"M": 1.0}).
         jacobian: ∂residuals/∂θ at the optimum, (n, p) (`least_squares_fit`; None elsewhere).
         result: the outcome, a `tribojax.RESULTS` member.
+        reduced_chi2: RSS/(n − p) of the residuals (in units of the stated noise if known).
+        noise_consistent: with a stated noise, whether `reduced_chi2` is consistent with it
+            (≤ `noise_limit`); when not, the standard errors are scaled by the residual. None
+            when the noise scale was estimated from the residuals.
+        unidentifiable: the directions of θ that the data do not determine (relative singular
+            value ≤ `IDENTIFIABLE_RTOL`), each {"direction": {name: component},
+            "relative_singular_value": s_k/s_max}; `converged` says nothing about these.
     """
 
     names: tuple[str, ...]
@@ -63,6 +81,9 @@ class FitResult:
     fixed: dict = dataclasses.field(default_factory=dict)
     jacobian: np.ndarray | None = None
     result: RESULTS | None = None
+    reduced_chi2: float | None = None
+    noise_consistent: bool | None = None
+    unidentifiable: tuple = ()
 
     def __post_init__(self):
         result = self.result
@@ -97,6 +118,10 @@ class FitResult:
             "singular_values": self.singular_values.tolist(),
             "fixed": dict(self.fixed),
             "result": result_name(self.result),
+            "reduced_chi2": self.reduced_chi2,
+            "noise_consistent": self.noise_consistent,
+            "identified": not self.unidentifiable,
+            "unidentifiable": [dict(d) for d in self.unidentifiable],
         }
 
 
@@ -124,13 +149,18 @@ def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps,
     Covariance of θ: s²(JᵀJ)⁻¹ through the SVD of J (s² = RSS/(n − p), or 1 if `sigma_known`);
     directions with singular values ≤ 1e-14 of the largest get infinite variance. Mapped to the
     physical parameters `transform(θ)` by the delta method, T·cov·Tᵀ with T = ∂transform/∂θ.
+    With `sigma_known` and a reduced χ² above `noise_limit` the stated noise is contradicted by
+    the misfit: `noise_consistent` is False and s² = RSS/(n − p) is used instead of 1. Directions
+    of θ with singular values ≤ `IDENTIFIABLE_RTOL` of the largest are listed in `unidentifiable`.
     """
     theta = np.asarray(theta, dtype=np.float64)
     r, J = np.asarray(r, dtype=np.float64), np.asarray(J, dtype=np.float64)
     n, p = J.shape
     _, sv, vt = np.linalg.svd(J, full_matrices=False)
     tiny = sv <= (sv[0] if sv.size else 0.0) * 1e-14  # (no parameters: nothing is tiny)
-    scale2 = 1.0 if sigma_known else float(r @ r) / max(n - p, 1)
+    chi2 = float(r @ r) / max(n - p, 1)
+    consistent = bool(chi2 <= noise_limit(n - p)) if sigma_known else None
+    scale2 = 1.0 if consistent else chi2
     T = np.asarray(jax.jacfwd(transform)(jnp.asarray(theta)))
     # T·V·S⁻¹ over the determined directions; a parameter that moves along an undetermined one
     # (singular value ~0) gets infinite variance (and no NaN from 0·inf)
@@ -144,8 +174,22 @@ def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps,
     return FitResult(
         names=tuple(names), values=np.asarray(transform(jnp.asarray(theta))), std_errors=std,
         covariance=cov, correlation=corr, theta=theta, residuals=r, singular_values=sv,
-        steps=int(steps), message=message, jacobian=J, result=result,
+        steps=int(steps), message=message, jacobian=J, result=result, reduced_chi2=chi2,
+        noise_consistent=consistent, unidentifiable=_singular_directions(sv, vt, names),
     )  # fmt: skip
+
+
+def _singular_directions(sv, vt, names) -> tuple:
+    """The directions of θ with singular values ≤ IDENTIFIABLE_RTOL of the largest."""
+    top = sv[0] if sv.size else 0.0
+    p = vt.shape[1]
+    labels = list(names) if len(names) == p else [f"theta[{i}]" for i in range(p)]
+    out = []
+    for k in np.flatnonzero(sv <= top * IDENTIFIABLE_RTOL):
+        v = vt[k] * np.sign(vt[k][np.argmax(np.abs(vt[k]))])  # largest component positive
+        out.append({"direction": dict(zip(labels, v.tolist())),
+                    "relative_singular_value": float(sv[k] / top) if top > 0 else 0.0})  # fmt: skip
+    return tuple(out)
 
 
 # Progress of the running fit: `NoiseFloorLM` reports each step through `report_step` (a

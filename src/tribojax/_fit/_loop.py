@@ -63,6 +63,12 @@ def analyse_loop(loop: HysteresisLoop, *, window: float = 0.05) -> LoopAnalysis:
     - W = ∮ f du over the whole cycles, per cycle (J).
     """
     check_range(window, "window", 0.0, 0.5)
+    for name, x, unit in (("force", loop.f, "N"), ("displacement", loop.u, "m")):
+        if np.ptp(x) == 0.0:
+            raise ValueError(
+                f"{loop.source}: the {name} is constant ({x[0]:g} {unit}) over the whole record; "
+                "a hysteresis loop needs a varying displacement and force"
+            )
     starts = cycle_starts(loop.t, loop.u)
     cycles = len(starts) - 1
     omega = 2.0 * np.pi * cycles / (starts[-1] - starts[0])
@@ -86,6 +92,11 @@ def analyse_loop(loop: HysteresisLoop, *, window: float = 0.05) -> LoopAnalysis:
     k1, k2 = float(np.mean(k1)), float(np.mean(k2))
     K_d = 0.5 * (k1 + k2)
     mu_N = 0.5 * float(np.mean(swings))
+    if not (K_d > 0.0 and mu_N > 0.0):
+        raise ValueError(
+            f"{loop.source}: the reversal slopes give K_d = {K_d:g} N/m (wu2015 Eq 6) and the "
+            f"force swing mu_N = {mu_N:g} N; both must be positive for a friction hysteresis loop"
+        )
     K_eq = float(F_c / A)
     C_eq = float(-F_s / (A * omega))
     W = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(u))) / cycles
@@ -127,6 +138,7 @@ def fit_loop(
     window: float = 0.05,
     model: str = "steady",
     max_steps: int = 500,
+    start=None,
 ) -> FitResult:
     """Least-squares fit of μN (N) and K_d (N/m) of a Jenkins or Mindlin element to the data.
 
@@ -150,6 +162,7 @@ def fit_loop(
             residuals).
         model: "steady" or "history".
         max_steps: Levenberg–Marquardt step budget.
+        start: dict of start values {"mu_N": N, "K_d": N/m} (missing keys from `analyse_loop`).
     Returns:
         FitResult with names ("mu_N", "K_d"); `result` (`tribojax.RESULTS`) and `converged` say
         whether LM succeeded. For a
@@ -161,7 +174,7 @@ def fit_loop(
     if model not in ("steady", "history"):
         raise ValueError(f"model must be 'steady' or 'history', got {model!r}")
     cls = _ELEMENTS[element]
-    start = analyse_loop(loop, window=window)
+    start_values, start = start, analyse_loop(loop, window=window)
     sigma = loop.noise_std if sigma is None else sigma
     scale = 1.0 if sigma is None else float(check_range(sigma, "sigma", 0.0, unit="N"))
     if model == "steady":
@@ -179,7 +192,14 @@ def fit_loop(
         args = (jnp.asarray(u_rel), f, jnp.asarray(0.0), f, jnp.asarray(scale))
     if len(f) <= 2:
         raise ValueError(f"{loop.source}: {len(f)} samples are too few to fit mu_N and K_d")
-    theta0 = jnp.log(jnp.array([start.mu_N, start.K_d]))
+    given = dict(start_values or {})
+    unknown = set(given) - {"mu_N", "K_d"}
+    if unknown:
+        raise ValueError(f"start has unknown key(s) {sorted(unknown)}; allowed ['mu_N', 'K_d']")
+    init = {"mu_N": start.mu_N, "K_d": start.K_d, **given}
+    for key, value in init.items():
+        check_range(value, f"start[{key!r}]", 0.0, np.inf)
+    theta0 = jnp.log(jnp.array([init["mu_N"], init["K_d"]], dtype=jnp.float64))
     # jitted once per (element, model, record length): repeated fits reuse the compilation
     fit = least_squares_fit(
         fn,

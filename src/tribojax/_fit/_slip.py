@@ -33,10 +33,9 @@ from .._friction._lugre import PreSlipLuGre
 from .._io._slip_run import SlipRun
 from ._engine import FAILED_RESIDUAL, FitResult, least_squares_fit
 from ._solver import NoiseFloorLM
-from ._start import noise_scale, slip_run_start
+from ._start import C_TAU_START_FACTORS, noise_scale, slip_run_start
 
 SLIP_NAMES = ("F_s", "K_tau", "C_tau", "alpha")
-_C_FACTORS = (1.0, 0.1, 10.0)
 # NoiseFloorLM's Cauchy tolerances, and the Gauss–Newton step (standard errors) that a stop may
 # leave: the residuals come from an adaptive ODE solve (rtol 1e-6), not smooth below ~1e-8.
 _RTOL = _ATOL = 1e-7
@@ -138,7 +137,7 @@ def fit_slip_run(
     unknown = set(start) - set(SLIP_NAMES)
     if unknown:
         raise ValueError(f"start has unknown key(s) {sorted(unknown)}; allowed {SLIP_NAMES}")
-    c_starts = [None] if "C_tau" in start else list(_C_FACTORS)
+    c_starts = [None] if "C_tau" in start else list(C_TAU_START_FACTORS)
     if not {"F_s", "K_tau", "C_tau"} <= set(start):
         if progress is not None:
             progress("start: quasi-static F_s, K_tau; C_tau from damping ratio 0.1 (x0.1, x10)")
@@ -163,7 +162,7 @@ def fit_slip_run(
             raise ValueError(
                 f"{run.source}: the slip solver fails at the start values "
                 + ", ".join(f"{key} = {st[key]:.5g}" for key in names)
-                + "; give a start closer to the data (or none: slip_run_start)"
+                + "; give a start closer to the data (start=, or tribojax fit --start NAME=VALUE)"
             )
         fit = least_squares_fit(fn, theta0, args, names=names, transform=jnp.exp,
                                 sigma_known=sigma_known, max_steps=max_steps, jac="fwd",
@@ -173,7 +172,10 @@ def fit_slip_run(
         if best is None or key < best[0]:
             best = (key, fit)
     if best is None:
-        raise ValueError(f"{run.source}: the slip solver fails at every start; give a start")
+        raise ValueError(
+            f"{run.source}: the slip solver fails at every start; give a start (start=, or "
+            "tribojax fit --start F_s=VALUE K_tau=VALUE C_tau=VALUE)"
+        )
     fit = best[1]
     if not free_alpha:
         fit = _with_fixed(fit, {"alpha": float(alpha)})

@@ -17,7 +17,9 @@ import numpy as np
 
 from .._io._slip_run import SlipRun
 
-_ZETA_START = 0.1  # damping ratio of the C_τ start; fit_slip_run also tries 10x either side
+_ZETA_START = 0.1  # damping ratio of the C_τ start
+# fits start from these multiples of the C_τ start and keep the lowest cost (see slip_run_start)
+C_TAU_START_FACTORS = (1.0, 0.1, 10.0)
 
 
 def _quasi_static_shape(force, F_s):

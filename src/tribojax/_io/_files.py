@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._tables import DataFileError
+from ._tables import DataFileError, read_text
 
 
 def positive_or_none(value, name: str, source: str, unit: str, *, required=False):
@@ -39,18 +39,41 @@ def positive_or_none(value, name: str, source: str, unit: str, *, required=False
 # atomic writes
 
 
-def write_text_atomic(path, text: str) -> None:
-    """Write `text` (UTF-8) to `path` via a temporary file, so a failure leaves no partial file."""
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write_text_atomic(path, text: str, *, exclusive: bool = False) -> None:
+    """Write `text` (UTF-8) to `path` via a temporary file, so a failure leaves no partial file.
+
+    The file gets the permissions of a normally created file (0666 less the umask, 0644
+    usually). With `exclusive`, an existing `path` is never replaced (FileExistsError), even by a
+    writer that finishes at the same time: the temporary file is hard-linked into place.
+    """
     path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(21, "is a folder, not a file name", str(path))
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
+        os.chmod(tmp, 0o666 & ~_umask())
+        if exclusive:
+            try:
+                os.link(tmp, path)
+            except FileExistsError:
+                raise FileExistsError(
+                    17,
+                    "exists (written by another run meanwhile?); refusing to overwrite it",
+                    str(path),
+                ) from None
+        else:
+            os.replace(tmp, path)
+    finally:
         Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def _json_default(obj):
@@ -72,10 +95,11 @@ def _finite(obj):
     return obj
 
 
-def write_json_atomic(path, data) -> None:
-    """Write strict JSON (NaN/inf as null, NumPy values as numbers) to `path`, atomically."""
+def write_json_atomic(path, data, *, exclusive: bool = False) -> None:
+    """Write strict JSON (NaN/inf as null, NumPy values as numbers) to `path`, atomically
+    (`exclusive`: never replace an existing file, see `write_text_atomic`)."""
     text = json.dumps(_finite(data), indent=2, default=_json_default, allow_nan=False)
-    write_text_atomic(path, text + "\n")
+    write_text_atomic(path, text + "\n", exclusive=exclusive)
 
 
 def refuse_existing(targets) -> None:
@@ -128,10 +152,7 @@ def read_sidecar(csv_path, schema: dict[str, bool], units: dict[str, str], *, re
             f"{side}: sidecar not found; {Path(csv_path).name} needs a JSON file beside it with "
             f"{need} (optional: {', '.join(k for k, req in schema.items() if not req)})"
         )
-    try:
-        text = side.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataFileError(f"{side}: cannot be read ({err})") from err
+    text = read_text(side)
     try:
         data = json.loads(text)
     except json.JSONDecodeError as err:
@@ -181,7 +202,7 @@ def write_record_files(path, header, columns, sidecar: dict | None, *, overwrite
 def data_line_number(path, row: int) -> int:
     """1-based line number of data row `row` (0-based) of a CSV with comments and a header."""
     seen = -1  # the header is row -1
-    for lineno, raw in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), start=1):
+    for lineno, raw in enumerate(read_text(path).splitlines(), start=1):
         text = raw.strip()
         if not text or text.startswith("#"):
             continue
@@ -194,11 +215,7 @@ def data_line_number(path, row: int) -> int:
 def csv_header(path) -> tuple[str, ...]:
     """The header fields of a CSV (first line that is neither blank nor a `#` comment)."""
     path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataFileError(f"{path}: cannot be read ({err})") from err
-    for raw in lines:
+    for raw in read_text(path).splitlines():
         text = raw.strip()
         if text and not text.startswith("#"):
             return tuple(f.strip() for f in text.split(","))

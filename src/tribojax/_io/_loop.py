@@ -170,7 +170,10 @@ def synthetic_loop(
     A,
     omega,
     *,
-    cycles: int = 3, samples_per_cycle: int = 400, noise: float = 0.0, seed: int = 0,
+    cycles: int = 3,
+    samples_per_cycle: int = 400,
+    noise: float = 0.0,
+    seed: int = 0,
     normal_load=None,
 ) -> HysteresisLoop:
     """A steady loop of `element` under u = A sin ωt, with Gaussian force noise (N) from `seed`.

@@ -17,13 +17,14 @@ def read_record(path) -> SlipRun | HysteresisLoop:
     legacy `t_s,u_m,f_N` → `tribojax.read_loop`. Anything else: DataFileError listing these.
     """
     path = Path(path)
-    header = set(csv_header(path))
+    fields = csv_header(path)
+    header = set(fields)
     if set(SLIP_COLUMNS) <= header:
         return read_slip_run(path)
     if set(LOOP_FILE_COLUMNS) <= header or set(LOOP_COLUMNS) <= header:
         return read_loop(path)
     raise DataFileError(
-        f"{path}, line {data_line_number(path, -1)}: header {sorted(header)} is neither a slip "
+        f"{path}, line {data_line_number(path, -1)}: header {list(fields)} is neither a slip "
         f"run ({','.join(SLIP_COLUMNS)}) nor a loop ({','.join(LOOP_FILE_COLUMNS)}, or legacy "
         f"{','.join(LOOP_COLUMNS)})"
     )

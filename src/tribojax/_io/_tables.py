@@ -20,6 +20,24 @@ class DataFileError(ValueError):
     """A data file that cannot be used; the message names the file, the line and the reason."""
 
 
+def read_text(path) -> str:
+    """The text of a UTF-8 file (a leading byte-order mark is dropped); DataFileError naming the
+    file, and the line of the first byte that is not UTF-8, when it cannot be read."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as err:
+        raise DataFileError(f"{path}: cannot be read ({err.strerror or err})") from err
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        line = raw[: err.start].count(b"\n") + 1
+        raise DataFileError(
+            f"{path}, line {line}: byte 0x{raw[err.start]:02x} is not UTF-8 (Windows-1252 or "
+            "Latin-1 text?); save the file as UTF-8"
+        ) from None
+
+
 def data_dir() -> Path:
     """Folder of the bundled data: the installed copy, else the source tree's `data/`."""
     installed = resources.files("tribojax") / "_data"
@@ -47,10 +65,7 @@ def read_table(path, *, columns=None, text_columns=()) -> dict[str, np.ndarray]:
         DataFileError naming the file, the line number and what is wrong.
     """
     path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataFileError(f"{path}: cannot be read ({err})") from err
+    lines = read_text(path).splitlines()
     header, rows = None, []
     for lineno, raw in enumerate(lines, start=1):
         text = raw.strip()

@@ -10,13 +10,14 @@ MetroPro `.dat`, …) are handed to SurfaceTopography, an optional extra
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 import equinox as eqx
 import numpy as np
 from jaxtyping import Array, Float
 
-from .._io._tables import DataFileError
+from .._io._tables import DataFileError, read_text
 
 UNITS = {
     "m": 1.0,
@@ -110,10 +111,7 @@ def _read_plain(path: Path, dx, unit: str) -> Topography:
             raise DataFileError(f"{path}: expected a 1-D or 2-D array, got shape {z.shape}")
         return Topography(z * s, dx=dx * s, dy=None if z.ndim == 1 else dx * s, source=path.name)
     rows, width = [], None
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataFileError(f"{path}: cannot be read as text ({err})") from err
+    lines = read_text(path).splitlines()
     for lineno, raw in enumerate(lines, start=1):
         text = raw.strip()
         if not text or text.startswith(("#", "%")):
@@ -158,12 +156,13 @@ def _read_instrument(path: Path) -> Topography:
             f"{path}: this instrument format needs SurfaceTopography; install the extra with "
             "`pip install 'tribojax[topography]'` (or save the heights as .npy/.csv)"
         ) from None
+    fmt = _format_of(st, path)
     try:
-        t = st.open_topography(str(path)).topography()
+        t = _open_instrument(st, path, fmt)
         z = np.ma.filled(np.ma.asarray(t.heights(), dtype=np.float64), np.nan)
         unit = t.unit
     except Exception as err:  # SurfaceTopography raises many types for unreadable files
-        raise DataFileError(f"{path}: SurfaceTopography cannot read it ({err})") from err
+        raise DataFileError(_unreadable(path, fmt, err)) from err
     if unit is None:
         raise DataFileError(f"{path}: the file states no length unit; read it with unit=")
     s = unit_scale(unit)
@@ -175,6 +174,45 @@ def _read_instrument(path: Path) -> Topography:
     # SurfaceTopography stores maps as (nx, ny); tribojax uses (ny, nx), x along the last axis.
     dy = float(sizes[1]) / z.shape[1] * s
     return Topography(z.T * s, dx=dx, dy=dy, source=path.name)
+
+
+_TRUNCATED = ("not large enough", "truncat", "not a valid zip", "unexpected end", "eof",
+              "bad magic number for file header", "file is not a zip file")  # fmt: skip
+
+
+def _format_of(st, path: Path) -> str | None:
+    """SurfaceTopography's format name for the file's suffix when exactly one reader claims it."""
+    suffix = path.suffix.lower().lstrip(".")
+    if suffix == "di":
+        return "di"
+    names = [r.format() for r in st.IO.readers if suffix in getattr(r, "_file_extensions", ())]
+    return names[0] if len(names) == 1 else None
+
+
+def _open_instrument(st, path: Path, fmt: str | None):
+    """The file's topography by the reader of its suffix, else by SurfaceTopography's detection
+    (a misnamed file); the suffix reader's error when both fail."""
+    try:
+        return st.open_topography(str(path), format=fmt).topography()
+    except Exception:
+        if fmt is None:
+            raise
+        first = sys.exc_info()[1]
+    try:
+        return st.open_topography(str(path)).topography()
+    except Exception:
+        raise first from None
+
+
+def _unreadable(path: Path, fmt: str | None, err: Exception) -> str:
+    """One message for an instrument file SurfaceTopography cannot read, saying "truncated"
+    when the reader found the data shorter than its header announces."""
+    text = " ".join(str(err).split())
+    kind = f"a {fmt} file" if fmt else "any instrument format SurfaceTopography knows"
+    if any(k in text.lower() for k in _TRUNCATED):
+        return (f"{path}: the file is truncated or damaged ({path.stat().st_size} bytes; read as "
+                f"{kind}: {text[:200]})")  # fmt: skip
+    return f"{path}: cannot be read as {kind} ({text[:300]})"
 
 
 def read_topography(

@@ -11,6 +11,7 @@ import dataclasses
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import numpy as np
 
 from ._regions import noise_estimate
@@ -48,16 +49,21 @@ class EffectDesign:
 
     With strengths s (k,), the augmented model is
         y = baseline.predict(θ_b, knobs) + basis @ s,   knobs = knob_null ⊕ knob_set + knob_gain @ s
-    so s = 0 is the null (an interior point: strengths are signed). Nonlinear nuisance parameters
-    (frequencies, velocity scales) are fixed per design; an effect returns one design per point
-    of its grid.
+    so s = 0 is the null (an interior point: strengths are signed). An effect returns one design
+    per point of its grid of nonlinear nuisance parameters (frequencies, velocity scales); the
+    grid point only seeds them when the design makes them free: a strength that shifts a knob
+    (e.g. log v_s), fitted jointly with the others in the refit (`free`).
 
     strength_names / strength_units: names and units of the physical strengths.
     strength_scale: physical strength per unit of s (k,), for reporting (s is O(1) in fits).
     knob_gain: (n_knobs, k) or None — how s moves the baseline's physics knobs.
     knob_set: {knob name: value} — nuisance knobs fixed while the effect is active.
     basis: (n, k) additive columns in output units per unit s, or None.
-    nuisance: {name: value} reported with the result; n_nuisance counts them in ΔBIC.
+    nuisance: {name: value} reported with the result; n_nuisance counts the fixed ones in ΔBIC.
+    free: ((strength index, nuisance name, physical strength → nuisance value), ...): strengths
+        that are nuisance shifts (counted in k, reported under "nuisance", not as strengths).
+    columns: (n, k) ∂y/∂s at s = 0 whatever the fit (additive effects whose knobs move a term
+        outside the physics: the score test then needs no model solve), or None.
     """
 
     strength_names: tuple[str, ...]
@@ -68,6 +74,8 @@ class EffectDesign:
     basis: np.ndarray | None = None
     nuisance: dict = dataclasses.field(default_factory=dict)
     n_nuisance: int = 0
+    free: tuple = ()
+    columns: np.ndarray | None = None
 
     @property
     def k(self) -> int:
@@ -85,6 +93,9 @@ class AbstractBaseline(eqx.Module):
     param_names: eqx.AbstractClassVar[tuple[str, ...]]
     param_units: eqx.AbstractClassVar[tuple[str, ...]]
     knob_names: eqx.AbstractClassVar[tuple[str, ...]]
+    # False where the noise of the record cannot be told from its residual (a few summary
+    # values, no sidecar): the baseline is then never declared consistent with the noise
+    noise_gate: ClassVar[bool] = True
 
     @abc.abstractmethod
     def knob_null(self) -> np.ndarray:
@@ -93,6 +104,11 @@ class AbstractBaseline(eqx.Module):
     @abc.abstractmethod
     def start(self) -> np.ndarray:
         """Start θ for the baseline fit (unconstrained)."""
+
+    def starts(self) -> list:
+        """Start points of the baseline fit; the lowest converged cost is kept. Default
+        `[self.start()]`."""
+        return [self.start()]
 
     @abc.abstractmethod
     def physical(self, theta):
@@ -108,6 +124,17 @@ class AbstractBaseline(eqx.Module):
     @abc.abstractmethod
     def data(self) -> DiscoveryData:
         """The observed record."""
+
+    def value_and_jacobians(self, theta, knobs):
+        """`predict` and its forward-mode Jacobians ∂/∂θ (n, p), ∂/∂knobs (n, n_knobs), in one
+        pass (JAX); a baseline may split it (knobs that do not enter an ODE)."""
+
+        def f(tb, kn):
+            out = self.predict(tb, kn)
+            return out, out
+
+        (jb, jk), value = jax.jacfwd(f, argnums=(0, 1), has_aux=True)(theta, knobs)
+        return value, jb, jk
 
     def noise_model(self, r) -> tuple[float, float]:
         """(σ̂, AR(1) ρ̂) of the noise in the baseline residual `r` (output units). Default:
@@ -146,6 +173,10 @@ class AbstractEffect(eqx.Module):
     @abc.abstractmethod
     def designs(self, baseline: AbstractBaseline) -> list[EffectDesign]:
         """One `EffectDesign` per nuisance grid point (a single one when there is no nuisance)."""
+
+    # refit starts: the best grid design by score, then the next best ones at least a factor 10
+    # away in every nuisance value
+    refit_starts: ClassVar[int] = 1
 
     def refine(self, baseline: AbstractBaseline, design: EffectDesign, score) -> EffectDesign:
         """Optionally improve the best grid design's nuisance values; `score(design) -> float` is

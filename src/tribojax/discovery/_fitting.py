@@ -26,13 +26,7 @@ from ._regions import ar1_inflation
 
 def _predict_jac(baseline, theta_b, knobs):
     """predict and its forward-mode Jacobians ∂/∂θ_b (n, p), ∂/∂knobs (n, n_knobs): one pass."""
-
-    def f(tb, kn):
-        out = baseline.predict(tb, kn)
-        return out, out
-
-    (jb, jk), value = jax.jacfwd(f, argnums=(0, 1), has_aux=True)(theta_b, knobs)
-    return value, jb, jk
+    return baseline.value_and_jacobians(theta_b, knobs)
 
 
 _value_and_jac = eqx.filter_jit(_predict_jac)
@@ -70,6 +64,7 @@ def _residual_and_jac(x, a: _Padded):
     r = jnp.concatenate([jnp.where(ok, r, a.bad), hold * x[p:]])
     J_hold = jnp.concatenate([jnp.zeros((K_MAX, p)), jnp.diag(hold)], axis=1)
     return r, jnp.concatenate([jnp.where(ok, J, 0.0), J_hold], axis=0)
+
 
 
 @eqx.filter_custom_jvp
@@ -188,7 +183,10 @@ class _DiscoveryLM(optx.AbstractGaussNewton):
 _SOLVER = _DiscoveryLM(rtol=1e-8, atol=1e-10)
 
 
-def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=256) -> _State:
+MAX_STEPS = 128  # step budget of every discovery fit (accepted and rejected; one compile)
+
+
+def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=MAX_STEPS) -> _State:
     """Fit [θ_b, s] minimising ‖(model − y)/scale‖² with `least_squares_fit` (`_DiscoveryLM`).
 
     The strengths are padded to `K_MAX` (`_residual`), so the compiled solve is shared by every
@@ -255,16 +253,8 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=256) -> _State
         theta=x,
         yhat=y + scale * r,
         rss=cost,
-        cov=fit_statistics(
-            x,
-            r,
-            J,
-            names=[""] * npar,
-            transform=lambda t: t,
-            sigma_known=False,
-            result=res.result,
-            steps=res.steps,
-        ).covariance,  # fmt: skip
+        cov=fit_statistics(x, r, J, names=[""] * npar, transform=lambda t: t, sigma_known=False,
+                           result=res.result, steps=res.steps).covariance,  # fmt: skip
         jac=J,
         converged=bool(converged),
         steps=res.steps,
@@ -279,6 +269,8 @@ def _columns(baseline, state: _State, design: EffectDesign, knob_cache: dict) ->
     knobs = base + gain[:, : state.theta.size - p] @ state.theta[p:]
     for key, value in design.knob_set.items():
         knobs[baseline.knob_names.index(key)] = value
+    if design.columns is not None:
+        return np.asarray(design.columns)
     cols = np.zeros((baseline.data().y.shape[0], design.k))
     if design.knob_gain is not None and np.any(design.knob_gain):
         key = tuple(np.round(knobs, 12))

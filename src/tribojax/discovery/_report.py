@@ -166,15 +166,20 @@ def _strengths(baseline, state: _State) -> dict:
     out, j = {}, 0
     for name, d in zip(state.names, state.designs):
         entry = {}
+        nuisance = {k: float(v) for k, v in d.nuisance.items()}
+        free = {i: (name, fn) for i, name, fn in d.free}
         for i, (sn, su) in enumerate(zip(d.strength_names, d.strength_units)):
             s = state.theta[p + j + i]
             var = state.cov[p + j + i, p + j + i]
+            if i in free:  # a fitted nuisance value (the grid point seeded it)
+                nuisance[free[i][0]] = float(free[i][1](s * d.strength_scale[i]))
+                continue
             entry[sn] = {
                 "value": float(s * d.strength_scale[i]),
                 "std_error": float(np.sqrt(max(var, 0.0)) * abs(d.strength_scale[i])),
                 "unit": su,
             }
-        entry["nuisance"] = {k: float(v) for k, v in d.nuisance.items()}
+        entry["nuisance"] = nuisance
         out[name] = entry
         j += d.k
     return out

@@ -16,6 +16,15 @@ Knobs (null in brackets) and the effects of kind "wang2022_table" that move them
     load_coupling    κ [0]: N(t) = N(1 + κa/g) (as on the slip side)
     stribeck         δ_s [0], v_s on a grid: velocity weakening (as on the slip side)
     viscous_friction ν [0]: σ2 = ν·C_τ (as on the slip side)
+
+and one measurement effect with an additive basis (no knob):
+    position_step    s [0] on cell k (a grid over the 24 cells): ln|T| + s in that one cell — a
+                     step in the interferometer reading of one run between two windows moves the
+                     slip of one phase only (a transient position error such as the fibre bending
+                     the paper reports for Table 5 at 20 kPa, "from the stable acceleration phase
+                     to the uniform motion phase"). In log form a free factor on one cell is the
+                     same fit as a free additive step in nm there; the cell index is one nuisance
+                     parameter in ΔBIC.
 """
 
 from __future__ import annotations
@@ -59,6 +68,7 @@ class Wang2022TableBaseline(AbstractBaseline):
     param_names: ClassVar[tuple] = ()
     param_units: ClassVar[tuple] = ()
     knob_names: ClassVar[tuple] = TABLE_KNOBS
+    noise_gate: ClassVar[bool] = False  # 24 cells, no noise level: σ from the residual itself
     F_s: Array  # (6,) N
     K_tau: Array  # (6,) N/m
     C_tau: Array  # (6,) N s/m
@@ -169,8 +179,28 @@ class TableStribeck(AbstractEffect):
                       {"v_s_m_per_s": vs}, 1) for vs in VS_GRID]  # fmt: skip
 
 
+class TablePositionStep(AbstractEffect):
+    """A reading step in one phase of one run: a free factor on one cell (module docstring)."""
+
+    name: ClassVar[str] = "position_step"
+    kind: ClassVar[str] = "wang2022_table"
+
+    def designs(self, baseline):
+        vac = np.asarray(wang2022_table(4)["vacuum_kPa"])
+        n = len(vac)
+        out = []
+        for k in range(4 * n):  # table-major cells, as `predict`
+            basis = np.zeros((4 * n, 1))
+            basis[k, 0] = 1.0
+            out.append(EffectDesign(("log_step",), ("1 (ln of the cell's factor)",), np.ones(1),
+                                    basis=basis, nuisance={"table": 4 + k // n,
+                                                           "vacuum_kPa": float(vac[k % n])},
+                                    n_nuisance=1))  # fmt: skip
+        return out
+
+
 def wang2022_table_effects() -> list[AbstractEffect]:
     """The candidate effects for `wang2022_table_baseline` (not registered: pass explicitly)."""
     c = _EFFECT_CLASSES
     return [c["position_error"](), c["sensor_drift"](), c["gross_sliding"](), c["load_coupling"](),
-            TableStribeck(), c["viscous_friction"]()]  # fmt: skip
+            TableStribeck(), c["viscous_friction"](), TablePositionStep()]  # fmt: skip

@@ -111,16 +111,8 @@ def _oscillator_scipy(t, profile, f, zeta):
     return sol.y[0]
 
 
-def hidden_effect_run(
-    effect: str,
-    noise: float,
-    load: float = 0.6,
-    seed: int = 0,
-    *,
-    n: int = 461,
-    t_end: float = 2.3,
-    drive: float | None = DRIVE,
-) -> SlipRun:
+def hidden_effect_run(effect: str, noise: float, load: float = 0.6, seed: int = 0, *,
+                      n: int = 461, t_end: float = 2.3, drive: float | None = DRIVE) -> SlipRun:
     """A slip run with `effect` hidden (or "clean"), `noise` sd in m, at `load` kPa vacuum.
 
     `n` samples on [0, t_end]; keep (n − 1)/t_end·0.01 an integer so that the profile's kinks
@@ -154,14 +146,8 @@ def hidden_effect_run(
         extra = h["gain"] * _oscillator_scipy(t, prof, h["f_Hz"], h["zeta"])
     rng = np.random.default_rng(seed)
     slip = run.slip + extra + noise * rng.standard_normal(t.size)
-    return SlipRun(
-        t=t,
-        accel=run.accel,
-        slip=slip,
-        mass=m,
-        noise_std=noise if noise > 0 else None,
-        source=f"hidden:{effect}:{load}kPa:noise={noise:g}:seed={seed}:drive={drive}",
-    )
+    return SlipRun(t=t, accel=run.accel, slip=slip, mass=m, noise_std=noise if noise > 0 else None,
+                   source=f"hidden:{effect}:{load}kPa:noise={noise:g}:seed={seed}:drive={drive}")
 
 
 def confusion_study(

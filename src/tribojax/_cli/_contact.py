@@ -1,0 +1,175 @@
+"""`tribojax contact`: a surface (topography file, or D and G) → F_s, K_τ, C_τ at each load.
+
+    tribojax contact --D 2.88 --G 4.36e-8 --load 3 10 [--json out.json]
+    tribojax contact --topography profile.csv --unit um --load 5 [--method psd] [--band LO HI]
+
+D and G of a topography come from `estimate_fractal`. A measured surface that shows no clean
+power law over the searched band still gets an answer: the best band with 2 < D < 3 (of the chosen
+method, else of another) with its quality and a warning; `--band LO HI` fixes the band.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from contextlib import nullcontext
+from pathlib import Path
+
+import numpy as np
+
+from .. import _presets as P
+from .._contact._contact import FractalContact
+from .._contact._surface import FractalSurface
+from .._presets import wang2022_pair
+from .._roughness._estimate import METHODS, estimate_fractal
+from .._roughness._topography import read_topography
+from ._common import CommandError, claim_outputs, warn, write_json_atomic
+
+CONTACT_DEFAULTS = dict(
+    M=P.CALIBRATED_M,
+    gamma=P.WANG2022_GAMMA,
+    sigma_s=P.CALIBRATED_SIGMA_S,
+    mu_t=P.CALIBRATED_MU_T,
+    tangential_load=P.WANG2022_TANGENTIAL_LOAD_N,
+    mass=P.WANG2022_RETICLE_MASS_KG,
+)  # wang2022 pair, Table-3-calibrated constants (tribojax._presets)
+
+
+def add_arguments(con) -> None:
+    con.add_argument("--topography", help="profile/height map (.csv, .txt, .npy, instrument files)")
+    con.add_argument("--unit", default="m", help="length unit of a plain file (m, mm, um, nm)")
+    con.add_argument("--dx", type=float, help="sampling interval (in --unit) for .npy/matrices")
+    con.add_argument("--method", default="psd", choices=METHODS)
+    con.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"), help="fit band, m")
+    con.add_argument("--min-decades", type=float, default=1.0)
+    con.add_argument("--D", type=float, help="surface fractal dimension (2, 3)")
+    con.add_argument("--G", type=float, help="fractal roughness, m")
+    con.add_argument("--load", type=float, nargs="+", required=True, help="normal load(s), N")
+    for k, v in CONTACT_DEFAULTS.items():
+        con.add_argument("--" + k.replace("_", "-"), dest=k, type=float, default=v)
+    con.add_argument("--json", help="write the results to this JSON file")
+
+
+def _check_arguments(args) -> None:
+    for load in args.load:
+        if not (math.isfinite(load) and load > 0):
+            raise CommandError(f"--load = {load:g} N is outside the allowed range (0, inf)")
+    if args.band is not None:
+        lo, hi = args.band
+        if not (math.isfinite(hi) and 0 < lo < hi):
+            raise CommandError(f"--band = {lo:g} {hi:g} m must satisfy 0 < LO < HI < inf")
+    if args.topography is not None and (args.D is not None or args.G is not None):
+        raise CommandError("give either --topography or --D/--G, not both")
+    if args.topography is None and (args.D is None or args.G is None):
+        raise CommandError("give --topography FILE, or both --D and --G")
+
+
+def surface_estimate(topo, args):
+    """D, G of `topo` by `args.method`; without a clean scaling band, the best band with
+    2 < D < 3 of that method or, failing that, of another method (the estimate's `warning` says
+    so). CommandError listing every method's finding when no band gives 2 < D < 3."""
+    kw = dict(band=args.band, M=int(args.M), min_decades=args.min_decades)
+    try:
+        return estimate_fractal(topo, args.method, **kw)
+    except ValueError as err:
+        if args.band is not None or "no fractal scaling band" not in str(err):
+            raise
+        first = str(err)
+    found, failures = [], [first]
+    for method in [args.method] + [m for m in METHODS if m != args.method]:
+        try:
+            found.append(estimate_fractal(topo, method, best_band=True, **kw))
+        except ValueError as err:
+            if method != args.method:
+                failures.append(str(err))
+    if not found:
+        seen = []
+        for text in failures:
+            m = re.search(r"by '(\w+)': \w+ \w+ band (\S+ m) has slope \S+ \(D = ([-\d.]+)", text)
+            seen.append(f"{m[1]}: D = {m[3]} over {m[2]}" if m else text)
+        raise CommandError(
+            f"{topo.source}: no band of any method gives 2 < D < 3, the range of the fractal "
+            f"contact model ({'; '.join(seen)}); a D below 2 means the surface is smoother than "
+            "a fractal one over the measured range; give --D and --G, or --band LO HI"
+        )
+    return min(found, key=lambda e: (e.method != args.method, e.rms_residual))
+
+
+def run_contact(args) -> int:
+    """`tribojax contact`: 0 when every contact solve converged, else 1 (2 bad input)."""
+    _check_arguments(args)
+    result = {"assumed": {}}
+    with claim_outputs(None, [Path(args.json)], force=True) if args.json else nullcontext():
+        if args.topography is not None:
+            topo = read_topography(args.topography, unit=args.unit, dx=args.dx)
+            est = surface_estimate(topo, args)
+            D, G = est.D, est.G
+            result["surface"] = est.as_dict()
+            print(
+                f"{topo.source}: D = {D:.4f} ± {est.D_std:.4f}, G = {G:.4g} m (± "
+                f"{est.log10G_std:.2f} in log10) by {est.method}, band {est.band[0]:.3g}-"
+                f"{est.band[1]:.3g} m"
+            )
+            if est.warning:
+                if est.method != args.method:
+                    warn(f"no fractal scaling band by {args.method!r}; used {est.method!r}")
+                warn(f"{topo.source}: {est.warning}; --band LO HI fixes the band")
+        else:
+            D, G = args.D, args.G
+            result["surface"] = {"D": D, "G": G, "method": "given"}
+        rows = _contact_rows(args, D, G, result)
+        result["contact"] = rows
+        if args.json:
+            write_json_atomic(Path(args.json), result)
+            print(f"wrote {args.json}")
+    return 0 if all(r["converged"] for r in rows) else 1
+
+
+def _contact_rows(args, D, G, result) -> list:
+    for k in CONTACT_DEFAULTS:
+        result["assumed"][k] = getattr(args, k)
+    result["assumed"]["materials"] = (
+        "wang2022 Table 2 pair (E* 41.28 GPa, G' 9.158 GPa, H 1.372 GPa)"
+    )
+    print(
+        "assumed: "
+        + ", ".join(f"{k} = {v:g}" for k, v in result["assumed"].items() if not isinstance(v, str))
+        + "; wang2022 Table 2 materials"
+    )
+    pair = wang2022_pair(sigma_s=args.sigma_s)
+    model = FractalContact(
+        FractalSurface(D, G, args.M, gamma=args.gamma),
+        pair,
+        mu_t=args.mu_t,
+        tangential_load=args.tangential_load,
+        mass=args.mass,
+        throw=False,
+    )
+    rows = []
+    print(f"{'load/N':>9} {'F_s/N':>10} {'K_tau/(N/m)':>12} {'C_tau/(Ns/m)':>12} {'z_max/nm':>9}")
+    for load in args.load:
+        out = model(load)
+        row = {
+            "load_N": load,
+            "Fs_N": float(out.F_s),
+            "Ktau_N_per_m": float(out.K_tau),
+            "Ctau_Ns_per_m": float(out.C_tau),
+            "zmax_m": float(out.z_max),
+            "load_share": np.asarray(out.load_share).tolist(),
+            "converged": bool(out.converged),
+            "all_plastic": bool(out.all_plastic),
+        }
+        rows.append(row)
+        if row["all_plastic"]:
+            warn(f"load {load:g} N: every asperity is fully plastic (a'_l <= a'_pc): F_s, K_tau, "
+                 "C_tau are 0 in this model; check G (too large?), M and the load")  # fmt: skip
+        elif row["Fs_N"] == 0.0:
+            warn(f"load {load:g} N: no asperity is elastic or first elastic-plastic (a'_l <= "
+                 "a'_epc), so F_s = z_max = 0 in this model (wang2022 Eqs 14, 16)")  # fmt: skip
+        if not row["converged"]:
+            warn(f"load {load:g} N: the load balance did not converge (wang2022 Eqs 8-15)")
+        print(
+            f"{load:9.4g} {row['Fs_N']:10.4g} {row['Ktau_N_per_m']:12.4g} "
+            f"{row['Ctau_Ns_per_m']:12.4g} {1e9 * row['zmax_m']:9.4g}"
+        )
+    return rows

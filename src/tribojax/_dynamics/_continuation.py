@@ -1,0 +1,249 @@
+"""Pseudo-arclength continuation of multi-harmonic-balance solutions, and `FrequencyResponse`.
+
+The branch z(s) = (X, λ) of solutions of R(X, λ) = 0 is followed in the arclength s of the scaled
+unknowns (X / x_ref, λ / |λ_end − λ₀|). Each step predicts z + Δs·t along the unit tangent t
+(the null vector of ∂R/∂z, oriented by the previous tangent) and corrects with Newton on
+[R(z) = 0, t·(z − z_pred) = 0] (Keller's pseudo-arclength condition), so turning points are passed
+without special treatment. The step Δs adapts to the Newton count (×1.5 for ≤ 3 steps, ×0.6 for
+> 6, halved on a failed corrector or when the tangent turns by more than 0.2 rad), capped at
+ds_max·max(1, ‖y‖∞) so that a high resonance peak takes steps relative to its size; the whole
+loop is one jitted `lax.while_loop`.
+
+The result is a `FrequencyResponse`; every point's stability comes from Hill's method (`_mhb`).
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+
+from .._precision import ensure_x64
+from .._results import RESULTS, result_name
+from ._mhb import FrictionSystem, floquet_exponents, solve_hbm
+
+_COS_MAX_TURN = 0.98  # cos(0.2 rad)
+
+
+def _tangent(full, z, prev, args):
+    J = jax.jacfwd(full)(z, args)
+    A = jnp.concatenate([J, prev[None, :]])
+    e = jnp.zeros(z.shape[0]).at[-1].set(1.0)
+    t = jnp.linalg.solve(A, e)
+    return t / jnp.linalg.norm(t)
+
+
+@eqx.filter_jit
+def _arclength(fn, y0, lam0, lam_end, args, ds, ds_min, ds_max, max_points, max_newton, tol):
+    """Continue R(y, λ) = fn(y, λ, args) from the solution (y0, λ0) towards λ_end (scaled y)."""
+    lam_scale = jnp.abs(lam_end - lam0)
+    direction = jnp.sign(lam_end - lam0)
+
+    def full(z, a):
+        return fn(z[:-1], lam0 + z[-1] * lam_scale, a)
+
+    z0 = jnp.concatenate([y0, jnp.zeros(1)])
+    n = z0.shape[0]
+    e_lam = jnp.zeros(n).at[-1].set(direction)
+    t0 = _tangent(full, z0, e_lam, args)
+    t0 = t0 * jnp.sign(t0[-1] * direction)
+    Z = jnp.full((max_points, n), jnp.nan).at[0].set(z0)
+    steps = jnp.zeros(max_points, dtype=jnp.int32)
+    solver = optx.Newton(rtol=tol, atol=tol)
+
+    def cond(c):
+        return c["code"] < 0
+
+    def body(c):
+        z, t, ds = c["z"], c["t"], c["ds"]
+        z_pred = z + ds * t
+
+        def aug(w, a):
+            return jnp.concatenate([full(w, a), jnp.dot(t, w - z_pred)[None]])
+
+        sol = optx.root_find(aug, solver, z_pred, args, max_steps=max_newton, throw=False,
+                             adjoint=optx.RecursiveCheckpointAdjoint())  # fmt: skip
+        z_new = sol.value
+        ok = (sol.result == optx.RESULTS.successful) & jnp.all(jnp.isfinite(z_new))
+        ok = ok & (jnp.dot(z_new - z, t) > 0.0)
+        t_new = _tangent(full, jnp.where(ok, z_new, z), t, args)
+        ok = ok & jnp.all(jnp.isfinite(t_new))
+        # curvature control: the tangent may turn by at most ~0.2 rad per step
+        ok = ok & ((jnp.dot(t_new, t) > _COS_MAX_TURN) | (ds <= 2.0 * ds_min))
+        nsteps = sol.stats["num_steps"]
+        i = c["i"] + jnp.where(ok, 1, 0)
+        factor = jnp.where(nsteps <= 3, 1.5, jnp.where(nsteps > 6, 0.6, 1.0))
+        size = jnp.maximum(1.0, jnp.max(jnp.abs(z_new[:-1])))  # steps relative on large branches
+        ds_new = jnp.where(ok, jnp.clip(ds * factor, ds_min, ds_max * size), 0.5 * ds)
+        reached = ok & ((z_new[-1] * lam_scale * direction) >= lam_scale)
+        code = jnp.where(reached, 0, -1)
+        code = jnp.where((code < 0) & (i >= max_points - 1), 2, code)
+        code = jnp.where((code < 0) & (ds_new < ds_min), 1, code)
+        return dict(
+            z=jnp.where(ok, z_new, z),
+            t=jnp.where(ok, t_new, t),
+            ds=ds_new,
+            i=i,
+            Z=jnp.where(ok, c["Z"].at[i].set(z_new), c["Z"]),
+            steps=jnp.where(ok, c["steps"].at[i].set(nsteps), c["steps"]),
+            code=code,
+        )
+
+    init = dict(z=z0, t=t0, ds=jnp.asarray(ds, float), i=jnp.asarray(0), Z=Z, steps=steps,
+                code=jnp.asarray(-1))  # fmt: skip
+    out = jax.lax.while_loop(cond, body, init)
+    lam = lam0 + out["Z"][:, -1] * lam_scale
+    return out["Z"][:, :-1], lam, out["steps"], out["i"] + 1, out["code"]
+
+
+class FrequencyResponse(eqx.Module):
+    """A continued branch of periodic solutions (NumPy arrays, one row per point).
+
+    Fields: parameter (the continued parameter: ω in rad/s for `frequency_response`), omega
+    (rad/s), X (n, N, n_coef: harmonic coefficients, m), amplitude (n, N: first-harmonic
+    amplitude √(a₁² + b₁²) of each DOF, m), stable (n, bool; Hill's method), max_floquet (n: the
+    largest real part of the Floquet exponents, 1/s), newton_steps (n), harmonics, result
+    (`RESULTS`: successful, continuation_failed or continuation_incomplete).
+    """
+
+    parameter: np.ndarray
+    omega: np.ndarray
+    X: np.ndarray
+    amplitude: np.ndarray
+    stable: np.ndarray
+    max_floquet: np.ndarray
+    newton_steps: np.ndarray
+    harmonics: tuple = eqx.field(static=True)
+    result: RESULTS
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.result == RESULTS.successful)
+
+    @property
+    def message(self) -> str:
+        return RESULTS[self.result]
+
+    def peak(self, dof: int = 0):
+        """(ω, amplitude) of the largest first-harmonic amplitude of `dof` on the branch."""
+        i = int(np.argmax(self.amplitude[:, dof]))
+        return float(self.omega[i]), float(self.amplitude[i, dof])
+
+    def to_dict(self) -> dict:
+        return {
+            "parameter": self.parameter.tolist(),
+            "omega": self.omega.tolist(),
+            "amplitude": self.amplitude.tolist(),
+            "stable": [bool(s) for s in self.stable],
+            "harmonics": list(self.harmonics),
+            "result": result_name(self.result),
+            "message": self.message,
+        }
+
+
+_CODES = (RESULTS.successful, RESULTS.continuation_failed, RESULTS.continuation_incomplete)
+
+
+def _checked_range(start, end, name):
+    start, end = float(start), float(end)
+    if not np.isfinite(start) or not np.isfinite(end) or start == end:
+        raise ValueError(f"{name} range [{start:g}, {end:g}] must be finite and non-empty")
+    return start, end
+
+
+@eqx.filter_jit
+def _jacobians(res, Y, lam, args):
+    return jax.vmap(lambda y, p: jax.jacfwd(res)(y, p, args))(Y, lam)
+
+
+def _freq_res(y, w, args):
+    system, f_ref, x_ref = args
+    X = y.reshape(system.n_dof, system.n_coef) * x_ref
+    return (system.residual(X, w) / f_ref).reshape(-1)
+
+
+def _param_res(y, p, args):
+    make, omega, f_ref, x_ref = args
+    system = make(p)
+    X = y.reshape(system.n_dof, system.n_coef) * x_ref
+    return (system.residual(X, omega) / f_ref).reshape(-1)
+
+
+def _run(system_of, res, first, lam0, lam1, X0, omega0, extra, opts, stability, omega_of):
+    ensure_x64()
+    start = solve_hbm(first, omega0, X0)
+    if not bool(start.converged):
+        raise ValueError(
+            f"the harmonic balance did not converge at the start ({RESULTS[start.result]}); give "
+            "a start X0 or another start value"
+        )
+    f_ref, x_ref = first.scales(omega0)
+    x_ref = jnp.maximum(x_ref, jnp.max(jnp.abs(start.X)))
+    args = extra + (f_ref, x_ref)
+    ds, ds_min, ds_max, max_points, max_newton, tol = opts
+    Y, lam, steps, n, code = _arclength(
+        res, start.X.reshape(-1) / x_ref, jnp.asarray(lam0), jnp.asarray(lam1), args,
+        ds, ds_min, ds_max, int(max_points), int(max_newton), tol,
+    )  # fmt: skip
+    n, code = int(n), int(code)
+    lam_np = np.asarray(lam[:n])
+    inside = (lam_np - lam1) * np.sign(lam1 - lam0) <= 0.0
+    if code == 0 and n > 1 and not inside[-1]:
+        n -= 1  # the last step passed the end of the range
+    if n < 2 and code == 0:
+        code = 1
+    nd, nc = first.n_dof, first.n_coef
+    X = np.asarray(Y[:n]).reshape(n, nd, nc) * float(x_ref)
+    lam_n = np.asarray(lam[:n])
+    omega = np.array([float(omega_of(p)) for p in lam_n])
+    amp = np.hypot(X[..., first.index(1)], X[..., first.index(1, True)])
+    mf = np.full(n, np.nan)
+    if stability:
+        J = np.asarray(_jacobians(res, Y, lam, args))[:n] * float(f_ref / x_ref)
+        J = J[:, :, : nd * nc]
+        for i in range(n):
+            sys_i = first if system_of is None else system_of(lam_n[i])
+            mf[i] = floquet_exponents(sys_i, X[i], omega[i], J[i]).real.max()
+    return FrequencyResponse(
+        parameter=lam_n, omega=omega, X=X, amplitude=amp, stable=mf < 1e-6 * omega,
+        max_floquet=mf, newton_steps=np.asarray(steps[:n]), harmonics=first.harmonics,
+        result=_CODES[code],
+    )  # fmt: skip
+
+
+def frequency_response(system: FrictionSystem, omega_start, omega_end, *, X0=None, ds=0.02,
+                       ds_min=1e-6, ds_max=0.3, max_points: int = 400, max_newton: int = 12,
+                       tol=1e-9, stability: bool = True) -> FrequencyResponse:  # fmt: skip
+    """Forced response of `system` from ω = omega_start to omega_end (rad/s, > 0) by
+    pseudo-arclength continuation (the module docstring); the start solved by `solve_hbm` from X0.
+
+    Steps ds, ds_min, ds_max are in the scaled arclength (x / x_ref with x_ref the larger of the
+    static deflection F/K and the start amplitude; ω / |ω_end − ω_start|). A continuation that
+    stops early is reported in `result`, never as NaN points. Hill stability when `stability`.
+    """
+    w0, w1 = _checked_range(omega_start, omega_end, "frequency")
+    if w0 <= 0 or w1 <= 0:
+        raise ValueError(f"frequency range [{w0:g}, {w1:g}] rad/s must be > 0")
+    opts = (ds, ds_min, ds_max, max_points, max_newton, tol)
+    return _run(None, _freq_res, system, w0, w1, X0, w0, (system,), opts, stability,
+                lambda p: p)  # fmt: skip
+
+
+def parameter_response(make_system, p_start, p_end, omega, *, X0=None, ds=0.02, ds_min=1e-6,
+                       ds_max=0.3, max_points: int = 400, max_newton: int = 12, tol=1e-9,
+                       stability: bool = True) -> FrequencyResponse:  # fmt: skip
+    """Continuation in a scalar parameter p (e.g. the normal load) at fixed ω (rad/s).
+
+    `make_system(p)` builds the `FrictionSystem` at p with JAX operations (it is traced).
+    `parameter` holds p; `omega` is constant. Otherwise as `frequency_response`.
+    """
+    p0, p1 = _checked_range(p_start, p_end, "parameter")
+    if not float(omega) > 0:
+        raise ValueError(f"omega = {float(omega):g} rad/s must be > 0")
+    first = make_system(jnp.asarray(p0))
+    opts = (ds, ds_min, ds_max, max_points, max_newton, tol)
+    return _run(lambda p: make_system(jnp.asarray(p)), _param_res, first, p0, p1, X0,
+                float(omega), (make_system, float(omega)), opts, stability,
+                lambda p: omega)  # fmt: skip

@@ -1,0 +1,67 @@
+"""Figure of the full-chain fits per cell: measured, paper theory, plain and robust fit."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._io._tables import wang2022_table
+from .._plot import pyplot, save_figure
+from ._chain import TABLES, measured_slips, paper_theory_slips
+from ._robust import rms_relative_masked
+
+
+def plot_fit_measured(plain_nm, robust_nm, flagged, path=None, *, files=True):
+    """|phase slip| (nm) per cell of wang2022 Tables 4–7 against the vacuum level: measured,
+    the paper's theory, the plain (relative least-squares) fit and the robust fit; flagged cells
+    are ringed. One panel per table.
+
+    Args:
+        plain_nm, robust_nm: (6, 4) model slips (nm) of the two fits (`ChainFit.model_nm`,
+            `RobustChainFit.model_nm`).
+        flagged: (6, 4) bool, the robust fit's flagged cells.
+        path: PNG to write (the figure is then closed); files: non-interactive backend.
+    Returns:
+        the figure, or None without matplotlib.
+    """
+    plt = pyplot("fit_measured figure", files=files)
+    if plt is None:
+        return None
+    vac = np.asarray(wang2022_table(3)["vacuum_kPa"])
+    y, paper = measured_slips(), paper_theory_slips()
+    plain_nm, robust_nm = np.asarray(plain_nm), np.asarray(robust_nm)
+    flagged = np.asarray(flagged, dtype=bool)
+    fig, axes = plt.subplots(1, 4, figsize=(14, 3.8), sharex=True, constrained_layout=True)
+    for j, (ax, n) in enumerate(zip(axes, TABLES)):
+        ax.plot(vac, np.abs(y[:, j]), "ko", label="measured")
+        ax.plot(vac, np.abs(paper[:, j]), "C7s--", mfc="none", label="paper theory")
+        ax.plot(vac, np.abs(plain_nm[:, j]), "C3v-", label="plain fit (relative LS)")
+        ax.plot(vac, np.abs(robust_nm[:, j]), "C0^-", label="robust fit")
+        flag = flagged[:, j]
+        if np.any(flag):
+            ax.plot(vac[flag], np.abs(y[flag, j]), "o", ms=14, mfc="none", mec="C1", mew=2,
+                    label="flagged")  # fmt: skip
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(plt.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.yaxis.set_minor_formatter(  # label 2 and 5 times a power of ten
+            plt.FuncFormatter(lambda v, _: f"{v:g}" if f"{v:e}"[0] in "25" else "")
+        )
+        ax.set_title(f"Table {n} (T{n})")
+        ax.set_xlabel("vacuum (kPa)")
+    axes[0].set_ylabel("|phase slip| (nm)")
+    handles, labels = [], []
+    for ax in axes:  # the legend entries of all panels, once
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    axes[0].legend(handles, labels, fontsize=7)
+    fig.suptitle(
+        f"wang2022 Tables 4–7: rms relative residual over the unflagged cells — robust "
+        f"{rms_relative_masked(robust_nm, y, ~flagged):.3f}, plain "
+        f"{rms_relative_masked(plain_nm, y, ~flagged):.3f}, paper theory "
+        f"{rms_relative_masked(paper, y, ~flagged):.3f}"
+    )
+    if path is not None:
+        save_figure(fig, path)
+    return fig

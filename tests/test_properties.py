@@ -1,0 +1,230 @@
+"""Property-based tests (hypothesis) of the record readers and the command line.
+
+Random valid files round-trip exactly; random corruptions of a valid record give a clean error
+naming the file (DataFileError from the API; one `tribojax <cmd>: error:` line and exit 2 from the
+CLI), never a traceback and never a partial output. Example counts are small to keep the suite
+fast; the generators are plain hypothesis strategies, independent of the readers.
+"""
+
+import math
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+hypothesis = pytest.importorskip("hypothesis")
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+import tribojax as tj  # noqa: E402
+from tribojax._cli import _fit as cli_fit  # noqa: E402
+from tribojax._cli._main import main  # noqa: E402
+from tribojax._io._records import read_record  # noqa: E402
+from tribojax._io._tables import read_table  # noqa: E402
+
+FAST = settings(max_examples=30, deadline=None,
+                suppress_health_check=[HealthCheck.function_scoped_fixture])  # fmt: skip
+finite = st.floats(allow_nan=False, allow_infinity=False, width=64, min_value=-1e300,
+                   max_value=1e300)  # fmt: skip
+
+
+@st.composite
+def slip_runs(draw):
+    n = draw(st.integers(2, 40))
+    steps = draw(st.lists(st.floats(1e-9, 1e3), min_size=n, max_size=n))
+    t = np.cumsum(steps) - steps[0]  # t[0] = 0, strictly increasing
+    if np.any(np.diff(t) <= 0):
+        t = np.arange(n) * 1e-3
+    accel = np.array(draw(st.lists(finite, min_size=n, max_size=n)))
+    slip = np.array(draw(st.lists(finite, min_size=n, max_size=n)))
+    mass = draw(st.floats(1e-6, 1e6))
+    noise = draw(st.none() | st.floats(1e-15, 1.0))
+    return tj.SlipRun(t, accel, slip, mass=mass, noise_std=noise)
+
+
+@pytest.fixture
+def folder():
+    path = Path(tempfile.mkdtemp(prefix="tj-prop-"))
+    yield path
+    shutil.rmtree(path, ignore_errors=True)
+
+
+@FAST
+@given(run=slip_runs())
+def test_slip_runs_round_trip_exactly(folder, run):
+    path = folder / "run.csv"
+    tj.write_slip_run(run, path, overwrite=True, comment="hypothesis")
+    back = read_record(path)
+    for name in ("t", "accel", "slip"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(run, name))
+    assert back.mass == run.mass and back.noise_std == run.noise_std
+
+
+@FAST
+@given(
+    names=st.lists(st.text("abcdefghij_", min_size=1, max_size=8), min_size=1, max_size=5,
+                   unique=True),
+    rows=st.integers(1, 10),
+    data=st.data(),
+)  # fmt: skip
+def test_tables_round_trip_in_file_order(folder, names, rows, data):
+    values = np.array(
+        data.draw(st.lists(finite, min_size=rows * len(names), max_size=rows * len(names)))
+    ).reshape(rows, len(names))
+    path = folder / "t.csv"
+    lines = ["# comment", ",".join(names)] + [",".join(f"{v:.17g}" for v in r) for r in values]
+    path.write_text("\n".join(lines) + "\n")
+    table = read_table(path)
+    assert list(table) == names
+    for j, name in enumerate(names):
+        np.testing.assert_array_equal(table[name], values[:, j])
+
+
+# --- corruptions --------------------------------------------------------------------------
+
+_JUNK = ["abc", "nan", "inf", "-inf", "", "1e999", "0x10", "1,5", "\t", "é", '"1"']
+
+
+@st.composite
+def corruptions(draw):
+    """(kind, parameters) of one corruption of a valid slip-run CSV and sidecar."""
+    kind = draw(st.sampled_from(["field", "drop", "extra", "bytes", "truncate", "header",
+                                 "sidecar", "reverse"]))  # fmt: skip
+    return kind, draw(st.integers(0, 10**6)), draw(st.sampled_from(_JUNK))
+
+
+def _corrupt(csv: Path, kind, k, junk):
+    lines = csv.read_text().splitlines()
+    data = [i for i, ln in enumerate(lines) if ln and not ln.startswith("#")][1:]
+    row = data[k % len(data)]
+    fields = lines[row].split(",")
+    if kind == "field":
+        fields[k % 3] = junk
+        lines[row] = ",".join(fields)
+    elif kind == "drop":
+        lines[row] = ",".join(fields[:-1])
+    elif kind == "extra":
+        lines[row] = ",".join(fields + ["1"])
+    elif kind == "header":
+        hdr = data[0] - 1
+        lines[hdr] = ["time_s,time_s,slip_m", "time_s,stage_accel,slip_m", "a,b", ""][k % 4]
+    elif kind == "reverse":
+        lines[data[0]], lines[data[-1]] = lines[data[-1]], lines[data[0]]
+    text = "\n".join(lines) + "\n"
+    raw = text.encode()
+    if kind == "bytes":
+        at = len(raw) // 2 + k % (len(raw) // 2)
+        raw = raw[:at] + bytes([0x80 + k % 0x40]) + raw[at:]
+    if kind == "truncate":
+        raw = raw[: k % len(raw)]
+    csv.write_bytes(raw)
+    if kind == "sidecar":
+        side = csv.with_suffix(".json")
+        side.write_text(['{"mass_kg": -1}', '{"mass_kg": 0.3, "x": 1}', "{", "[]", '{"mass": 1}',
+                         '{"mass_kg": "0.3"}', '{"mass_kg": null}', ""][k % 8])  # fmt: skip
+
+
+def _valid_run(folder):
+    t = np.linspace(0.0, 0.1, 12)
+    run = tj.SlipRun(t, np.sin(40 * t), 1e-9 * t, mass=0.321, noise_std=1e-10)
+    path = folder / "run.csv"
+    tj.write_slip_run(run, path, overwrite=True)
+    return path
+
+
+@FAST
+@given(c=corruptions())
+def test_corrupted_records_give_a_clean_error(folder, c):
+    path = _valid_run(folder)
+    _corrupt(path, *c)
+    try:
+        read_record(path)
+    except tj.DataFileError as err:
+        assert "run.csv" in str(err) or "run.json" in str(err), str(err)
+    # (a corruption may leave a valid record: e.g. a junk value in a comment-free position
+    # that parses, or a truncation at a line end; then reading succeeds)
+
+
+@FAST
+@given(c=corruptions())
+def test_cli_on_corrupted_records_exits_cleanly(folder, c):
+    path = _valid_run(folder)
+    _corrupt(path, *c)
+    out = folder / "out"
+    reached = []
+
+    def stop(*a, **k):  # a record that is still valid reaches the fit: stop there
+        reached.append(True)
+        raise KeyboardInterrupt
+
+    with pytest.MonkeyPatch.context() as mp, _Capture() as cap:
+        mp.setattr(cli_fit, "fit_slip_run", stop)
+        code = main(["fit", str(path), "--out", str(out)])
+    err = cap.err
+    assert "Traceback" not in err
+    if reached:
+        assert code == 130 and err.strip() == "tribojax fit: interrupted (Ctrl-C)"
+    else:
+        assert code == 2, err
+        (line,) = err.strip().splitlines()
+        assert line.startswith("tribojax fit: error: ") and (
+            "run.csv" in line or "run.json" in line
+        )
+    assert not out.exists()
+
+
+class _Capture:
+    """Capture stderr inside a hypothesis example (pytest's capsys is per test, not example)."""
+
+    def __enter__(self):
+        import contextlib
+        import io
+
+        self._buf = io.StringIO()
+        self._cm = contextlib.redirect_stderr(self._buf)
+        self._cm.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        self._cm.__exit__(*exc)
+        self.err = self._buf.getvalue()
+        return False
+
+
+@FAST
+@given(text=st.text(st.characters(codec="utf-8"), max_size=300) | st.binary(max_size=300))
+def test_plain_topography_reader_on_random_files(folder, text):
+    path = folder / "surf.txt"
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    try:
+        topo = tj.read_topography(path, instrument=False, dx=1e-6)
+    except (tj.DataFileError, ValueError) as err:
+        assert "surf.txt" in str(err), str(err)
+    else:
+        assert np.all(np.isfinite(np.asarray(topo.heights)))
+
+
+_number = st.sampled_from(["0", "-1", "nan", "inf", "1e-300", "1e300", "2.5", "3", "2", "x"])
+
+
+@settings(max_examples=25, deadline=None)
+@given(D=_number | st.floats(2.0, 3.0).map(repr), G=_number | st.floats(1e-12, 1e-6).map(repr),
+       load=_number | st.floats(0.1, 100.0).map(repr))  # fmt: skip
+def test_cli_contact_never_tracebacks(D, G, load):
+    with _Capture() as cap:
+        try:
+            code = main(["contact", "--D", D, "--G", G, "--load", load])
+        except SystemExit as exit_:  # argparse refuses a value that is not a float
+            code = ("argparse", exit_.code)
+    if isinstance(code, tuple):
+        assert code[1] == 2 and "invalid float value" in cap.err
+        return
+    assert "Traceback" not in cap.err
+    assert code in (0, 1, 2), (D, G, load, cap.err)
+    if code == 2:
+        lines = [ln for ln in cap.err.splitlines() if ln.startswith("tribojax contact: error: ")]
+        assert len(lines) == 1, cap.err
+    if code == 0:
+        assert math.isfinite(float(load)) and float(load) > 0
