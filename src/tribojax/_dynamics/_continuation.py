@@ -203,9 +203,10 @@ def _run(system_of, res, first, lam0, lam1, X0, omega0, extra, opts, stability, 
     if stability:
         J = np.asarray(_jacobians(res, Y, lam, args))[:n] * float(f_ref / x_ref)
         J = J[:, :, : nd * nc]
-        for i in range(n):
-            sys_i = first if system_of is None else system_of(lam_n[i])
-            mf[i] = floquet_exponents(sys_i, X[i], omega[i], J[i]).real.max()
+        if system_of is None:  # one system: one stacked eigenvalue call
+            mf = floquet_exponents(first, None, omega, J).real.max(axis=-1)
+        for i in range(n if system_of is not None else 0):
+            mf[i] = floquet_exponents(system_of(lam_n[i]), X[i], omega[i], J[i]).real.max()
     return FrequencyResponse(
         parameter=lam_n, omega=omega, X=X, amplitude=amp, stable=mf < 1e-6 * omega,
         max_floquet=mf, newton_steps=np.asarray(steps[:n]), harmonics=first.harmonics,

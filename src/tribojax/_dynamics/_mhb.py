@@ -254,14 +254,29 @@ def hill_matrices(system: FrictionSystem, X, omega, J=None):
 
 
 def floquet_exponents(system: FrictionSystem, X, omega, J=None) -> np.ndarray:
-    """Hill's approximation of the 2N Floquet exponents (1/s) at a periodic solution X, ω."""
-    J, d1, d2 = hill_matrices(system, X, omega, J)
-    m = J.shape[0]
-    inv = np.linalg.inv(d2)
-    A = np.block([[np.zeros((m, m)), np.eye(m)], [-inv @ J, -inv @ d1]])
+    """Hill's approximation of the 2N Floquet exponents (1/s) at a periodic solution X, ω.
+
+    Batched: with J of shape (n, N·n_coef, N·n_coef) and ω of shape (n,) (X unused then), the
+    exponents of n solutions of the same system in one stacked eigenvalue call, shape (n, 2N).
+    """
+    J = np.asarray(J) if J is not None else hill_matrices(system, X, omega)[0]
+    batched = J.ndim == 3
+    J = J if batched else J[None]
+    w = np.asarray(omega, dtype=float).reshape(-1)
+    m = J.shape[-1]
+    c = system.n_coef
+    M, C = np.asarray(system.structure.M), np.asarray(system.structure.C)
+    inv = np.linalg.inv(np.kron(M, np.eye(c)))  # Δ₂⁻¹
+    d1_c = inv @ np.kron(C, np.eye(c))  # Δ₁ = C ⊗ I + ω·2 M ⊗ Δᵀ (Δ per unit ω)
+    d1_w = inv @ (2.0 * np.kron(M, harmonic_layout(system.harmonics)[2].T))
+    A = np.zeros((J.shape[0], 2 * m, 2 * m))
+    A[:, :m, m:] = np.eye(m)
+    A[:, m:, :m] = -inv @ J
+    A[:, m:, m:] = -d1_c - w[:, None, None] * d1_w
     lam = np.linalg.eigvals(A)
-    keep = np.argsort(np.abs(lam.imag), kind="stable")[: 2 * system.n_dof]
-    return lam[keep]
+    keep = np.argsort(np.abs(lam.imag), axis=-1, kind="stable")[:, : 2 * system.n_dof]
+    lam = np.take_along_axis(lam, keep, axis=-1)
+    return lam if batched else lam[0]
 
 
 def is_stable(system: FrictionSystem, X, omega, tol: float = 1e-6) -> bool:

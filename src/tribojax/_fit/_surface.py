@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -38,6 +39,23 @@ def surface_contact_model(D, G, mu_t, *, sigma_s=CALIBRATED_SIGMA_S, M=CALIBRATE
 def _surface_physical(theta, mu_min):
     """θ → (D, G, μ_t) by the chain's one mapping (`tribojax._chain.to_physical`)."""
     return to_physical(theta, SURFACE_NAMES, mu_min)
+
+
+class _SurfaceResiduals(eqx.Module):
+    """Whitened log differences of (F_s, K_τ, C_τ), model − stage 1, at each run's load; data in
+    `args` (loads, stage-1 log values, whitening factors, μ_t lower bound): one compilation per
+    (σ_s, M) and number of runs."""
+
+    sigma_s: float = eqx.field(static=True)
+    M: float = eqx.field(static=True)
+
+    def __call__(self, theta, args):
+        loads, target, whiten, mu_min = args
+        D, G, mu_t = _surface_physical(theta, mu_min)
+        model_fn = surface_contact_model(D, G, mu_t, sigma_s=self.sigma_s, M=self.M)
+        out = jax.vmap(model_fn)(loads)
+        model = jnp.log(jnp.stack([out.F_s, out.K_tau, out.C_tau], axis=1))
+        return jnp.einsum("nij,nj->ni", whiten, model - target).ravel()
 
 
 def fit_surface_from_runs(
@@ -103,16 +121,11 @@ def fit_surface_from_runs(
     whiten = jnp.asarray(np.stack(whiten))
     mu_min = _mu_min(loads)
 
-    def residuals(theta, args):
-        D, G, mu_t = _surface_physical(theta, mu_min)
-        out = jax.vmap(surface_contact_model(D, G, mu_t, sigma_s=sigma_s, M=M))(loads)
-        model = jnp.log(jnp.stack([out.F_s, out.K_tau, out.C_tau], axis=1))
-        return jnp.einsum("nij,nj->ni", whiten, model - target).ravel()
-
     theta0 = jnp.asarray(to_theta(start, SURFACE_NAMES, mu_min))  # ValueError outside the box
     if progress is not None:
         progress("surface: D, G, mu_t from the runs' F_s, K_tau, C_tau")
-    fit = least_squares_fit(jax.jit(residuals), theta0, names=SURFACE_NAMES,
+    fit = least_squares_fit(_SurfaceResiduals(float(sigma_s), float(M)), theta0,
+                            (loads, target, whiten, jnp.asarray(mu_min)), names=SURFACE_NAMES,
                             transform=lambda th: _surface_physical(th, mu_min),
                             sigma_known=True)  # fmt: skip
     fixed = {"alpha": float(alpha), "sigma_s_Pa": float(sigma_s), "M": float(M),

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -50,6 +51,19 @@ def equivalent_G(G, M, D, M_new):
     return G * (M_new / M) ** (1.0 / (2.0 * D - 4.0))
 
 
+class _Table3Residuals(eqx.Module):
+    """Relative residuals model/paper − 1 of F_s then K_τ at Table 3's loads; data in `args`
+    (loads, target, μ_t lower bound) so that repeated calibrations reuse one compilation."""
+
+    M: float = eqx.field(static=True)
+
+    def __call__(self, theta, args):
+        loads, target, mu_lo = args
+        G, mu_t, sigma_s = to_physical(theta, CALIBRATED_NAMES, mu_lo)
+        out = jax.vmap(wang2022_table3_model(G, mu_t, sigma_s, M=self.M, throw=False))(loads)
+        return jnp.concatenate([out.F_s, out.K_tau]) / target - 1.0
+
+
 def calibrate_table3(start=(1e-8, 0.2, 1e9), *, M=FIXED_M) -> FitResult:
     """Fit (G, μ_t, σ_s) to Table 3's F_s and K_τ at fixed M; see the module docstring.
 
@@ -64,14 +78,10 @@ def calibrate_table3(start=(1e-8, 0.2, 1e9), *, M=FIXED_M) -> FitResult:
     target = jnp.concatenate([jnp.asarray(t3["Fs_N"]), jnp.asarray(t3["Ktau_N_per_m"])])
     mu_lo = mu_min(loads)  # Eq 17 needs μ_t > T/P at every load
 
-    def residuals(theta, args):
-        G, mu_t, sigma_s = to_physical(theta, CALIBRATED_NAMES, mu_lo)
-        out = jax.vmap(wang2022_table3_model(G, mu_t, sigma_s, M=M, throw=False))(loads)
-        return jnp.concatenate([out.F_s, out.K_tau]) / target - 1.0
-
     fit = least_squares_fit(
-        residuals,
+        _Table3Residuals(float(M)),
         jnp.asarray(to_theta(start, CALIBRATED_NAMES, mu_lo)),
+        (loads, target, jnp.asarray(mu_lo)),
         names=CALIBRATED_NAMES,
         transform=lambda th: to_physical(th, CALIBRATED_NAMES, mu_lo),
     )
