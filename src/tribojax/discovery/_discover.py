@@ -122,7 +122,12 @@ def discover(
        qualifies if ΔBIC < `delta_bic_threshold` (ΔBIC with an AR(1) inflation from its own
        augmented residual; nuisance parameters counted); of those, add the one with the lowest
        ΔBIC at a common inflation (the largest of theirs, `delta_bic_common`). Repeat from 3
-       until none qualifies or `max_effects` are in.
+       until none qualifies, `max_effects` are in, or the model is consistent with the noise
+       (`_verdict.noise_consistent`: "explained"). Candidates are refitted in p-value order; one
+       with no fewer parameters (k + nuisance) than an earlier one that already reaches the
+       noise is not refitted, and a candidate's further starts stop once one reaches it. When
+       the baseline itself is consistent with the noise the candidates are ranked, not refitted
+       (verdict "none").
 
     Args:
         baseline: a concrete baseline holding the record (e.g. `slip_baseline(run)`).
@@ -226,13 +231,22 @@ def discover(
             break
         cands.sort(key=lambda c: (c["p_value"], -c["score"]))
         level = alpha / len(cands)
-        accepted = []
+        accepted, dk_explains = [], np.inf
         for c in [c for c in cands if c["p_value"] < level][: 0 if base_ok else n_refit]:
             d, new = c["_design"], None
+            if d.k + d.n_nuisance >= dk_explains:
+                # an earlier candidate with no more parameters brings the residual to the noise:
+                # this one could not beat its ΔBIC by more than the noise allows
+                c["refit_message"] = "not refitted: a candidate with fewer parameters explains"
+                continue
             for dd in (d, *c["_seeds"]):  # several starts: the best grid points by score
                 f = _refit(baseline, state, dd, c["name"], y, scale, r, cache)
                 if new is None or (f.converged and not f.rss >= new.rss) or not new.converged:
                     d, new = dd, f
+                if new.converged and consistent(new):
+                    break  # at the noise: further starts cannot do better
+            if new.converged and np.isfinite(new.rss) and consistent(new):
+                dk_explains = min(dk_explains, d.k + d.n_nuisance)
             if not new.converged or not np.isfinite(new.rss):
                 c["refit_message"] = new.message or "refit failed"
                 continue
