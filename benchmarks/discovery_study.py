@@ -93,6 +93,14 @@ def summarise(rows) -> tuple[dict, str]:
         }
         for k, v in groups.items()
     }
+    # an "explained" verdict means the final residual passes the noise test: an excess left
+    # there (e.g. 0.6 -> 0.3 sd) is at the noise floor of the excess estimate (≈ (2/n)^¼ σ ≈ 0.26σ
+    # at n = 461); counted apart, the strict rule above stays the headline
+    for k in ("in_vocabulary", "in_vocabulary_visible"):
+        ok = [r["ok"] or (r["verdict"] == "explained" and r["effect"] == r["effect_true"])
+              for r in groups[k]]  # fmt: skip
+        summary[k + "_explained_counts"] = {"n": len(ok), "success": sum(ok),
+                                             "rate": sum(ok) / max(len(ok), 1)}  # fmt: skip
     verdicts = ("none", "explained", "partly_explained", "unexplained")
     lines = ["| hidden effect | n | first name (count) | none | explained | partly | unexpl. | "
              "success |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip

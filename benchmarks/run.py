@@ -346,6 +346,9 @@ def main(argv=None):
     import discovery as discovery_benchmarks  # benchmarks/discovery.py (issue 6)
 
     results += discovery_benchmarks.run(quick=args.quick)
+    import long_records  # benchmarks/long_records.py (issue 18: records of 10^6 samples)
+
+    results += long_records.run(quick=args.quick)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(results, indent=2) + "\n")

@@ -327,9 +327,11 @@ def test_real_topographies_get_an_answer(tmp_path, capsys, name):
     err = capsys.readouterr().err
     assert "Traceback" not in err
     if name == "di-1.di":  # smoother than any fractal over every band: each method's D is named
-        line = _one_error_line(err, "contact")
-        assert code == 2 and "psd: D = 1." in line and "structure: D = 1." in line
-        assert "smoother" in line and not out.exists()
+        assert code == 0 and "structure: D = 1." in err and "smoother" in err
+        surface = json.loads(out.read_text())["surface"]
+        assert surface["D"] is None and len(surface["findings"]) == 3 and surface["warning"]
+        assert all("rms log10 residual" in f for f in surface["findings"])
+        assert json.loads(out.read_text())["contact"] == []
         return
     assert code == 0
     surface = json.loads(out.read_text())["surface"]
@@ -356,3 +358,15 @@ def test_truncated_instrument_files_say_so(tmp_path, name):
     with pytest.raises(tj.DataFileError, match="truncated or damaged") as info:
         tj.read_topography(cut)
     assert "tried" not in str(info.value) and len(str(info.value)) < 400
+
+
+@pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/data/topography is absent")
+def test_contact_band_where_the_surface_is_smoother_than_fractal(tmp_path, capsys):
+    pytest.importorskip("SurfaceTopography")
+    out = tmp_path / "c.json"
+    code = main(["contact", "--topography", str(SHARED / "di-1.di"), "--band", "1e-8", "1e-7",
+                 "--load", "5", "--json", str(out)])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 0 and "Traceback" not in err and "over the given band" in err
+    surface = json.loads(out.read_text())["surface"]
+    assert surface["band"] == [1e-8, 1e-7] and surface["findings"][0].startswith("psd: D = 1.")

@@ -79,12 +79,15 @@ from ._fit._chain import paper_theory_slips as wang2022_theory_slips  # noqa: F4
 from ._fit._chain import rms_relative as rms_relative
 from ._fit._chain import symmetric_bound as symmetric_bound
 from ._fit._chain import wang2022_loads as wang2022_loads
+from ._fit._decimate import Decimation as Decimation
+from ._fit._decimate import decimate_record as decimate_record
 from ._fit._engine import FitResult as FitResult
 from ._fit._engine import least_squares_fit as least_squares_fit
 from ._fit._figure import plot_fit_measured as plot_fit_measured
 from ._fit._loop import LoopAnalysis as LoopAnalysis
 from ._fit._loop import analyse_loop as analyse_loop
 from ._fit._loop import fit_loop as fit_loop
+from ._fit._loop import loop_residuals as loop_residuals
 from ._fit._profile import profile_likelihood as chain_profile_likelihood  # noqa: F401
 from ._fit._robust import NOISE_MODELS as CHAIN_NOISE_MODELS  # noqa: F401
 from ._fit._robust import RobustChainFit as RobustChainFit

@@ -28,8 +28,12 @@ from ._io._tables import wang2022_table
 
 # --- wang2022 -----------------------------------------------------------------------------------
 WANG2022_RETICLE_MASS_KG = 0.321  # m in Eqs 24 and 28
+"""Mass of the reticle, kg (wang2022 Section 5): the slider mass m of Eq 24 and the m·g of Eq 28."""
 WANG2022_A_MAX = 1.0  # m/s², the stage's peak acceleration
+"""Peak stage acceleration a_max, m/s² (wang2022 Section 5.2, Figure 9)."""
 WANG2022_TANGENTIAL_LOAD_N = WANG2022_RETICLE_MASS_KG * WANG2022_A_MAX  # T = m·a_max in T/P
+"""Applied tangential load T = m·a_max = 0.321 N, N: the T of the ratio T/P in wang2022 Eqs 18–22
+(the paper leaves T undefined; this reading reproduces Table 3's trend)."""
 WANG2022_SUCTION_AREA_M2 = 909e-6  # A_v of Eq 28
 STANDARD_GRAVITY_WANG2022 = 9.8  # m/s², g of Eq 28 (reproduces Table 3's load column)
 WANG2022_GAMMA = 1.5  # YK frequency-density parameter
@@ -48,6 +52,8 @@ WANG2022_CALIBRATED = MappingProxyType(
         "sigma_s_Pa": CALIBRATED_SIGMA_S,
     }
 )
+"""The Table 3 calibration (wang2022 Eqs 16, 19 fitted to Table 3's F_s and K_τ): M = 1, Table 1's
+D = 2.8821, G_m = 4.3636e-8 m, mu_t = 0.1416, sigma_s_Pa = 1.893e9 Pa."""
 # The chain fit's defaults (start and fixed values): the calibrated point and the paper's α = 1.
 CHAIN_DEFAULTS = MappingProxyType(
     {
@@ -58,6 +64,9 @@ CHAIN_DEFAULTS = MappingProxyType(
         "alpha": 1.0,
     }
 )
+"""Start and fixed values of the full-chain fit (`fit_measured_slips`): the Table 3 calibration
+(D, G_m in m, mu_t, sigma_s_Pa in Pa) and the paper's bristle exponent alpha = 1 (wang2022
+Eq 27)."""
 
 # --- wu2015 -------------------------------------------------------------------------------------
 WU2015_EQ5_COEFFICIENT = 0.5924e6  # N/m per N^exponent (Eq 5 read with K_d in N/µm)

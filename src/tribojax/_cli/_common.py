@@ -11,11 +11,15 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import sys
+import threading
+import time
 from pathlib import Path
 
 import equinox as eqx
 
+from .._fit._decimate import DECIMATION_MAX_SAMPLES, decimate_record
 from .._io._files import sidecar_path, write_json_atomic
 
 __all__ = [
@@ -23,8 +27,12 @@ __all__ = [
     "FAILED",
     "INTERRUPTED",
     "CommandError",
+    "Progress",
+    "add_decimation_arguments",
     "claim_outputs",
     "error",
+    "progress",
+    "reduce_record",
     "refused_outputs",
     "run_command",
     "warn",
@@ -167,3 +175,169 @@ def claim_outputs(src, targets, *, force: bool):
         lock.unlink(missing_ok=True)
         if created and not any(folder.iterdir()):
             folder.rmdir()  # a folder made for outputs that were not written
+
+
+class Progress:
+    """A one-line progress display on stderr for a long subcommand.
+
+    Shown only when the stream is a terminal and not `quiet`; otherwise every method does
+    nothing, so CI logs, pipes and files stay clean. `step(note)` counts a step (a bar when
+    `total` is known), `note(text)` shows a solver's latest message in place (a callback for
+    `progress=` arguments); a ticker redraws the elapsed time while a compiled computation runs.
+    While shown, the command's own stdout lines are printed above the display.
+    """
+
+    TICK_S = 0.5
+
+    def __init__(self, label: str, total: int | None = None, *, quiet: bool = False,
+                 stream=None):  # fmt: skip
+        self.stream = sys.stderr if stream is None else stream
+        isatty = getattr(self.stream, "isatty", None)
+        self.enabled = not quiet and bool(isatty and isatty())
+        self.label, self.total = label, total
+        self.count, self.text = 0, ""
+        self._t0 = time.perf_counter()
+        self._lock = threading.RLock()
+        self._stop = threading.Event()
+        self._thread = None
+        self._stdout = None
+        self._shown = False  # the display line is on screen
+        self._midline = False  # stdout has written part of a line: do not draw over it
+
+    def line(self) -> str:
+        """The display's current text (without control characters)."""
+        elapsed = f"{time.perf_counter() - self._t0:5.1f} s"
+        if self.total:
+            done = min(self.count, self.total)
+            bar = "#" * (20 * done // self.total) + "-" * (20 - 20 * done // self.total)
+            head = f"{self.label} [{bar}] {done}/{self.total} {elapsed}"
+        else:
+            spin = "|/-\\"[int(2 * (time.perf_counter() - self._t0)) % 4]
+            head = f"{self.label} {spin} {elapsed}"
+        width = shutil.get_terminal_size((100, 20)).columns - 1
+        return f"{head}  {self.text}"[:width].rstrip()
+
+    def _draw(self) -> None:
+        if self.enabled:
+            with self._lock:
+                if not self._midline:
+                    self.stream.write("\r\x1b[K" + self.line())
+                    self.stream.flush()
+                    self._shown = True
+
+    def _clear(self) -> None:
+        if self.enabled:
+            with self._lock:
+                if self._shown:
+                    self.stream.write("\r\x1b[K")
+                    self.stream.flush()
+                    self._shown = False
+
+    def step(self, note: str | None = None) -> None:
+        """One more step done (and the text shown beside the bar, if given)."""
+        self.count += 1
+        if note is not None:
+            self.text = note
+        self._draw()
+
+    def note(self, text: str) -> None:
+        """Show `text` (a solver's progress line) beside the bar."""
+        self.text = " ".join(str(text).split())
+        self._draw()
+
+    def _tick(self) -> None:
+        while not self._stop.wait(self.TICK_S):
+            self._draw()
+
+    def __enter__(self):
+        if self.enabled:
+            self._draw()
+            self._thread = threading.Thread(target=self._tick, daemon=True)
+            self._thread.start()
+            self._stdout = sys.stdout
+            sys.stdout = _AboveProgress(self, self._stdout)
+        return self
+
+    def __exit__(self, *exc):
+        if self.enabled:
+            self._stop.set()
+            self._thread.join()
+            sys.stdout = self._stdout
+            self._clear()
+        return False
+
+
+class _AboveProgress:
+    """stdout while a Progress is shown: a write clears the display line first, and the display
+    is drawn again once the line is complete."""
+
+    def __init__(self, progress: Progress, out):
+        self._progress, self._out = progress, out
+
+    def write(self, text: str) -> int:
+        with self._progress._lock:
+            self._progress._clear()
+            n = self._out.write(text)
+            self._out.flush()
+            if text:
+                self._progress._midline = not text.endswith("\n")
+            self._progress._draw()
+        return n
+
+    def __getattr__(self, name):
+        return getattr(self._out, name)
+
+
+def progress(args, label: str, total: int | None = None, stream=None) -> Progress:
+    """The progress display of a subcommand: off with `--quiet` (`args.quiet`) or when stderr is
+    not a terminal."""
+    return Progress(label, total, quiet=bool(getattr(args, "quiet", False)), stream=stream)
+
+
+def add_decimation_arguments(parser, max_samples: int = DECIMATION_MAX_SAMPLES) -> None:
+    """`--decimate auto|off|N` and `--max-samples` of the commands that take a record."""
+    parser.add_argument(
+        "--decimate",
+        default="auto",
+        metavar="auto|off|N",
+        help="long records: fit blocks of N samples reduced by local quadratics (noise "
+        "scaled); auto (default) reduces a record to at most --max-samples samples",
+    )
+    parser.add_argument(
+        "--max-samples",
+        type=int,
+        default=max_samples,
+        help=f"the size 'auto' reduces to (default {max_samples})",
+    )
+
+
+def reduce_record(record, args, *, whole_cycles: bool = False):
+    """(the record reduced as `--decimate` asks, the `Decimation`): `tribojax.decimate_record`.
+
+    A reduction is announced on stdout in one line."""
+    text = str(args.decimate).strip().lower()
+    if text == "auto":
+        factor = None
+    elif text == "off":
+        factor = 1
+    else:
+        try:
+            factor = int(text)
+        except ValueError:
+            raise CommandError(f"--decimate = {args.decimate!r}: expected auto, off or an integer "
+                               ">= 1") from None  # fmt: skip
+        if factor < 1:
+            raise CommandError(f"--decimate = {factor} is outside the allowed range [1, inf)")
+    if args.max_samples < 4:
+        raise CommandError(f"--max-samples = {args.max_samples} is outside the allowed range "
+                           "[4, inf)")  # fmt: skip
+    record, how = decimate_record(record, factor, max_samples=args.max_samples,
+                                  whole_cycles=whole_cycles)  # fmt: skip
+    if how.cycles_kept is not None:
+        print(f"{record.source}: kept the first {how.cycles_kept} whole cycles "
+              f"({how.samples_used} of {how.samples_in_record} samples)")  # fmt: skip
+    if how.factor > 1:
+        print(f"{record.source}: {how.samples_used} samples reduced to {how.samples} (blocks "
+              f"of {how.factor}, {how.method}; noise sd {how.noise_std_original:.3g} -> "
+              f"{how.noise_std:.3g})")  # fmt: skip
+    return record, how

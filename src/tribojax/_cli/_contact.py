@@ -5,7 +5,9 @@
 
 D and G of a topography come from `estimate_fractal`. A measured surface that shows no clean
 power law over the searched band still gets an answer: the best band with 2 < D < 3 (of the chosen
-method, else of another) with its quality and a warning; `--band LO HI` fixes the band.
+method, else of another) with its quality and a warning; `--band LO HI` fixes the band. A
+surface with no band of 2 < D < 3 at all (smoother than a fractal one) gets every method's D,
+band and quality with a warning, and no contact numbers (exit 0).
 """
 
 from __future__ import annotations
@@ -65,34 +67,36 @@ def _check_arguments(args) -> None:
 
 
 def surface_estimate(topo, args):
-    """D, G of `topo` by `args.method`; without a clean scaling band, the best band with
-    2 < D < 3 of that method or, failing that, of another method (the estimate's `warning` says
-    so). CommandError listing every method's finding when no band gives 2 < D < 3."""
+    """(estimate, []) of D, G of `topo` by `args.method`; without a clean scaling band, the
+    best band with 2 < D < 3 of that method or, failing that, of another method (the estimate's
+    `warning` says so). (None, every method's finding) when no band gives 2 < D < 3 (or the
+    given `--band` does not)."""
     kw = dict(band=args.band, M=int(args.M), min_decades=args.min_decades)
     try:
-        return estimate_fractal(topo, args.method, **kw)
+        return estimate_fractal(topo, args.method, **kw), []
     except ValueError as err:
-        if args.band is not None or "no fractal scaling band" not in str(err):
+        if "no fractal scaling band" not in str(err):
             raise
         first = str(err)
-    found, failures = [], [first]
-    for method in [args.method] + [m for m in METHODS if m != args.method]:
+    if args.band is not None:
+        return None, [_finding(first)]
+    order = [args.method] + [m for m in METHODS if m != args.method]
+    found, failures = [], {args.method: first}
+    for method in order:
         try:
             found.append(estimate_fractal(topo, method, best_band=True, **kw))
         except ValueError as err:
-            if method != args.method:
-                failures.append(str(err))
-    if not found:
-        seen = []
-        for text in failures:
-            m = re.search(r"by '(\w+)': \w+ \w+ band (\S+ m) has slope \S+ \(D = ([-\d.]+)", text)
-            seen.append(f"{m[1]}: D = {m[3]} over {m[2]}" if m else text)
-        raise CommandError(
-            f"{topo.source}: no band of any method gives 2 < D < 3, the range of the fractal "
-            f"contact model ({'; '.join(seen)}); a D below 2 means the surface is smoother than "
-            "a fractal one over the measured range; give --D and --G, or --band LO HI"
-        )
-    return min(found, key=lambda e: (e.method != args.method, e.rms_residual))
+            failures.setdefault(method, str(err))
+    if found:
+        return min(found, key=lambda e: (e.method != args.method, e.rms_residual)), []
+    return None, [_finding(failures[m]) for m in order]
+
+
+def _finding(text: str) -> str:
+    """'method: D = ... over LO-HI m (rms log10 residual ...)' from an estimator's message."""
+    m = re.search(r"by '(\w+)': \w+ \w+ band (\S+ m) has slope \S+ \(D = ([-\d.]+).*?"
+                  r"residual ([\d.]+)", text)  # fmt: skip
+    return f"{m[1]}: D = {m[3]} over {m[2]} (rms log10 residual {m[4]})" if m else text
 
 
 def run_contact(args) -> int:
@@ -102,7 +106,9 @@ def run_contact(args) -> int:
     with claim_outputs(None, [Path(args.json)], force=True) if args.json else nullcontext():
         if args.topography is not None:
             topo = read_topography(args.topography, unit=args.unit, dx=args.dx)
-            est = surface_estimate(topo, args)
+            est, findings = surface_estimate(topo, args)
+            if est is None:
+                return _no_fractal_band(topo, findings, result, args)
             D, G = est.D, est.G
             result["surface"] = est.as_dict()
             print(
@@ -123,6 +129,27 @@ def run_contact(args) -> int:
             write_json_atomic(Path(args.json), result)
             print(f"wrote {args.json}")
     return 0 if all(r["converged"] for r in rows) else 1
+
+
+def _no_fractal_band(topo, findings, result, args) -> int:
+    """The answer for a surface with no band of 2 < D < 3: every method's D and band, no
+    contact numbers (the model needs 2 < D < 3), a warning that says what to do; exit 0."""
+    where = "over the given band" if args.band is not None else "over any band searched"
+    smooth = any(re.search(r"D = 1\.|D = 0\.|D = -", f) for f in findings)
+    text = (f"{topo.source}: no fractal scaling {where} ({'; '.join(findings)})"
+            + ("; a D below 2 means the surface is smoother than a fractal one over the measured "
+               "range" if smooth else "")
+            + "; the contact model needs 2 < D < 3, so no contact numbers are given: pass "
+            "--D and --G (e.g. from a longer or finer measurement), or --band LO HI")  # fmt: skip
+    warn(text)
+    print(f"{topo.source}: no band with 2 < D < 3; estimates: {'; '.join(findings)}")
+    result["surface"] = {"D": None, "G": None, "method": args.method, "findings": findings,
+                         "band": args.band, "warning": text}  # fmt: skip
+    result["contact"] = []
+    if args.json:
+        write_json_atomic(Path(args.json), result)
+        print(f"wrote {args.json}")
+    return 0
 
 
 def _contact_rows(args, D, G, result) -> list:

@@ -5,7 +5,10 @@ slip_m) goes to the pre-slip LuGre baseline; a hysteresis loop (time_s, displace
 to the loop baseline (`tribojax.discovery.loop_baseline`). Writes
 DIR/discovery.json (keys: effect, verdict, effects, excess_rmse_before, excess_rmse_after, misfit,
 baseline_rmse, final_rmse, regions, candidates, ...)
-and DIR/discovery.png, and prints a summary.
+and DIR/discovery.png, and prints a summary. A long record is first reduced to at most
+`--max-samples` samples (default 5,000) by block local quadratics (`tribojax.decimate_record`;
+"decimation" in discovery.json says how, `--decimate off` keeps every sample); a loop of many
+cycles keeps only its first whole cycles that fit.
 
 Exit codes: 0 done; 2 malformed input or refused output; 3 the baseline fit did not converge
 (discovery.json is still written, with "converged": false).
@@ -16,10 +19,18 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from .._fit._decimate import DISCOVER_MAX_SAMPLES
 from .._io._loop import HysteresisLoop
 from .._io._records import read_record
 from ..discovery import discover, loop_baseline, plot_discovery, slip_baseline
-from ._common import claim_outputs, error, write_json_atomic
+from ._common import (
+    add_decimation_arguments,
+    claim_outputs,
+    error,
+    progress,
+    reduce_record,
+    write_json_atomic,
+)
 
 
 def add_arguments(parser) -> None:
@@ -28,6 +39,7 @@ def add_arguments(parser) -> None:
                         "discovery-out)")  # fmt: skip
     parser.add_argument("--force", action="store_true", help="replace an existing discovery.json")
     parser.add_argument("--max-effects", type=int, default=3, help="greedy rounds (default 3)")
+    add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
 
 
 def baseline_for(record):
@@ -45,16 +57,18 @@ def run_discover(args, out=None, err=None) -> int:
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
     with claim_outputs(src, [target, figure], force=args.force):
-        record = read_record(src)
+        record, reduction = reduce_record(read_record(src), args, whole_cycles=True)
         try:
             baseline = baseline_for(record)
-            report = discover(baseline, max_effects=args.max_effects)
+            with progress(args, "discover"):
+                report = discover(baseline, max_effects=args.max_effects)
         except ValueError as exc:
             if str(src) in str(exc) or Path(str(record.source)).name in str(exc):
                 raise
             raise ValueError(f"{src}: {exc}") from exc
         data = report.as_dict()
         data["source"] = str(src)
+        data["decimation"] = reduction.as_dict()
         write_json_atomic(target, data, exclusive=not args.force)
         drew = plot_discovery(report, figure)
     print(f"{src}: {report.kind} record, {len(report.y)} samples", file=out)

@@ -5,9 +5,11 @@
 
 The record type comes from the CSV header (`tribojax.read_record`). Writes DIR/fit.json
 (parameters, standard errors, correlation, converged, steps, rms residual, number of data, what was
-fitted, the source file) and DIR/fit.png (data and model, residuals). Exit status: 0 converged,
-1 not converged (fit.json still written, with "converged": false), 2 bad input (malformed file,
-fewer data than parameters, an output that exists or would overwrite the input).
+fitted, the source file; "decimation": how a long record was reduced before the fit;
+"full_record": the fitted model's residuals on every original sample) and DIR/fit.png (data and
+model, residuals). Exit status: 0 converged, 1 not converged (fit.json still written, with
+"converged": false), 2 bad input (malformed file, fewer data than parameters, an output that
+exists or would overwrite the input).
 """
 
 from __future__ import annotations
@@ -17,13 +19,24 @@ from pathlib import Path
 
 import numpy as np
 
-from .._fit._loop import fit_loop
+from .._fit._loop import fit_loop, loop_residuals
 from .._fit._slip import fit_slip_run
 from .._fit._start import noise_scale
+from .._friction._lugre import PreSlipLuGre
 from .._io._records import read_record
-from .._io._slip_run import SlipRun
+from .._io._slip_run import SlipRun, simulate_run
 from .._plot import pyplot, save_figure
-from ._common import FAILED, CommandError, claim_outputs, error, warn, write_json_atomic
+from ._common import (
+    FAILED,
+    CommandError,
+    add_decimation_arguments,
+    claim_outputs,
+    error,
+    progress,
+    reduce_record,
+    warn,
+    write_json_atomic,
+)
 
 
 def add_arguments(parser) -> None:
@@ -59,6 +72,7 @@ def add_arguments(parser) -> None:
     )
     parser.add_argument("--max-steps", type=int, default=200, help="LM step budget (default 200)")
     parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
+    add_decimation_arguments(parser)
 
 
 def run_fit(args) -> int:
@@ -72,14 +86,19 @@ def run_fit(args) -> int:
         return error(f"--max-steps = {args.max_steps} must be at least 1")
     start = _parse_start(args.start)
     with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force):
-        record = read_record(path)
+        full = read_record(path)
+        if args.alpha is not None and not isinstance(full, SlipRun):
+            return error(f"--alpha is for slip runs; {path} is a hysteresis loop")
         t0 = time.perf_counter()
-        if isinstance(record, SlipRun):
-            result, curves = _fit_slip(record, args, start)
-        else:
-            if args.alpha is not None:
-                return error(f"--alpha is for slip runs; {path} is a hysteresis loop")
-            result, curves = _fit_loop(record, args, start)
+        record, reduction = reduce_record(full, args)
+        with progress(args, "fit") as bar:
+            if isinstance(record, SlipRun):
+                result, curves = _fit_slip(record, args, start, reduction, bar.note)
+            else:
+                result, curves = _fit_loop(record, args, start, reduction)
+        result["decimation"] = reduction.as_dict()
+        if reduction.factor > 1:
+            result["full_record"] = _full_record(full, result, args, reduction)
         result["wall_time_s"] = time.perf_counter() - t0
         write_json_atomic(out / "fit.json", result, exclusive=not args.force)
         drew = _plot(curves, result, out / "fit.png")
@@ -91,6 +110,11 @@ def run_fit(args) -> int:
     unit = result["residual_unit"]
     print(f"  rms residual {result['rms_residual']:.4g} {unit}; converged: {fit['converged']} "
           f"({fit['steps']} steps, {result['wall_time_s']:.1f} s)")  # fmt: skip
+    if "full_record" in result:
+        fr = result["full_record"]
+        chi2 = f", reduced chi2 {fr['reduced_chi2']:.4g}" if fr["reduced_chi2"] else ""
+        rms = fr["rms_residual"]
+        print(f"  on all {fr['n_data']} samples: rms residual {rms:.4g} {unit}{chi2}")
     print(f"wrote {out / 'fit.json'}" + (f" and {out / 'fit.png'}" if drew else ""))
     for text in uncertainty_warnings(result):
         warn(text)
@@ -151,7 +175,34 @@ def _summary(fit, kind, source, n_data, resid, unit, sigma, sigma_source) -> dic
     return d
 
 
-def _fit_slip(run, args, start):
+def _full_record(full, result, args, reduction) -> dict:
+    """Residual statistics of the fitted model on every sample of the unreduced record."""
+    p = result["parameters"]
+    if isinstance(full, SlipRun):
+        alpha = p.get("alpha", result.get("fixed", {}).get("alpha", 1.0))
+        element = PreSlipLuGre(p["F_s"], p["K_tau"], p["C_tau"], alpha)
+        sol = simulate_run(element, full, throw=False)
+        resid = np.asarray(sol.slip) - full.slip
+    else:
+        resid = loop_residuals(full, args.element, p["mu_N"], p["K_d"], model=args.model)
+    sigma = reduction.noise_std_original
+    dof = max(len(resid) - len(result["fitted"]), 1)
+    return {
+        "n_data": len(resid),
+        "rms_residual": float(np.sqrt(np.mean(resid**2))),
+        "reduced_chi2": float(np.sum((resid / sigma) ** 2) / dof) if sigma else None,
+        "sigma": sigma,
+        "what": "the fitted model on every sample of the record before the reduction",
+    }
+
+
+def _reduced_sigma_source(reduction, default):
+    if reduction.factor == 1:
+        return default
+    return f"decimation: {reduction.noise_source}, scaled to the reduced samples"
+
+
+def _fit_slip(run, args, start, reduction, note=None):
     if args.alpha in (None, "free"):
         alpha = None
     else:
@@ -160,11 +211,11 @@ def _fit_slip(run, args, start):
         except ValueError:
             raise ValueError(f"--alpha must be 'free' or a number, got {args.alpha!r}") from None
     if run.noise_std is not None:
-        sigma, how = run.noise_std, "sidecar noise_std_m"
+        sigma, how = run.noise_std, _reduced_sigma_source(reduction, "sidecar noise_std_m")
     else:
         sigma, how = None, "estimated from the residuals"
     fit = fit_slip_run(run, alpha=alpha, max_steps=args.max_steps, start=start or None,
-                       progress=lambda m: print(f"  {m}", flush=True))  # fmt: skip
+                       progress=note)  # fmt: skip
     scale = run.noise_std if run.noise_std is not None else noise_scale(run.slip)
     resid = fit.residuals * scale  # model − data, m
     if sigma is None:
@@ -177,7 +228,7 @@ def _fit_slip(run, args, start):
     return d, curves
 
 
-def _fit_loop(loop, args, start):
+def _fit_loop(loop, args, start, reduction):
     if len(loop.t) <= 2:
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
     fit = fit_loop(loop, args.element, model=args.model, max_steps=args.max_steps,
@@ -186,6 +237,7 @@ def _fit_loop(loop, args, start):
     resid = fit.residuals * scale  # N, on the fitted samples (the last len(resid))
     m = len(resid)
     how = "sidecar noise_std_N" if loop.noise_std is not None else "estimated from the residuals"
+    how = _reduced_sigma_source(reduction, how)
     sigma = loop.noise_std
     if sigma is None:
         sigma = float(np.sqrt(np.sum(resid**2) / max(m - 2, 1)))

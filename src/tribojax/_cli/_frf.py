@@ -52,7 +52,7 @@ from .._io._config import read_config
 from .._io._files import write_text_atomic
 from .._io._tables import DataFileError
 from .._plot import pyplot, save_figure
-from ._common import claim_outputs, error, write_json_atomic
+from ._common import claim_outputs, error, progress, write_json_atomic
 
 SCHEMA = {
     "structure": {"M": "matrix", "C": "matrix", "K": "matrix"},
@@ -123,7 +123,8 @@ def run_frf(args) -> int:
     with claim_outputs(args.config, [out / "frf.json", out / "frf.csv", out / "frf.png"],
                        force=False):  # fmt: skip
         t0 = time.perf_counter()
-        fr = frequency_response(system, w0, w1, **opts)
+        with progress(args, "frf: continuation"):
+            fr = frequency_response(system, w0, w1, **opts)
         elapsed = time.perf_counter() - t0
         n = system.n_dof
         lines = ["omega_rad_per_s," + ",".join(f"amplitude_dof{i}_m" for i in range(n))

@@ -28,13 +28,14 @@ from .._reproduce._table3 import calibrate_table3, max_rel_error, reproduce_tabl
 from .._reproduce._tables4to7 import plot_figure10, print_tables4to7, reproduce_tables4to7
 from .._reproduce._wu2015 import plot_wu2015, wu2015_comparison
 from . import _contact, _discover, _fit, _frf, _hysteresis
-from ._common import claim_outputs, run_command, write_json_atomic
+from ._common import claim_outputs, progress, run_command, write_json_atomic
 from ._contact import CONTACT_DEFAULTS as CONTACT_DEFAULTS
 
 __all__ = ["SUBCOMMANDS", "build_parser", "main", "write_json_atomic"]
 
 
-def _print_table3(rows, out=sys.stdout) -> None:
+def _print_table3(rows, out=None) -> None:
+    out = sys.stdout if out is None else out  # at call time: the progress display wraps it
     head = (
         f"{'kPa':>5} {'F/N':>8} | {'F_s paper':>9} {'calib':>7} {'publ.':>7} | "
         f"{'K_tau paper':>11} {'calib':>9} {'publ.':>9} | {'C_tau paper':>11} {'calib':>7} | "
@@ -89,14 +90,15 @@ def _reproduce_slip_tables(result: dict, out_dir: Path) -> None:
         print(f"wrote {out_dir / 'figure10.png'}")
 
 
-def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = None) -> bool:
+def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = None,
+                            bar=None) -> bool:
     """The full-chain fits to the measured Tables 4–7 into result["fit_measured"]: the plain
     relative least-squares fit (the block's issue-5 keys) and the robust Student-t fit (issue 19:
     "loss", "flagged_cells", "rms_relative_residual_unflagged", ..., and "robust"); True if
     both converged. One start here; the studies are `python -m fitting.wang2022_slip` and
     `python -m fitting.wang2022_robust`."""
     print("wang2022 Tables 4-7 (measured): full-chain fit of D, G, mu_t (LM through diffrax) ...")
-    fit = chain_fit.fit_measured_slips(start, progress=True)
+    fit = chain_fit.fit_measured_slips(start, progress=True if bar is None else bar.note)
     block = fit.as_dict()
     measured, paper = chain_fit.measured_slips(), chain_fit.paper_theory_slips()
     block["paper_theory_rms_relative_residual"] = chain_fit.rms_relative(paper, measured)
@@ -123,6 +125,8 @@ def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = Non
         print(f"ERROR: the full-chain fit to the measured slips did not converge: "
               f"{fit.fit.message}", file=sys.stderr)  # fmt: skip
         return False
+    if bar is not None:
+        bar.step("robust fit")
     print("robust fit (Student-t noise by EM on the same engine) ...")
     t0 = time.perf_counter()
     robust = robust_fit.robust_fit_measured_slips(
@@ -169,11 +173,14 @@ def cmd_reproduce(args) -> int:
     out_dir = Path(args.out)
     names = ("reproduction.json", "table3.png", "figure10.png", "wu2015.png")
     with claim_outputs(None, [out_dir / n for n in names], force=True):
-        return _reproduce(out_dir)
+        with progress(args, "reproduce", total=5) as bar:
+            return _reproduce(out_dir, bar)
 
 
-def _reproduce(out_dir: Path) -> int:
+def _reproduce(out_dir: Path, bar) -> int:
+    """The steps of `tribojax reproduce`; `bar` counts the five of them (a `Progress`)."""
     t0 = time.perf_counter()
+    bar.note("Table 3 calibration")
     print("wang2022 Table 3: calibrating G, mu_t, sigma_s (optimistix Levenberg-Marquardt) ...")
     fit = calibrate_table3()
     result = reproduce_table3(fit)
@@ -203,10 +210,14 @@ def _reproduce(out_dir: Path) -> int:
     }
     if not cal["converged"]:
         print(f"WARNING: the calibration did not converge: {cal['message']}", file=sys.stderr)
+    bar.step("Tables 4-7: slip simulations")
     _reproduce_slip_tables(result, out_dir)
-    measured_ok = _reproduce_fit_measured(result, out_dir=out_dir)
+    bar.step("full-chain fit to the measured slips")
+    measured_ok = _reproduce_fit_measured(result, out_dir=out_dir, bar=bar)
     result["tribojax_version"] = __version__
+    bar.step("wu2015 against Eq 7")
     result["wu2015"] = _reproduce_wu2015(out_dir)
+    bar.step("writing")
     json_path = out_dir / "reproduction.json"
     write_json_atomic(json_path, result)
     fig_path = out_dir / "table3.png"
@@ -258,6 +269,10 @@ SUBCOMMANDS = [
 ]  # fmt: skip
 
 
+# Subcommands that show a progress display on a terminal (`--quiet` turns it off).
+LONG_RUNNING = ("reproduce", "fit", "discover", "frf")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The `tribojax` argument parser with every subcommand of `SUBCOMMANDS`."""
     parser = argparse.ArgumentParser(
@@ -271,6 +286,9 @@ def build_parser() -> argparse.ArgumentParser:
         cmd = sub.add_parser(name, help=help_text)
         add_arguments(cmd)
         cmd.add_argument("--debug", dest="debug_here", **debug)
+        if name in LONG_RUNNING:
+            cmd.add_argument("--quiet", action="store_true",
+                             help="no progress display (it is shown only on a terminal)")
         cmd.set_defaults(func=run)
     return parser
 

@@ -23,6 +23,8 @@ Scalar = Float[Array, ""]
 
 ELASTIC, EP1, EP2, PLASTIC = 0, 1, 2, 3
 REGIME_NAMES = ("elastic", "ep1", "ep2", "plastic")  # ep = elastic–plastic (first, second)
+"""The four deformation regimes of an asperity (wang2022 Section 2, Eqs 5–7): fully elastic
+(δ/δ_ec < 1), first elastic–plastic (1–6), second elastic–plastic (6–110), fully plastic (≥ 110)."""
 
 _LN2 = math.log(2.0)
 _LNPI = math.log(math.pi)

@@ -201,7 +201,11 @@ def _run(system_of, res, first, lam0, lam1, X0, omega0, extra, opts, stability, 
     amp = np.hypot(X[..., first.index(1)], X[..., first.index(1, True)])
     mf = np.full(n, np.nan)
     if stability:
-        J = np.asarray(_jacobians(res, Y, lam, args))[:n] * float(f_ref / x_ref)
+        # rows past the branch's end are NaN padding: evaluated at the start point instead (a
+        # parameter continuation's model may refuse NaN), fixed shape so one compilation serves
+        pad = jnp.arange(Y.shape[0]) >= n
+        Yv, lamv = jnp.where(pad[:, None], Y[0], Y), jnp.where(pad, lam[0], lam)
+        J = np.asarray(_jacobians(res, Yv, lamv, args))[:n] * float(f_ref / x_ref)
         J = J[:, :, : nd * nc]
         if system_of is None:  # one system: one stacked eigenvalue call
             mf = floquet_exponents(first, None, omega, J).real.max(axis=-1)

@@ -59,9 +59,12 @@ from ._engine import FAILED_RESIDUAL, FitResult, gauss_newton_step, least_square
 from ._solver import NoiseFloorLM
 
 PARAMETERS = ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha")
+"""Parameters of the full chain, in order: D, G (m), μ_t, σ_s (Pa) of the contact model (wang2022
+Eqs 5–24) and the bristle exponent α of the pre-slip element (Eq 27)."""
 # Defaults of the fixed ones: Table 1's D, the Table 3 calibration (M = 1), the paper's α = 1.
 DEFAULTS = dict(CHAIN_DEFAULTS)
 DEFAULT_FREE = ("D", "G_m", "mu_t")
+"""The parameters `fit_measured_slips` frees by default (σ_s and α stay at `CHAIN_DEFAULTS`)."""
 TABLES = (4, 5, 6, 7)
 GN_STEP_TOL = 0.1  # converged: the remaining Gauss–Newton step < 0.1 standard errors
 
@@ -113,13 +116,16 @@ def _report(rss, phys):
     _PROGRESS["n"] += 1
     if _PROGRESS["on"]:
         values = ", ".join(f"{k} {v:.6g}" for k, v in zip(PARAMETERS, phys.tolist()))
-        print(
+        line = (
             f"  fit_measured: evaluation {_PROGRESS['n']:3d}, RMS rel. residual "
             f"{math.sqrt(float(rss) / _PROGRESS['size']):.5f} at {values}; "
-            f"{time.perf_counter() - _PROGRESS['t0']:.1f} s",
-            file=sys.stderr,
-            flush=True,
+            f"{time.perf_counter() - _PROGRESS['t0']:.1f} s"
         )
+        sink = _PROGRESS.get("sink")
+        if callable(sink):
+            sink(line)
+        else:
+            print(line, file=sys.stderr, flush=True)
 
 
 def _announce(phys):
@@ -282,7 +288,8 @@ def fit_measured_slips(
             θ and the change of every residual below atol + rtol·|value|). The defaults match
             the chain's accuracy (slips to ~2e-4 relative, `SLIP_ATOL`); tighter ones make LM
             wander along the flat D–G valley without lowering the misfit.
-        progress: print one line per residual evaluation to stderr (long fits).
+        progress: True prints one line per residual evaluation to stderr (long fits); a
+            callable receives each line instead.
         sigma: (n, 4) uncertainty shape per cell, nm (default: the target itself, i.e. relative
             residuals model/measured − 1); the common scale is estimated from the fit.
         weights: (n, 4) positive weights per cell (default 1): residuals are multiplied by
@@ -342,7 +349,8 @@ def fit_measured_slips(
     def transform(theta):
         return to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo)[idx]
 
-    _PROGRESS.update(on=bool(progress), n=0, t0=time.perf_counter(), size=target.size)
+    _PROGRESS.update(on=bool(progress), n=0, t0=time.perf_counter(), size=target.size,
+                     sink=progress)  # fmt: skip
     t0 = time.perf_counter()
     try:
         fit = least_squares_fit(

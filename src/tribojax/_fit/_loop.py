@@ -177,19 +177,8 @@ def fit_loop(
     start_values, start = start, analyse_loop(loop, window=window)
     sigma = loop.noise_std if sigma is None else sigma
     scale = 1.0 if sigma is None else float(check_range(sigma, "sigma", 0.0, unit="N"))
-    if model == "steady":
-        direction = jnp.asarray(_loop_phase(loop, start))
-        u, f = jnp.asarray(loop.u), jnp.asarray(loop.f)
-        A = jnp.asarray(0.5 * (float(loop.u.max()) - float(loop.u.min())))
-        fn, args = _LoopResiduals(cls, None), (u, f, A, direction, jnp.asarray(scale))
-    else:
-        first = int(np.searchsorted(loop.t, cycle_starts(loop.t, loop.u)[0]))
-        u_rel = loop.u[first:] - 0.5 * (loop.u.max() + loop.u.min())
-        half = int(np.searchsorted(loop.t[first:], loop.t[first] + np.pi / start.omega))
-        skip = int(np.argmax(u_rel[:half]))  # the first reversal (u_max) after the crossing
-        f = jnp.asarray(loop.f[first + skip :])
-        fn = _LoopResiduals(cls, skip)
-        args = (jnp.asarray(u_rel), f, jnp.asarray(0.0), f, jnp.asarray(scale))
+    fn, args = _loop_problem(loop, cls, model, start, scale)
+    f = args[1]
     if len(f) <= 2:
         raise ValueError(f"{loop.source}: {len(f)} samples are too few to fit mu_N and K_d")
     given = dict(start_values or {})
@@ -225,6 +214,38 @@ def fit_loop(
         fit = dataclasses.replace(fit, std_errors=std, covariance=cov, correlation=corr,
                                   message=msg)  # fmt: skip
     return fit
+
+
+def _loop_problem(loop, cls, model, analysis, scale):
+    """The residual function and its args for `fit_loop` (see there for the two models)."""
+    if model == "steady":
+        direction = jnp.asarray(_loop_phase(loop, analysis))
+        u, f = jnp.asarray(loop.u), jnp.asarray(loop.f)
+        A = jnp.asarray(0.5 * (float(loop.u.max()) - float(loop.u.min())))
+        return _LoopResiduals(cls, None), (u, f, A, direction, jnp.asarray(scale))
+    first = int(np.searchsorted(loop.t, cycle_starts(loop.t, loop.u)[0]))
+    u_rel = loop.u[first:] - 0.5 * (loop.u.max() + loop.u.min())
+    half = int(np.searchsorted(loop.t[first:], loop.t[first] + np.pi / analysis.omega))
+    skip = int(np.argmax(u_rel[:half]))  # the first reversal (u_max) after the crossing
+    f = jnp.asarray(loop.f[first + skip :])
+    return _LoopResiduals(cls, skip), (jnp.asarray(u_rel), f, jnp.asarray(0.0), f,
+                                       jnp.asarray(scale))  # fmt: skip
+
+
+def loop_residuals(loop: HysteresisLoop, element: str, mu_N, K_d, *, model="steady"):
+    """Model − measured force (N) of a Jenkins or Mindlin element with μN (N), K_d (N/m) on
+    `loop`, as `fit_loop` computes it (steady loop, or the history from the first reversal:
+    the residuals then cover the last samples only). Used to judge a fit made on a reduced
+    record (`decimate_record`) on every sample of the original."""
+    if element not in _ELEMENTS:
+        raise ValueError(f"element must be one of {sorted(_ELEMENTS)}, got {element!r}")
+    fn, args = _loop_problem(loop, _ELEMENTS[element], model, analyse_loop(loop), 1.0)
+    return np.asarray(_evaluate(fn, jnp.log(jnp.array([mu_N, K_d], dtype=jnp.float64)), args))
+
+
+@eqx.filter_jit
+def _evaluate(fn, theta, args):
+    return fn(theta, args)
 
 
 class _LoopResiduals(eqx.Module):

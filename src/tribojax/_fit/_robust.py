@@ -44,6 +44,8 @@ from .._results import RESULTS, result_name
 from ._chain import TABLES, ChainFit, fit_measured_slips, measured_slips, paper_theory_slips
 
 NOISE_MODELS = ("relative", "absolute", "mixed")
+"""Noise shapes of `robust_fit_measured_slips`: relative (on ln|T|), absolute (nm) and mixed
+(σ ∝ √(T² + c²) with a floor c in nm)."""
 # The headline robust fit (the defaults; `tribojax reproduce`): relative errors, Student-t with
 # ν = 4 (Lange et al.'s robust choice), tied best by AIC (`python -m fitting.wang2022_robust`)
 HEADLINE_NOISE, HEADLINE_FLOOR_NM, HEADLINE_NU = "relative", None, 4.0

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._dynamics._profiles import MeasuredProfile, TrapezoidProfile
+from .._dynamics._profiles import AbstractProfile, MeasuredProfile, TrapezoidProfile
 from .._dynamics._slip import simulate_slip
 from .._presets import WANG2022_RETICLE_MASS_KG
 from ._files import data_line_number, positive_or_none, read_sidecar, write_record_files
@@ -42,6 +42,12 @@ class SlipRun:
     known (needed to fit surface parameters across loads); `noise_std` (m) the standard deviation
     of the slip noise, None when unknown (a fit then estimates it from its residuals).
 
+    `drive` (keyword-only, optional) is the stage acceleration profile the model is driven by
+    when it is not the samples' own: a record reduced by `tribojax.decimate_record` keeps the
+    full-resolution drive of the original, so that reducing the slip does not smooth the drive
+    (a velocity error of the drive is permanent in the slip). `write_slip_run` writes the
+    sampled `accel`, not `drive`.
+
     Construction validates: 1-D float64 arrays of equal length ≥ 2, all finite, t strictly
     increasing with t[0] ≥ 0 (the model starts from rest at t = 0), mass > 0, normal_load and
     noise_std > 0 when given. A violation raises ValueError naming `source` and the sample.
@@ -54,9 +60,14 @@ class SlipRun:
     normal_load: float | None = None
     noise_std: float | None = None
     source: str = "<array>"
+    drive: AbstractProfile | None = dataclasses.field(
+        default=None, kw_only=True, compare=False, repr=False
+    )
 
     def __post_init__(self):
         src = self.source
+        if self.drive is not None and not isinstance(self.drive, AbstractProfile):
+            raise ValueError(f"{src}: drive must be an acceleration profile, got {self.drive!r}")
         arrays = [np.array(x, dtype=np.float64) for x in (self.t, self.accel, self.slip)]
         for name, x in zip(("t", "accel", "slip"), arrays):
             if x.ndim != 1:
@@ -96,8 +107,11 @@ class SlipRun:
         The one definition used by `simulate_run`, `fit_slip_run` and discovery's slip baseline
         (`MeasuredProfile.from_samples`): the solver stops at the samples where a(t)'s slope
         changes when they are few (a sampled trapezoid: its 8 corners and the ends), and nowhere
-        for measured data that kink at every sample (the step controller handles those).
+        for measured data that kink at every sample (the step controller handles those). A
+        record with a `drive` returns that instead.
         """
+        if self.drive is not None:
+            return self.drive
         return MeasuredProfile.from_samples(self.t, self.accel)
 
 

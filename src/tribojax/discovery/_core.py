@@ -17,8 +17,14 @@ import numpy as np
 from ._regions import noise_estimate
 
 K_MAX = 8  # effect strengths in one fit, padded to this size (one compiled solve per record shape)
+"""Most effect strengths in one model; fits are padded to this size so that one compiled solve
+serves every combination of effects on a record shape."""
 DELTA_BIC_THRESHOLD = -10.0  # "very strong" evidence (Kass & Raftery 1995)
+"""An effect is accepted only when it lowers BIC by more than 10 ("very strong" evidence, Kass &
+Raftery 1995)."""
 ALPHA = 0.01  # family-wise level of the score tests (Bonferroni over grid points and candidates)
+"""Family-wise level of the Rao score tests that rank candidate effects (Bonferroni over grid
+points and candidates)."""
 
 
 @dataclasses.dataclass(frozen=True)
