@@ -83,13 +83,19 @@ def test_predict_derivatives_match_finite_differences():
     run = syn.hidden_effect_run("clean", 0.0, 0.6, n=N_CI)
     b = disc.slip_baseline(run)
     th = jnp.log(jnp.array([F, K, C]))
-    kn = jnp.asarray(b.knob_null()).at[0].set(0.5).at[1].set(0.1).at[2].set(-6.0).at[3].set(0.2)
+    # the friction knobs, then the mode term's (A_q, A_q̇ in m, log f, logit ζ/ζ_max)
+    kn = jnp.array([0.5, 0.1, -6.0, 0.2, 2e-9, -1e-9, np.log(40.0), 0.3])
     f = jax.jit(lambda v: b.predict(v[:3], v[3:]))
     v0 = jnp.concatenate([th, kn])
     J = jax.jacfwd(f)(v0)
+    # the split Jacobian the fits use (ODE over its own knobs, the mode term over its knobs)
+    # (eager here, jit above: an adaptive step decision can flip; measured <= 7e-4 of a column)
+    _, jb, jk = b.value_and_jacobians(th, kn)
+    err = np.max(np.abs(np.concatenate([jb, jk], axis=1) - J), axis=0)
+    assert np.all(err <= 3e-3 * np.max(np.abs(J), axis=0) + 1e-20)
     h = 1e-3
-    for i in range(7):
-        e = jnp.zeros(7).at[i].set(h)
+    for i in range(v0.size):
+        e = jnp.zeros(v0.size).at[i].set(h)
         fd = (f(v0 + e) - f(v0 - e)) / (2 * h)
         # the FD carries the adaptive solver's step noise (rtol 1e-6), which the slip's ratchet
         # makes permanent; it falls as h grows (h = 1e-4: up to 6 %, 1e-3: <= 1.4 % measured),
@@ -121,18 +127,10 @@ def _check(row):
 
 
 FULL = os.environ.get("TRIBOJAX_FULL") == "1"
-# CI form: clean (must give none), one measurement and two physics effects (position_error runs in
-# the CLI test); TRIBOJAX_FULL=1: every effect and clean x 2 noise levels x 2 loads
-CASES = (
-    [(h, None, None) for h in ("clean", *syn.SLIP_EFFECTS)]
-    if FULL
-    else [
-        ("clean", "high", 2.0),
-        ("vibration", "high", 0.6),
-        ("load_coupling", "low", 2.0),
-        ("viscous_friction", "high", 2.0),  # the closest call of the grid (shrink 2.1)
-    ]
-)
+# TRIBOJAX_FULL=1: every effect and clean x 2 noise levels x 2 loads on the library's own hidden
+# effect records (self-consistency). The CI form of discovery on hidden effects is the independent
+# records of tests/test_discovery_verdict.py (it replaced four cases here).
+CASES = [(h, None, None) for h in ("clean", *syn.SLIP_EFFECTS)] if FULL else []
 
 
 @pytest.mark.slow

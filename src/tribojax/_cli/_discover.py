@@ -3,7 +3,8 @@
 The sidecar `<stem>.json` is read from beside the CSV. A slip run (time_s, stage_accel_m_s2,
 slip_m) goes to the pre-slip LuGre baseline; a hysteresis loop (time_s, displacement_m, force_N)
 to the loop baseline (`tribojax.discovery.loop_baseline`). Writes
-DIR/discovery.json (keys: effect, effects, baseline_rmse, final_rmse, regions, candidates, ...)
+DIR/discovery.json (keys: effect, verdict, effects, excess_rmse_before, excess_rmse_after, misfit,
+baseline_rmse, final_rmse, regions, candidates, ...)
 and DIR/discovery.png, and prints a summary. A long record is first reduced to at most
 `--max-samples` samples (default 5,000) by block local quadratics (`tribojax.decimate_record`;
 "decimation" in discovery.json says how, `--decimate off` keeps every sample); a loop of many

@@ -84,6 +84,7 @@ from ._loop import plot_loop_discovery as plot_loop_discovery
 from ._loop_synthetic import eq7_standin_loop as eq7_standin_loop
 from ._loop_synthetic import eq7_standin_shape as eq7_standin_shape
 from ._loop_synthetic import hidden_effect_loop as hidden_effect_loop
+from ._plot import plot_correction as plot_correction
 from ._plot import plot_discovery as plot_discovery
 from ._regions import find_regions as find_regions
 from ._regions import noise_estimate as noise_estimate

@@ -11,6 +11,7 @@ import dataclasses
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import numpy as np
 
 from ._regions import noise_estimate
@@ -54,16 +55,21 @@ class EffectDesign:
 
     With strengths s (k,), the augmented model is
         y = baseline.predict(θ_b, knobs) + basis @ s,   knobs = knob_null ⊕ knob_set + knob_gain @ s
-    so s = 0 is the null (an interior point: strengths are signed). Nonlinear nuisance parameters
-    (frequencies, velocity scales) are fixed per design; an effect returns one design per point
-    of its grid.
+    so s = 0 is the null (an interior point: strengths are signed). An effect returns one design
+    per point of its grid of nonlinear nuisance parameters (frequencies, velocity scales); the
+    grid point only seeds them when the design makes them free: a strength that shifts a knob
+    (e.g. log v_s), fitted jointly with the others in the refit (`free`).
 
     strength_names / strength_units: names and units of the physical strengths.
     strength_scale: physical strength per unit of s (k,), for reporting (s is O(1) in fits).
     knob_gain: (n_knobs, k) or None — how s moves the baseline's physics knobs.
     knob_set: {knob name: value} — nuisance knobs fixed while the effect is active.
     basis: (n, k) additive columns in output units per unit s, or None.
-    nuisance: {name: value} reported with the result; n_nuisance counts them in ΔBIC.
+    nuisance: {name: value} reported with the result; n_nuisance counts the fixed ones in ΔBIC.
+    free: ((strength index, nuisance name, physical strength → nuisance value), ...): strengths
+        that are nuisance shifts (counted in k, reported under "nuisance", not as strengths).
+    columns: (n, k) ∂y/∂s at s = 0 whatever the fit (additive effects whose knobs move a term
+        outside the physics: the score test then needs no model solve), or None.
     """
 
     strength_names: tuple[str, ...]
@@ -74,6 +80,8 @@ class EffectDesign:
     basis: np.ndarray | None = None
     nuisance: dict = dataclasses.field(default_factory=dict)
     n_nuisance: int = 0
+    free: tuple = ()
+    columns: np.ndarray | None = None
 
     @property
     def k(self) -> int:
@@ -91,6 +99,9 @@ class AbstractBaseline(eqx.Module):
     param_names: eqx.AbstractClassVar[tuple[str, ...]]
     param_units: eqx.AbstractClassVar[tuple[str, ...]]
     knob_names: eqx.AbstractClassVar[tuple[str, ...]]
+    # False where the noise of the record cannot be told from its residual (a few summary
+    # values, no sidecar): the baseline is then never declared consistent with the noise
+    noise_gate: ClassVar[bool] = True
 
     @abc.abstractmethod
     def knob_null(self) -> np.ndarray:
@@ -120,6 +131,17 @@ class AbstractBaseline(eqx.Module):
     def data(self) -> DiscoveryData:
         """The observed record."""
 
+    def value_and_jacobians(self, theta, knobs):
+        """`predict` and its forward-mode Jacobians ∂/∂θ (n, p), ∂/∂knobs (n, n_knobs), in one
+        pass (JAX); a baseline may split it (knobs that do not enter an ODE)."""
+
+        def f(tb, kn):
+            out = self.predict(tb, kn)
+            return out, out
+
+        (jb, jk), value = jax.jacfwd(f, argnums=(0, 1), has_aux=True)(theta, knobs)
+        return value, jb, jk
+
     def noise_model(self, r) -> tuple[float, float]:
         """(σ̂, AR(1) ρ̂) of the noise in the baseline residual `r` (output units). Default:
         `noise_estimate` (first differences within segments); a baseline may override it with a
@@ -130,6 +152,17 @@ class AbstractBaseline(eqx.Module):
         """Extra keys for a flagged region (e.g. a loop's branch and displacement range);
         default none."""
         return {}
+
+    def unidentified(self, values: dict, std_errors: dict) -> dict:
+        """Parameters the record does not determine, {name: {"lower_bound", "upper_bound",
+        "unit"}}, from the fitted values and standard errors; default none."""
+        return {}
+
+    def signals(self) -> dict:
+        """Measured signals (name → (n,) array) a remaining misfit is correlated with; default
+        the abscissa."""
+        d = self.data()
+        return {d.x_label: np.asarray(d.x, dtype=float)}
 
     def solver_ok(self, theta, knobs) -> bool:
         """False when the model could not be evaluated (e.g. ODE failure); default True."""
@@ -146,6 +179,10 @@ class AbstractEffect(eqx.Module):
     @abc.abstractmethod
     def designs(self, baseline: AbstractBaseline) -> list[EffectDesign]:
         """One `EffectDesign` per nuisance grid point (a single one when there is no nuisance)."""
+
+    # refit starts: the best grid design by score, then the next best ones at least a factor 10
+    # away in every nuisance value
+    refit_starts: ClassVar[int] = 1
 
     def refine(self, baseline: AbstractBaseline, design: EffectDesign, score) -> EffectDesign:
         """Optionally improve the best grid design's nuisance values; `score(design) -> float` is

@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from ._core import (
@@ -16,151 +12,10 @@ from ._core import (
     AbstractEffect,
     default_effects,
 )
-from ._fitting import _columns, _delta_bic, _fit, _score, _State
+from ._fitting import _columns, _delta_bic, _fit, _score
 from ._regions import ar1_inflation, chi2_sf, find_regions, noise_estimate, residual_rho
-
-
-@dataclasses.dataclass(frozen=True)
-class DiscoveryReport:
-    """Outcome of `discover`. `as_dict()` is the discovery.json contract (plus extra keys).
-
-    effects: names in the order added ("none" in `effect` when empty).
-    baseline_rmse, final_rmse: RMS residual (output units) of the baseline and the final model.
-    regions: flagged stretches of the baseline residual (see `find_regions`), each with
-        rmse_before / rmse_after.
-    candidates: first-round ranking against the baseline: name, score (Rao LM statistic), dof,
-        p_value (Bonferroni over the effect's grid), nuisance at the best grid point, and, for
-        refitted candidates, delta_bic (None if not refitted).
-    rounds: every greedy round's candidate list.
-    strengths: per added effect, {strength name: {"value", "std_error", "unit"}} plus nuisance.
-    baseline_fit, final_fit: parameter values and std errors, converged, steps, message.
-    noise_std, noise_estimated, rho: the noise model used for regions.
-    x, y, baseline_y, final_y, segment: arrays for plots (not in as_dict).
-    """
-
-    kind: str
-    effects: tuple[str, ...]
-    baseline_rmse: float
-    final_rmse: float
-    regions: list
-    candidates: list
-    rounds: list
-    strengths: dict
-    baseline_fit: dict
-    final_fit: dict
-    noise_std: float
-    noise_estimated: bool
-    rho: float
-    settings: dict
-    labels: dict
-    x: np.ndarray = dataclasses.field(repr=False)
-    y: np.ndarray = dataclasses.field(repr=False)
-    baseline_y: np.ndarray = dataclasses.field(repr=False)
-    final_y: np.ndarray = dataclasses.field(repr=False)
-    segment: np.ndarray = dataclasses.field(repr=False)
-
-    @property
-    def effect(self) -> str:
-        return self.effects[0] if self.effects else "none"
-
-    @property
-    def converged(self) -> bool:
-        return bool(self.baseline_fit["converged"])
-
-    def as_dict(self) -> dict:
-        return {
-            "effect": self.effect,
-            "effects": list(self.effects),
-            "baseline_rmse": self.baseline_rmse,
-            "final_rmse": self.final_rmse,
-            "regions": self.regions,
-            "candidates": self.candidates,
-            "kind": self.kind,
-            "converged": self.converged,
-            "rounds": self.rounds,
-            "strengths": self.strengths,
-            "baseline_fit": self.baseline_fit,
-            "final_fit": self.final_fit,
-            "noise_std": self.noise_std,
-            "noise_estimated": self.noise_estimated,
-            "rho": self.rho,
-            "settings": self.settings,
-            "labels": self.labels,
-        }
-
-    def summary(self) -> str:
-        """A few lines for people."""
-        unit = self.labels.get("y_unit", "")
-        lines = [
-            f"effect: {self.effect}"
-            + (f"  (all: {', '.join(self.effects)})" if self.effects else ""),  # fmt: skip
-            f"rmse: baseline {self.baseline_rmse:.4g} {unit} -> final {self.final_rmse:.4g} {unit}"
-            f" (noise sd {self.noise_std:.3g}{' estimated' if self.noise_estimated else ''})",
-            f"flagged regions: {len(self.regions)}",
-        ]
-        for rg in self.regions[:6]:
-            lines.append(
-                f"  [{rg['start']:.4g}, {rg['end']:.4g}] seg {rg['segment']}: rmse "
-                f"{rg['rmse_before']:.3g} -> {rg['rmse_after']:.3g}, p = {rg['p_value']:.2g}"
-            )
-        for name, st in self.strengths.items():
-            parts = [
-                f"{k} = {v['value']:.4g} ± {v['std_error']:.2g} {v['unit']}"
-                for k, v in st.items()
-                if isinstance(v, dict) and "value" in v
-            ]
-            lines.append(f"  {name}: " + "; ".join(parts))
-        if not self.baseline_fit["converged"]:
-            lines.append(f"WARNING: baseline fit did not converge: {self.baseline_fit['message']}")
-        return "\n".join(lines)
-
-
-def _fit_dict(baseline, state: _State, scale: float) -> dict:
-    p = len(baseline.param_names)
-    theta_b = jnp.asarray(state.theta[:p])
-    values = np.asarray(baseline.physical(theta_b))
-    T = np.asarray(jax.jacfwd(baseline.physical)(theta_b))
-    cov_b = state.cov[:p, :p]
-    # a physical parameter that depends on an undetermined one is undetermined (inf), not 0·inf
-    free = np.isfinite(np.diag(cov_b))
-    cov_f = np.where(np.isfinite(cov_b), cov_b, 0.0)
-    var = np.einsum("ij,jk,ik->i", T, cov_f, T)
-    var = np.where(np.any((T != 0) & ~free[None, :], axis=1), np.inf, var)
-    std = np.sqrt(np.clip(var, 0, None))
-    return {
-        "parameters": dict(zip(baseline.param_names, values.tolist())),
-        "std_errors": dict(zip(baseline.param_names, std.tolist())),
-        "units": dict(zip(baseline.param_names, baseline.param_units)),
-        "converged": state.converged,
-        "steps": state.steps,
-        "message": state.message,
-        "effects": list(state.names),
-        "rss": state.rss * scale**2,
-    }
-
-
-def _strengths(baseline, state: _State) -> dict:
-    p = len(baseline.param_names)
-    out, j = {}, 0
-    for name, d in zip(state.names, state.designs):
-        entry = {}
-        for i, (sn, su) in enumerate(zip(d.strength_names, d.strength_units)):
-            s = state.theta[p + j + i]
-            var = state.cov[p + j + i, p + j + i]
-            entry[sn] = {
-                "value": float(s * d.strength_scale[i]),
-                "std_error": float(np.sqrt(max(var, 0.0)) * abs(d.strength_scale[i])),
-                "unit": su,
-            }
-        entry["nuisance"] = {k: float(v) for k, v in d.nuisance.items()}
-        out[name] = entry
-        j += d.k
-    return out
-
-
-def _rmse(a):
-    a = np.asarray(a)
-    return float(np.sqrt(np.mean(a * a))) if a.size else float("nan")
+from ._report import DiscoveryReport, _fit_dict, _rmse, _strengths
+from ._verdict import correlations, excess_rmse, flexible_correction, noise_consistent, verdict
 
 
 def _refit(baseline, state, design, name, y, scale, r, cache):
@@ -188,12 +43,57 @@ def _refit(baseline, state, design, name, y, scale, r, cache):
     return min(good, key=lambda f: f.rss) if good else fits[-1]
 
 
+def _apart(d1, d2):
+    return all(abs(np.log10(abs(d1.nuisance[k]) / abs(d2.nuisance[k]))) >= 1 for k in d1.nuisance)
+
+
+def _seeds(scored, n):
+    """Further refit starts: the best-scoring grid designs a decade from the chosen ones."""
+    chosen = [scored[0][4]]
+    for z in scored[1:]:
+        if len(chosen) >= n:
+            break
+        if z[3] and z[4].nuisance and all(_apart(z[4], c) for c in chosen):
+            chosen.append(z[4])
+    return chosen[1:]
+
+
+def _public(cands):
+    return [{k: v for k, v in c.items() if k not in ("_design", "_seeds")} for c in cands]
+
+
+def _misfit(baseline, data, r0, rf, state, sigma, rho, alpha, n_windows):
+    """Noise tests of the baseline and final residuals, the verdict, the excess misfits and,
+    where a misfit remains, its regions, signal correlations and flexible correction."""
+    p = len(baseline.param_names)
+    n_final = p + sum(d.k + d.n_nuisance for d in state.designs)
+    seg, x = data.segment, data.x
+    kw = {"alpha": alpha, "n_windows": n_windows, "estimated": not data.noise_std}
+    base_ok, p0, _ = noise_consistent(r0, sigma, rho, seg, x, p, **kw)
+    final_ok, p1, remaining = noise_consistent(rf, sigma, rho, seg, x, n_final, **kw)
+    e0, e1 = excess_rmse(r0, sigma), excess_rmse(rf, sigma)
+    v = verdict(len(state.names), base_ok, final_ok, e0, e1)
+    if not baseline.noise_gate:  # no noise test: the ΔBIC selection alone decides
+        v = "explained" if state.names else "none"
+    misfit = {"baseline_noise_p_value": p0, "final_noise_p_value": p1,
+              "baseline_consistent": base_ok, "final_consistent": final_ok}  # fmt: skip
+    if v in ("partly_explained", "unexplained"):
+        signals = {**baseline.signals(), "model": np.asarray(state.yhat)}
+        for rg in remaining:
+            rg.update(baseline.region_info(rg))
+        misfit["regions"] = remaining
+        misfit["correlations"] = correlations(rf, signals)
+        misfit["correction"] = flexible_correction(rf, signals, sigma)
+    return misfit, v, e0, e1
+
+
 def discover(
     baseline: AbstractBaseline,
     effects: list[AbstractEffect] | None = None,
     *,
     max_effects: int = 3,
     n_refit: int = 3,
+    n_starts: int = 1,
     delta_bic_threshold: float = DELTA_BIC_THRESHOLD,
     alpha: float = ALPHA,
     n_windows: int = 32,
@@ -222,10 +122,18 @@ def discover(
        qualifies if ΔBIC < `delta_bic_threshold` (ΔBIC with an AR(1) inflation from its own
        augmented residual; nuisance parameters counted); of those, add the one with the lowest
        ΔBIC at a common inflation (the largest of theirs, `delta_bic_common`). Repeat from 3
-       until none qualifies or `max_effects` are in.
+       until none qualifies, `max_effects` are in, or the model is consistent with the noise
+       (`_verdict.noise_consistent`: "explained"). Candidates are refitted in p-value order; one
+       with no fewer parameters (k + nuisance) than an earlier one that already reaches the
+       noise is not refitted, and a candidate's further starts stop once one reaches it. When
+       the baseline itself is consistent with the noise the candidates are ranked, not refitted
+       (verdict "none").
 
     Args:
         baseline: a concrete baseline holding the record (e.g. `slip_baseline(run)`).
+        n_starts: refit starts per candidate with a nuisance grid (at least the effect's
+            `refit_starts`): the best grid point by score (refined), then the best ones a
+            decade away in every nuisance value; the lowest cost kept.
         theta0: one start θ for the baseline fit instead of `baseline.starts()`.
         effects: candidate effects; default `default_effects(baseline.kind)`. Add your own:
             `effects=[*default_effects("slip"), MyEffect()]`.
@@ -264,11 +172,19 @@ def discover(
         sigma = float(data.noise_std)
     regions = find_regions(r0, data.x, data.segment, sigma, rho_n, n_windows=n_windows,
                            alpha=alpha, segment_names=data.segment_names)  # fmt: skip
+    kw = {"alpha": alpha, "n_windows": n_windows, "estimated": estimated}
+
+    def consistent(st):  # the noise test that decides "none" and "explained"
+        n_par = len(baseline.param_names) + sum(d.k + d.n_nuisance for d in st.designs)
+        return baseline.noise_gate and noise_consistent(y - st.yhat, sigma, rho_n, data.segment,
+                                                        data.x, n_par, **kw)[0]  # fmt: skip
+
+    base_ok = consistent(state)  # then the candidates are ranked, none is refitted or added
     for rg in regions:
         rg.update(baseline.region_info(rg))
     rounds = []
     grids = {e.name: e.designs(baseline) for e in effects}
-    while state.converged and len(state.names) < max_effects:
+    while state.converged and len(state.names) < max_effects and not (rounds and base_ok):
         r = (y - state.yhat) / scale
         J_cur = state.jac
         cache: dict = {}
@@ -280,11 +196,14 @@ def discover(
             grid = grids[e.name]
             if sum(d.k for d in state.designs) + grid[0].k > K_MAX:
                 continue
+            scored = []
             for d in grid:
                 S, rank = _score(r, J_cur, _columns(baseline, state, d, cache) / scale)
                 pv = chi2_sf(S, rank) if rank else 1.0
-                if best is None or pv < best[1] or (pv == best[1] and S > best[0]):
-                    best = (S, pv, rank, d)
+                scored.append((pv, -S, len(scored), rank, d))
+            scored.sort(key=lambda z: z[:3])
+            best = (-scored[0][1], scored[0][0], scored[0][3], scored[0][4])
+            seeds = _seeds(scored, max(n_starts, e.refit_starts))  # further refit starts
             S, pv, rank, d = best
             if rank:
 
@@ -305,16 +224,29 @@ def discover(
                     "nuisance": {kk: float(v) for kk, v in d.nuisance.items()},
                     "delta_bic": None,
                     "_design": d,
+                    "_seeds": seeds,
                 }
             )
         if not cands:
             break
         cands.sort(key=lambda c: (c["p_value"], -c["score"]))
         level = alpha / len(cands)
-        accepted = []
-        for c in [c for c in cands if c["p_value"] < level][:n_refit]:
-            d = c["_design"]
-            new = _refit(baseline, state, d, c["name"], y, scale, r, cache)
+        accepted, dk_explains = [], np.inf
+        for c in [c for c in cands if c["p_value"] < level][: 0 if base_ok else n_refit]:
+            d, new = c["_design"], None
+            if d.k + d.n_nuisance >= dk_explains:
+                # an earlier candidate with no more parameters brings the residual to the noise:
+                # this one could not beat its ΔBIC by more than the noise allows
+                c["refit_message"] = "not refitted: a candidate with fewer parameters explains"
+                continue
+            for dd in (d, *c["_seeds"]):  # several starts: the best grid points by score
+                f = _refit(baseline, state, dd, c["name"], y, scale, r, cache)
+                if new is None or (f.converged and not f.rss >= new.rss) or not new.converged:
+                    d, new = dd, f
+                if new.converged and consistent(new):
+                    break  # at the noise: further starts cannot do better
+            if new.converged and np.isfinite(new.rss) and consistent(new):
+                dk_explains = min(dk_explains, d.k + d.n_nuisance)
             if not new.converged or not np.isfinite(new.rss):
                 c["refit_message"] = new.message or "refit failed"
                 continue
@@ -324,7 +256,7 @@ def discover(
             if c["delta_bic"] < delta_bic_threshold:
                 accepted.append((c, new, d.k + d.n_nuisance, ar1_inflation(rho1)))
         if not accepted:
-            rounds.append([{k: v for k, v in c.items() if k != "_design"} for c in cands])
+            rounds.append(_public(cands))
             break
         # Each candidate is accepted on its own ΔBIC (AR(1) inflation of its own residuals).
         # The choice between accepted ones uses one inflation for all (the largest): otherwise
@@ -335,12 +267,16 @@ def discover(
         for c, new, dk, _ in accepted:
             gain = n * np.log(new.rss / state.rss) / c_common
             c["delta_bic_common"] = float(gain + dk * np.log(n))
-        rounds.append([{k: v for k, v in c.items() if k != "_design"} for c in cands])
+        rounds.append(_public(cands))
         state = min(accepted, key=lambda a: a[0]["delta_bic_common"])[1]
+        if consistent(state):  # explained: nothing is left to name
+            break
     rf = y - state.yhat
     for rg in regions:
         rg["rmse_before"] = _rmse(r0[rg["i0"] : rg["i1"]])
         rg["rmse_after"] = _rmse(rf[rg["i0"] : rg["i1"]])
+    misfit, verdict, e0, e1 = _misfit(baseline, data, r0, rf, state, sigma, rho_n, alpha,
+                                      n_windows)  # fmt: skip
     return DiscoveryReport(
         kind=baseline.kind,
         effects=state.names,
@@ -365,6 +301,10 @@ def discover(
             "n_windows": n_windows,
             "candidates_offered": names,
         },
+        verdict=verdict,
+        excess_rmse_before=e0,
+        excess_rmse_after=e1,
+        misfit=misfit,
         labels={
             "x": data.x_label,
             "y": data.y_label,
@@ -375,4 +315,5 @@ def discover(
         baseline_y=base_state.yhat,
         final_y=state.yhat,
         segment=np.asarray(data.segment),
+        signals={**baseline.signals(), "model": np.asarray(state.yhat)},
     )

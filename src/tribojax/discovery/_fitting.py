@@ -26,13 +26,7 @@ from ._regions import ar1_inflation
 
 def _predict_jac(baseline, theta_b, knobs):
     """predict and its forward-mode Jacobians ∂/∂θ_b (n, p), ∂/∂knobs (n, n_knobs): one pass."""
-
-    def f(tb, kn):
-        out = baseline.predict(tb, kn)
-        return out, out
-
-    (jb, jk), value = jax.jacfwd(f, argnums=(0, 1), has_aux=True)(theta_b, knobs)
-    return value, jb, jk
+    return baseline.value_and_jacobians(theta_b, knobs)
 
 
 _value_and_jac = eqx.filter_jit(_predict_jac)
@@ -275,6 +269,8 @@ def _columns(baseline, state: _State, design: EffectDesign, knob_cache: dict) ->
     knobs = base + gain[:, : state.theta.size - p] @ state.theta[p:]
     for key, value in design.knob_set.items():
         knobs[baseline.knob_names.index(key)] = value
+    if design.columns is not None:
+        return np.asarray(design.columns)
     cols = np.zeros((baseline.data().y.shape[0], design.k))
     if design.knob_gain is not None and np.any(design.knob_gain):
         key = tuple(np.round(knobs, 12))

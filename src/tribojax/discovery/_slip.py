@@ -11,6 +11,8 @@ Physics knobs of the baseline (null values in brackets), all inside one friction
     log10_v_s       [−5]: the Stribeck velocity scale (a nuisance, on a grid)
     load_coupling κ [0]:  normal load N(t) = N₀(1 + κ·a(t)/g), so F_s and K_τ scale by the
                           same factor (stage acceleration a, g = 9.8 m/s², wang2022 Eq 28)
+and four knobs of a mode term added to the reading (`vibration`): amplitudes mode_q, mode_qdot
+[0], mode_log_f (log f) and mode_logit_zeta (ζ = ZETA_MAX/(1 + e^−u): a lightly damped mode).
 The element (`AugmentedPreSlip`, a `PreSlipLuGre` with knob fields) carries the time as a
 second state (τ' = 1) so that it can read a(τ).
 
@@ -24,7 +26,6 @@ Additive (measurement) effects, linear in their strengths:
 
 from __future__ import annotations
 
-import functools
 from typing import ClassVar
 
 import diffrax as dfx
@@ -32,7 +33,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.scipy.linalg import expm
 from jaxtyping import Array
 
 from .._dynamics._profiles import MeasuredProfile
@@ -42,9 +42,14 @@ from .._friction._lugre import DEFAULT_VELOCITY_SCALE, PreSlipLuGre
 from .._io._slip_run import SlipRun
 from .._presets import STANDARD_GRAVITY_WANG2022 as G_ACC  # m/s², wang2022 Eq 28
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
+from ._modes import _golden_max, _oscillator
 from ._regions import noise_estimate
 
-KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling")
+KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling",
+         "mode_q", "mode_qdot", "mode_log_f", "mode_logit_zeta")  # fmt: skip
+ZETA_MAX = 0.3  # damping ratio bound of a structural mode (above: a low-pass of a(t), not a mode)
+N_ODE_KNOBS = 4  # the knobs of the friction element; the mode's knobs act on the reading
+F_MAX_OVER_DRIVE = 100.0  # bound of F_s in units of m·max|a| (beyond: slip ∝ (m a/F_s)², tiny)
 VS_GRID = tuple(10.0 ** np.arange(-7.0, -3.4, 0.5))  # m/s, Stribeck velocity grid
 
 
@@ -103,14 +108,18 @@ class SlipBaseline(AbstractBaseline):
     noise_std: Array  # m, NaN when unknown
     start_values: Array  # (F_s, K_τ, C_τ) start
     sigma_ref: Array  # N s/m: unit of the viscous knob (the start C_τ)
+    f_max: Array  # N: upper bound of F_s (`F_MAX_OVER_DRIVE` × m·max|a|)
     profile: MeasuredProfile
     t_end: float = eqx.field(static=True)  # s, the last sample (a solver setting)
 
     def knob_null(self):
-        return np.array([0.0, 0.0, -5.0, 0.0])
+        return np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0, np.log(50.0), 0.0])
 
     def start(self):
-        return np.log(np.asarray(self.start_values))
+        F, K, C = np.asarray(self.start_values, dtype=float)
+        cap = np.log(float(self.f_max))
+        u = min(np.log(F), cap - 0.7)  # invert the cap (F below half the bound)
+        return np.array([cap - np.log(np.expm1(cap - u)), np.log(K), np.log(C)])
 
     def starts(self):
         """The start and its C_τ multiplied by 0.1 and 10 (`C_TAU_START_FACTORS`), as
@@ -118,10 +127,25 @@ class SlipBaseline(AbstractBaseline):
         return [self.start() + np.log([1.0, 1.0, c]) for c in C_TAU_START_FACTORS]
 
     def physical(self, theta):
-        return jnp.exp(theta)
+        """θ → (F_s, K_τ, C_τ): F_s = exp(L − softplus(L − θ₀)), L = log `f_max` (≈ exp θ₀ below
+        the bound, never above it: a fit that cannot see F_s stops at the bound instead of
+        running it off), K_τ = exp θ₁, C_τ = exp θ₂."""
+        cap = jnp.log(self.f_max)
+        return jnp.stack([jnp.exp(cap - jax.nn.softplus(cap - theta[0])), jnp.exp(theta[1]),
+                          jnp.exp(theta[2])])  # fmt: skip
+
+    def unidentified(self, values: dict, std_errors: dict) -> dict:
+        """Parameters the record does not determine, with their bound: F_s within 10 % of
+        `f_max` or with a standard error above its value (m·a_max/F_s too small to show it)."""
+        F, sd = values["F_s"], std_errors["F_s"]
+        fm = float(self.f_max)
+        if F > 0.9 * fm or not sd < F:
+            return {"F_s": {"lower_bound": float(min(F, fm) / 2 if not sd < F else F - 2 * sd),
+                            "upper_bound": fm, "unit": "N"}}  # fmt: skip
+        return {}
 
     def element(self, theta, knobs):
-        F_s, K, C = jnp.exp(theta[0]), jnp.exp(theta[1]), jnp.exp(theta[2])
+        F_s, K, C = self.physical(theta)
         return AugmentedPreSlip(F_s, K, C, knobs[0] * self.sigma_ref, knobs[1],
                                 10.0 ** knobs[2], knobs[3], self.profile)  # fmt: skip
 
@@ -129,11 +153,41 @@ class SlipBaseline(AbstractBaseline):
         return simulate_slip(self.element(theta, knobs), self.profile, self.mass, ts=self.t,
                              t_end=self.t_end, adjoint=dfx.ForwardMode(), throw=False)  # fmt: skip
 
+    def _mode(self, km):
+        """The mode term of the reading: A_q·q/rms(q) + A_q̇·q̇/rms(q̇), m, for knobs
+        (A_q, A_q̇, log f, logit ζ/`ZETA_MAX`) (`_oscillator`, the `Vibration` effect's shape)."""
+        zeta = ZETA_MAX * jax.nn.sigmoid(km[3:4])
+        q = _oscillator(self.t, self.accel, 2 * jnp.pi * jnp.exp(km[2:3]), zeta)[0]
+        rms = jnp.sqrt(jnp.mean(q * q, axis=0)) + 1e-300
+        return q[:, 0] / rms[0] * km[0] + q[:, 1] / rms[1] * km[1]
+
     def predict(self, theta, knobs):
-        return self._solve(theta, knobs).slip
+        return self._solve(theta, knobs[:N_ODE_KNOBS]).slip + self._mode(knobs[N_ODE_KNOBS:])
+
+    def value_and_jacobians(self, theta, knobs):
+        """The ODE differentiated over θ and its own knobs only, the mode term over its knobs."""
+
+        def ode(tb, kn):
+            out = self._solve(tb, kn).slip
+            return out, out
+
+        def mode(km):
+            out = self._mode(km)
+            return out, out
+
+        (jb, jk), value = jax.jacfwd(ode, argnums=(0, 1), has_aux=True)(theta,
+                                                                        knobs[:N_ODE_KNOBS])
+        jm, vm = jax.jacfwd(mode, has_aux=True)(knobs[N_ODE_KNOBS:])
+        return value + vm, jb, jnp.concatenate([jk, jm], axis=1)
 
     def solver_ok(self, theta, knobs):
-        return bool(_ok(self, theta, knobs))
+        return bool(_ok(self, theta, knobs[:N_ODE_KNOBS]))
+
+    def signals(self):
+        t, a = np.asarray(self.t), np.asarray(self.accel)
+        v, x = stage_travel(t, a)
+        return {"time": t, "accel": a, "jerk": np.gradient(a, t), "stage_velocity": v,
+                "stage_travel": x}  # fmt: skip
 
     def data(self):
         sd = float(self.noise_std)
@@ -171,6 +225,7 @@ def slip_baseline(run, start=None) -> SlipBaseline:
         noise_std=jnp.asarray(np.nan if noise is None else float(noise)),
         start_values=jnp.asarray(sv, dtype=jnp.float64),
         sigma_ref=jnp.asarray(float(sv[2])),
+        f_max=jnp.asarray(F_MAX_OVER_DRIVE * float(run.mass) * float(np.max(np.abs(run.accel)))),
         profile=record.profile(),
         t_end=float(t[-1]),
     )
@@ -224,59 +279,15 @@ class PositionError(AbstractEffect):
                              basis=(x / rms * ys)[:, None])]  # fmt: skip
 
 
-def _transition(M, h):
-    """exp(M·h) for every step length h (one matrix exponential when the sampling is uniform)."""
-    uniform = jnp.all(jnp.abs(h - h[0]) <= 1e-12 * jnp.abs(h[0]))
-    return jax.lax.cond(uniform, lambda: jnp.broadcast_to(expm(M * h[0]), (h.size, 4, 4)),
-                        lambda: jax.vmap(lambda hh: expm(M * hh))(h))  # fmt: skip
-
-
-@jax.jit
-@functools.partial(jax.vmap, in_axes=(None, None, 0, 0))
-def _oscillator(t, a, omega, zeta):
-    """q, q̇ of q̈ + 2ζωq̇ + ω²q = −a(t), a linear between samples (exact discretisation), for
-    each (ω, ζ) pair of the vectors `omega`, `zeta`: shape (pairs, n, 2)."""
-    A = jnp.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]])
-    M = jnp.zeros((4, 4)).at[:2, :2].set(A).at[1, 2].set(-1.0).at[2, 3].set(1.0)
-    h = jnp.diff(t)
-    E = _transition(M, h)
-    slope = jnp.diff(a) / h
-
-    def step(x, inp):
-        Ek, ak, sk = inp
-        y = Ek @ jnp.concatenate([x, jnp.stack([ak, sk])])
-        return y[:2], y[:2]
-
-    _, xs = jax.lax.scan(step, jnp.zeros(2), (E, a[:-1], slope))
-    return jnp.concatenate([jnp.zeros((1, 2)), xs])
-
-
-def _golden_max(f, lo, hi, iters=18):
-    """Maximiser of a unimodal f on [lo, hi] (golden section)."""
-    g = (np.sqrt(5) - 1) / 2
-    a, b = lo, hi
-    c, d = b - g * (b - a), a + g * (b - a)
-    fc, fd = f(c), f(d)
-    for _ in range(iters):
-        if fc > fd:
-            b, d, fd = d, c, fc
-            c = b - g * (b - a)
-            fc = f(c)
-        else:
-            a, c, fc = c, d, fd
-            d = a + g * (b - a)
-            fd = f(d)
-    return (c, fc) if fc > fd else (d, fd)
-
-
 @register_effect
 class Vibration(AbstractEffect):
     """A lightly damped structural mode excited by the stage acceleration, seen in the reading.
 
     Additive A₁q + A₂q̇/ω (two signed amplitudes set the phase); natural frequency and damping
-    ratio on a grid (default 40 frequencies between 3/T and 0.4 × the sampling rate, capped at
-    500 Hz, × ζ ∈ {0.01, 0.03, 0.1}), then refined around the best grid point by golden-section
-    searches on the score (log f within one grid step, then log ζ within a factor 3).
+    ratio seeded by a grid (default 40 frequencies between 3/T and 0.4 × the sampling rate,
+    capped at 500 Hz, × ζ ∈ {0.01, 0.03, 0.1}) refined around the best grid point by
+    golden-section searches on the score (log f within one grid step, then log ζ within a
+    factor 3), then fitted jointly with the amplitudes in the refit (knobs `mode_*`).
     """
 
     name: ClassVar[str] = "vibration"
@@ -291,9 +302,17 @@ class Vibration(AbstractEffect):
         ys = _y_scale(baseline)
         f, z = np.asarray(pairs, dtype=float).reshape(-1, 2).T
         qs = np.asarray(_oscillator(baseline.t, baseline.accel, 2 * np.pi * f, z))
-        return [EffectDesign(("A_q", "A_qdot"), ("m", "m"), np.full(2, ys),
-                             basis=np.stack([_unit_rms(q[:, 0]), _unit_rms(q[:, 1])], 1) * ys,
-                             nuisance={"f_Hz": float(fi), "zeta": float(zi)}, n_nuisance=2)
+        gain = np.zeros((len(KNOBS), 4))
+        for j, (kn, g) in enumerate(zip(KNOBS[N_ODE_KNOBS:], (ys, ys, 1.0, 1.0))):
+            gain[KNOBS.index(kn), j] = g
+        return [EffectDesign(("A_q", "A_qdot", "log_f_shift", "logit_zeta_shift"),
+                             ("m", "m", "1", "1"), np.array([ys, ys, 1.0, 1.0]), knob_gain=gain,
+                             knob_set={"mode_log_f": np.log(fi), "mode_logit_zeta": _logit(zi)},
+                             columns=np.stack([_unit_rms(q[:, 0]) * ys, _unit_rms(q[:, 1]) * ys,
+                                               0 * q[:, 0], 0 * q[:, 0]], 1),
+                             nuisance={"f_Hz": float(fi), "zeta": float(zi)},
+                             free=((2, "f_Hz", lambda u, f0=fi: f0 * np.exp(u)),
+                                   (3, "zeta", lambda u, z0=zi: _zeta(_logit(z0) + u))))
                 for q, fi, zi in zip(qs, f, z)]  # fmt: skip
 
     def frequencies(self, baseline):
@@ -311,8 +330,17 @@ class Vibration(AbstractEffect):
         lf, _ = _golden_max(lambda u: score(self.design(baseline, np.exp(u), z0)),
                             np.log(f0) - step, np.log(f0) + step)  # fmt: skip
         lz, _ = _golden_max(lambda u: score(self.design(baseline, np.exp(lf), np.exp(u))),
-                            np.log(z0 / 3), np.log(min(3 * z0, 0.7)), iters=12)  # fmt: skip
+                            np.log(z0 / 3), np.log(min(3 * z0, 0.8 * ZETA_MAX)),
+                            iters=12)  # fmt: skip
         return self.design(baseline, np.exp(lf), np.exp(lz))
+
+
+def _logit(zeta):
+    return float(np.log(zeta / (ZETA_MAX - zeta)))
+
+
+def _zeta(u):
+    return float(ZETA_MAX / (1.0 + np.exp(-u)))
 
 
 def _knob_design(knob, strength, unit, scale, knob_set=None, nuisance=None, n_nuisance=0):
@@ -336,24 +364,21 @@ class LoadCoupling(AbstractEffect):
 
 @register_effect
 class Stribeck(AbstractEffect):
-    """Velocity weakening g(v) = F_s(1 − δ(1 − exp(−(v/v_s)²))); v_s on a grid (`VS_GRID`)."""
+    """Velocity weakening g(v) = F_s(1 − δ(1 − exp(−(v/v_s)²))) (wang2022 Eq 25, β = 2); v_s
+    seeded by the grid `VS_GRID` (the best score) and fitted jointly with δ in the refit."""
 
     name: ClassVar[str] = "stribeck"
     kind: ClassVar[str] = "slip"
+    refit_starts: ClassVar[int] = 3  # the score's best v_s is often a decade off the refit's
 
     def designs(self, baseline):
-        return [
-            _knob_design(
-                "stribeck",
-                "delta",
-                "1",
-                1.0,
-                knob_set={"log10_v_s": np.log10(vs)},
-                nuisance={"v_s_m_per_s": vs},
-                n_nuisance=1,
-            )  # fmt: skip
-            for vs in VS_GRID
-        ]
+        gain = np.zeros((len(KNOBS), 2))
+        gain[KNOBS.index("stribeck"), 0] = gain[KNOBS.index("log10_v_s"), 1] = 1.0
+        return [EffectDesign(("delta", "log10_v_s_shift"), ("1", "1"), np.ones(2),
+                             knob_gain=gain, knob_set={"log10_v_s": np.log10(vs)},
+                             nuisance={"v_s_m_per_s": vs},
+                             free=((1, "v_s_m_per_s", lambda u, v0=vs: v0 * 10.0**u),))
+                for vs in VS_GRID]  # fmt: skip
 
 
 @register_effect

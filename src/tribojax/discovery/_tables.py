@@ -68,6 +68,7 @@ class Wang2022TableBaseline(AbstractBaseline):
     param_names: ClassVar[tuple] = ()
     param_units: ClassVar[tuple] = ()
     knob_names: ClassVar[tuple] = TABLE_KNOBS
+    noise_gate: ClassVar[bool] = False  # 24 cells, no noise level: σ from the residual itself
     F_s: Array  # (6,) N
     K_tau: Array  # (6,) N/m
     C_tau: Array  # (6,) N s/m

@@ -1,0 +1,190 @@
+"""The outcome of `discover` (discovery.json) and its parameter/strength tables."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._fitting import _State
+
+
+@dataclasses.dataclass(frozen=True)
+class DiscoveryReport:
+    """Outcome of `discover`. `as_dict()` is the discovery.json contract (plus extra keys).
+
+    effects: names in the order added ("none" in `effect` when empty).
+    baseline_rmse, final_rmse: RMS residual (output units) of the baseline and the final model.
+    regions: flagged stretches of the baseline residual (see `find_regions`), each with
+        rmse_before / rmse_after.
+    candidates: first-round ranking against the baseline: name, score (Rao LM statistic), dof,
+        p_value (Bonferroni over the effect's grid), nuisance at the best grid point, and, for
+        refitted candidates, delta_bic (None if not refitted).
+    rounds: every greedy round's candidate list.
+    strengths: per added effect, {strength name: {"value", "std_error", "unit"}} plus nuisance.
+    baseline_fit, final_fit: parameter values and std errors, converged, steps, message.
+    noise_std, noise_estimated, rho: the noise model used for regions.
+    verdict: "none", "explained", "partly_explained" or "unexplained" (see `_verdict`).
+    excess_rmse_before / excess_rmse_after: RMS misfit beyond the noise of the baseline and the
+        final model, sqrt(max(rmse² − σ², 0)) (output units).
+    misfit: where a remaining misfit lives: noise-test p-values of the baseline and final
+        residuals, the final residual's flagged regions, its correlations with the measured
+        signals and a flexible (linear-spline) correction in the best signal.
+    x, y, baseline_y, final_y, segment, signals: arrays for plots (not in as_dict).
+    """
+
+    kind: str
+    effects: tuple[str, ...]
+    baseline_rmse: float
+    final_rmse: float
+    regions: list
+    candidates: list
+    rounds: list
+    strengths: dict
+    baseline_fit: dict
+    final_fit: dict
+    noise_std: float
+    noise_estimated: bool
+    rho: float
+    settings: dict
+    labels: dict
+    verdict: str
+    excess_rmse_before: float
+    excess_rmse_after: float
+    misfit: dict
+    x: np.ndarray = dataclasses.field(repr=False)
+    y: np.ndarray = dataclasses.field(repr=False)
+    baseline_y: np.ndarray = dataclasses.field(repr=False)
+    final_y: np.ndarray = dataclasses.field(repr=False)
+    segment: np.ndarray = dataclasses.field(repr=False)
+    signals: dict = dataclasses.field(repr=False, default_factory=dict)  # measured, for plots
+
+    @property
+    def effect(self) -> str:
+        """The first added effect when explained or partly explained; else the verdict."""
+        if self.verdict in ("explained", "partly_explained"):
+            return self.effects[0]
+        return self.verdict
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.baseline_fit["converged"])
+
+    def as_dict(self) -> dict:
+        return {
+            "effect": self.effect,
+            "verdict": self.verdict,
+            "excess_rmse_before": self.excess_rmse_before,
+            "excess_rmse_after": self.excess_rmse_after,
+            "misfit": self.misfit,
+            "effects": list(self.effects),
+            "baseline_rmse": self.baseline_rmse,
+            "final_rmse": self.final_rmse,
+            "regions": self.regions,
+            "candidates": self.candidates,
+            "kind": self.kind,
+            "converged": self.converged,
+            "rounds": self.rounds,
+            "strengths": self.strengths,
+            "baseline_fit": self.baseline_fit,
+            "final_fit": self.final_fit,
+            "noise_std": self.noise_std,
+            "noise_estimated": self.noise_estimated,
+            "rho": self.rho,
+            "settings": self.settings,
+            "labels": self.labels,
+        }
+
+    def summary(self) -> str:
+        """A few lines for people."""
+        unit = self.labels.get("y_unit", "")
+        lines = [
+            f"verdict: {self.verdict}; effect: {self.effect}"
+            + (f"  (all: {', '.join(self.effects)})" if self.effects else ""),  # fmt: skip
+            f"rmse: baseline {self.baseline_rmse:.4g} {unit} -> final {self.final_rmse:.4g} {unit}"
+            f" (noise sd {self.noise_std:.3g}{' estimated' if self.noise_estimated else ''})",
+            f"excess misfit beyond the noise: {self.excess_rmse_before:.3g} -> "
+            f"{self.excess_rmse_after:.3g} {unit}",
+            f"flagged regions: {len(self.regions)}",
+        ]
+        for rg in self.regions[:6]:
+            lines.append(
+                f"  [{rg['start']:.4g}, {rg['end']:.4g}] seg {rg['segment']}: rmse "
+                f"{rg['rmse_before']:.3g} -> {rg['rmse_after']:.3g}, p = {rg['p_value']:.2g}"
+            )
+        for name, st in self.strengths.items():
+            parts = [
+                f"{k} = {v['value']:.4g} ± {v['std_error']:.2g} {v['unit']}"
+                for k, v in st.items()
+                if isinstance(v, dict) and "value" in v
+            ]
+            lines.append(f"  {name}: " + "; ".join(parts))
+        if self.verdict in ("partly_explained", "unexplained"):
+            corr = self.misfit.get("correlations", [])[:3]
+            lines.append("remaining misfit correlates with: " + ", ".join(
+                f"{c['signal']} ({c['correlation']:+.2f})" for c in corr))  # fmt: skip
+            fc = self.misfit.get("correction")
+            if fc:
+                lines.append(f"a term in {fc['signal']} could close {100 * fc['gap_closed']:.0f}%"
+                             " of the remaining excess")  # fmt: skip
+        if not self.baseline_fit["converged"]:
+            lines.append(f"WARNING: baseline fit did not converge: {self.baseline_fit['message']}")
+        return "\n".join(lines)
+
+
+def _fit_dict(baseline, state: _State, scale: float) -> dict:
+    p = len(baseline.param_names)
+    theta_b = jnp.asarray(state.theta[:p])
+    values = np.asarray(baseline.physical(theta_b))
+    T = np.asarray(jax.jacfwd(baseline.physical)(theta_b))
+    cov_b = state.cov[:p, :p]
+    # a physical parameter that depends on an undetermined one is undetermined (inf), not 0·inf
+    free = np.isfinite(np.diag(cov_b))
+    cov_f = np.where(np.isfinite(cov_b), cov_b, 0.0)
+    var = np.einsum("ij,jk,ik->i", T, cov_f, T)
+    var = np.where(np.any((T != 0) & ~free[None, :], axis=1), np.inf, var)
+    std = np.sqrt(np.clip(var, 0, None))
+    vals = dict(zip(baseline.param_names, values.tolist()))
+    stds = dict(zip(baseline.param_names, std.tolist()))
+    return {
+        "parameters": vals,
+        "std_errors": stds,
+        "unidentified": baseline.unidentified(vals, stds),
+        "units": dict(zip(baseline.param_names, baseline.param_units)),
+        "converged": state.converged,
+        "steps": state.steps,
+        "message": state.message,
+        "effects": list(state.names),
+        "rss": state.rss * scale**2,
+    }
+
+
+def _strengths(baseline, state: _State) -> dict:
+    p = len(baseline.param_names)
+    out, j = {}, 0
+    for name, d in zip(state.names, state.designs):
+        entry = {}
+        nuisance = {k: float(v) for k, v in d.nuisance.items()}
+        free = {i: (name, fn) for i, name, fn in d.free}
+        for i, (sn, su) in enumerate(zip(d.strength_names, d.strength_units)):
+            s = state.theta[p + j + i]
+            var = state.cov[p + j + i, p + j + i]
+            if i in free:  # a fitted nuisance value (the grid point seeded it)
+                nuisance[free[i][0]] = float(free[i][1](s * d.strength_scale[i]))
+                continue
+            entry[sn] = {
+                "value": float(s * d.strength_scale[i]),
+                "std_error": float(np.sqrt(max(var, 0.0)) * abs(d.strength_scale[i])),
+                "unit": su,
+            }
+        entry["nuisance"] = nuisance
+        out[name] = entry
+        j += d.k
+    return out
+
+
+def _rmse(a):
+    a = np.asarray(a)
+    return float(np.sqrt(np.mean(a * a))) if a.size else float("nan")
