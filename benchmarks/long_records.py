@@ -75,7 +75,7 @@ def run_cli(args: list[str], limit: float = TIME_LIMIT_S) -> dict:
 
 def _entry(name, cli, baseline, truth=None, fit_json=None):
     extra = {}
-    if fit_json is not None and fit_json.exists():
+    if fit_json is not None and fit_json.exists() and cli["exit"] == 0:
         d = json.loads(fit_json.read_text())
         extra["decimation"] = d.get("decimation")
         extra["full_record"] = d.get("full_record")

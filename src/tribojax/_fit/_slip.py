@@ -40,6 +40,7 @@ SLIP_NAMES = ("F_s", "K_tau", "C_tau", "alpha")
 # leave: the residuals come from an adaptive ODE solve (rtol 1e-6), not smooth below ~1e-8.
 _RTOL = _ATOL = 1e-7
 _OPTIMUM_TOL = 0.25
+_LOG_LIMIT = 300.0  # |log p| beyond this (p > 1e130) is no physical slip parameter
 
 
 class _SlipResiduals(eqx.Module):
@@ -49,14 +50,17 @@ class _SlipResiduals(eqx.Module):
 
     def __call__(self, theta, args):
         t, profile, slip, mass, scale, log_alpha = args
-        p = jnp.exp(theta)
+        # a trial point far outside float64 (exp overflows) is a failed evaluation, which the
+        # solver rejects, not an invalid element
+        usable = jnp.all(jnp.isfinite(theta) & (jnp.abs(theta) < _LOG_LIMIT))
+        p = jnp.exp(jnp.where(usable, theta, 0.0))
         alpha = p[3] if theta.shape[0] == 4 else jnp.exp(log_alpha)
         element = PreSlipLuGre(p[0], p[1], p[2], alpha)
         sol = simulate_slip(
             element, profile, mass, ts=t, t_end=self.t_end, adjoint=dfx.ForwardMode(), throw=False
         )
         r = (sol.slip - slip) / scale
-        return jnp.where(sol.ok & jnp.isfinite(r), r, FAILED_RESIDUAL)
+        return jnp.where(usable & sol.ok & jnp.isfinite(r), r, FAILED_RESIDUAL)
 
 
 @eqx.filter_jit
