@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-from .._plot import pyplot
+from .._plot import pyplot, save_figure
 
 
 def plot_discovery(report, path) -> bool:
@@ -47,10 +45,7 @@ def plot_discovery(report, path) -> bool:
         fontsize=10,
     )
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return True
 
 
@@ -73,8 +68,5 @@ def plot_correction(report, path) -> bool:
     ax.set_title(f"verdict: {report.verdict}; where the missing term sits", fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return True
