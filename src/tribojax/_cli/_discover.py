@@ -2,7 +2,9 @@
 
 The sidecar `<stem>.json` is read from beside the CSV. A slip run (time_s, stage_accel_m_s2,
 slip_m) goes to the pre-slip LuGre baseline; a hysteresis loop (time_s, displacement_m, force_N)
-to the loop baseline (`tribojax.discovery.loop_baseline`). Writes
+to the loop baseline (`tribojax.discovery.loop_baseline`); a steady friction curve (a folder of EPOS
+steady-state exports, or a curve CSV) to the Coulomb + viscous curve baseline
+(`tribojax.discovery.curve_baseline`); the format is detected, or named by `--format`. Writes
 DIR/discovery.json (keys: effect, verdict, effects, excess_rmse_before, excess_rmse_after, misfit,
 baseline_rmse, final_rmse, regions, candidates, ...)
 and DIR/discovery.png, and prints a summary. A long record is first reduced to at most
@@ -22,8 +24,15 @@ from pathlib import Path
 from .._fit._decimate import DISCOVER_MAX_SAMPLES
 from .._io._curve import FrictionCurve, FrictionTransient
 from .._io._loop import HysteresisLoop
-from .._io._records import read_record
-from ..discovery import discover, loop_baseline, plot_discovery, slip_baseline
+from .._io._records import RECORD_FORMATS, read_record
+from ..discovery import (
+    curve_baseline,
+    discover,
+    loop_baseline,
+    plot_curve_discovery,
+    plot_discovery,
+    slip_baseline,
+)
 from ._common import (
     CommandError,
     add_decimation_arguments,
@@ -36,16 +45,21 @@ from ._common import (
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("file", help="record CSV (slip run or hysteresis loop), sidecar beside it")
+    parser.add_argument("file", help="record (slip run or loop CSV, brfd JSON, friction curve or a "
+                        "folder of EPOS steady-state exports)")
     parser.add_argument("--out", default="discovery-out", help="output folder (default "
                         "discovery-out)")  # fmt: skip
     parser.add_argument("--force", action="store_true", help="replace an existing discovery.json")
+    parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
+                        help="the record's format (default: detected)")  # fmt: skip
     parser.add_argument("--max-effects", type=int, default=3, help="greedy rounds (default 3)")
     add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
 
 
 def baseline_for(record):
-    """The discovery baseline for a loaded record (slip run or hysteresis loop)."""
+    """The discovery baseline for a loaded record (slip run, hysteresis loop, friction curve)."""
+    if isinstance(record, FrictionCurve):
+        return curve_baseline(record)
     if isinstance(record, HysteresisLoop):
         return loop_baseline(record)
     return slip_baseline(record)
@@ -59,11 +73,13 @@ def run_discover(args, out=None, err=None) -> int:
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
     with claim_outputs(src, [target, figure], force=args.force):
-        record = read_record(src)
-        if isinstance(record, FrictionCurve | FrictionTransient):
+        record = read_record(src, args.format)
+        if isinstance(record, FrictionTransient):
             raise CommandError(f"{src}: discovery has no baseline for a {type(record).__name__} "
                                "yet; fit it with `tribojax fit`")  # fmt: skip
-        record, reduction = reduce_record(record, args, whole_cycles=True)
+        curve = isinstance(record, FrictionCurve)  # a few points: never reduced
+        record, reduction = (record, None) if curve else reduce_record(record, args,
+                                                                       whole_cycles=True)
         try:
             baseline = baseline_for(record)
             with progress(args, "discover"):
@@ -74,9 +90,12 @@ def run_discover(args, out=None, err=None) -> int:
             raise ValueError(f"{src}: {exc}") from exc
         data = report.as_dict()
         data["source"] = str(src)
-        data["decimation"] = reduction.as_dict()
+        data["decimation"] = reduction.as_dict() if reduction else None
         write_json_atomic(target, data, exclusive=not args.force)
-        drew = plot_discovery(report, figure)
+        if curve:
+            drew = plot_curve_discovery(report, record, figure)
+        else:
+            drew = plot_discovery(report, figure)
     print(f"{src}: {report.kind} record, {len(report.y)} samples", file=out)
     print(report.summary(), file=out)
     print(f"wrote {target}" + (f" and {figure}" if drew else " (no figure: matplotlib missing)"),

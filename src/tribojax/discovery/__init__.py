@@ -64,6 +64,11 @@ Loop side (`loop_baseline`: Jenkins, wu2015 Eq 1, driven by the measured displac
 hidden-effect loops `hidden_effect_loop` and wu2015 Eq 7 stand-ins `eq7_standin_loop`): see
 `tribojax.discovery._loop`. Optional baseline hooks used there: `noise_model(r)` (σ̂, ρ̂ of the
 residual's noise) and `region_info(region)` (extra keys of a flagged region).
+
+Curve side (`curve_baseline`: Coulomb + linear viscous friction of a steady `FrictionCurve`, both
+directions, each point weighted by its standard error; effects `stribeck` (LuGre steady law),
+`asymmetry` (a direction-dependent level) and `viscous` (a power-law viscous term);
+`discover_curve`, `plot_curve_discovery`): see `tribojax.discovery._curve`.
 """
 
 from ._core import ALPHA as ALPHA
@@ -75,6 +80,10 @@ from ._core import DiscoveryData as DiscoveryData
 from ._core import EffectDesign as EffectDesign
 from ._core import default_effects as default_effects
 from ._core import register_effect as register_effect
+from ._curve import CurveBaseline as CurveBaseline  # registers the curve effects
+from ._curve import curve_baseline as curve_baseline
+from ._curve import discover_curve as discover_curve
+from ._curve import plot_curve_discovery as plot_curve_discovery
 from ._discover import DiscoveryReport as DiscoveryReport
 from ._discover import discover as discover
 from ._loop import LoopBaseline as LoopBaseline  # registers the loop effects
