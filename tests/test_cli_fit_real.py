@@ -47,8 +47,8 @@ def test_fit_epos_folder_as_one_curve(tmp_path, capsys):
     assert "n2.csv, line 1: not valid JSON" in capsys.readouterr().err
 
 
-def test_discover_refuses_a_friction_curve_cleanly(tmp_path, capsys):
-    src = REAL / "screwdrive" / "driveNo1_steady_0.096kg.csv"
+def test_discover_refuses_a_friction_transient_cleanly(tmp_path, capsys):
+    src = REAL / "screwdrive" / "driveNo1_start_stop_50.csv"
     assert main(["discover", str(src), "--out", str(tmp_path / "d")]) == 2
-    assert "no baseline for a FrictionCurve" in capsys.readouterr().err
+    assert "no baseline for a FrictionTransient" in capsys.readouterr().err
     assert not (tmp_path / "d").exists()
