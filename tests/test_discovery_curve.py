@@ -10,6 +10,8 @@ of tribojax's model code is used to make them.
 import json
 from pathlib import Path
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -103,6 +105,32 @@ def test_bad_input_names_the_point():
         curve_baseline(bad)
     with pytest.raises(ValueError, match="FrictionCurve"):
         discover_curve(np.zeros(3))
+
+
+def test_model_jit_and_gradients():
+    base = curve_baseline(_curve_record("clean"))
+    theta = np.asarray(base.start()) + np.array([0.05, -0.1])
+    knobs = np.array([0.2, 0.3, np.log(1.3), 0.04, -0.2])  # every knob away from its null
+
+    def total(th, kn):
+        return jnp.sum(jnp.sin(base.predict(th, kn)))
+
+    jitted = jax.jit(lambda th, kn: base.predict(th, kn))
+    assert np.allclose(jitted(theta, knobs), base.predict(theta, knobs), rtol=1e-12)
+    g_th, g_kn = jax.grad(total, argnums=(0, 1))(theta, knobs)
+    x = np.concatenate([theta, knobs])
+    h = 1e-6
+    for i in range(x.size):
+        e = np.zeros(x.size)
+        e[i] = h
+        hi, lo = x + e, x - e
+        fd = (total(hi[:2], hi[2:]) - total(lo[:2], lo[2:])) / (2 * h)
+        g = (g_th if i < 2 else g_kn)[i if i < 2 else i - 2]
+        assert float(g) == pytest.approx(float(fd), rel=1e-6, abs=1e-8)
+    # null knobs: the baseline sgn(v)·F_c + σ2·v exactly
+    F_c, sigma2 = np.asarray(base.physical(theta))
+    plain = np.asarray(base.friction(theta, base.knob_null()))
+    assert np.allclose(plain, np.sign(base.v) * F_c + sigma2 * np.asarray(base.v), rtol=1e-12)
 
 
 def test_curve_effects_are_registered():

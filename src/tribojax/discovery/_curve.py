@@ -45,7 +45,14 @@ from jaxtyping import Array
 from .._friction._lugre import stribeck_curve
 from .._io._curve import FrictionCurve
 from .._plot import pyplot, save_figure
-from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
+from ._core import (
+    AbstractBaseline,
+    AbstractEffect,
+    DiscoveryData,
+    EffectDesign,
+    default_effects,
+    register_effect,
+)
 from ._discover import DiscoveryReport, discover
 
 CURVE_KNOBS = ("stribeck", "log10_v_s", "log_beta", "asymmetry", "log_viscous_exponent")
@@ -211,8 +218,13 @@ class CurveViscous(AbstractEffect):
 
 def discover_curve(curve: FrictionCurve, effects=None, **kw) -> DiscoveryReport:
     """`discover(curve_baseline(curve), effects, **kw)`: the Coulomb + viscous baseline and the
-    curve effects (`stribeck`, `asymmetry`, `viscous`, or `effects`) on a friction curve."""
-    return discover(curve_baseline(curve), effects=effects, **kw)
+    curve effects (`stribeck`, `asymmetry`, `viscous`, or `effects`) on a friction curve. A curve
+    of one direction is not offered `asymmetry` (a level in one direction is F_c itself)."""
+    base = curve_baseline(curve)
+    if effects is None:
+        both = len(np.unique(np.sign(np.asarray(base.v)))) == 2
+        effects = [e for e in default_effects("curve") if both or e.name != "asymmetry"]
+    return discover(base, effects=effects, **kw)
 
 
 def plot_curve_discovery(report: DiscoveryReport, curve: FrictionCurve, path) -> bool:
