@@ -120,6 +120,7 @@ from ._friction._rate_independent import Mindlin as Mindlin
 from ._io._brfd import read_brfd as read_brfd
 from ._io._curve import FrictionCurve as FrictionCurve
 from ._io._curve import FrictionTransient as FrictionTransient
+from ._io._curve import effective_samples as effective_samples
 from ._io._curve import read_epos_steady as read_epos_steady
 from ._io._curve import read_epos_transient as read_epos_transient
 from ._io._curve import read_friction_curve as read_friction_curve

@@ -45,7 +45,8 @@ def _checked(source, **arrays):
 class FrictionCurve:
     """Steady friction versus velocity: per point the mean `velocity`, the mean `friction`, the
     standard deviation of the friction samples `friction_scatter` (> 0) and of the velocity
-    samples `velocity_scatter` (>= 0), and the number of `samples` (>= 1) averaged.
+    samples `velocity_scatter` (>= 0), and the number of independent `samples` (>= 1) averaged:
+    the count for independent samples, fewer for correlated ones (`effective_samples`).
 
     `units` {"velocity_unit", "friction_unit"} (SI, e.g. "rad/s" and "N m" for a motor, "m/s"
     and "N" for a slider); `source` the file or folder it came from. The friction has the sign
@@ -110,14 +111,37 @@ class FrictionTransient:
 
 
 EPOS_UNITS_SI = {"velocity_unit": "rad/s", "friction_unit": "N m"}
+"""Units of an EPOS export converted to SI: velocity rad/s, torque N m."""
+
+BATCHES = 10
+"""Batch count for the batch-means standard error of a correlated record (`effective_samples`)."""
+
+
+def effective_samples(x) -> float:
+    """The number of independent samples a correlated series `x` is worth for its mean: n_eff =
+    s² / SE², with s the samples' standard deviation and SE the batch-means standard error of the
+    mean (the series cut into `BATCHES` equal consecutive batches; SE = std of the batch means /
+    √BATCHES). Clipped to [1, len(x)]: never more than the count (an anticorrelated or short
+    series keeps n). Motor-torque samples 2 ms apart have a lag-1 autocorrelation near 0.9, so
+    scatter/√n understates the error of a steady point's mean about twofold."""
+    x = np.asarray(x, dtype=float)
+    n = len(x)
+    if n < 2 * BATCHES:
+        return float(n)
+    m = n // BATCHES
+    means = x[: m * BATCHES].reshape(BATCHES, m).mean(axis=1)
+    se2 = np.var(means, ddof=1) / BATCHES
+    s2 = np.var(x, ddof=1)
+    return float(np.clip(s2 / se2, 1.0, n)) if se2 > 0 else float(n)
 
 
 def read_epos_steady(folder) -> FrictionCurve:
     """One steady friction curve from a folder of EPOS steady-state exports (`*.csv`, one per
     commanded speed): each file gives one point, the means and scatters of its velocity (rad/s)
-    and torque (N m) samples. The direction is the measured velocity's sign (not the file name).
-    Points are sorted by velocity. DataFileError (naming the file and line) for a bad export or
-    a folder without exports."""
+    and torque (N m) samples, and the torque's `effective_samples` (the samples are correlated, so
+    the point's standard error is the batch-means one, not scatter/√count). The direction is the
+    measured velocity's sign (not the file name). Points are sorted by velocity. DataFileError
+    (naming the file and line) for a bad export or a folder without exports."""
     folder = Path(folder)
     files = sorted(folder.glob("*.csv"))
     if not files:
@@ -129,7 +153,7 @@ def read_epos_steady(folder) -> FrictionCurve:
         if not scatter > 0:
             raise DataFileError(f"{path}, line {ex.units_line + 1}: the torque is constant")
         rows.append((float(np.mean(ex.velocity)), float(np.mean(ex.torque)), scatter,
-                     float(np.std(ex.velocity, ddof=1)), len(ex.t)))  # fmt: skip
+                     float(np.std(ex.velocity, ddof=1)), effective_samples(ex.torque)))  # fmt: skip
     rows.sort()
     cols = dict(zip(CURVE_COLUMNS, np.asarray(rows).T))
     return FrictionCurve(**cols, units=dict(EPOS_UNITS_SI), source=str(folder))
