@@ -29,7 +29,6 @@ def _predict_jac(baseline, theta_b, knobs):
     return baseline.value_and_jacobians(theta_b, knobs)
 
 
-_value_and_jac = eqx.filter_jit(_predict_jac)
 
 
 class _Padded(eqx.Module):
@@ -262,6 +261,26 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=MAX_STEPS) -> 
     )
 
 
+def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
+    """∂y/∂knobs (n, n_knobs) at (θ_b, knobs), output units: the fit's own compiled residual
+    Jacobian (`value_and_jacobian(_residual, ...)`) with the knobs as the padded strengths, K_MAX
+    knobs per call, so scoring compiles no second copy of the model and its Jacobian."""
+    p, m = len(theta_b), len(knobs)
+    n = baseline.data().y.shape[0]
+    x = jnp.asarray(np.concatenate([theta_b, np.zeros(K_MAX)]), dtype=jnp.float64)
+    out = np.empty((n, m))
+    for j in range(0, m, K_MAX):
+        k = min(K_MAX, m - j)
+        gain = np.zeros((m, K_MAX))
+        gain[j : j + k, :k] = np.eye(k)
+        arrays = (knobs, gain, np.zeros((n, K_MAX)), np.arange(K_MAX) < k, np.zeros(n), 1.0,
+                  np.inf, np.ones(p + K_MAX))  # fmt: skip
+        args = _Padded(baseline, *(jnp.asarray(v, dtype=jnp.float64) for v in arrays))
+        r, J = (np.asarray(v) for v in value_and_jacobian(_residual, x, args))
+        out[:, j : j + k] = J[:n, p : p + k] if np.all(np.isfinite(r[:n])) else np.nan
+    return out
+
+
 def _columns(baseline, state: _State, design: EffectDesign, knob_cache: dict) -> np.ndarray:
     """∂y/∂s of `design` added to the fitted `state` (n, k), output units."""
     base, gain, _ = _pack(baseline, state.designs)
@@ -276,8 +295,7 @@ def _columns(baseline, state: _State, design: EffectDesign, knob_cache: dict) ->
         key = tuple(np.round(knobs, 12))
         if key not in knob_cache:
             try:
-                out = _value_and_jac(baseline, jnp.asarray(state.theta[:p]), jnp.asarray(knobs))
-                knob_cache[key] = np.asarray(out[2])
+                knob_cache[key] = _knob_jacobian(baseline, state.theta[:p], knobs)
             except eqx.EquinoxRuntimeError:
                 knob_cache[key] = np.full((cols.shape[0], knobs.size), np.nan)
         cols = cols + knob_cache[key] @ design.knob_gain
