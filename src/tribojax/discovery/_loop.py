@@ -13,7 +13,8 @@ are compared. Its physics knobs (null 0) are those of `tribojax._loop_models.loo
   peak-to-peak displacement.
 
 Effects (registered for `default_effects("loop")`, names as in the issues): `microslip`,
-`viscous_damping`, `normal_load_variation`, `backlash`; each moves one knob with a signed
+`viscous_damping`, `normal_load_variation`, `backlash`, and the measurement effect
+`force_offset` (a constant added to the force); each moves one knob (or the offset) with a signed
 strength, so the null is interior and the Rao score test applies. `backlash` has a nuisance, the
 gap g, not identified under the null: a grid of g/A seeds the score (Davies: the largest score,
 Bonferroni over the grid) and the refit starts, and the refit fits ln g jointly with ε (as
@@ -68,7 +69,7 @@ class LoopBaseline(AbstractBaseline):
     x: Array  # record displacement at the fitted samples, m
     segment: Array  # branch per fitted sample: 0 unloading, 1 loading
     t: Array  # time of the fitted samples, s
-    period: Array  # drive period T = 2π/ω from `analyse_loop`, s
+    period: Array  # drive period T = 2π/ω from `analyse_loop`, s (inf for a history)
     theta0: Array
     noise: Array  # force-noise sd from the record (N), NaN when unknown (an array leaf, so
     # records of one length share a compiled fit)
@@ -115,19 +116,31 @@ class LoopBaseline(AbstractBaseline):
         )
 
 
+def history_start(loop: HysteresisLoop) -> tuple[float, float]:
+    """Start (μN in N, K_d in N/m) for a history without whole cycles: μN = half the spread
+    between the 1st and 99th percentiles of the force, K_d = μN/(0.05·A) (A = half ptp(u))."""
+    mu_N = 0.5 * float(np.diff(np.percentile(loop.f, [1.0, 99.0]))[0])
+    return mu_N, mu_N / (0.025 * float(np.ptp(loop.u)))
+
+
 def loop_baseline(loop: HysteresisLoop) -> LoopBaseline:
     """The Jenkins baseline of a loop record, started from `analyse_loop`'s μN and wu2015 Eq 6
-    K_d. The force noise sd is the record's `noise_std` (sidecar) or None (estimated)."""
+    K_d (a history, `periodic=False`: from `history_start`, with the noise from first
+    differences). The force noise sd is the record's `noise_std` (sidecar) or None (estimated)."""
     data = prepare_loop(loop)
-    a = analyse_loop(loop)
+    if loop.periodic:
+        a = analyse_loop(loop)
+        period, start = 2.0 * np.pi / a.omega, (a.mu_N, a.K_d)
+    else:  # no period: `cycle_noise` falls back to first differences
+        period, start = np.inf, history_start(loop)
     idx = np.asarray(data.index)
     return LoopBaseline(
         record=data,
         x=jnp.asarray(loop.u[idx]),
         segment=jnp.asarray((loop_branch(loop)[idx] > 0).astype(int)),
         t=jnp.asarray(loop.t[idx]),
-        period=jnp.asarray(2.0 * np.pi / a.omega),
-        theta0=jnp.log(jnp.array([a.mu_N, a.K_d])),
+        period=jnp.asarray(period),
+        theta0=jnp.log(jnp.array(start)),
         noise=jnp.asarray(np.nan if loop.noise_std is None else loop.noise_std),
     )
 
@@ -222,6 +235,21 @@ class Backlash(AbstractEffect):
                              nuisance={"gap_m": q * A},
                              free=((1, "gap_m", lambda s, g0=q * A: g0 * np.exp(s)),))
                 for q in GAP_GRID]  # fmt: skip
+
+
+@register_effect
+class ForceOffset(AbstractEffect):
+    """A constant offset f0 (N) of the force reading (a load-cell zero error): additive, f0 = 0
+    null."""
+
+    name: ClassVar[str] = "force_offset"
+    kind: ClassVar[str] = "loop"
+    description: ClassVar[str] = "constant offset of the force reading"
+
+    def designs(self, baseline):
+        scale = 0.5 * float(np.ptp(np.asarray(baseline.record.f)))
+        ones = np.ones((np.asarray(baseline.record.f).size, 1)) * scale
+        return [EffectDesign(("f0",), ("N",), np.array([scale]), basis=ones, columns=ones)]
 
 
 def discover_loop(loop: HysteresisLoop, effects=None, **kw) -> DiscoveryReport:

@@ -74,15 +74,38 @@ class LoopData(eqx.Module):
     skip: int = eqx.field(static=True)
 
 
+REVERSAL_TRAVEL = 0.02  # a history's first reversal: the drive turns back by this share of ptp(u)
+
+
+def first_reversal(u, travel: float = REVERSAL_TRAVEL) -> int:
+    """Index of the first reversal of a displacement history u: the extreme reached before u first
+    turns back by `travel`·ptp(u) after moving that far from its start (len(u) − 1 if never)."""
+    u = np.asarray(u, dtype=float)
+    tol = travel * float(np.ptp(u))
+    hi, lo = np.maximum.accumulate(u), np.minimum.accumulate(u)
+    down = (hi - u > tol) & (hi - u[0] > tol)  # went up, now turned down
+    up = (u - lo > tol) & (u[0] - lo > tol)
+    turned = np.flatnonzero(down | up)
+    if not turned.size:
+        return len(u) - 1
+    i = int(turned[0])
+    return int(np.argmax(u[: i + 1]) if down[i] else np.argmin(u[: i + 1]))
+
+
 def prepare_loop(loop: HysteresisLoop) -> LoopData:
-    """`LoopData` of a record: drive from the first upward crossing, fit from the first reversal."""
+    """`LoopData` of a record: a periodic loop is driven from its first upward crossing, a history
+    (`periodic=False`) from its first sample; both are fitted from the first reversal on."""
     t, u = loop.t, loop.u
-    first = int(np.searchsorted(t, cycle_starts(t, u)[0]))
     mid = 0.5 * (u.max() + u.min())
-    u_rel = u[first:] - mid
-    omega = analyse_loop(loop).omega
-    half = int(np.searchsorted(t[first:], t[first] + np.pi / omega))
-    skip = int(np.argmax(u_rel[: max(half, 2)]))
+    if loop.periodic:
+        first = int(np.searchsorted(t, cycle_starts(t, u)[0]))
+        u_rel = u[first:] - mid
+        omega = analyse_loop(loop).omega
+        half = int(np.searchsorted(t[first:], t[first] + np.pi / omega))
+        skip = int(np.argmax(u_rel[: max(half, 2)]))
+    else:
+        first, u_rel = 0, u - mid
+        skip = first_reversal(u)
     v = np.gradient(u, t, edge_order=2)
     index = np.arange(first + skip, len(t))
     return LoopData(
