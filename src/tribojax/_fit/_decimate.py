@@ -50,7 +50,7 @@ DISCOVER_MAX_SAMPLES = 5_000
 MIN_SAMPLES_PER_CYCLE = 256
 
 METHOD = "block local quadratic"
-MIN_FACTOR = 4  # smallest automatic block: 3 quadratic coefficients + 1 degree of freedom of scatter
+MIN_FACTOR = 4  # smallest automatic block: 3 coefficients of the quadratic + 1 dof of scatter
 
 
 @dataclasses.dataclass(frozen=True)

@@ -148,9 +148,9 @@ def loop_force(
 
     `microslip=False` (static) skips the Mindlin bank (use it when w is identically 0: the result
     is the same, at a fraction of the cost). `check=True` refuses a β that makes N(u) ≤ 0 and a
-    gap < 0 (ValueError, or equinox's runtime error under jit); `check=False` (inside fits, where a trial
-    step may overshoot) floors N(u)/N0 at S_MIN instead. References: wu2015 Eqs 1, 2, 5 (see the
-    module docstring).
+    gap < 0 (ValueError, or equinox's runtime error under jit); `check=False` (inside fits, where
+    a trial step may overshoot) floors N(u)/N0 at S_MIN instead. References: wu2015 Eqs 1, 2, 5
+    (see the module docstring).
     """
     s = 1.0 + spec.beta * data.u / data.A
     if check:
