@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 import tribojax as tj
+from fitting.real_discovery_brfd import brfd_discovery
 from tribojax._plot import pyplot, save_figure
 
 MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen")
@@ -191,7 +192,7 @@ def main(argv=None) -> None:
 
     study = {} if args.skip_brfd else brfd_study(args.src, args.short, log)
     study["screwdrive"] = screwdrive_study(args.src, log)
-    study["discovery"] = None  # filled by the discovery runs on these records (issue 15, point 5)
+    study["discovery"] = {"brfd": brfd_discovery(args.src, args.short, log), "screwdrive": None}
     study["decimate"] = DECIMATE
     study["seconds"] = time.perf_counter() - t0
     if "prediction" in study:
