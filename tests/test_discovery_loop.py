@@ -215,25 +215,31 @@ def test_clean_loops_give_none(seed):
         assert c["p_value"] > 0.01 / len(rep.candidates) or c["delta_bic"] > -10
 
 
-class ForceOffset(AbstractEffect):
-    """A user effect defined here (not in the library): a constant offset of the force sensor."""
+class ForceDrift(AbstractEffect):
+    """A user effect defined here (not in the library): a force reading drifting linearly in
+    time, 0 at the record's first fitted sample (N per record duration)."""
 
-    name: ClassVar[str] = "force_offset"
+    name: ClassVar[str] = "force_drift"
     kind: ClassVar[str] = "loop"
 
     def designs(self, baseline):
-        n = baseline.data().y.size
-        return [EffectDesign(("offset",), ("N",), np.ones(1) * 0.01, basis=0.01 * np.ones((n, 1)))]
+        t = np.asarray(baseline.t)
+        ramp = (t - t[0]) / (t[-1] - t[0])
+        return [EffectDesign(("drift",), ("N",), np.ones(1) * 0.01, basis=0.01 * ramp[:, None])]
 
 
 def test_user_effect_without_editing_the_library():
     loop = hidden_effect_loop("none", 0.005, 2.0, 4)
-    shifted = dataclasses.replace(loop, f=loop.f + 0.05 * MUN)
-    rep = disc.discover_loop(shifted, effects=[*disc.default_effects("loop"), ForceOffset()])
-    assert rep.effect == "force_offset"
-    s = rep.strengths["force_offset"]["offset"]
+    base = disc.loop_baseline(loop)
+    t0, t1 = float(base.t[0]), float(base.t[-1])
+    drifted = dataclasses.replace(loop, f=loop.f + 0.05 * MUN * (loop.t - t0) / (t1 - t0))
+    rep = disc.discover_loop(drifted, effects=[*disc.default_effects("loop"), ForceDrift()])
+    assert rep.effect == "force_drift"
+    s = rep.strengths["force_drift"]["drift"]
     assert abs(s["value"] - 0.05 * MUN) < 4 * s["std_error"]
-    assert {c["name"] for c in rep.candidates} == {"force_offset", *LOOP_EFFECTS}
+    names = {e.name for e in disc.default_effects("loop")}
+    assert names >= {*LOOP_EFFECTS, "backlash", "force_offset"}
+    assert {c["name"] for c in rep.candidates} == {"force_drift", *names}
     json.dumps(rep.as_dict())  # the report is JSON-ready
 
 
