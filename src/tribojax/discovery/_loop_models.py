@@ -169,7 +169,7 @@ def loop_force(
     else:
         y, k = A0 * jnp.ones(1), jnp.ones(1)
     if check:
-        b = fail_if(b, spec.gap < 0.0, "backlash: gap must be >= 0 m")
+        b = fail_if(b, spec.gap < 0.0, "backlash: gap (m) is outside the allowed range [0, inf)")
     h = 0.5 * jnp.maximum(spec.gap, 0.0)
     # per-slider limit scale (n, m): y_j·a(u) + ε·h, floored at 0 (a trial ε < 0 inside fits)
     limit = jnp.maximum(a[:, None] + spec.depth * h / y[None, :], 0.0)
