@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 import tribojax as tj
+from fitting.real_discovery_brfd import brfd_discovery
 from fitting.real_discovery_screw import screwdrive_discovery
 from tribojax._plot import pyplot, save_figure
 
@@ -192,10 +193,11 @@ def main(argv=None) -> None:
 
     study = {} if args.skip_brfd else brfd_study(args.src, args.short, log)
     study["screwdrive"] = screwdrive_study(args.src, log)
-    study["discovery"] = None  # filled by the discovery runs on these records (issue 15, point 5)
     study["decimate"] = DECIMATE
-    screw = screwdrive_discovery(args.src, log, args.out)  # issue 15 point 5, both screw drives
-    study["discovery"] = {**(study["discovery"] or {}), "screwdrive": screw}
+    study["discovery"] = {  # issue 15 point 5: every brfd test and both screw drives
+        "brfd": brfd_discovery(args.src, args.short, log),
+        "screwdrive": screwdrive_discovery(args.src, log, args.out),
+    }
     study["seconds"] = time.perf_counter() - t0
     if "prediction" in study:
         _figure(study, args.out)

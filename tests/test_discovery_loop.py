@@ -57,7 +57,8 @@ def test_effects_vanish_at_their_null_and_are_differentiable():
     f0 = loop_force(LoopSpec(MUN, KD), base.record, microslip=False)
     assert float(jnp.max(jnp.abs(base.predict(theta, null) - f0))) < 1e-12 * MUN
     # jit == eager, and jacfwd against central differences in θ and every knob
-    knobs = jnp.array([0.3, 0.05, 0.08])
+    knobs = jnp.array([0.3, 0.05, 0.08, 0.6, np.log(0.3)])  # w, β, c, backlash ε, ln(g/A)
+    assert knobs.size == len(base.knob_names)
     eager = base.predict(theta, knobs)
     jitted = jax.jit(type(base).predict)(base, theta, knobs)
     np.testing.assert_allclose(np.asarray(jitted), np.asarray(eager), rtol=0, atol=1e-13 * MUN)
@@ -68,9 +69,9 @@ def test_effects_vanish_at_their_null_and_are_differentiable():
 
     x = jnp.concatenate([theta, knobs])
     J = jax.jacfwd(flat)(x)
-    for i in range(5):
+    for i in range(x.size):
         h = 1e-6
-        e = jnp.zeros(5).at[i].set(h)
+        e = jnp.zeros(x.size).at[i].set(h)
         fd = (flat(x + e) - flat(x - e)) / (2 * h)
         # piecewise-smooth force (slip onsets): compare in RMS; FD error O(h) at the kinks
         scale = float(jnp.sqrt(jnp.mean(J[:, i] ** 2)))
@@ -88,6 +89,12 @@ def test_effects_vanish_at_their_null_and_are_differentiable():
 
     np.testing.assert_allclose(np.asarray(jax.grad(loss)(x)), np.asarray(J.T @ (flat(x) - y)),
                                rtol=1e-9, atol=0)  # fmt: skip
+
+
+def test_backlash_gap_below_zero_is_refused():
+    data = prepare_loop(hidden_effect_loop("none", 0.0, 2.0, 0))
+    with pytest.raises(ValueError, match="gap"):
+        loop_force(LoopSpec(MUN, KD, depth=1.0, gap=-1e-7), data)
 
 
 def test_load_variation_out_of_range_is_refused():
@@ -215,25 +222,31 @@ def test_clean_loops_give_none(seed):
         assert c["p_value"] > 0.01 / len(rep.candidates) or c["delta_bic"] > -10
 
 
-class ForceOffset(AbstractEffect):
-    """A user effect defined here (not in the library): a constant offset of the force sensor."""
+class ForceDrift(AbstractEffect):
+    """A user effect defined here (not in the library): a force reading drifting linearly in
+    time, 0 at the record's first fitted sample (N per record duration)."""
 
-    name: ClassVar[str] = "force_offset"
+    name: ClassVar[str] = "force_drift"
     kind: ClassVar[str] = "loop"
 
     def designs(self, baseline):
-        n = baseline.data().y.size
-        return [EffectDesign(("offset",), ("N",), np.ones(1) * 0.01, basis=0.01 * np.ones((n, 1)))]
+        t = np.asarray(baseline.t)
+        ramp = (t - t[0]) / (t[-1] - t[0])
+        return [EffectDesign(("drift",), ("N",), np.ones(1) * 0.01, basis=0.01 * ramp[:, None])]
 
 
 def test_user_effect_without_editing_the_library():
     loop = hidden_effect_loop("none", 0.005, 2.0, 4)
-    shifted = dataclasses.replace(loop, f=loop.f + 0.05 * MUN)
-    rep = disc.discover_loop(shifted, effects=[*disc.default_effects("loop"), ForceOffset()])
-    assert rep.effect == "force_offset"
-    s = rep.strengths["force_offset"]["offset"]
+    base = disc.loop_baseline(loop)
+    t0, t1 = float(base.t[0]), float(base.t[-1])
+    drifted = dataclasses.replace(loop, f=loop.f + 0.05 * MUN * (loop.t - t0) / (t1 - t0))
+    rep = disc.discover_loop(drifted, effects=[*disc.default_effects("loop"), ForceDrift()])
+    assert rep.effect == "force_drift"
+    s = rep.strengths["force_drift"]["drift"]
     assert abs(s["value"] - 0.05 * MUN) < 4 * s["std_error"]
-    assert {c["name"] for c in rep.candidates} == {"force_offset", *LOOP_EFFECTS}
+    names = {e.name for e in disc.default_effects("loop")}
+    assert names >= {*LOOP_EFFECTS, "backlash", "force_offset"}
+    assert {c["name"] for c in rep.candidates} == {"force_drift", *names}
     json.dumps(rep.as_dict())  # the report is JSON-ready
 
 

@@ -50,6 +50,7 @@ DISCOVER_MAX_SAMPLES = 5_000
 MIN_SAMPLES_PER_CYCLE = 256
 
 METHOD = "block local quadratic"
+MIN_FACTOR = 4  # smallest automatic block: 3 coefficients of the quadratic + 1 dof of scatter
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,11 +82,14 @@ class Decimation:
 
 
 def _factor(record, n: int, max_samples: int) -> int:
-    factor = max(1, math.ceil(n / max_samples))
-    if isinstance(record, HysteresisLoop):
+    factor, cap = max(1, math.ceil(n / max_samples)), n
+    if isinstance(record, HysteresisLoop) and record.periodic:
         starts = cycle_starts(record.t, record.u)
         per_cycle = n * (starts[-1] - starts[0]) / (len(starts) - 1) / (record.t[-1] - record.t[0])
-        factor = min(factor, max(1, int(per_cycle // MIN_SAMPLES_PER_CYCLE)))
+        cap = max(1, int(per_cycle // MIN_SAMPLES_PER_CYCLE))
+        factor = min(factor, cap)
+    if 1 < factor < MIN_FACTOR:  # a block quadratic and its scatter need MIN_FACTOR samples
+        factor = MIN_FACTOR if cap >= MIN_FACTOR else 1
     return factor
 
 
@@ -150,7 +154,8 @@ def decimate_record(
     else:
         raise ValueError(f"record must be a SlipRun or a HysteresisLoop, got {type(record)}")
     n = len(t)
-    if whole_cycles and isinstance(record, HysteresisLoop) and factor is None:
+    periodic_loop = isinstance(record, HysteresisLoop) and record.periodic
+    if whole_cycles and periodic_loop and factor is None:
         keep = _factor(record, n, int(max_samples)) * int(max_samples)
         if keep < n:
             record = _whole_cycles(record, keep)
@@ -159,8 +164,9 @@ def decimate_record(
         if int(max_samples) < 4:
             raise ValueError(f"max_samples = {max_samples} is outside the allowed range [4, inf)")
         factor = _factor(record, len(t), int(max_samples))
-    if isinstance(factor, bool) or int(factor) != factor or factor < 1:
-        raise ValueError(f"factor = {factor!r} must be an integer >= 1")
+    if isinstance(factor, bool) or int(factor) != factor or factor < 1 or factor == 2:
+        raise ValueError(f"factor = {factor!r} must be 1 or an integer >= 3 (a block quadratic "
+                         "needs 3 samples)")  # fmt: skip
     factor = int(factor)
     sigma = record.noise_std
     if factor == 1:

@@ -60,7 +60,8 @@ Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration
 `load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip`.
 
 Loop side (`loop_baseline`: Jenkins, wu2015 Eq 1, driven by the measured displacement; effects
-`microslip`, `viscous_damping`, `normal_load_variation`; `discover_loop`, `plot_loop_discovery`;
+`microslip`, `viscous_damping`, `normal_load_variation`, `backlash`, `force_offset`;
+`discover_loop`, `plot_loop_discovery`;
 hidden-effect loops `hidden_effect_loop` and wu2015 Eq 7 stand-ins `eq7_standin_loop`): see
 `tribojax.discovery._loop`. Optional baseline hooks used there: `noise_model(r)` (σ̂, ρ̂ of the
 residual's noise) and `region_info(region)` (extra keys of a flagged region).

@@ -7,11 +7,18 @@ are compared. Its physics knobs (null 0) are those of `tribojax._loop_models.loo
 
 * "microslip" w: force (1 − w)·Jenkins + w·Mindlin (wu2015 Eq 2, same μN and K_d);
 * "load_slope" β: N(u) = N0(1 + βu/A), μN ∝ N, K_d ∝ N^0.7616 (wu2015 Eq 5);
-* "viscous" c/c_ref: a force c·u̇, c_ref = (half peak-to-peak force)/(half peak-to-peak velocity).
+* "viscous" c/c_ref: a force c·u̇, c_ref = (half peak-to-peak force)/(half peak-to-peak velocity);
+* "backlash" ε and "log_gap" ln(g/A): a clearance of travel g and depth ε in series with the
+  contact (force zero across the gap at ε = 1; `_loop_models`), A the record's half
+  peak-to-peak displacement.
 
-Effects (registered for `default_effects("loop")`, names as in the issue): `microslip`,
-`viscous_damping`, `normal_load_variation`; each moves one knob with a signed strength, so the
-null is interior and the Rao score test applies. No nuisance grids are needed.
+Effects (registered for `default_effects("loop")`, names as in the issues): `microslip`,
+`viscous_damping`, `normal_load_variation`, `backlash`, and the measurement effect
+`force_offset` (a constant added to the force); each moves one knob (or the offset) with a signed
+strength, so the null is interior and the Rao score test applies. `backlash` has a nuisance, the
+gap g, not identified under the null: a grid of g/A seeds the score (Davies: the largest score,
+Bonferroni over the grid) and the refit starts, and the refit fits ln g jointly with ε (as
+`stribeck` fits its v_s).
 
 Noise (when the sidecar gives none) and its AR(1) ρ come from differences between cycles: the
 steady loop's misfit repeats every period T while the noise does not, so d(t) = r(t) − r(t + T)
@@ -44,12 +51,15 @@ from ._loop_models import LoopData, LoopSpec, loop_branch, loop_force, prepare_l
 from ._regions import RHO_MAX, lag1, noise_estimate
 
 BRANCH_NAMES = {0: "unloading", 1: "loading"}
-_KNOBS = ("microslip", "load_slope", "viscous")
+_KNOBS = ("microslip", "load_slope", "viscous", "backlash", "log_gap")
+GAP_GRID = tuple(np.geomspace(0.02, 1.2, 10).tolist())
+"""Seeds of the backlash gap g as a fraction of the record's half peak-to-peak displacement A
+(score grid and refit starts; the refit fits g itself)."""
 
 
 class LoopBaseline(AbstractBaseline):
     """Jenkins element (μN in N, K_d in N/m; θ = their logs) driven by a loop record's
-    displacement; knobs (w, β, c/c_ref) as in the module docstring."""
+    displacement; knobs (w, β, c/c_ref, ε, ln(g/A)) as in the module docstring."""
 
     kind: ClassVar[str] = "loop"
     param_names: ClassVar[tuple[str, ...]] = ("mu_N", "K_d")
@@ -59,13 +69,15 @@ class LoopBaseline(AbstractBaseline):
     x: Array  # record displacement at the fitted samples, m
     segment: Array  # branch per fitted sample: 0 unloading, 1 loading
     t: Array  # time of the fitted samples, s
-    period: Array  # drive period T = 2π/ω from `analyse_loop`, s
+    period: Array  # drive period T = 2π/ω from `analyse_loop`, s (inf for a history)
     theta0: Array
     noise: Array  # force-noise sd from the record (N), NaN when unknown (an array leaf, so
     # records of one length share a compiled fit)
 
     def knob_null(self):
-        return np.zeros(len(_KNOBS))
+        null = np.zeros(len(_KNOBS))
+        null[_KNOBS.index("log_gap")] = np.log(0.1)  # irrelevant while ε = 0
+        return null
 
     def start(self):
         return np.asarray(self.theta0)
@@ -80,6 +92,8 @@ class LoopBaseline(AbstractBaseline):
             w=knobs[0],
             beta=knobs[1],
             c=knobs[2] * self.record.c_scale,
+            depth=knobs[3],
+            gap=self.record.A * jnp.exp(knobs[4]),
         )
         return loop_force(spec, self.record, check=False)
 
@@ -102,19 +116,31 @@ class LoopBaseline(AbstractBaseline):
         )
 
 
+def history_start(loop: HysteresisLoop) -> tuple[float, float]:
+    """Start (μN in N, K_d in N/m) for a history without whole cycles: μN = half the spread
+    between the 1st and 99th percentiles of the force, K_d = μN/(0.05·A) (A = half ptp(u))."""
+    mu_N = 0.5 * float(np.diff(np.percentile(loop.f, [1.0, 99.0]))[0])
+    return mu_N, mu_N / (0.025 * float(np.ptp(loop.u)))
+
+
 def loop_baseline(loop: HysteresisLoop) -> LoopBaseline:
     """The Jenkins baseline of a loop record, started from `analyse_loop`'s μN and wu2015 Eq 6
-    K_d. The force noise sd is the record's `noise_std` (sidecar) or None (estimated)."""
+    K_d (a history, `periodic=False`: from `history_start`, with the noise from first
+    differences). The force noise sd is the record's `noise_std` (sidecar) or None (estimated)."""
     data = prepare_loop(loop)
-    a = analyse_loop(loop)
+    if loop.periodic:
+        a = analyse_loop(loop)
+        period, start = 2.0 * np.pi / a.omega, (a.mu_N, a.K_d)
+    else:  # no period: `cycle_noise` falls back to first differences
+        period, start = np.inf, history_start(loop)
     idx = np.asarray(data.index)
     return LoopBaseline(
         record=data,
         x=jnp.asarray(loop.u[idx]),
         segment=jnp.asarray((loop_branch(loop)[idx] > 0).astype(int)),
         t=jnp.asarray(loop.t[idx]),
-        period=jnp.asarray(2.0 * np.pi / a.omega),
-        theta0=jnp.log(jnp.array([a.mu_N, a.K_d])),
+        period=jnp.asarray(period),
+        theta0=jnp.log(jnp.array(start)),
         noise=jnp.asarray(np.nan if loop.noise_std is None else loop.noise_std),
     )
 
@@ -185,6 +211,45 @@ class NormalLoadVariation(AbstractEffect):
 
     def designs(self, baseline):
         return _knob_design(baseline, "load_slope", ("beta",), ("1",), 1.0)
+
+
+@register_effect
+class Backlash(AbstractEffect):
+    """A clearance (dead zone) in series with the contact: after each reversal the force falls to
+    zero and stays there while the drive crosses the gap g (m), then re-engages (the model in
+    `_loop_models`). Strengths: the depth ε (—; 0 none, 1 a clean clearance) and the shift of
+    ln g from its seed (g/A on `GAP_GRID`), fitted jointly; the fitted g is reported as the
+    nuisance "gap_m"."""
+
+    name: ClassVar[str] = "backlash"
+    kind: ClassVar[str] = "loop"
+    description: ClassVar[str] = "clearance at reversal: force held at zero across a gap g"
+    refit_starts: ClassVar[int] = 2  # the score's best gap can sit far from the refit's
+
+    def designs(self, baseline):
+        A = float(baseline.record.A)
+        gain = np.zeros((len(_KNOBS), 2))
+        gain[_KNOBS.index("backlash"), 0] = gain[_KNOBS.index("log_gap"), 1] = 1.0
+        return [EffectDesign(("depth", "log_gap_shift"), ("1", "1"), np.ones(2),
+                             knob_gain=gain, knob_set={"log_gap": float(np.log(q))},
+                             nuisance={"gap_m": q * A},
+                             free=((1, "gap_m", lambda s, g0=q * A: g0 * np.exp(s)),))
+                for q in GAP_GRID]  # fmt: skip
+
+
+@register_effect
+class ForceOffset(AbstractEffect):
+    """A constant offset f0 (N) of the force reading (a load-cell zero error): additive, f0 = 0
+    null."""
+
+    name: ClassVar[str] = "force_offset"
+    kind: ClassVar[str] = "loop"
+    description: ClassVar[str] = "constant offset of the force reading"
+
+    def designs(self, baseline):
+        scale = 0.5 * float(np.ptp(np.asarray(baseline.record.f)))
+        ones = np.ones((np.asarray(baseline.record.f).size, 1)) * scale
+        return [EffectDesign(("f0",), ("N",), np.array([scale]), basis=ones, columns=ones)]
 
 
 def discover_loop(loop: HysteresisLoop, effects=None, **kw) -> DiscoveryReport:

@@ -17,10 +17,19 @@ One generalised element covers the baseline and every physical augmentation:
   exponent of wu2015 Eq 5, K_d ∝ N^0.7616); every Iwan slider's limit scales with μN and every
   spring with K_d. β = 0 is the baseline;
 * `viscous_damping`: c·u̇ added to the force (u̇ from the record's displacement by central
-  differences); c = 0 is the baseline.
+  differences); c = 0 is the baseline;
+* `backlash`: a clearance of total travel g (m) in series with the contact, of depth ε (—): every
+  spring deflection z_j passes a dead zone, f_j = k_j·(z_j − ε·clip(z_j, −g/2, g/2)), and its
+  slip limit widens to y_j·a(u) + ε·g/2. With ε = 1 (a clean clearance) and one element: after
+  a reversal the force falls along K_d to zero, stays zero while the drive crosses the gap g, and
+  rises along K_d on the far side (a rigid play in series with the Jenkins element); 0 < ε < 1
+  leaves a soft stiffness (1 − ε)·K_d across the gap. ε = 0 is the baseline. For a bank each
+  slider carries the clearance (exact for one element; for the Mindlin bank the slider of limit
+  y_j < (1 − ε)g/2 slips below its own force k_j·y_j).
 
-Rate-independent updates are exact: z_j ← clip(z_j + Δu, −y_j·a(u), y_j·a(u)), f = Σ k_j·b(u)·z_j
-with a = s^(1−0.7616), b = s^0.7616 (a = b = 1 without load variation).
+Rate-independent updates are exact: z_j ← clip(z_j + Δu, −L_j, L_j), L_j = y_j·a(u) + ε·g/2,
+f = Σ k_j·b(u)·(z_j − ε·clip(z_j, −g/2, g/2)) with a = s^(1−0.7616), b = s^0.7616 (a = b = 1
+without load variation).
 """
 
 from __future__ import annotations
@@ -65,15 +74,38 @@ class LoopData(eqx.Module):
     skip: int = eqx.field(static=True)
 
 
+REVERSAL_TRAVEL = 0.02  # a history's first reversal: the drive turns back by this share of ptp(u)
+
+
+def first_reversal(u, travel: float = REVERSAL_TRAVEL) -> int:
+    """Index of the first reversal of a displacement history u: the extreme reached before u first
+    turns back by `travel`·ptp(u) after moving that far from its start (len(u) − 1 if never)."""
+    u = np.asarray(u, dtype=float)
+    tol = travel * float(np.ptp(u))
+    hi, lo = np.maximum.accumulate(u), np.minimum.accumulate(u)
+    down = (hi - u > tol) & (hi - u[0] > tol)  # went up, now turned down
+    up = (u - lo > tol) & (u[0] - lo > tol)
+    turned = np.flatnonzero(down | up)
+    if not turned.size:
+        return len(u) - 1
+    i = int(turned[0])
+    return int(np.argmax(u[: i + 1]) if down[i] else np.argmin(u[: i + 1]))
+
+
 def prepare_loop(loop: HysteresisLoop) -> LoopData:
-    """`LoopData` of a record: drive from the first upward crossing, fit from the first reversal."""
+    """`LoopData` of a record: a periodic loop is driven from its first upward crossing, a history
+    (`periodic=False`) from its first sample; both are fitted from the first reversal on."""
     t, u = loop.t, loop.u
-    first = int(np.searchsorted(t, cycle_starts(t, u)[0]))
     mid = 0.5 * (u.max() + u.min())
-    u_rel = u[first:] - mid
-    omega = analyse_loop(loop).omega
-    half = int(np.searchsorted(t[first:], t[first] + np.pi / omega))
-    skip = int(np.argmax(u_rel[: max(half, 2)]))
+    if loop.periodic:
+        first = int(np.searchsorted(t, cycle_starts(t, u)[0]))
+        u_rel = u[first:] - mid
+        omega = analyse_loop(loop).omega
+        half = int(np.searchsorted(t[first:], t[first] + np.pi / omega))
+        skip = int(np.argmax(u_rel[: max(half, 2)]))
+    else:
+        first, u_rel = 0, u - mid
+        skip = first_reversal(u)
     v = np.gradient(u, t, edge_order=2)
     index = np.arange(first + skip, len(t))
     return LoopData(
@@ -92,7 +124,8 @@ class LoopSpec(eqx.Module):
 
     Fields: mu_N (gross-slip force, N, > 0), K_d (tangential stiffness, N/m, > 0), w (microslip
     weight, —; 0 Jenkins, 1 Mindlin), beta (normal-load gradient N(u) = N0(1 + βu/A), —, |β| < 1),
-    c (viscous coefficient, N·s/m).
+    c (viscous coefficient, N·s/m), depth (backlash depth ε, —; 0 none, 1 a clean clearance),
+    gap (backlash clearance g, total travel of the drive across it, m, ≥ 0).
     """
 
     mu_N: jax.Array
@@ -100,6 +133,8 @@ class LoopSpec(eqx.Module):
     w: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     beta: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     c: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+    depth: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+    gap: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
 
 
 _Y_MINDLIN, _K_MINDLIN = mindlin_unit_bank(N_IWAN)  # the Mindlin bank in units of A0, K_d
@@ -112,10 +147,10 @@ def loop_force(
     """Model force (N) at the fitted samples of `data` for the parameters `spec`.
 
     `microslip=False` (static) skips the Mindlin bank (use it when w is identically 0: the result
-    is the same, at a fraction of the cost). `check=True` refuses a β that makes N(u) ≤ 0
-    (ValueError, or equinox's runtime error under jit); `check=False` (inside fits, where a trial
-    step may overshoot) floors N(u)/N0 at S_MIN instead. References: wu2015 Eqs 1, 2, 5 (see the
-    module docstring).
+    is the same, at a fraction of the cost). `check=True` refuses a β that makes N(u) ≤ 0 and a
+    gap < 0 (ValueError, or equinox's runtime error under jit); `check=False` (inside fits, where
+    a trial step may overshoot) floors N(u)/N0 at S_MIN instead. References: wu2015 Eqs 1, 2, 5
+    (see the module docstring).
     """
     s = 1.0 + spec.beta * data.u / data.A
     if check:
@@ -133,7 +168,13 @@ def loop_force(
         k = jnp.concatenate([jnp.ones(1) * (1.0 - spec.w), spec.w * jnp.asarray(_K_MINDLIN)])
     else:
         y, k = A0 * jnp.ones(1), jnp.ones(1)
-    z = IwanBank(y, k).deflections(data.u, a)[data.skip :]
+    if check:
+        b = fail_if(b, spec.gap < 0.0, "backlash: gap (m) is outside the allowed range [0, inf)")
+    h = 0.5 * jnp.maximum(spec.gap, 0.0)
+    # per-slider limit scale (n, m): y_j·a(u) + ε·h, floored at 0 (a trial ε < 0 inside fits)
+    limit = jnp.maximum(a[:, None] + spec.depth * h / y[None, :], 0.0)
+    z = IwanBank(y, k).deflections(data.u, limit)[data.skip :]
+    z = z - spec.depth * jnp.clip(z, -h, h)  # the clearance's dead zone
     return spec.K_d * b[data.skip :] * (z @ k) + spec.c * data.v
 
 

@@ -1,0 +1,169 @@
+"""Discovery on the brfd friction-damper records: what `tribojax discover FILE` names per test.
+
+    python -m fitting.real_data --out DIR      # the "discovery" → "brfd" part of real_data.json
+
+Each brfd test goes through the same path as `tribojax discover FILE --out DIR`: `read_record`,
+`decimate_record(..., whole_cycles=True)` to at most `DISCOVER_MAX_SAMPLES` samples (blocks of
+≥ 4 samples, at least 256 per cycle; a loop whose cycles do not fit keeps its first whole
+cycles), `loop_baseline` (the Jenkins element driven by the measured displacement; an
+earthquake history is driven from its first sample) and `discover` with the default loop
+effects. The full JSON files of `SRC/brfd/` (../shared/data/real) are used when present, else the
+converted excerpts bundled in data/real/brfd (one sinusoidal test, the first 4096 samples of
+one earthquake history).
+
+Per test: the named effects (in order), the verdict, the excess misfit beyond the noise before
+and after, the fitted backlash gap, where a misfit remains (flagged regions: branch and
+displacement range) and a note on whether the named effects make physical sense for this rig (a
+clearance at reversal is expected: the device has backlash).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+import tribojax as tj
+from tribojax._fit._decimate import DISCOVER_MAX_SAMPLES
+from tribojax._io._brfd import brfd_test
+from tribojax.discovery import discover, loop_baseline
+
+BUNDLED = Path(__file__).resolve().parents[1] / "data" / "real"
+INCH_M = 0.0254
+BRANCH = {0: "unloading", 1: "loading"}
+
+NOTES = {
+    "backlash": "backlash: expected, the damper has a clearance at motion reversal",
+    "force_offset": "force_offset: a zero offset of the force reading, or friction that differs "
+    "between the two directions (both shift the loop as a whole); plausible for this rig",
+    "microslip": "microslip: the gradual re-engagement at the end of the gap (a compliant stop) "
+    "that a rigid clearance lacks; a weight w > 1 extrapolates the Mindlin law, so a shape term "
+    "rather than partial slip of the band",
+    "viscous_damping": "viscous_damping: a velocity-proportional force (hydraulic or rig "
+    "damping); not expected in a dry friction band",
+    "normal_load_variation": "normal_load_variation: band tension varying with rotation; "
+    "possible in a banded device",
+}
+
+
+def brfd_files(src: Path) -> list[Path]:
+    """The brfd tests: `src/brfd/*.json` when present, else the bundled CSV excerpts."""
+    full = sorted((Path(src) / "brfd").glob("*.json"))
+    return full if full else sorted((BUNDLED / "brfd").glob("*.csv"))
+
+
+def _test_info(path: Path) -> dict:
+    test = brfd_test(path)  # from the file name (the bundled CSV keeps the JSON's stem)
+    if test is None:
+        return {"drive": "earthquake history"}
+    return {"drive": "sinusoidal", "frequency_Hz": test["frequency_Hz"],
+            "amplitude_in": round(test["amplitude_m"] / INCH_M, 6)}  # fmt: skip
+
+
+def _where(report, t) -> dict:
+    """Where a misfit remains: the regions still flagged after the added effects (branch,
+    displacement range in mm, time range in s, RMS over the noise sd), and the share of samples
+    they cover."""
+    regions = report.misfit.get("regions", [])
+    rows = [{"branch": BRANCH.get(rg.get("branch"), rg.get("branch")),
+             "u_min_mm": 1e3 * rg["u_min"], "u_max_mm": 1e3 * rg["u_max"],
+             "t_s": [float(t[rg["i0"]]), float(t[rg["i1"] - 1])],
+             "rms_over_noise": float(np.sqrt(rg["statistic"])), "p_value": rg["p_value"]}
+            for rg in regions]  # fmt: skip
+    share = sum(rg["n"] for rg in regions) / max(len(t), 1)
+    return {"share_of_samples": share, "regions": rows}
+
+
+def physical_sense(effects) -> str:
+    """A note on the named effects for a banded friction damper with backlash."""
+    if not effects:
+        return "nothing named: backlash was expected for this device"
+    lines = [NOTES.get(e, e) for e in effects]
+    if effects[0] != "backlash":
+        lines.insert(0, "backlash not named first, though expected for this device")
+    return "; ".join(lines)
+
+
+def discover_brfd_test(
+    path: Path, *, record=None, factor=None, max_samples: int = DISCOVER_MAX_SAMPLES
+) -> dict:
+    """One row of the table: `tribojax discover`'s steps on one brfd file (or on `record`, e.g.
+    an excerpt, named after `path`); `factor`: decimation blocks (None: automatic, as the CLI)."""
+    t0 = time.perf_counter()
+    record = tj.read_record(path) if record is None else record
+    reduced, how = tj.decimate_record(record, factor, max_samples=max_samples, whole_cycles=True)
+    baseline = loop_baseline(reduced)
+    report = discover(baseline)
+    d = report.as_dict()
+    strengths = d.get("strengths", {})
+    gap = strengths.get("backlash", {}).get("nuisance", {}).get("gap_m")
+    depth = strengths.get("backlash", {}).get("depth", {}).get("value")
+    row = {
+        "test": path.stem,
+        "file": str(path),
+        **_test_info(path),
+        "samples_in_record": len(record.t),
+        "samples": len(report.y),
+        "decimation": how.as_dict(),
+        "noise_sd_N": d.get("noise_std"),
+        "effects": list(report.effects),
+        "verdict": d["verdict"],
+        "excess_rmse_before_N": d["excess_rmse_before"],
+        "excess_rmse_after_N": d["excess_rmse_after"],
+        "baseline_rmse_N": d["baseline_rmse"],
+        "final_rmse_N": d["final_rmse"],
+        "backlash_gap_mm": None if gap is None else 1e3 * gap,
+        "first_round": [
+            {k: c.get(k) for k in ("name", "p_value", "delta_bic")} for c in d["candidates"]
+        ],  # fmt: skip
+        "backlash_depth": depth,
+        "strengths": strengths,
+        "misfit": _where(report, np.asarray(baseline.t)),
+        "physical_sense": physical_sense(report.effects),
+        "converged": report.converged,
+        "seconds": time.perf_counter() - t0,
+    }
+    return row
+
+
+def brfd_discovery(src, short: bool, log) -> list[dict]:
+    """Discovery on every brfd test under `src` (the bundled excerpts without it); `short`: the
+    tests at 1 Hz and above only. One row per test (see the module docstring)."""
+    rows = []
+    for path in brfd_files(Path(src)):
+        info = _test_info(path)
+        if short and info.get("frequency_Hz", 0.0) < 1.0:
+            continue
+        row = discover_brfd_test(path)
+        rows.append(row)
+        gap = row["backlash_gap_mm"]
+        log(f"discover {row['test']:34s} {'+'.join(row['effects']) or 'none':36s} "
+            f"{row['verdict']:16s} excess {row['excess_rmse_before_N']:.3g} -> "
+            f"{row['excess_rmse_after_N']:.3g} N"
+            + ("" if gap is None else f", gap {gap:.3g} mm")
+            + f" ({row['seconds']:.1f} s)")  # fmt: skip
+    return rows
+
+
+def table(rows) -> str:
+    """Markdown table of the rows (test, effects, verdict, excess before/after, gap)."""
+    out = ["| test | named effects | verdict | excess before (N) | after (N) | gap (mm) |",
+           "|---|---|---|---|---|---|"]  # fmt: skip
+    for r in rows:
+        gap = "" if r["backlash_gap_mm"] is None else f"{r['backlash_gap_mm']:.3g}"
+        out.append(
+            f"| {r['test']} | {', '.join(r['effects']) or 'none'} | {r['verdict']} | "
+            f"{r['excess_rmse_before_N']:.0f} | {r['excess_rmse_after_N']:.0f} | {gap} |"
+        )
+    return "\n".join(out)
+
+
+if __name__ == "__main__":
+    shared = Path(__file__).resolve().parents[1].parent / "shared/data/real"
+    t_start = time.perf_counter()
+    result = brfd_discovery(
+        shared, False, lambda m: print(f"[{time.perf_counter() - t_start:7.1f} s] {m}", flush=True)
+    )
+    print(table(result))
+    print(np.round([r["seconds"] for r in result], 1))
