@@ -14,8 +14,10 @@ Data (../shared/data/real by default; see data/README.md for sources and licence
   direction and jointly with a direction asymmetry (`tribojax.fit_steady_curve`), then the LuGre
   dynamic parameters from the start–stop transients with the steady law fixed
   (`tribojax.fit_transient`).
+* discovery — `tribojax discover`'s workflow on every brfd test (fitting/real_discovery_brfd.py)
+  and on both screw-drive curves (fitting/real_discovery_screw.py).
 Writes DIR/real_data.json (keys "brfd_fits", "slip_force_vs_test", "prediction", "screwdrive",
-"discovery" — the last left for the discovery runs) and DIR/real_data_prediction.png.
+"discovery" {"brfd", "screwdrive"}) and DIR/real_data_prediction.png.
 """
 
 import argparse
