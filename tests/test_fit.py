@@ -152,3 +152,13 @@ def test_noise_floor_lm_stops_on_the_statistical_rule():
         atol=0.0,
     )
     assert plain.result == tj.RESULTS.nonlinear_max_steps_reached
+
+
+def test_a_jacobian_that_is_not_finite_is_a_failed_fit_not_a_crash():
+    # a residual whose derivative overflows at the optimum: exp(exp(θ)) at θ = 7 (e^1097 > 1.8e308)
+    def residuals(theta, args):
+        return jnp.array([theta[0] - 7.0, 0.0 * jnp.exp(jnp.exp(theta[0]))])
+
+    fit = tj.least_squares_fit(residuals, jnp.array([7.0]), names=("a",))
+    assert fit.result == tj.RESULTS.model_failed_at_start and not fit.converged
+    assert np.all(np.isinf(fit.std_errors))

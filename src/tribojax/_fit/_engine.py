@@ -156,7 +156,9 @@ def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps,
     theta = np.asarray(theta, dtype=np.float64)
     r, J = np.asarray(r, dtype=np.float64), np.asarray(J, dtype=np.float64)
     n, p = J.shape
-    _, sv, vt = np.linalg.svd(J, full_matrices=False)
+    # a Jacobian that is not finite (a failed evaluation) determines nothing: infinite variances
+    finite = np.all(np.isfinite(J))
+    _, sv, vt = np.linalg.svd(J if finite else np.zeros_like(J), full_matrices=False)
     tiny = sv <= (sv[0] if sv.size else 0.0) * 1e-14  # (no parameters: nothing is tiny)
     chi2 = float(r @ r) / max(n - p, 1)
     consistent = bool(chi2 <= noise_limit(n - p)) if sigma_known else None
@@ -298,7 +300,7 @@ def least_squares_fit(
     r, J = value_and_jacobian(residual_fn, theta, args)
     r, J = np.asarray(r), np.asarray(J)
     result, message = RESULTS.promote(sol.result), None
-    if np.any(r == FAILED_RESIDUAL):
+    if np.any(r == FAILED_RESIDUAL) or not (np.all(np.isfinite(r)) and np.all(np.isfinite(J))):
         moved = not np.array_equal(np.asarray(theta), np.asarray(theta0))
         result = RESULTS.model_failed if moved else RESULTS.model_failed_at_start
     elif result == RESULTS.nonlinear_max_steps_reached:
