@@ -8,8 +8,8 @@ dX/dp = −(∂R/∂X)⁻¹ ∂R/∂p, never from unrolled Newton iterations.
 * `amplitude_at`: first-harmonic amplitude of one DOF at a given ω;
 * `resonance_peak`: (ω*, a*) where da/dω = 0, a second root-find on g(ω) = ∂a/∂ω, itself
   differentiated implicitly: dω*/dp = −g_p / g_ω, and da*/dp = ∂a/∂p (envelope theorem);
-* `peak_on_grid`: a vmappable peak search (natural continuation along an ω grid, then
-  `resonance_peak`) for design curves over many normal loads.
+* `peak_on_grid`: a vmappable peak search with fixed work (natural continuation along an ω grid,
+  then a bracketing regula-falsi search of ∂a/∂ω = 0) for design curves over many normal loads.
 """
 
 from __future__ import annotations
@@ -87,23 +87,90 @@ def resonance_peak(system: FrictionSystem, omega_guess, dof: int = 0, X0=None, *
     return Peak(omega=omega, amplitude=amplitude_at(system, omega, dof, X0), result=result)
 
 
-def peak_on_grid(system: FrictionSystem, omegas, dof: int = 0) -> Peak:
-    """Resonance peak of `dof` from a grid of frequencies (rad/s, ascending, spanning the peak):
-    natural continuation along the grid (each solve started from the previous solution), the
-    largest amplitude refined by `resonance_peak`. Fixed work, so it vmaps over systems."""
+def _frozen(system):
+    """`system` with every array leaf cut from differentiation (for the peak search itself)."""
+    return jax.tree.map(lambda v: jax.lax.stop_gradient(v) if eqx.is_array(v) else v, system)
+
+
+def _amp_slope(system, omega, X0, dof, solver):
+    """(X, a, ∂a/∂ω, ok) at ω: the MHB solution from X0 and its ω-derivative (forward mode
+    through the implicit function theorem, dX/dω = −(∂R/∂X)⁻¹ ∂R/∂ω)."""
+
+    def solve(w):
+        sol = _solve(system, w, X0, solver, 100)
+        return sol.X, sol.result == RESULTS.successful
+
+    (X, ok), (dX, _) = eqx.filter_jvp(solve, (omega,), (jnp.ones_like(omega),))
+    i, j = system.index(1), system.index(1, True)
+    a = jnp.hypot(X[dof, i], X[dof, j])
+    g = (X[dof, i] * dX[dof, i] + X[dof, j] * dX[dof, j]) / jnp.where(a > 0, a, 1.0)
+    return X, a, g, ok
+
+
+def peak_on_grid(system: FrictionSystem, omegas, dof: int = 0, *, tol: float = 1e-9,
+                 refine_steps: int = 16) -> Peak:  # fmt: skip
+    """Resonance peak of `dof` from a grid of frequencies (rad/s, ascending, spanning the peak).
+
+    Natural continuation along the grid (each solve started from the previous solution); around
+    the largest amplitude, the root of g = ∂a/∂ω inside the two neighbouring grid points by
+    `refine_steps` (static) steps of regula falsi with the Illinois modification (Dowell & Jarratt
+    1971; bracketing, so
+    it cannot leave the peak's interval; g by forward-mode implicit differentiation of the MHB
+    solution). Fixed work per system, so it vmaps over systems without a loop whose trip count
+    is the slowest one's. `result` is successful when every solve converged, g changes sign
+    across the interval, and the last Newton correction |g/g_ω| is <= tol·ω; otherwise
+    `nonlinear_divergence` (the best point is still returned). With a sampled AFT a
+    rate-independent contact makes a(ω) piecewise smooth (a kink where a time sample changes
+    between stick and slip): a peak on a kink has no stationary point and is reported so.
+    Derivatives: dω*/dp = −g_p/g_ω (implicit function theorem) and da*/dp = ∂a/∂p (envelope
+    theorem, ∂a/∂ω = 0 at a stationary peak).
+    """
     omegas = jnp.asarray(omegas, dtype=jnp.float64)
-    solver = optx.Dogleg(rtol=1e-9, atol=1e-9)
+    frozen = _frozen(system)
+    solver = optx.Dogleg(rtol=tol, atol=tol)
 
     def body(X, w):
-        sol = _solve(system, w, X, solver, 100)
-        return sol.X, (sol.X, system.amplitude(sol.X)[dof])
+        sol = _solve(frozen, w, X, solver, 100)
+        return sol.X, (sol.X, frozen.amplitude(sol.X)[dof], sol.result == RESULTS.successful)
 
-    X0 = system.linear_solution(omegas[0]) * 0.0
-    _, (Xs, amps) = jax.lax.scan(body, X0, omegas)
+    X0 = frozen.linear_solution(omegas[0]) * 0.0
+    _, (Xs, amps, oks) = jax.lax.scan(body, X0, omegas)
     i = jnp.argmax(amps)
     n = omegas.shape[0]
+    inner = (i > 0) & (i < n - 1)
     lo, hi = omegas[jnp.maximum(i - 1, 0)], omegas[jnp.minimum(i + 1, n - 1)]
-    return resonance_peak(system, omegas[i], dof, jax.lax.stop_gradient(Xs[i]), bracket=(lo, hi))
+    fine = oks[jnp.maximum(i - 1, 0)] & oks[i] & oks[jnp.minimum(i + 1, n - 1)]
+    _, _, g_lo, ok_lo = _amp_slope(frozen, lo, Xs[jnp.maximum(i - 1, 0)], dof, solver)
+    _, _, g_hi, ok_hi = _amp_slope(frozen, hi, Xs[jnp.minimum(i + 1, n - 1)], dof, solver)
+    bracketed = inner & fine & ok_lo & ok_hi & (g_lo > 0) & (g_hi < 0)
+
+    def illinois(c, _):
+        lo, g_lo, hi, g_hi, side, X, ok = c
+        den = g_lo - g_hi
+        w = lo + g_lo * (hi - lo) / jnp.where(den != 0, den, 1.0)
+        w = jnp.where((w > lo) & (w < hi), w, 0.5 * (lo + hi))
+        X, _, g, ok_w = _amp_slope(frozen, w, X, dof, solver)
+        up = g > 0  # the peak lies above w
+        g_hi = jnp.where(up & (side > 0), 0.5 * g_hi, g_hi)  # Illinois: halve the kept end
+        g_lo = jnp.where(~up & (side < 0), 0.5 * g_lo, g_lo)
+        lo, g_lo = jnp.where(up, w, lo), jnp.where(up, g, g_lo)
+        hi, g_hi = jnp.where(up, hi, w), jnp.where(up, g_hi, g)
+        return (lo, g_lo, hi, g_hi, jnp.where(up, 1, -1), X, ok & ok_w), w
+
+    init = (lo, g_lo, hi, g_hi, jnp.asarray(0), Xs[i], jnp.asarray(True))
+    (*_, X_last, ok_all), ws = jax.lax.scan(illinois, init, None, length=refine_steps)
+    w_star = jnp.where(bracketed, ws[-1], omegas[i])
+    X_star = jax.lax.stop_gradient(jnp.where(bracketed, X_last, Xs[i]))
+    # g and g_ω at ω*: success test (Newton correction) and the IFT derivative of ω*
+    g_star = _slope(w_star, (system, dof, X_star))
+    g_w = jax.jvp(lambda w: _slope(w, (frozen, dof, X_star)), (w_star,), (jnp.ones(()),))[1]
+    g_w = jax.lax.stop_gradient(g_w)
+    newton = jax.lax.stop_gradient(g_star) / jnp.where(g_w != 0, g_w, -1.0)
+    ok = bracketed & ok_all & (g_w < 0) & (jnp.abs(newton) <= tol * w_star)
+    omega = w_star - jnp.where(ok, (g_star - jax.lax.stop_gradient(g_star)) / g_w, 0.0)
+    amplitude = amplitude_at(system, w_star, dof, X_star)
+    result = RESULTS.where(ok, RESULTS.successful, RESULTS.nonlinear_divergence)
+    return Peak(omega=omega, amplitude=amplitude, result=result)
 
 
 class PeakDesign(eqx.Module):
