@@ -26,6 +26,7 @@ Additive (measurement) effects, linear in their strengths:
 
 from __future__ import annotations
 
+import dataclasses
 from typing import ClassVar
 
 import diffrax as dfx
@@ -51,6 +52,7 @@ ZETA_MAX = 0.3  # damping ratio bound of a structural mode (above: a low-pass of
 N_ODE_KNOBS = 4  # the knobs of the friction element; the mode's knobs act on the reading
 F_MAX_OVER_DRIVE = 100.0  # bound of F_s in units of m·max|a| (beyond: slip ∝ (m a/F_s)², tiny)
 VS_GRID = tuple(10.0 ** np.arange(-7.0, -3.4, 0.5))  # m/s, Stribeck velocity grid
+SIGMA2_STARTS = (1.0, 10.0, 100.0)  # viscous refit starts, σ2 in units of the start C_τ
 
 
 def AugmentedPreSlip(F_s, K_tau, C_tau, sigma2, stribeck, v_s, kappa, profile,  # noqa: N802
@@ -383,10 +385,19 @@ class Stribeck(AbstractEffect):
 
 @register_effect
 class ViscousFriction(AbstractEffect):
-    """A viscous term σ2·v in the friction force (LuGre σ2, wang2022 Eq 25)."""
+    """A viscous term σ2·v in the friction force (LuGre σ2, wang2022 Eq 25).
+
+    While the contact sticks, ż ≈ v and σ2·v is C_τ·ż: at the baseline's fit the viscous
+    column is nearly that of C_τ, the score sees little, and the optimum (σ2 many times C_τ, C_τ
+    itself poorly determined) lies far along that valley. The refit is therefore made whatever
+    the score (`score_gate` False) and also starts from σ2 = `SIGMA2_STARTS` × the reference
+    damping (the start C_τ); the ΔBIC of the refit decides.
+    """
 
     name: ClassVar[str] = "viscous_friction"
     kind: ClassVar[str] = "slip"
+    score_gate: ClassVar[bool] = False
 
     def designs(self, baseline):
-        return [_knob_design("viscous", "sigma2", "N s/m", float(baseline.sigma_ref))]
+        d = _knob_design("viscous", "sigma2", "N s/m", float(baseline.sigma_ref))
+        return [dataclasses.replace(d, starts=tuple((v,) for v in SIGMA2_STARTS))]
