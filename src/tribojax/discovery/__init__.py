@@ -43,7 +43,7 @@ An effect may also override `refine(baseline, design, score) -> EffectDesign` to
 nuisance values around the best grid point (`score(design)` is the Rao statistic at the current
 fit; `vibration` refines its frequency and damping this way).
 Register it for `default_effects(kind)` with `@register_effect`, or pass it explicitly:
-`discover(baseline, effects=[*default_effects("slip"), MyEffect()])`. At most `K_MAX` = 8
+`discover(baseline, effects=[*default_effects("slip"), MyEffect()])`. At most `K_MAX` = 12
 strengths in one model.
 
 Loop side: export `loop_baseline(loop: HysteresisLoop) -> AbstractBaseline` from this package

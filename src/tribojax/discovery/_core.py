@@ -16,7 +16,7 @@ import numpy as np
 
 from ._regions import noise_estimate
 
-K_MAX = 8  # effect strengths in one fit, padded to this size (one compiled solve per record shape)
+K_MAX = 12  # effect strengths in one fit, padded to this size (one compiled solve per record shape)
 """Most effect strengths in one model; fits are padded to this size so that one compiled solve
 serves every combination of effects on a record shape."""
 DELTA_BIC_THRESHOLD = -10.0  # "very strong" evidence (Kass & Raftery 1995)

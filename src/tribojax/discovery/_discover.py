@@ -51,7 +51,15 @@ def _refit(baseline, state, design, name, y, scale, r, cache, done=lambda f: Fal
 
 
 def _apart(d1, d2):
+    if d1.k != d2.k:  # another number of strengths: another model (e.g. a drift's degree)
+        return True
     return all(abs(np.log10(abs(d1.nuisance[k]) / abs(d2.nuisance[k]))) >= 1 for k in d1.nuisance)
+
+
+def _bic(fit, design, n):
+    """n·log RSS + (k + nuisance)·log n: compares refits of one effect's designs (the RSS
+    alone when they have as many parameters)."""
+    return n * np.log(fit.rss) + (design.k + design.n_nuisance) * np.log(n)
 
 
 def _seeds(scored, n):
@@ -99,7 +107,7 @@ def discover(
     effects: list[AbstractEffect] | None = None,
     *,
     max_effects: int = 3,
-    n_refit: int = 3,
+    n_refit: int = 4,
     n_starts: int = 1,
     delta_bic_threshold: float = DELTA_BIC_THRESHOLD,
     alpha: float = ALPHA,
@@ -200,8 +208,9 @@ def discover(
             if e.name in state.names:
                 continue
             best = None
-            grid = grids[e.name]
-            if sum(d.k for d in state.designs) + grid[0].k > K_MAX:
+            room = K_MAX - sum(d.k for d in state.designs)
+            grid = [d for d in grids[e.name] if d.k <= room]  # designs that fit in K_MAX
+            if not grid:
                 continue
             scored = []
             for d in grid:
@@ -251,7 +260,8 @@ def discover(
                 continue
             for dd in (d, *c["_seeds"]):  # several starts: the best grid points by score
                 f = _refit(baseline, state, dd, c["name"], y, scale, r, cache, consistent)
-                if new is None or (f.converged and not f.rss >= new.rss) or not new.converged:
+                if new is None or (f.converged and not _bic(f, dd, n) >= _bic(new, d, n)) \
+                        or not new.converged:
                     d, new = dd, f
                 if new.converged and consistent(new):
                     break  # at the noise: further starts cannot do better

@@ -250,20 +250,29 @@ def _unit_rms(col):
 
 @register_effect
 class SensorDrift(AbstractEffect):
-    """Smooth additive drift of the slip reading: cubic (Legendre P0–P3) in time."""
+    """Smooth additive drift of the slip reading: a Legendre series in time, c₀P₀(s) + … +
+    c_dP_d(s), s = scaled time ∈ [−1, 1], of degree d ∈ `degrees` (a grid chosen by the score:
+    3 for a polynomial or thermal drift; a wandering, random-walk-like drift needs more terms:
+    degree d resolves wanderings slower than about T/d)."""
 
     name: ClassVar[str] = "sensor_drift"
     kind: ClassVar[str] = "slip"
-    degree: int = 3
+    degrees: tuple = (3, 6, 9)
+    # every degree is refitted: at a large misfit the score saturates (S → n) for all of them
+    # and cannot choose; the lowest BIC among the refits is kept
+    refit_starts: ClassVar[int] = 3
 
     def designs(self, baseline):
         t = np.asarray(baseline.t)
         s = 2 * (t - t[0]) / (t[-1] - t[0]) - 1
-        cols = np.polynomial.legendre.legvander(s, self.degree)
         ys = _y_scale(baseline)
-        k = self.degree + 1
-        return [EffectDesign(tuple(f"c{i}" for i in range(k)), ("m",) * k, np.full(k, ys),
-                             basis=cols * ys)]  # fmt: skip
+        out = []
+        for deg in self.degrees:
+            k = deg + 1
+            out.append(EffectDesign(tuple(f"c{i}" for i in range(k)), ("m",) * k,
+                                    np.full(k, ys), nuisance={"degree": float(deg)},
+                                    basis=np.polynomial.legendre.legvander(s, deg) * ys))
+        return out  # fmt: skip
 
 
 @register_effect
