@@ -279,11 +279,14 @@ def discover(
             rounds.append(_public(cands))
             break
         # Each candidate is accepted on its own ΔBIC (AR(1) inflation of its own residuals).
-        # The choice between accepted ones uses one inflation for all (the largest): otherwise
-        # a candidate that leaves a smooth misfit is charged more than one that leaves a rough
-        # one, whatever their RSS (measured: a hidden-Stribeck record where `vibration` won
-        # with 1.4x the RSS of `stribeck`).
-        c_common = max(a[3] for a in accepted)
+        # The choice between accepted ones uses one inflation for all, that of the one with the
+        # lowest RSS (the error correlation estimated from the fullest model): otherwise a
+        # candidate that leaves a smooth misfit is charged more than one that leaves a rough one
+        # (measured: a hidden-Stribeck record where `vibration` won with 1.4x the RSS of
+        # `stribeck`). The largest inflation (the earlier rule) divided the gain of a candidate
+        # that reaches the noise by that of a smooth leftover misfit (c ≈ 100: a random-walk
+        # drift named `position_error` with twice the RMS misfit of `sensor_drift`).
+        c_common = min(accepted, key=lambda a: a[1].rss)[3]
         for c, new, dk, _ in accepted:
             gain = n * np.log(new.rss / state.rss) / c_common
             c["delta_bic_common"] = float(gain + dk * np.log(n))
