@@ -57,7 +57,8 @@ forward-mode pass of `predict` over θ and the knobs. `predict` must not raise i
 a trial point where it is not finite is rejected as a rise of the cost.
 
 Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration`,
-`load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip`.
+`load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip` and
+`tribojax.discovery._slip_effects`.
 
 Loop side (`loop_baseline`: Jenkins, wu2015 Eq 1, driven by the measured displacement; effects
 `microslip`, `viscous_damping`, `normal_load_variation`; `discover_loop`, `plot_loop_discovery`;
@@ -66,6 +67,7 @@ hidden-effect loops `hidden_effect_loop` and wu2015 Eq 7 stand-ins `eq7_standin_
 residual's noise) and `region_info(region)` (extra keys of a flagged region).
 """
 
+from . import _slip_effects  # noqa: F401  (registers the slip effects)
 from ._core import ALPHA as ALPHA
 from ._core import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
 from ._core import K_MAX as K_MAX
