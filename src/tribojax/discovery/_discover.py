@@ -133,10 +133,12 @@ def discover(
        (`AbstractEffect.refine`, e.g. the vibration frequency); the p-value keeps the grid's
        Bonferroni factor, which makes it somewhat optimistic after refinement.
     4. Refit the `n_refit` best candidates whose p-value is below alpha/(number of candidates),
-       from one Gauss–Newton step (and from zero new strengths when that fails). A candidate
+       and those of effects with `score_gate` False whatever their p-value, from one
+       Gauss–Newton step (and from zero new strengths when that fails, then from the design's
+       `starts` while the noise is not reached). A candidate
        qualifies if ΔBIC < `delta_bic_threshold` (ΔBIC with an AR(1) inflation from its own
        augmented residual; nuisance parameters counted); of those, add the one with the lowest
-       ΔBIC at a common inflation (the largest of theirs, `delta_bic_common`). Repeat from 3
+       ΔBIC at a common inflation (that of the lowest-RSS one, `delta_bic_common`). Repeat from 3
        until none qualifies, `max_effects` are in, or the model is consistent with the noise
        (`_verdict.noise_consistent`: "explained"). Candidates are refitted in p-value order; one
        with no fewer parameters (k + nuisance) than an earlier one that already reaches the
