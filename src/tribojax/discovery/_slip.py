@@ -5,7 +5,8 @@ consistent reading, `tribojax.simulate_slip`), driven by the record's own accele
 (`SlipRun.profile`, linear between samples), F_s, K_τ, C_τ fitted in log form.
 
 Physics knobs of the baseline (null values in brackets), all inside one friction element:
-    viscous      ν  [0]:  σ2 = ν·σ_ref added to the friction force, σ2·v (LuGre σ2, Eq 25)
+    viscous      ν  [0]:  σ2 = |ν|·σ_ref ≥ 0 (viscous friction dissipates) added to the friction
+                          force, σ2·v (LuGre σ2, Eq 25)
     stribeck     δ  [0]:  strength g(v) = F_s·(1 − δ·(1 − exp(−(v/v_s)²))) (Eq 25 with
                           F_c = (1 − δ)F_s, β = 2); δ > 0 is velocity weakening
     log10_v_s       [−5]: the Stribeck velocity scale (a nuisance, on a grid)
@@ -145,7 +146,7 @@ class SlipBaseline(AbstractBaseline):
 
     def element(self, theta, knobs):
         F_s, K, C = self.physical(theta)
-        return AugmentedPreSlip(F_s, K, C, knobs[0] * self.sigma_ref, knobs[1],
+        return AugmentedPreSlip(F_s, K, C, jnp.abs(knobs[0]) * self.sigma_ref, knobs[1],
                                 10.0 ** knobs[2], knobs[3], self.profile)  # fmt: skip
 
     def _solve(self, theta, knobs):
