@@ -106,3 +106,27 @@ def test_discover_on_independent_records():
     specs = [s for s in dr.study_specs() if any(s.label.startswith(c) for c in labels)]
     fails = [row["label"] for row in map(st.run_one, specs) if not row["ok"]]
     assert not fails
+
+
+def test_drift_degrees_resolve_a_wandering_drift():
+    # a random-walk-like drift (a SciPy cubic spline through a cumulative Gaussian walk at 9
+    # knots, the generator's shape): the cubic leaves much of it, the degree-9 series little;
+    # the score cannot choose between them at a large misfit, so every degree is refitted
+    from scipy.interpolate import CubicSpline
+
+    from tribojax.discovery import _slip_effects as _slip
+
+    run = tj.SlipRun(t=T, accel=np.sin(2 * np.pi * T / 2.3), slip=np.zeros(N), mass=0.3,
+                     noise_std=1e-10)  # fmt: skip
+    designs = _slip.SensorDrift().designs(tj.discovery.slip_baseline(run, start=[1.0, 1e7, 500.0]))
+    assert [d.k for d in designs] == [4, 7, 10]
+    assert _slip.SensorDrift.refit_starts == len(designs)
+    left = {3: [], 9: []}
+    for seed in range(20):
+        knots = np.linspace(0, 2.3, 9)
+        drift = CubicSpline(knots, np.cumsum(np.random.default_rng(seed).normal(size=9)))(T)
+        for d in (designs[0], designs[2]):
+            c = np.linalg.lstsq(d.basis, drift, rcond=None)[0]
+            res = drift - d.basis @ c
+            left[int(d.nuisance["degree"])].append(np.std(res) / np.std(drift))
+    assert np.median(left[9]) < 0.15 and np.median(left[3]) > 2 * np.median(left[9])

@@ -43,7 +43,7 @@ An effect may also override `refine(baseline, design, score) -> EffectDesign` to
 nuisance values around the best grid point (`score(design)` is the Rao statistic at the current
 fit; `vibration` refines its frequency and damping this way).
 Register it for `default_effects(kind)` with `@register_effect`, or pass it explicitly:
-`discover(baseline, effects=[*default_effects("slip"), MyEffect()])`. At most `K_MAX` = 8
+`discover(baseline, effects=[*default_effects("slip"), MyEffect()])`. At most `K_MAX` = 12
 strengths in one model.
 
 Loop side: export `loop_baseline(loop: HysteresisLoop) -> AbstractBaseline` from this package
@@ -57,7 +57,8 @@ forward-mode pass of `predict` over θ and the knobs. `predict` must not raise i
 a trial point where it is not finite is rejected as a rise of the cost.
 
 Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration`,
-`load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip`.
+`load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip` and
+`tribojax.discovery._slip_effects`.
 
 Loop side (`loop_baseline`: Jenkins, wu2015 Eq 1, driven by the measured displacement; effects
 `microslip`, `viscous_damping`, `normal_load_variation`, `backlash`, `force_offset`;
@@ -72,6 +73,7 @@ directions, each point weighted by its standard error; effects `stribeck` (LuGre
 `discover_curve`, `plot_curve_discovery`): see `tribojax.discovery._curve`.
 """
 
+from . import _slip_effects  # noqa: F401  (registers the slip effects)
 from ._core import ALPHA as ALPHA
 from ._core import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
 from ._core import K_MAX as K_MAX

@@ -16,7 +16,7 @@ import numpy as np
 
 from ._regions import noise_estimate
 
-K_MAX = 8  # effect strengths in one fit, padded to this size (one compiled solve per record shape)
+K_MAX = 12  # effect strengths in one fit, padded to this size (one compiled solve per record shape)
 """Most effect strengths in one model; fits are padded to this size so that one compiled solve
 serves every combination of effects on a record shape."""
 DELTA_BIC_THRESHOLD = -10.0  # "very strong" evidence (Kass & Raftery 1995)
@@ -70,6 +70,9 @@ class EffectDesign:
         that are nuisance shifts (counted in k, reported under "nuisance", not as strengths).
     columns: (n, k) ∂y/∂s at s = 0 whatever the fit (additive effects whose knobs move a term
         outside the physics: the score test then needs no model solve), or None.
+    starts: further strength vectors (k,) from which the refit starts (with the baseline at its
+        current fit) while the Gauss–Newton and zero starts leave a misfit: seeds of an optimum
+        far from the null along a valley that the local score cannot see.
     """
 
     strength_names: tuple[str, ...]
@@ -82,6 +85,7 @@ class EffectDesign:
     n_nuisance: int = 0
     free: tuple = ()
     columns: np.ndarray | None = None
+    starts: tuple = ()
 
     @property
     def k(self) -> int:
@@ -183,6 +187,10 @@ class AbstractEffect(eqx.Module):
     # refit starts: the best grid design by score, then the next best ones at least a factor 10
     # away in every nuisance value
     refit_starts: ClassVar[int] = 1
+    # False: refitted whatever its score p-value (an effect whose optimum the score at the null
+    # cannot see, e.g. one nearly confounded with a baseline parameter there); the ΔBIC of the
+    # refit alone then decides
+    score_gate: ClassVar[bool] = True
 
     def refine(self, baseline: AbstractBaseline, design: EffectDesign, score) -> EffectDesign:
         """Optionally improve the best grid design's nuisance values; `score(design) -> float` is

@@ -5,7 +5,8 @@ consistent reading, `tribojax.simulate_slip`), driven by the record's own accele
 (`SlipRun.profile`, linear between samples), F_s, K_τ, C_τ fitted in log form.
 
 Physics knobs of the baseline (null values in brackets), all inside one friction element:
-    viscous      ν  [0]:  σ2 = ν·σ_ref added to the friction force, σ2·v (LuGre σ2, Eq 25)
+    viscous      ν  [0]:  σ2 = |ν|·σ_ref ≥ 0 (viscous friction dissipates) added to the friction
+                          force, σ2·v (LuGre σ2, Eq 25)
     stribeck     δ  [0]:  strength g(v) = F_s·(1 − δ·(1 − exp(−(v/v_s)²))) (Eq 25 with
                           F_c = (1 − δ)F_s, β = 2); δ > 0 is velocity weakening
     log10_v_s       [−5]: the Stribeck velocity scale (a nuisance, on a grid)
@@ -41,9 +42,8 @@ from .._fit._start import C_TAU_START_FACTORS, slip_run_start
 from .._friction._lugre import DEFAULT_VELOCITY_SCALE, PreSlipLuGre
 from .._io._slip_run import SlipRun
 from .._presets import STANDARD_GRAVITY_WANG2022 as G_ACC  # m/s², wang2022 Eq 28
-from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
-from ._modes import _golden_max, _oscillator
-from ._regions import noise_estimate
+from ._core import AbstractBaseline, DiscoveryData
+from ._modes import _oscillator
 
 KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling",
          "mode_q", "mode_qdot", "mode_log_f", "mode_logit_zeta")  # fmt: skip
@@ -146,7 +146,7 @@ class SlipBaseline(AbstractBaseline):
 
     def element(self, theta, knobs):
         F_s, K, C = self.physical(theta)
-        return AugmentedPreSlip(F_s, K, C, knobs[0] * self.sigma_ref, knobs[1],
+        return AugmentedPreSlip(F_s, K, C, jnp.abs(knobs[0]) * self.sigma_ref, knobs[1],
                                 10.0 ** knobs[2], knobs[3], self.profile)  # fmt: skip
 
     def _solve(self, theta, knobs):
@@ -229,164 +229,3 @@ def slip_baseline(run, start=None) -> SlipBaseline:
         profile=record.profile(),
         t_end=float(t[-1]),
     )
-
-
-# ------------------------------------------------------------------------- effects
-
-
-def _y_scale(baseline) -> float:
-    d = baseline.data()
-    if d.noise_std:
-        return float(d.noise_std)
-    return float(noise_estimate(d.y)[0]) or float(np.std(d.y)) or 1.0
-
-
-def _unit_rms(col):
-    rms = float(np.sqrt(np.mean(col**2)))
-    return col / rms if rms > 0 else col
-
-
-@register_effect
-class SensorDrift(AbstractEffect):
-    """Smooth additive drift of the slip reading: cubic (Legendre P0–P3) in time."""
-
-    name: ClassVar[str] = "sensor_drift"
-    kind: ClassVar[str] = "slip"
-    degree: int = 3
-
-    def designs(self, baseline):
-        t = np.asarray(baseline.t)
-        s = 2 * (t - t[0]) / (t[-1] - t[0]) - 1
-        cols = np.polynomial.legendre.legvander(s, self.degree)
-        ys = _y_scale(baseline)
-        k = self.degree + 1
-        return [EffectDesign(tuple(f"c{i}" for i in range(k)), ("m",) * k, np.full(k, ys),
-                             basis=cols * ys)]  # fmt: skip
-
-
-@register_effect
-class PositionError(AbstractEffect):
-    """Reading error proportional to stage travel, ε·x_s(t) (e.g. interferometer fibre bending)."""
-
-    name: ClassVar[str] = "position_error"
-    kind: ClassVar[str] = "slip"
-
-    def designs(self, baseline):
-        _, x = stage_travel(baseline.t, baseline.accel)
-        ys = _y_scale(baseline)
-        rms = float(np.sqrt(np.mean(x**2))) or 1.0
-        return [EffectDesign(("epsilon",), ("m/m",), np.array([ys / rms]),
-                             basis=(x / rms * ys)[:, None])]  # fmt: skip
-
-
-@register_effect
-class Vibration(AbstractEffect):
-    """A lightly damped structural mode excited by the stage acceleration, seen in the reading.
-
-    Additive A₁q + A₂q̇/ω (two signed amplitudes set the phase); natural frequency and damping
-    ratio seeded by a grid (default 40 frequencies between 3/T and 0.4 × the sampling rate,
-    capped at 500 Hz, × ζ ∈ {0.01, 0.03, 0.1}) refined around the best grid point by
-    golden-section searches on the score (log f within one grid step, then log ζ within a
-    factor 3), then fitted jointly with the amplitudes in the refit (knobs `mode_*`).
-    """
-
-    name: ClassVar[str] = "vibration"
-    kind: ClassVar[str] = "slip"
-    zetas: tuple = (0.01, 0.03, 0.1)
-    n_freq: int = 40
-
-    def design(self, baseline, f, z):
-        return self._designs(baseline, [(f, z)])[0]
-
-    def _designs(self, baseline, pairs):
-        ys = _y_scale(baseline)
-        f, z = np.asarray(pairs, dtype=float).reshape(-1, 2).T
-        qs = np.asarray(_oscillator(baseline.t, baseline.accel, 2 * np.pi * f, z))
-        gain = np.zeros((len(KNOBS), 4))
-        for j, (kn, g) in enumerate(zip(KNOBS[N_ODE_KNOBS:], (ys, ys, 1.0, 1.0))):
-            gain[KNOBS.index(kn), j] = g
-        return [EffectDesign(("A_q", "A_qdot", "log_f_shift", "logit_zeta_shift"),
-                             ("m", "m", "1", "1"), np.array([ys, ys, 1.0, 1.0]), knob_gain=gain,
-                             knob_set={"mode_log_f": np.log(fi), "mode_logit_zeta": _logit(zi)},
-                             columns=np.stack([_unit_rms(q[:, 0]) * ys, _unit_rms(q[:, 1]) * ys,
-                                               0 * q[:, 0], 0 * q[:, 0]], 1),
-                             nuisance={"f_Hz": float(fi), "zeta": float(zi)},
-                             free=((2, "f_Hz", lambda u, f0=fi: f0 * np.exp(u)),
-                                   (3, "zeta", lambda u, z0=zi: _zeta(_logit(z0) + u))))
-                for q, fi, zi in zip(qs, f, z)]  # fmt: skip
-
-    def frequencies(self, baseline):
-        t = np.asarray(baseline.t)
-        fs = (t.size - 1) / (t[-1] - t[0])
-        return np.geomspace(3.0 / (t[-1] - t[0]), min(0.4 * fs, 500.0), self.n_freq)
-
-    def designs(self, baseline):
-        return self._designs(baseline, [(f, z) for f in self.frequencies(baseline)
-                                        for z in self.zetas])  # fmt: skip
-
-    def refine(self, baseline, design, score):
-        f0, z0 = design.nuisance["f_Hz"], design.nuisance["zeta"]
-        step = float(np.log(self.frequencies(baseline)[1] / self.frequencies(baseline)[0]))
-        lf, _ = _golden_max(lambda u: score(self.design(baseline, np.exp(u), z0)),
-                            np.log(f0) - step, np.log(f0) + step)  # fmt: skip
-        lz, _ = _golden_max(lambda u: score(self.design(baseline, np.exp(lf), np.exp(u))),
-                            np.log(z0 / 3), np.log(min(3 * z0, 0.8 * ZETA_MAX)),
-                            iters=12)  # fmt: skip
-        return self.design(baseline, np.exp(lf), np.exp(lz))
-
-
-def _logit(zeta):
-    return float(np.log(zeta / (ZETA_MAX - zeta)))
-
-
-def _zeta(u):
-    return float(ZETA_MAX / (1.0 + np.exp(-u)))
-
-
-def _knob_design(knob, strength, unit, scale, knob_set=None, nuisance=None, n_nuisance=0):
-    gain = np.zeros((len(KNOBS), 1))
-    gain[KNOBS.index(knob), 0] = 1.0
-    return EffectDesign((strength,), (unit,), np.array([scale]), knob_gain=gain,
-                        knob_set=knob_set or {}, nuisance=nuisance or {},
-                        n_nuisance=n_nuisance)  # fmt: skip
-
-
-@register_effect
-class LoadCoupling(AbstractEffect):
-    """Normal load (hence F_s and K_τ) varying with stage acceleration: N = N₀(1 + κa/g)."""
-
-    name: ClassVar[str] = "load_coupling"
-    kind: ClassVar[str] = "slip"
-
-    def designs(self, baseline):
-        return [_knob_design("load_coupling", "kappa", "1 (per g)", 1.0)]
-
-
-@register_effect
-class Stribeck(AbstractEffect):
-    """Velocity weakening g(v) = F_s(1 − δ(1 − exp(−(v/v_s)²))) (wang2022 Eq 25, β = 2); v_s
-    seeded by the grid `VS_GRID` (the best score) and fitted jointly with δ in the refit."""
-
-    name: ClassVar[str] = "stribeck"
-    kind: ClassVar[str] = "slip"
-    refit_starts: ClassVar[int] = 3  # the score's best v_s is often a decade off the refit's
-
-    def designs(self, baseline):
-        gain = np.zeros((len(KNOBS), 2))
-        gain[KNOBS.index("stribeck"), 0] = gain[KNOBS.index("log10_v_s"), 1] = 1.0
-        return [EffectDesign(("delta", "log10_v_s_shift"), ("1", "1"), np.ones(2),
-                             knob_gain=gain, knob_set={"log10_v_s": np.log10(vs)},
-                             nuisance={"v_s_m_per_s": vs},
-                             free=((1, "v_s_m_per_s", lambda u, v0=vs: v0 * 10.0**u),))
-                for vs in VS_GRID]  # fmt: skip
-
-
-@register_effect
-class ViscousFriction(AbstractEffect):
-    """A viscous term σ2·v in the friction force (LuGre σ2, wang2022 Eq 25)."""
-
-    name: ClassVar[str] = "viscous_friction"
-    kind: ClassVar[str] = "slip"
-
-    def designs(self, baseline):
-        return [_knob_design("viscous", "sigma2", "N s/m", float(baseline.sigma_ref))]

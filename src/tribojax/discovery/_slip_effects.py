@@ -1,0 +1,204 @@
+"""Slip effects of discovery: additive (`sensor_drift`, `position_error`, `vibration`) and
+knobs of the one pre-slip element (`load_coupling`, `stribeck`, `viscous_friction`); the
+baseline and the knobs are in `_slip` (see its docstring for the physics)."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import ClassVar
+
+import numpy as np
+
+from ._core import AbstractEffect, EffectDesign, register_effect
+from ._modes import _golden_max, _oscillator
+from ._regions import noise_estimate
+from ._slip import KNOBS, N_ODE_KNOBS, VS_GRID, ZETA_MAX, stage_travel
+
+KAPPA_STARTS = (-0.3, 1.0)  # load-coupling refit starts, κ per g
+SIGMA2_STARTS = (1.0, 10.0, 100.0)  # viscous refit starts, σ2 in units of the start C_τ
+
+
+def _y_scale(baseline) -> float:
+    d = baseline.data()
+    if d.noise_std:
+        return float(d.noise_std)
+    return float(noise_estimate(d.y)[0]) or float(np.std(d.y)) or 1.0
+
+
+def _unit_rms(col):
+    rms = float(np.sqrt(np.mean(col**2)))
+    return col / rms if rms > 0 else col
+
+
+@register_effect
+class SensorDrift(AbstractEffect):
+    """Smooth additive drift of the slip reading: a Legendre series in time, c₀P₀(s) + … +
+    c_dP_d(s), s = scaled time ∈ [−1, 1], of degree d ∈ `degrees` (a grid chosen by the score:
+    3 for a polynomial or thermal drift; a wandering, random-walk-like drift needs more terms:
+    degree d resolves wanderings slower than about T/d)."""
+
+    name: ClassVar[str] = "sensor_drift"
+    kind: ClassVar[str] = "slip"
+    degrees: tuple = (3, 6, 9)
+    # every degree is refitted: at a large misfit the score saturates (S → n) for all of them
+    # and cannot choose; the lowest BIC among the refits is kept
+    refit_starts: ClassVar[int] = 3
+
+    def designs(self, baseline):
+        t = np.asarray(baseline.t)
+        s = 2 * (t - t[0]) / (t[-1] - t[0]) - 1
+        ys = _y_scale(baseline)
+        out = []
+        for deg in self.degrees:
+            k = deg + 1
+            out.append(
+                EffectDesign(
+                    tuple(f"c{i}" for i in range(k)),
+                    ("m",) * k,
+                    np.full(k, ys),
+                    nuisance={"degree": float(deg)},
+                    basis=np.polynomial.legendre.legvander(s, deg) * ys,
+                )
+            )
+        return out  # fmt: skip
+
+
+@register_effect
+class PositionError(AbstractEffect):
+    """Reading error proportional to stage travel, ε·x_s(t) (e.g. interferometer fibre bending)."""
+
+    name: ClassVar[str] = "position_error"
+    kind: ClassVar[str] = "slip"
+
+    def designs(self, baseline):
+        _, x = stage_travel(baseline.t, baseline.accel)
+        ys = _y_scale(baseline)
+        rms = float(np.sqrt(np.mean(x**2))) or 1.0
+        return [EffectDesign(("epsilon",), ("m/m",), np.array([ys / rms]),
+                             basis=(x / rms * ys)[:, None])]  # fmt: skip
+
+
+@register_effect
+class Vibration(AbstractEffect):
+    """A lightly damped structural mode excited by the stage acceleration, seen in the reading.
+
+    Additive A₁q + A₂q̇/ω (two signed amplitudes set the phase); natural frequency and damping
+    ratio seeded by a grid (default 40 frequencies between 3/T and 0.4 × the sampling rate,
+    capped at 500 Hz, × ζ ∈ {0.01, 0.03, 0.1}) refined around the best grid point by
+    golden-section searches on the score (log f within one grid step, then log ζ within a
+    factor 3), then fitted jointly with the amplitudes in the refit (knobs `mode_*`).
+    """
+
+    name: ClassVar[str] = "vibration"
+    kind: ClassVar[str] = "slip"
+    zetas: tuple = (0.01, 0.03, 0.1)
+    n_freq: int = 40
+
+    def design(self, baseline, f, z):
+        return self._designs(baseline, [(f, z)])[0]
+
+    def _designs(self, baseline, pairs):
+        ys = _y_scale(baseline)
+        f, z = np.asarray(pairs, dtype=float).reshape(-1, 2).T
+        qs = np.asarray(_oscillator(baseline.t, baseline.accel, 2 * np.pi * f, z))
+        gain = np.zeros((len(KNOBS), 4))
+        for j, (kn, g) in enumerate(zip(KNOBS[N_ODE_KNOBS:], (ys, ys, 1.0, 1.0))):
+            gain[KNOBS.index(kn), j] = g
+        return [EffectDesign(("A_q", "A_qdot", "log_f_shift", "logit_zeta_shift"),
+                             ("m", "m", "1", "1"), np.array([ys, ys, 1.0, 1.0]), knob_gain=gain,
+                             knob_set={"mode_log_f": np.log(fi), "mode_logit_zeta": _logit(zi)},
+                             columns=np.stack([_unit_rms(q[:, 0]) * ys, _unit_rms(q[:, 1]) * ys,
+                                               0 * q[:, 0], 0 * q[:, 0]], 1),
+                             nuisance={"f_Hz": float(fi), "zeta": float(zi)},
+                             free=((2, "f_Hz", lambda u, f0=fi: f0 * np.exp(u)),
+                                   (3, "zeta", lambda u, z0=zi: _zeta(_logit(z0) + u))))
+                for q, fi, zi in zip(qs, f, z)]  # fmt: skip
+
+    def frequencies(self, baseline):
+        t = np.asarray(baseline.t)
+        fs = (t.size - 1) / (t[-1] - t[0])
+        return np.geomspace(3.0 / (t[-1] - t[0]), min(0.4 * fs, 500.0), self.n_freq)
+
+    def designs(self, baseline):
+        return self._designs(baseline, [(f, z) for f in self.frequencies(baseline)
+                                        for z in self.zetas])  # fmt: skip
+
+    def refine(self, baseline, design, score):
+        f0, z0 = design.nuisance["f_Hz"], design.nuisance["zeta"]
+        step = float(np.log(self.frequencies(baseline)[1] / self.frequencies(baseline)[0]))
+        lf, _ = _golden_max(lambda u: score(self.design(baseline, np.exp(u), z0)),
+                            np.log(f0) - step, np.log(f0) + step)  # fmt: skip
+        lz, _ = _golden_max(lambda u: score(self.design(baseline, np.exp(lf), np.exp(u))),
+                            np.log(z0 / 3), np.log(min(3 * z0, 0.8 * ZETA_MAX)),
+                            iters=12)  # fmt: skip
+        return self.design(baseline, np.exp(lf), np.exp(lz))
+
+
+def _logit(zeta):
+    return float(np.log(zeta / (ZETA_MAX - zeta)))
+
+
+def _zeta(u):
+    return float(ZETA_MAX / (1.0 + np.exp(-u)))
+
+
+def _knob_design(knob, strength, unit, scale, knob_set=None, nuisance=None, n_nuisance=0):
+    gain = np.zeros((len(KNOBS), 1))
+    gain[KNOBS.index(knob), 0] = 1.0
+    return EffectDesign((strength,), (unit,), np.array([scale]), knob_gain=gain,
+                        knob_set=knob_set or {}, nuisance=nuisance or {},
+                        n_nuisance=n_nuisance)  # fmt: skip
+
+
+@register_effect
+class LoadCoupling(AbstractEffect):
+    """Normal load (hence F_s and K_τ) varying with stage acceleration: N = N₀(1 + κa/g)."""
+
+    name: ClassVar[str] = "load_coupling"
+    kind: ClassVar[str] = "slip"
+
+    def designs(self, baseline):
+        # seeds of κ (per g) for the refit: near m·a_max ≈ F_s the baseline's optimum can sit far
+        # from the coupled one (a hidden coupling at the fast drive: the Gauss–Newton and zero
+        # starts stopped at 75–350 noise sd, κ from −0.3 or 1.0 reached 5 sd)
+        d = _knob_design("load_coupling", "kappa", "1 (per g)", 1.0)
+        return [dataclasses.replace(d, starts=tuple((k,) for k in KAPPA_STARTS))]
+
+
+@register_effect
+class Stribeck(AbstractEffect):
+    """Velocity weakening g(v) = F_s(1 − δ(1 − exp(−(v/v_s)²))) (wang2022 Eq 25, β = 2); v_s
+    seeded by the grid `VS_GRID` (the best score) and fitted jointly with δ in the refit."""
+
+    name: ClassVar[str] = "stribeck"
+    kind: ClassVar[str] = "slip"
+    refit_starts: ClassVar[int] = 3  # the score's best v_s is often a decade off the refit's
+
+    def designs(self, baseline):
+        gain = np.zeros((len(KNOBS), 2))
+        gain[KNOBS.index("stribeck"), 0] = gain[KNOBS.index("log10_v_s"), 1] = 1.0
+        return [EffectDesign(("delta", "log10_v_s_shift"), ("1", "1"), np.ones(2),
+                             knob_gain=gain, knob_set={"log10_v_s": np.log10(vs)},
+                             nuisance={"v_s_m_per_s": vs},
+                             free=((1, "v_s_m_per_s", lambda u, v0=vs: v0 * 10.0**u),))
+                for vs in VS_GRID]  # fmt: skip
+
+
+@register_effect
+class ViscousFriction(AbstractEffect):
+    """A viscous term σ2·v in the friction force (LuGre σ2, wang2022 Eq 25).
+
+    While the contact sticks, ż ≈ v and σ2·v is C_τ·ż: at the baseline's fit the viscous
+    column is nearly that of C_τ, the score sees little, and the optimum (σ2 many times C_τ, C_τ
+    itself poorly determined) lies far along that valley. The refit is therefore made whatever
+    the score (`score_gate` False) and also starts from σ2 = `SIGMA2_STARTS` × the reference
+    damping (the start C_τ); the ΔBIC of the refit decides.
+    """
+
+    name: ClassVar[str] = "viscous_friction"
+    kind: ClassVar[str] = "slip"
+    score_gate: ClassVar[bool] = False
+
+    def designs(self, baseline):
+        d = _knob_design("viscous", "sigma2", "N s/m", float(baseline.sigma_ref))
+        return [dataclasses.replace(d, starts=tuple((v,) for v in SIGMA2_STARTS))]
