@@ -1,6 +1,6 @@
 """Confusion study of `discover` on independent hidden-effect slip records (issue 14).
 
-    python benchmarks/discovery_study.py [--out DIR] [--subset ci] [--resume]
+    python benchmarks/discovery_study.py [--out DIR] [--subset ci] [--labels FILE] [--resume]
 
 Records: `benchmarks.discovery_records.study_specs()` (SciPy-generated, seeds in the specs).
 Writes DIR/discovery_study.jsonl (one line per record, appended as it goes), and at the end
@@ -133,6 +133,8 @@ def main(argv=None):
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent))
     ap.add_argument("--subset", choices=["all", "ci"], default="all")
     ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--labels", help="file of record labels, one a line: run those, in that order "
+                    "(a re-run of chosen records; write it to another --out)")  # fmt: skip
     ap.add_argument(
         "--reverse",
         action="store_true",
@@ -147,6 +149,13 @@ def main(argv=None):
     specs = dr.study_specs()
     if args.subset == "ci":
         specs = [s for s in specs if any(s.label.startswith(c) for c in CI_LABELS)]
+    if args.labels:
+        by_label = {s.label: s for s in specs}
+        wanted = [x.strip() for x in Path(args.labels).read_text().splitlines() if x.strip()]
+        missing = [x for x in wanted if x not in by_label]
+        if missing:
+            raise SystemExit(f"{args.labels}: labels not in study_specs(): {missing}")
+        specs = [by_label[x] for x in wanted]
     i_shard, n_shard = (int(v) for v in args.shard.split("/"))
     log = out / ("discovery_study.jsonl" if n_shard == 1 else f"discovery_study.{i_shard}.jsonl")
     done = {}
