@@ -19,8 +19,8 @@ second state (τ' = 1) so that it can read a(τ).
 
 Additive (measurement) effects, linear in their strengths:
     sensor_drift     c₀ + c₁P₁(s) + c₂P₂(s) + c₃P₃(s), Legendre in s = scaled time ∈ [−1, 1]
-    position_error   ε·x_s(t), x_s = ∫∫a dt the stage travel from the record (fibre bending,
-                     Abbe/cosine errors: a reading error proportional to travel)
+    position_error   ε·x_s(t) [+ ε₂·x_s(t)²], x_s = ∫∫a dt the stage travel from the record
+                     (fibre bending, Abbe/cosine errors: a reading error growing with travel)
     vibration        A₁·q(t) + A₂·q̇(t)/ω, q the response of a damped oscillator
                      q̈ + 2ζωq̇ + ω²q = −a(t) to the stage acceleration; ω, ζ on a grid
 """
