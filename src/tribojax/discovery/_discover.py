@@ -12,7 +12,7 @@ from ._core import (
     AbstractEffect,
     default_effects,
 )
-from ._fitting import _columns, _delta_bic, _fit, _score
+from ._fitting import MAX_STEPS, _columns, _delta_bic, _fit, _score
 from ._regions import ar1_inflation, chi2_sf, find_regions, noise_estimate, residual_rho
 from ._report import DiscoveryReport, _fit_dict, _rmse, _strengths
 from ._verdict import correlations, excess_rmse, flexible_correction, noise_consistent, verdict
@@ -47,6 +47,15 @@ def _refit(baseline, state, design, name, y, scale, r, cache, done=lambda f: Fal
         start = np.concatenate([state.theta, np.asarray(s0, dtype=float)])
         fits.append(_fit(baseline, designs, start, y, scale, names))
     good = [f for f in fits if f.converged and np.isfinite(f.rss)]
+    if not good:
+        # a fit that ran out of steps while still descending (e.g. an unidentified F_s walking
+        # to its bound: a hidden position error at 20 kPa, 128 steps) goes on from where it
+        # stopped, once
+        run = [f for f in fits if np.isfinite(f.rss) and f.steps >= MAX_STEPS]
+        if run:
+            fits.append(_fit(baseline, designs, min(run, key=lambda f: f.rss).theta, y, scale,
+                             names))  # fmt: skip
+            good = [f for f in fits[-1:] if f.converged and np.isfinite(f.rss)]
     return min(good, key=lambda f: f.rss) if good else fits[-1]
 
 
