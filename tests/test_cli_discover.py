@@ -13,7 +13,7 @@ from tribojax.discovery.synthetic import NOISE_LEVELS, hidden_effect_run
 @pytest.fixture(scope="module")
 def record(tmp_path_factory):
     d = tmp_path_factory.mktemp("rec")
-    run = hidden_effect_run("position_error", NOISE_LEVELS["low"], 0.6, n=231)
+    run = hidden_effect_run("position_error", NOISE_LEVELS["low"], 0.6, n=461)  # verdict tests' shape
     path = d / "run.csv"
     write_slip_run(run, path)
     return path
