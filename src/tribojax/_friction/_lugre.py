@@ -52,15 +52,16 @@ def stribeck_curve(v, F_c, F_s, v_s, beta):
     """The Stribeck strength g(v) = F_c + (F_s − F_c)·exp(−|v/v_s|^β), N (wang2022 Eq 25).
 
     v in m/s, F_c and F_s in N, v_s in m/s (> 0), β > 0. The power is double-where masked at
-    v = 0, so derivatives stay finite there for any β; it is taken as exp(β·ln u) and masked
-    where β·ln u > 50 (exp(−e^50) is 0 in float64), so a large β or a small v_s gives g = F_c
-    with finite derivatives instead of an overflow of u^β to inf and NaN gradients.
+    v = 0, so derivatives stay finite there for any β; it is also masked where β·ln u > 50
+    (exp(−e^50) is 0 in float64), so a large β or a small v_s gives g = F_c with finite
+    derivatives instead of an overflow of u^β to inf and NaN gradients.
     """
     u = jnp.abs(jnp.asarray(v) / v_s)
     nz = u > 0.0
-    log_powed = beta * jnp.log(jnp.where(nz, u, 1.0))
-    live = nz & (log_powed < _LOG_POWER_MAX)
-    decay = jnp.where(live, jnp.exp(-jnp.exp(jnp.where(live, log_powed, 0.0))), 0.0)
+    safe_u = jnp.where(nz, u, 1.0)
+    live = nz & (beta * jnp.log(safe_u) < _LOG_POWER_MAX)
+    powed = jnp.where(live, safe_u, 1.0) ** jnp.where(live, beta, 1.0)
+    decay = jnp.where(live, jnp.exp(-powed), 0.0)
     decay = jnp.where(nz, decay, 1.0)
     return F_c + (F_s - F_c) * decay
 
