@@ -51,8 +51,9 @@ def _steady_amplitude(omega, x0, v0, periods=40):
 
 def test_continuation_passes_the_folds_of_a_duffing_response():
     # harmonics 1 and 3 of a symmetric cubic; n_time = 16 is alias-free for x³ (harmonics <= 9)
-    system = tj.FrictionSystem(tj.Structure(1.0, C, 1.0), [CubicSpring(jnp.asarray(K3), 0)],
-                               tj.Excitation(1, cosine=[F]), harmonics=(1, 3), n_time=16)  # fmt: skip
+    spring = CubicSpring(jnp.asarray(K3), 0)
+    system = tj.FrictionSystem(tj.Structure(1.0, C, 1.0), [spring], tj.Excitation(1, cosine=[F]),
+                               harmonics=(1, 3), n_time=16)  # fmt: skip
     fr = tj.frequency_response(system, 0.5, 2.0)
     assert fr.converged and fr.omega[-1] > 1.8
     w, a = fr.omega, fr.amplitude[:, 0]

@@ -130,3 +130,41 @@ def test_frf_2dof_study(tmp_path):
         c = res[F]
         assert c["result"] == "successful" and len(c["omega"]) == len(c["amplitude"])
         assert max(r["rel_diff"] for r in c["time_check"]) < 0.01
+
+
+def absorber(p):
+    """A friction-tuned absorber: a 1 kg, 1 N/m primary mass (ζ = 0.02, force 0.02 cos ωt N)
+    carrying a 0.1 kg mass through a Jenkins damper only (μ = 0.5, load p[0] N, stiffness p[1]
+    N/m). Unlike a damper to ground, whose peak falls monotonically as K_d grows (a stiffer
+    contact dissipates more per cycle at the same slip force), K_d here also tunes the absorber:
+    K_d → 0 detaches it, K_d → ∞ locks it, so the joint (N, K_d) optimum is interior."""
+    structure = tj.Structure(jnp.diag(jnp.array([1.0, 0.1])), jnp.diag(jnp.array([0.04, 0.0])),
+                             jnp.diag(jnp.array([1.0, 0.0])))  # fmt: skip
+    contact = tj.FrictionContact(tj.Jenkins(0.5, p[0], p[1]), 0, ref_dof=1)
+    return tj.FrictionSystem(structure, [contact], tj.Excitation(2, cosine=jnp.array([0.02, 0.0])),
+                             harmonics=(1, 3), n_time=32)  # fmt: skip
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not FULL, reason="long form only (TRIBOJAX_FULL=1): minutes of compilation")
+def test_joint_load_and_stiffness_design_against_grid():
+    omegas = jnp.linspace(0.6, 1.5, 27)
+    design = tj.minimise_peak(absorber, [0.02, 0.06], omegas)
+    N_opt, K_opt = (float(v) for v in design.params)
+    a_opt = float(design.peak.amplitude)
+    # brute force: the peak on a 9 × 9 log grid around the optimum (same peak search, no
+    # gradients); the equal-peak optimum of a tuned absorber is a kink of max(peak₁, peak₂), so
+    # BFGS may stop short of its tolerance there: only the value is held to the grid's best
+    Ns, Ks = np.geomspace(0.015, 0.06, 9), np.geomspace(0.05, 0.2, 9)
+    P = jnp.array([[n, k] for n in Ns for k in Ks])
+    peaks = jax.jit(jax.vmap(lambda p: tj.peak_on_grid(absorber(p), omegas).amplitude))
+    grid = np.asarray(peaks(P))
+    j = int(np.argmin(grid))
+    print(f"BFGS: N = {N_opt:.4f}, K_d = {K_opt:.4f}, peak {a_opt:.5f} ({int(design.steps)} "
+          f"steps); grid best {grid[j]:.5f} at {np.asarray(P[j])}")  # fmt: skip
+    # measured: 60 steps (max_steps at the kink), peak 0.09605 vs the grid's best 0.09660
+    ends = (tj.RESULTS.successful, tj.RESULTS.nonlinear_max_steps_reached)
+    assert any(bool(design.result == r) for r in ends) and np.isfinite(a_opt)
+    assert Ns[0] < N_opt < Ns[-1] and Ks[0] < K_opt < Ks[-1]
+    assert a_opt <= grid[j] * 1.01  # no worse than the grid's best by more than 1 %
+    assert a_opt < 0.5 * float(tj.peak_on_grid(absorber(jnp.array([0.02, 0.06])), omegas).amplitude)
