@@ -13,7 +13,8 @@ from tribojax.discovery.synthetic import NOISE_LEVELS, hidden_effect_run
 @pytest.fixture(scope="module")
 def record(tmp_path_factory):
     d = tmp_path_factory.mktemp("rec")
-    run = hidden_effect_run("position_error", NOISE_LEVELS["low"], 0.6, n=231)
+    # 461 samples: the shape of the verdict tests' records (one compile in their shared unit)
+    run = hidden_effect_run("position_error", NOISE_LEVELS["low"], 0.6, n=461)
     path = d / "run.csv"
     write_slip_run(run, path)
     return path

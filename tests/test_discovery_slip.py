@@ -59,7 +59,7 @@ def test_oscillator_matches_scipy_radau():
         q = np.asarray(ds._oscillator(jnp.asarray(ts), jnp.asarray(a), omega, zeta))[..., 0]
         for qi, f, z in zip(q, (40.0, 61.3), zeta):
             ref = syn._oscillator_scipy(ts, syn.HIDDEN_PROFILE, f, z)
-            # exact discretisation vs Radau at rtol 1e-10: agreement to ~1e-7 of the peak
+            # exact discretisation vs SciPy DOP853 at rtol 1e-10: agreement to ~1e-7 of the peak
             assert np.max(np.abs(qi - ref)) < 1e-6 * np.max(np.abs(ref))
 
 

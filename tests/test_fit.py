@@ -49,6 +49,21 @@ def test_unidentifiable_direction_gets_infinite_error():
     assert not np.all(np.isfinite(fit.std_errors))
 
 
+def test_a_determined_parameter_keeps_a_finite_error_beside_an_undetermined_pair():
+    # a and b enter only as a + b; c is determined. The SVD's null direction loads c at
+    # round-off level only, which must not make c's standard error infinite.
+    # (with these x, y the SVD puts -7.8e-17 of c into the null direction)
+    def residuals(theta, args):
+        x = jnp.array([1.0, 2.0, 3.0, 4.0, 5.0])
+        y = jnp.array([0.3, -1.1, 0.7, 2.9, -0.4])
+        return 1.7 * x * (theta[0] + theta[1] - 1.0) + y * (theta[2] - 2.0)
+
+    fit = tj.least_squares_fit(residuals, jnp.array([0.3, 0.1, 0.0]), names=("a", "b", "c"),
+                               sigma_known=True)
+    assert np.isinf(fit.std_errors[0]) and np.isinf(fit.std_errors[1])
+    assert np.isfinite(fit.std_errors[2]) and fit.std_errors[2] > 0.0
+
+
 def test_non_convergence_is_reported():
     def residuals(theta, args):
         return jnp.array([jnp.exp(theta[0]) - 1e6, theta[0] * 1e-3])

@@ -88,3 +88,21 @@ def test_constant_velocity_step_grad_and_jit():
         fd = (z_end(p + e) - z_end(p - e)) / (2e-6 * p[i])
         assert float(g[i]) == pytest.approx(float(fd), rel=1e-6)
     assert float(jax.jit(z_end)(p)) == pytest.approx(float(z_end(p)), rel=1e-14)
+
+
+def test_stribeck_curve_step_limit_has_finite_gradients():
+    """A fit running β off to a step (driveNo2's joint fit: β → 1e5) must see g = F_c with
+    finite derivatives where |v/v_s|^β overflows, and the closed form elsewhere."""
+    import jax
+    import jax.numpy as jnp
+
+    from tribojax._friction._lugre import stribeck_curve
+
+    def g(p, v):
+        return stribeck_curve(v, p[0], p[1], p[2], p[3])
+
+    for beta, v in ((1.2e5, 3.0), (1.2e5, 0.5), (800.0, 40.0), (1.4, 0.0), (1.4, 2.0)):
+        p = jnp.array([2.5, 3.2, 2.0, beta])
+        closed = 2.5 + 0.7 * np.exp(-(np.float64(abs(v) / 2.0) ** beta))
+        assert float(g(p, v)) == pytest.approx(closed, rel=1e-14)
+        assert np.all(np.isfinite(jax.grad(g)(p, v)))

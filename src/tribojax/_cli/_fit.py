@@ -81,7 +81,8 @@ def add_arguments(parser) -> None:
     )
     parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
                         help="the record's format (default: detected)")  # fmt: skip
-    parser.add_argument("--max-steps", type=int, default=200, help="LM step budget (default 200)")
+    parser.add_argument("--max-steps", type=int, default=200,
+                        help="LM step budget (default 200; a friction curve: at least 2000)")
     parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
     add_decimation_arguments(parser)
 

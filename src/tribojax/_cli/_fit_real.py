@@ -19,6 +19,10 @@ from .._io._curve import FrictionCurve
 from ._common import CommandError
 
 ELEMENT_MODELS = tuple(HISTORY_MODELS)  # jenkins, mindlin, lugre, bouc_wen
+# A steady-law step costs microseconds once compiled; a curve whose Stribeck dip is not resolved
+# by its points (driveNo2: no point below v_s) walks β slowly towards a step (≈ 470 LM steps),
+# so a curve fit gets at least this budget whatever --max-steps (default 200, sized for ODE fits).
+CURVE_MIN_STEPS = 2000
 
 
 def bic(rss: float, n: int, p: int) -> float:
@@ -57,7 +61,8 @@ def fit_curve_record(curve: FrictionCurve, model: str, args, summary):
     """Fit the LuGre steady law with a direction asymmetry to a friction curve."""
     if model not in ("lugre", "best"):
         raise CommandError(f"--model {model} does not apply to a friction curve; use lugre or best")
-    fit = fit_steady_curve(curve, max_steps=args.max_steps)
+    steps = max(args.max_steps, CURVE_MIN_STEPS)
+    fit = fit_steady_curve(curve, max_steps=steps)
     resid = fit.residuals * curve.friction_error
     unit = curve.units["friction_unit"]
     sigma = float(np.median(curve.friction_error))
@@ -65,7 +70,7 @@ def fit_curve_record(curve: FrictionCurve, model: str, args, summary):
                 "per-point scatter / sqrt(samples)")  # fmt: skip
     sides = {}
     for side, sign in (("positive", 1), ("negative", -1)):
-        sides[side] = fit_steady_curve(curve, direction=sign, max_steps=args.max_steps).as_dict()
+        sides[side] = fit_steady_curve(curve, direction=sign, max_steps=steps).as_dict()
     d.update(model="lugre", nrmse=float(np.sqrt(np.mean(resid**2)) / np.std(curve.friction)),
              route="steady law with direction asymmetry T0", units=curve.units,
              per_direction=sides)  # fmt: skip

@@ -25,6 +25,7 @@ from .._results import RESULTS, result_name
 from ._mhb import FrictionSystem, floquet_exponents, solve_hbm
 
 _COS_MAX_TURN = 0.98  # cos(0.2 rad)
+_JAC_BLOCK = 64  # Hill stability: Jacobians of the branch's points, this many per call
 
 
 def _tangent(full, z, prev, args):
@@ -201,12 +202,15 @@ def _run(system_of, res, first, lam0, lam1, X0, omega0, extra, opts, stability, 
     amp = np.hypot(X[..., first.index(1)], X[..., first.index(1, True)])
     mf = np.full(n, np.nan)
     if stability:
-        # rows past the branch's end are NaN padding: evaluated at the start point instead (a
-        # parameter continuation's model may refuse NaN), fixed shape so one compilation serves
-        pad = jnp.arange(Y.shape[0]) >= n
-        Yv, lamv = jnp.where(pad[:, None], Y[0], Y), jnp.where(pad, lam[0], lam)
-        J = np.asarray(_jacobians(res, Yv, lamv, args))[:n] * float(f_ref / x_ref)
-        J = J[:, :, : nd * nc]
+        # the branch's n points in blocks of _JAC_BLOCK rows (one compilation serves every n;
+        # the padding rows of the last block repeat the start point, never the NaN rows past
+        # the branch's end, which a parameter continuation's model may refuse)
+        blocks = []
+        for k in range(0, n, _JAC_BLOCK):
+            rows = jnp.arange(k, k + _JAC_BLOCK)
+            rows = jnp.where(rows < n, rows, 0)
+            blocks.append(np.asarray(_jacobians(res, Y[rows], lam[rows], args)))
+        J = np.concatenate(blocks)[:n, :, : nd * nc] * float(f_ref / x_ref)
         if system_of is None:  # one system: one stacked eigenvalue call
             mf = floquet_exponents(first, None, omega, J).real.max(axis=-1)
         for i in range(n if system_of is not None else 0):

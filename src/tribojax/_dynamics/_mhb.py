@@ -232,8 +232,11 @@ def _scaled_residual(y, args):
 def _solve(system, omega, X0, solver, max_steps):
     f_ref, x_ref = system.scales(omega)
     y0 = (system.linear_solution(omega) if X0 is None else jnp.asarray(X0)) / x_ref
+    # jac="bwd": the (square) Jacobian is materialised once per step by reverse mode, so the
+    # trust-region's products J·v, Jᵀ·r and its LU solve are dense algebra, not re-runs of the
+    # AFT's history scan (same iterates; about half the time per step)
     sol = optx.root_find(_scaled_residual, solver, y0, (system, omega, f_ref, x_ref),
-                         max_steps=max_steps, throw=False)  # fmt: skip
+                         max_steps=max_steps, throw=False, options=dict(jac="bwd"))  # fmt: skip
     result = RESULTS.promote(sol.result)
     X = jnp.where(jnp.isfinite(sol.value), sol.value, 0.0) * x_ref
     result = RESULTS.where(jnp.all(jnp.isfinite(sol.value)), result, RESULTS.nonlinear_divergence)

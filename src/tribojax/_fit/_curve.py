@@ -26,6 +26,12 @@ import numpy as np
 from .._friction._lugre import LuGre, stribeck_curve
 from .._io._curve import FrictionCurve, FrictionTransient
 from ._engine import FitResult, least_squares_fit
+from ._solver import NoiseFloorLM
+
+# Plain LM never stops on a curve whose points leave a parameter undetermined (driveNo2's
+# Stribeck dip: β walks towards a step, every late step rejected); NoiseFloorLM also stops when
+# the Gauss–Newton step left is below 0.05 standard errors in every parameter.
+_RTOL, _ATOL = 1e-10, 1e-12
 
 STEADY_NAMES = ("F_c", "F_s", "v_s", "beta", "sigma2")
 
@@ -62,7 +68,7 @@ def _steady_start(v, f) -> np.ndarray:
     return np.log([F_c, F_s, v_s, 2.0, sigma2])
 
 
-def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 500) -> FitResult:
+def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2000) -> FitResult:
     """Fit the LuGre steady law to a friction curve (see the module docstring).
 
     Args:
@@ -71,6 +77,9 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 5
             velocity unit, β dimensionless).
         direction: +1 or −1 fits the points of that velocity sign alone; None fits both
             directions with the asymmetry T0.
+        max_steps: LM budget (`NoiseFloorLM`); a curve whose points do not resolve the
+            Stribeck dip (driveNo2: no point below v_s) walks β towards a step for a few hundred
+            steps, each of microseconds.
     Returns:
         FitResult with names (F_c, F_s, v_s, beta, sigma2) [+ T0]; positive parameters fitted
         as logarithms, standard errors from the per-point scatter (inflated by the residual if
@@ -101,7 +110,7 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 5
 
     fit = least_squares_fit(_SteadyResiduals(joint), jnp.asarray(theta0), (v, f, err),
                             names=names, transform=tr, sigma_known=True, max_steps=max_steps,
-                            jac="fwd")  # fmt: skip
+                            jac="fwd", solver=NoiseFloorLM(_RTOL, _ATOL))  # fmt: skip
     fixed = {"direction": "both" if joint else int(direction), **c.units}
     return dataclasses.replace(fit, fixed=fixed)
 
@@ -156,7 +165,7 @@ def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start
     fit = least_squares_fit(_TransientResiduals(), jnp.log(jnp.asarray(start)), args,
                             names=("sigma0", "sigma1"), transform=jnp.exp,
                             sigma_known=sigma is not None, max_steps=max_steps,
-                            jac="fwd")  # fmt: skip
+                            jac="fwd", solver=NoiseFloorLM(_RTOL, _ATOL))  # fmt: skip
     law = dict(zip(steady.names, steady.values.tolist()))
     return dataclasses.replace(fit, fixed={"steady": law})
 

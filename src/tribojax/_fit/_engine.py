@@ -168,7 +168,10 @@ def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps,
     # (singular value ~0) gets infinite variance (and no NaN from 0·inf)
     A = (T @ vt[~tiny].T) / sv[~tiny][None, :]
     cov = scale2 * (A @ A.T)
-    free = np.any(T @ vt[tiny].T != 0.0, axis=1)
+    # (a component at round-off level, |T·v| ≤ 1e-10·|T row|, is not a dependence: driveNo2's
+    # negative-direction σ2 loaded its null Stribeck directions by 6e-17 and got an infinite error)
+    load = np.abs(T @ vt[tiny].T)
+    free = np.any(load > 1e-10 * np.linalg.norm(T, axis=1, keepdims=True), axis=1)
     cov[np.ix_(free, free)] = np.inf
     with np.errstate(invalid="ignore"):
         std = np.sqrt(np.diag(cov))

@@ -45,16 +45,25 @@ def bristle_rate(v, sigma0_z_over_g, alpha, eps):
     return v * jnp.where(pos, safe**alpha, 0.0)
 
 
+_LOG_POWER_MAX = 50.0  # exp(-exp(50)) == 0.0 in float64
+
+
 def stribeck_curve(v, F_c, F_s, v_s, beta):
     """The Stribeck strength g(v) = F_c + (F_s − F_c)·exp(−|v/v_s|^β), N (wang2022 Eq 25).
 
     v in m/s, F_c and F_s in N, v_s in m/s (> 0), β > 0. The power is double-where masked at
-    v = 0, so derivatives stay finite there for any β.
+    v = 0, so derivatives stay finite there for any β; it is also masked where β·ln u > 50
+    (exp(−e^50) is 0 in float64), so a large β or a small v_s gives g = F_c with finite
+    derivatives instead of an overflow of u^β to inf and NaN gradients.
     """
     u = jnp.abs(jnp.asarray(v) / v_s)
     nz = u > 0.0
-    powed = jnp.where(nz, jnp.where(nz, u, 1.0) ** beta, 0.0)
-    return F_c + (F_s - F_c) * jnp.exp(-powed)
+    safe_u = jnp.where(nz, u, 1.0)
+    live = nz & (beta * jnp.log(safe_u) < _LOG_POWER_MAX)
+    powed = jnp.where(live, safe_u, 1.0) ** jnp.where(live, beta, 1.0)
+    decay = jnp.where(live, jnp.exp(-powed), 0.0)
+    decay = jnp.where(nz, decay, 1.0)
+    return F_c + (F_s - F_c) * decay
 
 
 class LuGre(AbstractFrictionElement):
