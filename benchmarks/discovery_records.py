@@ -11,6 +11,14 @@ reticle, v = Δx',
 F_spring = K_τ z by default, g(v) = F_s. Effects change g, F_spring, F_visc, the loads, or the
 reading; `make_record(spec)` builds one record from a `RecordSpec` with its seed.
 
+Strengths are drawn from ranges (none on a tribojax grid) scaled to what the record can show:
+the velocity effects to the clean record's peak slip speed v_pk (Stribeck v_s = 10^U(−0.5, 0.3)
+v_pk, F_c/F_s ∈ U(0.78, 0.88); viscous force at v_pk 2–5 % of F_s), additive effects to a peak of
+0.8–1.6 nm (a mode driven by the acceleration: its dynamic part q + a/ω², not the quasi-static
+slip ∝ a that K_τ absorbs). The first study (commit 8de909a) drew v_s from 0.4–2 µm/s and σ2 from
+12–20 C_τ whatever the load: at 2–10 kPa the slip speed stays far below such v_s and σ2·v is
+nearly C_τ·ż, so 9 of 65 in-vocabulary records held no misfit beyond the noise.
+
 Drives: "paper" is wang2022's cycle (a_max = 1 m/s², 0.15 s ramps, 0.35 s holds, 0.75 s cruise,
 from 0.1 s); "fast" has 0.05 s ramps, 0.25 s holds, 0.5 s cruise and m·a_max = 0.75·F_s. Every
 record has 461 samples over 2.3 s (5 ms): the kinks fall on samples.
@@ -82,8 +90,9 @@ def drive_knots(drive, F_s):
     return t, a
 
 
-def _law(spec, rng, F_s, K, C):
-    """Friction law pieces (g(v, n), spring(z, n), visc(v)) and load ratio n(a) of the spec."""
+def _law(spec, rng, F_s, K, C, v_peak):
+    """Friction law pieces (g(v, n), spring(z, n), visc(v)) and load ratio n(a) of the spec;
+    v_peak: the clean record's peak slip speed (m/s), the scale of the velocity effects."""
     e, sh = spec.effect, spec.shape
     pF = pK = kappa = 0.0
     g = lambda v: F_s  # noqa: E731
@@ -93,18 +102,17 @@ def _law(spec, rng, F_s, K, C):
         kappa = rng.uniform(0.25, 0.45)
         pF, pK = (1.0, 0.6) if sh == "exponents_1_0.6" else (0.8, 1.2)
     elif e == "stribeck":
-        ratio, v_s = rng.uniform(0.78, 0.88), 10 ** rng.uniform(-6.4, -5.7)
+        ratio, v_s = rng.uniform(0.78, 0.88), v_peak * 10 ** rng.uniform(-0.5, 0.3)
         if sh == "exponential":
             g = lambda v: F_s * (ratio + (1 - ratio) * np.exp(-abs(v) / v_s))  # noqa: E731
         else:
             g = lambda v: F_s * (ratio + (1 - ratio) / (1 + (v / v_s) ** 2))  # noqa: E731
     elif e == "viscous_friction":
-        s2 = C * rng.uniform(12.0, 20.0)
+        f_v = F_s * rng.uniform(0.02, 0.05)  # viscous force at the peak slip speed
         if sh == "linear":
-            visc = lambda v: s2 * v  # noqa: E731
+            visc = lambda v: f_v * v / v_peak  # noqa: E731
         else:
-            v_r = 1e-5
-            visc = lambda v: s2 * v_r * np.sign(v) * abs(v / v_r) ** 0.7  # noqa: E731
+            visc = lambda v: f_v * np.sign(v) * abs(v / v_peak) ** 0.7  # noqa: E731
     elif e == "stiffness_hardening":
         h = rng.uniform(0.6, 1.0)
         spring = lambda z: K * z * (1 + h * (K * z / F_s) ** 2)  # noqa: E731
@@ -114,10 +122,12 @@ def _law(spec, rng, F_s, K, C):
     return g, spring, visc, kappa, pF, pK
 
 
-def _simulate(spec, rng, tk, ak, ts):
-    """Slip, stage travel and mode response at ts: SciPy LSODA per stretch between kinks."""
+def _simulate(spec, rng, tk, ak, ts, v_peak=None):
+    """Slip, stage travel, mode response, slip velocity at ts and the mode's frequency: SciPy
+    LSODA per stretch between kinks (v_peak: the clean record's peak slip speed, for the
+    velocity effects)."""
     F_s, K, C = table3(spec.load)
-    g, spring, visc, kappa, pF, pK = _law(spec, rng, F_s, K, C)
+    g, spring, visc, kappa, pF, pK = _law(spec, rng, F_s, K, C, v_peak)
     f_mode = rng.uniform(17.0, 70.0)
     zeta = rng.uniform(0.012, 0.08)
     w = 2 * np.pi * f_mode
@@ -153,7 +163,7 @@ def _simulate(spec, rng, tk, ak, ts):
         y = sol.y[:, -1]
         at = np.isclose(ts, t1, atol=1e-12, rtol=0)
         out[:, at] = y[:, None]
-    return out[0] * 1e-9, out[4], out[5], (f_mode, zeta)
+    return out[0] * 1e-9, out[4], out[5], out[1] * 1e-9, f_mode
 
 
 def make_record(spec: RecordSpec, *, with_noise: bool = True) -> tj.SlipRun:
@@ -163,7 +173,11 @@ def make_record(spec: RecordSpec, *, with_noise: bool = True) -> tj.SlipRun:
     F_s, _, _ = table3(spec.load)
     tk, ak = drive_knots(spec.drive, F_s)
     ts = np.linspace(0.0, T_END, N_SAMPLES)
-    slip, xs, q, _ = _simulate(spec, rng, tk, ak, ts)
+    v_peak = None
+    if spec.effect in ("stribeck", "viscous_friction"):  # strengths relative to the clean run
+        clean = dataclasses.replace(spec, effect="clean", shape="-")
+        v_peak = float(np.max(np.abs(_simulate(clean, np.random.default_rng(0), tk, ak, ts)[3])))
+    slip, xs, q, _, f_mode = _simulate(spec, rng, tk, ak, ts, v_peak)
     accel = np.interp(ts, tk, ak)
     peak = rng.uniform(0.8, 1.6) * 1e-9  # m, peak size of an additive effect
     e, sh = spec.effect, spec.shape
@@ -182,6 +196,9 @@ def make_record(spec: RecordSpec, *, with_noise: bool = True) -> tj.SlipRun:
             add -= add[0]
     elif e == "vibration":
         add = q
+        # scaled below by its dynamic part: the quasi-static response q ≈ −a/ω² (a slip ∝ a,
+        # which K_τ absorbs) of a stiff mode is not what makes a vibration visible
+        dyn = q + accel / (2 * np.pi * f_mode) ** 2 if sh == "accel_driven" else q
     elif e == "position_error":
         add = xs if sh == "linear" else xs**2
     elif e == "readout_step":
@@ -204,7 +221,8 @@ def make_record(spec: RecordSpec, *, with_noise: bool = True) -> tj.SlipRun:
         accel = np.interp(ts - lag, tk, ak)
     if np.any(add):
         add = add - add[0]
-        slip = slip + add * peak / np.max(np.abs(add))
+        scale = np.max(np.abs(dyn - dyn[0])) if e == "vibration" else np.max(np.abs(add))
+        slip = slip + add * peak / scale
     sd = NOISE[spec.noise]
     slip = slip + rng.normal(0.0, sd, ts.size) * with_noise
     return tj.SlipRun(t=ts, accel=accel, slip=slip, mass=MASS,

@@ -1,8 +1,10 @@
-"""Confusion study of `discover` on independent hidden-effect slip records (issue 14).
+"""Confusion study of `discover` on independent hidden-effect slip and loop records (issue 14).
 
     python benchmarks/discovery_study.py [--out DIR] [--subset ci] [--labels FILE] [--resume]
 
-Records: `benchmarks.discovery_records.study_specs()` (SciPy-generated, seeds in the specs).
+Records: `benchmarks.discovery_records.study_specs()` (slip runs, SciPy-generated) and
+`benchmarks.discovery_loop_records.loop_study_specs()` (loops, own NumPy hysteresis models);
+seeds in the specs.
 Writes DIR/discovery_study.jsonl (one line per record, appended as it goes), and at the end
 DIR/discovery_study.json (rows + summary) and DIR/discovery_study.md (the confusion table).
 Default DIR: benchmarks/ (the stored table that notebooks/05_discovery.ipynb reads).
@@ -29,7 +31,10 @@ import numpy as np
 import tribojax.discovery as disc
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from benchmarks import discovery_loop_records as dlr  # noqa: E402
 from benchmarks import discovery_records as dr  # noqa: E402
+
+OUT_OF_VOCAB = (*dr.OUT_OF_VOCAB, *dlr.OUT_OF_VOCAB)
 
 # the CI subset (records that pass in the stored study; the study itself is the measurement):
 # the first four are the CI form of tests/test_discovery_verdict.py (clean, a physics effect that
@@ -46,27 +51,34 @@ CI_LABELS = (
 )
 
 
+def all_specs() -> list:
+    """Every record of the study: the slip runs, then the loops."""
+    return [*dr.study_specs(), *dlr.loop_study_specs()]
+
+
 def score(spec, verdict, effect, e0, e1) -> bool:
     if spec.effect == "clean":
         return verdict == "none"
-    if spec.effect in dr.OUT_OF_VOCAB:
+    if spec.effect in OUT_OF_VOCAB:
         return verdict not in ("explained", "none")
     return effect == spec.effect and e1 <= 0.5 * e0
 
 
 def run_one(spec) -> dict:
-    rec = dr.make_record(spec)
+    loop = getattr(spec, "kind", "slip") == "loop"
+    rec = dlr.make_loop_record(spec) if loop else dr.make_record(spec)
     t0 = time.perf_counter()
-    rep = disc.discover(disc.slip_baseline(rec))
+    rep = disc.discover_loop(rec) if loop else disc.discover(disc.slip_baseline(rec))
     wall = time.perf_counter() - t0
     sd = rep.noise_std
-    row = {"label": spec.label, "effect_true": spec.effect, "shape": spec.shape,
-           "load_kPa": spec.load, "drive": spec.drive, "noise": spec.noise,
+    row = {"label": spec.label, "kind": "loop" if loop else "slip", "effect_true": spec.effect,
+           "shape": spec.shape, "load_kPa": None if loop else spec.load,
+           "drive": "sine" if loop else spec.drive, "noise": spec.noise,
            "sidecar": spec.sidecar, "seed": spec.seed, "verdict": rep.verdict,
            "effect": rep.effect, "effects": list(rep.effects),
            "excess_before_sd": rep.excess_rmse_before / sd,
            "excess_after_sd": rep.excess_rmse_after / sd,
-           "F_s": rep.baseline_fit["parameters"]["F_s"], "converged": rep.converged,
+           "F_s": rep.baseline_fit["parameters"].get("F_s"), "converged": rep.converged,
            "seconds": wall}  # fmt: skip
     row["ok"] = score(spec, rep.verdict, rep.effect, rep.excess_rmse_before,
                       rep.excess_rmse_after)  # fmt: skip
@@ -80,7 +92,7 @@ def summarise(rows) -> tuple[dict, str]:
             "clean"
             if r["effect_true"] == "clean"
             else "out_of_vocabulary"
-            if r["effect_true"] in dr.OUT_OF_VOCAB
+            if r["effect_true"] in OUT_OF_VOCAB
             else "in_vocabulary"
         )
         groups[kind].append(r)  # fmt: skip
@@ -116,7 +128,9 @@ def summarise(rows) -> tuple[dict, str]:
              "success |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
     by_effect = collections.defaultdict(list)
     for r in rows:
-        by_effect[r["effect_true"] + ("" if r["shape"] == "-" else "/" + r["shape"])].append(r)
+        prefix = "loop:" if r.get("kind") == "loop" else ""
+        by_effect[prefix + r["effect_true"] + ("" if r["shape"] == "-" else "/" + r["shape"])
+                  ].append(r)  # fmt: skip
     for name, rs in by_effect.items():
         names = collections.Counter(r["effect"] for r in rs)
         cells = [str(sum(r["verdict"] == v for r in rs)) for v in verdicts]
@@ -153,7 +167,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    specs = dr.study_specs()
+    specs = all_specs()
     if args.subset == "ci":
         specs = [s for s in specs if any(s.label.startswith(c) for c in CI_LABELS)]
     if args.labels:
@@ -197,7 +211,7 @@ def main(argv=None):
     summary, table = summarise(rows)
     total_s = float(np.sum([r["seconds"] for r in rows]))
     res = {"summary": summary, "rows": rows, "discover_seconds_total": total_s,
-           "records_planned": len(dr.study_specs()), "records_run": len(rows)}  # fmt: skip
+           "records_planned": len(all_specs()), "records_run": len(rows)}  # fmt: skip
     (out / "discovery_study.json").write_text(json.dumps(res, indent=1))
     (out / "discovery_study.md").write_text(table + "\n")
     print(table)

@@ -1,11 +1,13 @@
 """Issue 14: the noise-consistency test behind "none"/"explained", the excess misfit, the verdict,
-the flexible correction, and the independent record generator (benchmarks/discovery_records.py,
-SciPy LSODA with the exact sign: shares no code with the candidate effects)."""
+the flexible correction, and the independent record generators (benchmarks/discovery_records.py,
+SciPy LSODA with the exact sign; benchmarks/discovery_loop_records.py, NumPy hysteresis: neither
+shares code with the candidate effects)."""
 
 import os
 
 import numpy as np
 import pytest
+from benchmarks import discovery_loop_records as dlr
 from benchmarks import discovery_records as dr
 
 import tribojax as tj
@@ -92,6 +94,42 @@ def test_study_spec_covers_the_issue():
         }
     assert {s.load for s in specs if s.drive == "paper"} == set(dr.LOADS_KPA)
     assert len({s.effect for s in specs if s.effect in dr.OUT_OF_VOCAB}) >= 4
+
+
+def test_independent_loop_generator_matches_the_library_elements():
+    # the generator's own stop operator and closed-form Mindlin–Masing law against tribojax's
+    # Jenkins and Mindlin (Iwan bank of 128) steady loops at the same rig: two implementations
+    spec = dlr.LoopRecordSpec("clean", "-", "low", True, 7)
+    rec = dlr.make_loop_record(spec, with_noise=False)
+    N0, mu, k, freq, A_bar = dlr.rig(np.random.default_rng(7))
+    F_s, omega = mu * N0, 2 * np.pi * freq
+    A = A_bar * F_s / k
+    kw = dict(cycles=dlr.CYCLES, samples_per_cycle=dlr.SPC)
+    jenkins = tj.synthetic_loop(tj.Jenkins(mu, N0, k), A, omega, **kw)
+    assert np.allclose(rec.t, jenkins.t) and np.allclose(rec.u, jenkins.u, atol=1e-18)
+    assert np.max(np.abs(rec.f - jenkins.f)) < 1e-10 * F_s  # measured 1.2e-14
+    fine = np.linspace(0.0, 1.5, 12001) / freq
+    u = A * np.sin(omega * fine)
+    mine = dlr._mindlin_masing(u, k, F_s)
+    lib = tj.synthetic_loop(tj.Mindlin(mu, N0, k), A, omega, cycles=1, samples_per_cycle=400)
+    # steady loop (after the first peak) against the library's, matched on the same phases
+    sel = (fine * freq >= 0.25) & (fine * freq <= 1.25)
+    ref = np.interp(fine[sel] * freq % 1.0, lib.t * freq, lib.f, period=1.0)
+    assert np.max(np.abs(mine[sel] - ref)) < 1e-3 * F_s  # 3.4e-4: Iwan 128 (~1/n²), interp.
+    # an Iwan bank with every slider at x_max is a Jenkins element
+    assert np.allclose(dlr._iwan_power(u, k, F_s, -0.4, 1.0), dlr._stop(u, k, F_s), atol=1e-9)
+
+
+def test_loop_study_spec_covers_the_issue():
+    specs = dlr.loop_study_specs()
+    assert len({s.seed for s in specs}) == len(specs)
+    for e, shapes in dlr.IN_VOCAB.items():
+        assert len(shapes) >= 2
+        got = [s for s in specs if s.effect == e]
+        assert {s.noise for s in got} == {"low", "high"}
+        assert {s.sidecar for s in got} == {True, False}
+    assert len({s.effect for s in specs if s.effect in dlr.OUT_OF_VOCAB}) >= 3
+    assert sum(s.effect == "clean" for s in specs) >= 6
 
 
 @pytest.mark.slow

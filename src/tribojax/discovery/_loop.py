@@ -6,7 +6,8 @@ model="history")`), μN and K_d fitted as logarithms; the force samples from the
 are compared. Its physics knobs (null 0) are those of `tribojax._loop_models.loop_force`:
 
 * "microslip" w: force (1 − w)·Jenkins + w·Mindlin (wu2015 Eq 2, same μN and K_d);
-* "load_slope" β: N(u) = N0(1 + βu/A), μN ∝ N, K_d ∝ N^0.7616 (wu2015 Eq 5);
+* "load_slope" β and "load_curve" γ: N(u) = N0(1 + βu/A + γ(u/A)²), μN ∝ N, K_d ∝ N^0.7616
+  (wu2015 Eq 5);
 * "viscous" c/c_ref: a force c·u̇, c_ref = (half peak-to-peak force)/(half peak-to-peak velocity);
 * "backlash" ε and "log_gap" ln(g/A): a clearance of travel g and depth ε in series with the
   contact (force zero across the gap at ε = 1; `_loop_models`), A the record's half
@@ -51,7 +52,7 @@ from ._loop_models import LoopData, LoopSpec, loop_branch, loop_force, prepare_l
 from ._regions import RHO_MAX, lag1, noise_estimate
 
 BRANCH_NAMES = {0: "unloading", 1: "loading"}
-_KNOBS = ("microslip", "load_slope", "viscous", "backlash", "log_gap")
+_KNOBS = ("microslip", "load_slope", "viscous", "backlash", "log_gap", "load_curve")
 GAP_GRID = tuple(np.geomspace(0.02, 1.2, 10).tolist())
 """Seeds of the backlash gap g as a fraction of the record's half peak-to-peak displacement A
 (score grid and refit starts; the refit fits g itself)."""
@@ -94,6 +95,7 @@ class LoopBaseline(AbstractBaseline):
             c=knobs[2] * self.record.c_scale,
             depth=knobs[3],
             gap=self.record.A * jnp.exp(knobs[4]),
+            gamma=knobs[5],
         )
         return loop_force(spec, self.record, check=False)
 
@@ -202,15 +204,32 @@ class ViscousDamping(AbstractEffect):
 
 @register_effect
 class NormalLoadVariation(AbstractEffect):
-    """Normal load varying with displacement, N(u) = N0(1 + β·u/A) (μN ∝ N, K_d ∝ N^0.7616,
-    wu2015 Eq 5); β = 0 null."""
+    """Normal load varying with displacement, N(u) = N0(1 + β·u/A) or N0(1 + β·u/A + γ·(u/A)²)
+    (`degrees` 1 and 2, both refitted, the lower BIC kept; μN ∝ N, K_d ∝ N^0.7616, wu2015 Eq 5);
+    β = γ = 0 null.
+
+    The linear term is a tilted counter-face; γ a load that rises (or falls) towards both ends of
+    the stroke (a curved or wavy face, a rocking fixture): it is even in u, so the score of the
+    linear term alone does not see it (measured on independent loops with N ∝ 1 + γ(u/A)²).
+    """
 
     name: ClassVar[str] = "normal_load_variation"
     kind: ClassVar[str] = "loop"
-    description: ClassVar[str] = "normal load linear in displacement, N0(1 + beta u/A)"
+    description: ClassVar[str] = "normal load varying with u: N0(1 + beta u/A + gamma (u/A)^2)"
+    degrees: tuple = (1, 2)
+    refit_starts: ClassVar[int] = 2  # every degree is refitted (the score cannot choose)
 
     def designs(self, baseline):
-        return _knob_design(baseline, "load_slope", ("beta",), ("1",), 1.0)
+        out = []
+        for deg in self.degrees:
+            gain = np.zeros((len(_KNOBS), deg))
+            for j, knob in enumerate(("load_slope", "load_curve")[:deg]):
+                gain[_KNOBS.index(knob), j] = 1.0
+            names = ("beta", "gamma")[:deg]
+            design = EffectDesign(names, ("1",) * deg, np.ones(deg), knob_gain=gain,
+                                  nuisance={"degree": float(deg)})  # fmt: skip
+            out.append(design)
+        return out
 
 
 @register_effect

@@ -12,10 +12,11 @@ One generalised element covers the baseline and every physical augmentation:
   (wu2015 Eq 2);
 * `microslip`: the force is (1 − w)·Jenkins + w·Mindlin with the same μN and K_d (both have initial
   slope K_d and gross-slip force μN); w = 0 is the baseline, w = 1 the full Mindlin law;
-* `normal_load_variation`: the normal load follows the displacement, N(u) = N0·(1 + β·u/A) (A: half
-  the record's peak-to-peak u), so μN scales by s(u) = 1 + βu/A and K_d by s(u)^0.7616 (the
-  exponent of wu2015 Eq 5, K_d ∝ N^0.7616); every Iwan slider's limit scales with μN and every
-  spring with K_d. β = 0 is the baseline;
+* `normal_load_variation`: the normal load follows the displacement, N(u) = N0·(1 + β·u/A +
+  γ·(u/A)²) (A: half the record's peak-to-peak u), so μN scales by s(u) = N(u)/N0 and K_d by
+  s(u)^0.7616 (the exponent of wu2015 Eq 5, K_d ∝ N^0.7616); every Iwan slider's limit scales with
+  μN and every spring with K_d. β = γ = 0 is the baseline (γ: a load that peaks or dips at both
+  ends of the stroke, e.g. a curved or wavy counter-face);
 * `viscous_damping`: c·u̇ added to the force (u̇ from the record's displacement by central
   differences); c = 0 is the baseline;
 * `backlash`: a clearance of total travel g (m) in series with the contact, of depth ε (—): every
@@ -123,15 +124,17 @@ class LoopSpec(eqx.Module):
     """Parameters of the generalised loop model (array leaves; the baseline has w = β = c = 0).
 
     Fields: mu_N (gross-slip force, N, > 0), K_d (tangential stiffness, N/m, > 0), w (microslip
-    weight, —; 0 Jenkins, 1 Mindlin), beta (normal-load gradient N(u) = N0(1 + βu/A), —, |β| < 1),
-    c (viscous coefficient, N·s/m), depth (backlash depth ε, —; 0 none, 1 a clean clearance),
-    gap (backlash clearance g, total travel of the drive across it, m, ≥ 0).
+    weight, —; 0 Jenkins, 1 Mindlin), beta and gamma (normal load N(u) = N0(1 + βu/A + γ(u/A)²),
+    —, N > 0 over the stroke), c (viscous coefficient, N·s/m), depth (backlash depth ε, —; 0
+    none, 1 a clean clearance), gap (backlash clearance g, total travel of the drive across it,
+    m, ≥ 0).
     """
 
     mu_N: jax.Array
     K_d: jax.Array
     w: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     beta: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+    gamma: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     c: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     depth: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     gap: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
@@ -147,17 +150,19 @@ def loop_force(
     """Model force (N) at the fitted samples of `data` for the parameters `spec`.
 
     `microslip=False` (static) skips the Mindlin bank (use it when w is identically 0: the result
-    is the same, at a fraction of the cost). `check=True` refuses a β that makes N(u) ≤ 0 and a
+    is the same, at a fraction of the cost). `check=True` refuses β, γ that make N(u) ≤ 0 and a
     gap < 0 (ValueError, or equinox's runtime error under jit); `check=False` (inside fits, where
     a trial step may overshoot) floors N(u)/N0 at S_MIN instead. References: wu2015 Eqs 1, 2, 5
     (see the module docstring).
     """
-    s = 1.0 + spec.beta * data.u / data.A
+    x = data.u / data.A
+    s = 1.0 + spec.beta * x + spec.gamma * x * x
     if check:
         s = fail_if(
             s,
             jnp.any(s <= 0.0),
-            "normal_load_variation: beta must keep N(u) = N0(1 + beta u/A) > 0, i.e. |beta| < 1",
+            "normal_load_variation: beta, gamma must keep N(u) = N0(1 + beta u/A + gamma (u/A)^2)"
+            " > 0 over the stroke",
         )
     s_safe = jnp.where(s > S_MIN, s, S_MIN)
     b = s_safe**KD_LOAD_EXPONENT
