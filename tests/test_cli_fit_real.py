@@ -39,6 +39,9 @@ def test_fit_epos_folder_as_one_curve(tmp_path, capsys):
     # the asymmetry: +3 % of 9.84 mN m in both directions
     assert res["parameters"]["T0"] == pytest.approx(0.03 * 9.84e-3, rel=0.02)
     assert set(res["per_direction"]) == {"positive", "negative"} and "nrmse" in res
+    # an explicit --max-steps is the budget (no floor overrides it): 2 LM steps do not converge
+    assert main(["fit", str(folder), "--out", str(tmp_path / "s"), "--max-steps", "2"]) == 1
+    assert json.loads((tmp_path / "s" / "fit.json").read_text())["converged"] is False
     # a model that does not apply to a curve, and a wrong --format, are bad input (2)
     assert main(["fit", str(folder), "--out", str(tmp_path / "p"), "--model", "jenkins"]) == 2
     assert "does not apply to a friction curve" in capsys.readouterr().err

@@ -42,6 +42,7 @@ __all__ = [
 BAD_INPUT = 2  # malformed input, a parameter out of range or a refused output
 FAILED = 1  # the computation failed (did not converge, the model could not be evaluated)
 INTERRUPTED = 130  # Ctrl-C (128 + SIGINT)
+ODE_FIT_STEPS = 200  # `tribojax fit` LM budget for slip-run and loop fits (an ODE solve a step)
 
 _PROG = ["tribojax"]  # "tribojax <cmd>" of the running subcommand, for messages
 

@@ -32,6 +32,7 @@ from .._io._slip_run import SlipRun, simulate_run
 from .._plot import pyplot, save_figure
 from ._common import (
     FAILED,
+    ODE_FIT_STEPS,
     CommandError,
     add_decimation_arguments,
     claim_outputs,
@@ -81,8 +82,9 @@ def add_arguments(parser) -> None:
     )
     parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
                         help="the record's format (default: detected)")  # fmt: skip
-    parser.add_argument("--max-steps", type=int, default=200,
-                        help="LM step budget (default 200; a friction curve: at least 2000)")
+    parser.add_argument("--max-steps", type=int, default=None,
+                        help=f"LM step budget (default {ODE_FIT_STEPS} for slip runs and loops; "
+                        "friction curves: the steady-law fit's own budget)")  # fmt: skip
     parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
     add_decimation_arguments(parser)
 
@@ -94,7 +96,7 @@ def run_fit(args) -> int:
     """
     path = Path(args.file)
     out = Path(args.out) if args.out is not None else Path("tribojax-out") / f"fit-{path.stem}"
-    if args.max_steps < 1:
+    if args.max_steps is not None and args.max_steps < 1:
         return error(f"--max-steps = {args.max_steps} must be at least 1")
     start = _parse_start(args.start)
     with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force):
@@ -239,8 +241,8 @@ def _fit_slip(run, args, start, reduction, note=None):
         sigma, how = run.noise_std, _reduced_sigma_source(reduction, "sidecar noise_std_m")
     else:
         sigma, how = None, "estimated from the residuals"
-    fit = fit_slip_run(run, alpha=alpha, max_steps=args.max_steps, start=start or None,
-                       progress=note)  # fmt: skip
+    steps = args.max_steps or ODE_FIT_STEPS
+    fit = fit_slip_run(run, alpha=alpha, max_steps=steps, start=start or None, progress=note)
     scale = run.noise_std if run.noise_std is not None else noise_scale(run.slip)
     resid = fit.residuals * scale  # model − data, m
     if sigma is None:
@@ -257,7 +259,8 @@ def _fit_slip(run, args, start, reduction, note=None):
 def _fit_loop(loop, args, start, reduction):
     if len(loop.t) <= 2:
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
-    fit = fit_loop(loop, args.element, model=args.model or "steady", max_steps=args.max_steps,
+    steps = args.max_steps or ODE_FIT_STEPS
+    fit = fit_loop(loop, args.element, model=args.model or "steady", max_steps=steps,
                    start=start or None)  # fmt: skip
     scale = loop.noise_std if loop.noise_std is not None else 1.0
     resid = fit.residuals * scale  # N, on the fitted samples (the last len(resid))

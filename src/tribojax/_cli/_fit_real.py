@@ -16,13 +16,9 @@ import numpy as np
 from .._fit._curve import fit_steady_curve
 from .._fit._history import HISTORY_MODELS, fit_history, predict_history
 from .._io._curve import FrictionCurve
-from ._common import CommandError
+from ._common import ODE_FIT_STEPS, CommandError
 
 ELEMENT_MODELS = tuple(HISTORY_MODELS)  # jenkins, mindlin, lugre, bouc_wen
-# A steady-law step costs microseconds once compiled; a curve whose Stribeck dip is not resolved
-# by its points (driveNo2: no point below v_s) walks β slowly towards a step (≈ 470 LM steps),
-# so a curve fit gets at least this budget whatever --max-steps (default 200, sized for ODE fits).
-CURVE_MIN_STEPS = 2000
 
 
 def bic(rss: float, n: int, p: int) -> float:
@@ -36,7 +32,8 @@ def fit_history_record(loop, model: str, args, start, summary):
     fits = {}
     for name in names:
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
-        fits[name] = fit_history(loop, name, start=given or None, max_steps=args.max_steps)
+        steps = args.max_steps or ODE_FIT_STEPS
+        fits[name] = fit_history(loop, name, start=given or None, max_steps=steps)
     pred = {k: predict_history(h, loop)[0] for k, h in fits.items()}
     n = len(loop.f)
     scores = {k: bic(float(np.sum((pred[k] - loop.f) ** 2)), n, len(h.fit.names))
@@ -61,8 +58,9 @@ def fit_curve_record(curve: FrictionCurve, model: str, args, summary):
     """Fit the LuGre steady law with a direction asymmetry to a friction curve."""
     if model not in ("lugre", "best"):
         raise CommandError(f"--model {model} does not apply to a friction curve; use lugre or best")
-    steps = max(args.max_steps, CURVE_MIN_STEPS)
-    fit = fit_steady_curve(curve, max_steps=steps)
+    # without --max-steps: the curve fit's own budget (a steady-law step costs microseconds)
+    steps = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    fit = fit_steady_curve(curve, **steps)
     resid = fit.residuals * curve.friction_error
     unit = curve.units["friction_unit"]
     sigma = float(np.median(curve.friction_error))
@@ -70,7 +68,7 @@ def fit_curve_record(curve: FrictionCurve, model: str, args, summary):
                 "per-point scatter / sqrt(samples)")  # fmt: skip
     sides = {}
     for side, sign in (("positive", 1), ("negative", -1)):
-        sides[side] = fit_steady_curve(curve, direction=sign, max_steps=steps).as_dict()
+        sides[side] = fit_steady_curve(curve, direction=sign, **steps).as_dict()
     d.update(model="lugre", nrmse=float(np.sqrt(np.mean(resid**2)) / np.std(curve.friction)),
              route="steady law with direction asymmetry T0", units=curve.units,
              per_direction=sides)  # fmt: skip
