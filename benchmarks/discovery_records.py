@@ -14,8 +14,9 @@ reading; `make_record(spec)` builds one record from a `RecordSpec` with its seed
 Strengths are drawn from ranges (none on a tribojax grid) scaled to what the record can show:
 the velocity effects to the clean record's peak slip speed v_pk (Stribeck v_s = 10^U(−0.5, 0.3)
 v_pk, F_c/F_s ∈ U(0.78, 0.88); viscous force at v_pk 2–5 % of F_s), additive effects to a peak of
-0.8–1.6 nm (a mode driven by the acceleration: its dynamic part q + a/ω², not the quasi-static
-slip ∝ a that K_τ absorbs). The first study (commit 8de909a) drew v_s from 0.4–2 µm/s and σ2 from
+0.8–1.6 nm (a mode driven by the acceleration is read as its dynamic part q + a/ω²: with its
+quasi-static part, a slip ∝ a that K_τ absorbs, scaled to 1 nm the ringing was below the noise).
+The first study (commit 8de909a) drew v_s from 0.4–2 µm/s and σ2 from
 12–20 C_τ whatever the load: at 2–10 kPa the slip speed stays far below such v_s and σ2·v is
 nearly C_τ·ż, so 9 of 65 in-vocabulary records held no misfit beyond the noise.
 
@@ -195,10 +196,10 @@ def make_record(spec: RecordSpec, *, with_noise: bool = True) -> tj.SlipRun:
             add = CubicSpline(knots, np.cumsum(rng.normal(size=knots.size)))(ts)
             add -= add[0]
     elif e == "vibration":
-        add = q
-        # scaled below by its dynamic part: the quasi-static response q ≈ −a/ω² (a slip ∝ a,
-        # which K_τ absorbs) of a stiff mode is not what makes a vibration visible
-        dyn = q + accel / (2 * np.pi * f_mode) ** 2 if sh == "accel_driven" else q
+        # accel_driven: the mode's dynamic deflection q + a/ω² (its quasi-static part −a/ω² is
+        # compensated, e.g. by the stage's feed-forward: what is left rings after each jerk);
+        # jerk_driven: the full response of a mode forced by the jerk
+        add = q + accel / (2 * np.pi * f_mode) ** 2 if sh == "accel_driven" else q
     elif e == "position_error":
         add = xs if sh == "linear" else xs**2
     elif e == "readout_step":
@@ -221,8 +222,7 @@ def make_record(spec: RecordSpec, *, with_noise: bool = True) -> tj.SlipRun:
         accel = np.interp(ts - lag, tk, ak)
     if np.any(add):
         add = add - add[0]
-        scale = np.max(np.abs(dyn - dyn[0])) if e == "vibration" else np.max(np.abs(add))
-        slip = slip + add * peak / scale
+        slip = slip + add * peak / np.max(np.abs(add))
     sd = NOISE[spec.noise]
     slip = slip + rng.normal(0.0, sd, ts.size) * with_noise
     return tj.SlipRun(t=ts, accel=accel, slip=slip, mass=MASS,

@@ -102,6 +102,10 @@ class LoopBaseline(AbstractBaseline):
     def noise_model(self, r):
         return cycle_noise(r, np.asarray(self.t), float(self.period), np.asarray(self.segment))
 
+    def signals(self):
+        return {"u (m)": np.asarray(self.x), "velocity (m/s)": np.asarray(self.record.v),
+                "time (s)": np.asarray(self.t)}  # fmt: skip
+
     def region_info(self, region):
         lo, hi = sorted((region["start"], region["end"]))
         return {"branch": region["segment"], "u_min": lo, "u_max": hi}
