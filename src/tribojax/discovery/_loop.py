@@ -48,11 +48,19 @@ from .._io._loop import HysteresisLoop
 from .._plot import pyplot
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign, register_effect
 from ._discover import DiscoveryReport, discover
-from ._loop_models import LoopData, LoopSpec, loop_branch, loop_force, prepare_loop
+from ._loop_models import (
+    KD_LOAD_EXPONENT,
+    LoopData,
+    LoopSpec,
+    loop_branch,
+    loop_force,
+    prepare_loop,
+)
 from ._regions import RHO_MAX, lag1, noise_estimate
 
 BRANCH_NAMES = {0: "unloading", 1: "loading"}
-_KNOBS = ("microslip", "load_slope", "viscous", "backlash", "log_gap", "load_curve")
+_KNOBS = ("microslip", "load_slope", "viscous", "backlash", "log_gap", "load_curve",
+          "kd_exponent")
 GAP_GRID = tuple(np.geomspace(0.02, 1.2, 10).tolist())
 """Seeds of the backlash gap g as a fraction of the record's half peak-to-peak displacement A
 (score grid and refit starts; the refit fits g itself)."""
@@ -78,6 +86,7 @@ class LoopBaseline(AbstractBaseline):
     def knob_null(self):
         null = np.zeros(len(_KNOBS))
         null[_KNOBS.index("log_gap")] = np.log(0.1)  # irrelevant while ε = 0
+        null[_KNOBS.index("kd_exponent")] = KD_LOAD_EXPONENT  # irrelevant while N(u) = N0
         return null
 
     def start(self):
@@ -96,6 +105,7 @@ class LoopBaseline(AbstractBaseline):
             depth=knobs[3],
             gap=self.record.A * jnp.exp(knobs[4]),
             gamma=knobs[5],
+            kd_exponent=knobs[6],
         )
         return loop_force(spec, self.record, check=False)
 
@@ -209,19 +219,23 @@ class ViscousDamping(AbstractEffect):
 @register_effect
 class NormalLoadVariation(AbstractEffect):
     """Normal load varying with displacement, N(u) = N0(1 + β·u/A) or N0(1 + β·u/A + γ·(u/A)²)
-    (`degrees` 1 and 2, both refitted, the lower BIC kept; μN ∝ N, K_d ∝ N^0.7616, wu2015 Eq 5);
-    β = γ = 0 null.
+    (`degrees` 1 and 2), μN ∝ N and K_d ∝ N^p with p = 0.7616 (wu2015 Eq 5) or p = 0 (a stiffness
+    that does not follow the load, `kd_exponents`); every combination is refitted and the lower
+    BIC kept; β = γ = 0 null, p a fixed nuisance of each design.
 
     The linear term is a tilted counter-face; γ a load that rises (or falls) towards both ends of
     the stroke (a curved or wavy face, a rocking fixture): it is even in u, so the score of the
-    linear term alone does not see it (measured on independent loops with N ∝ 1 + γ(u/A)²).
+    linear term alone does not see it (measured on independent loops with N ∝ 1 + γ(u/A)²). With
+    p = 0.7616 only, a load gradient at constant stiffness (independent loops, β ≈ 0.18) left
+    2.3 noise sd of misfit and a force offset was named first.
     """
 
     name: ClassVar[str] = "normal_load_variation"
     kind: ClassVar[str] = "loop"
     description: ClassVar[str] = "normal load varying with u: N0(1 + beta u/A + gamma (u/A)^2)"
     degrees: tuple = (1, 2)
-    refit_starts: ClassVar[int] = 2  # every degree is refitted (the score cannot choose)
+    kd_exponents: tuple = (KD_LOAD_EXPONENT, 0.0)
+    refit_starts: ClassVar[int] = 4  # every design is refitted (the score cannot choose)
 
     def designs(self, baseline):
         out = []
@@ -230,9 +244,11 @@ class NormalLoadVariation(AbstractEffect):
             for j, knob in enumerate(("load_slope", "load_curve")[:deg]):
                 gain[_KNOBS.index(knob), j] = 1.0
             names = ("beta", "gamma")[:deg]
-            design = EffectDesign(names, ("1",) * deg, np.ones(deg), knob_gain=gain,
-                                  nuisance={"degree": float(deg)})  # fmt: skip
-            out.append(design)
+            for p in self.kd_exponents:
+                design = EffectDesign(names, ("1",) * deg, np.ones(deg), knob_gain=gain,
+                                      knob_set={"kd_exponent": float(p)},
+                                      nuisance={"degree": float(deg), "kd_exponent": float(p)})
+                out.append(design)  # fmt: skip
         return out
 
 

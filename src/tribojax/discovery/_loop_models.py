@@ -14,9 +14,10 @@ One generalised element covers the baseline and every physical augmentation:
   slope K_d and gross-slip force μN); w = 0 is the baseline, w = 1 the full Mindlin law;
 * `normal_load_variation`: the normal load follows the displacement, N(u) = N0·(1 + β·u/A +
   γ·(u/A)²) (A: half the record's peak-to-peak u), so μN scales by s(u) = N(u)/N0 and K_d by
-  s(u)^0.7616 (the exponent of wu2015 Eq 5, K_d ∝ N^0.7616); every Iwan slider's limit scales with
-  μN and every spring with K_d. β = γ = 0 is the baseline (γ: a load that peaks or dips at both
-  ends of the stroke, e.g. a curved or wavy counter-face);
+  s(u)^p (p = 0.7616, the exponent of wu2015 Eq 5, K_d ∝ N^0.7616, or p = 0: a stiffness that does
+  not follow the load); every Iwan slider's limit scales with μN and every spring with K_d.
+  β = γ = 0 is the baseline (γ: a load that peaks or dips at both ends of the stroke, e.g. a
+  curved or wavy counter-face);
 * `viscous_damping`: c·u̇ added to the force (u̇ from the record's displacement by central
   differences); c = 0 is the baseline;
 * `backlash`: a clearance of total travel g (m) in series with the contact, of depth ε (—): every
@@ -29,7 +30,7 @@ One generalised element covers the baseline and every physical augmentation:
   y_j < (1 − ε)g/2 slips below its own force k_j·y_j).
 
 Rate-independent updates are exact: z_j ← clip(z_j + Δu, −L_j, L_j), L_j = y_j·a(u) + ε·g/2,
-f = Σ k_j·b(u)·(z_j − ε·clip(z_j, −g/2, g/2)) with a = s^(1−0.7616), b = s^0.7616 (a = b = 1
+f = Σ k_j·b(u)·(z_j − ε·clip(z_j, −g/2, g/2)) with a = s^(1−p), b = s^p (a = b = 1
 without load variation).
 """
 
@@ -125,7 +126,8 @@ class LoopSpec(eqx.Module):
 
     Fields: mu_N (gross-slip force, N, > 0), K_d (tangential stiffness, N/m, > 0), w (microslip
     weight, —; 0 Jenkins, 1 Mindlin), beta and gamma (normal load N(u) = N0(1 + βu/A + γ(u/A)²),
-    —, N > 0 over the stroke), c (viscous coefficient, N·s/m), depth (backlash depth ε, —; 0
+    —, N > 0 over the stroke), kd_exponent (p in K_d ∝ N^p, —; default wu2015 Eq 5's 0.7616),
+    c (viscous coefficient, N·s/m), depth (backlash depth ε, —; 0
     none, 1 a clean clearance), gap (backlash clearance g, total travel of the drive across it,
     m, ≥ 0).
     """
@@ -135,6 +137,7 @@ class LoopSpec(eqx.Module):
     w: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     beta: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     gamma: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+    kd_exponent: jax.Array = eqx.field(default_factory=lambda: jnp.asarray(KD_LOAD_EXPONENT))
     c: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     depth: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     gap: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
@@ -165,7 +168,7 @@ def loop_force(
             " > 0 over the stroke",
         )
     s_safe = jnp.where(s > S_MIN, s, S_MIN)
-    b = s_safe**KD_LOAD_EXPONENT
+    b = s_safe**spec.kd_exponent
     a = s_safe / b
     A0 = spec.mu_N / spec.K_d
     if microslip:  # one bank: the Jenkins element (weight 1 − w) and the Mindlin bank (w)
