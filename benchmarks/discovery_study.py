@@ -37,13 +37,21 @@ from benchmarks import discovery_records as dr  # noqa: E402
 OUT_OF_VOCAB = (*dr.OUT_OF_VOCAB, *dlr.OUT_OF_VOCAB)
 
 # the CI subset (records that pass in the stored study; the study itself is the measurement):
-# the first four are the CI form of tests/test_discovery_verdict.py (clean, a physics effect that
-# the baseline cannot absorb, Stribeck, out of vocabulary), TRIBOJAX_FULL=1 runs them all
-CI_LABELS = (
+# CI_SHORT is the CI form of tests/test_discovery_verdict.py (slip: clean, a physics effect that
+# the baseline cannot absorb, Stribeck, out of vocabulary; loops: a quadratic load variation at
+# constant stiffness and a lag between the channels), TRIBOJAX_FULL=1 runs CI_LABELS
+CI_SHORT = (
     "clean/- 0.6kPa paper low s1066",
     "load_coupling/exponents_0.8_1.2 2kPa paper high est s1032",
     "stribeck/exponential 0.6kPa paper low s1036",
     "readout_step/- 2kPa paper high est s1085",
+    "loop:normal_load_variation/quadratic high est s2024",
+    "loop:channel_lag/- low s2035",
+)
+CI_LABELS = (
+    *CI_SHORT,
+    "loop:clean/- high est s2032",
+    "loop:microslip/iwan_power high est s2006",
     "vibration/accel_driven 0.6kPa paper low s1016",
     "position_error/linear 2kPa fast low est s1060",
     "sensor_drift/thermal 0.6kPa paper low s1006",
@@ -80,6 +88,10 @@ def run_one(spec) -> dict:
            "excess_after_sd": rep.excess_rmse_after / sd,
            "F_s": rep.baseline_fit["parameters"].get("F_s"), "converged": rep.converged,
            "seconds": wall}  # fmt: skip
+    corr = rep.misfit.get("correlations") or []
+    row["misfit_signals"] = [c["signal"] for c in corr]  # largest |correlation| first
+    fix = rep.misfit.get("correction") or {}
+    row["correction"] = {k: fix.get(k) for k in ("signal", "gap_closed")} if fix else None
     row["ok"] = score(spec, rep.verdict, rep.effect, rep.excess_rmse_before,
                       rep.excess_rmse_after)  # fmt: skip
     return row
