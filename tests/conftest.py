@@ -41,8 +41,8 @@ SHARED_COMPILE = {
     "test_cli_discover.py": "slip_discovery",
 }
 WEIGHT_S = {
-    "test_docs.py": 560, "test_reproduce.py": 195, "slip_discovery": 190,
-    "test_discovery_slip.py": 120, "test_fit_chain.py": 142, "test_slip.py": 91,
+    "test_docs.py": 560, "test_reproduce.py": 195, "slip_discovery": 220,
+    "test_discovery_slip.py": 75, "test_fit_chain.py": 142, "test_slip.py": 91,
     "test_sensitivity.py": 75, "test_fit_user.py": 59, "test_mhb_excitation.py": 58,
     "test_contact.py": 53, "test_mhb.py": 32, "test_fitting_studies.py": 31, "test_cli_fit.py": 29,
     "test_real_discovery_brfd.py": 25,
