@@ -4,6 +4,7 @@ records with hidden effects (tribojax.discovery.synthetic; full confusion table 
 import os
 
 import diffrax as dfx
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -88,11 +89,13 @@ def test_predict_derivatives_match_finite_differences():
     f = jax.jit(lambda v: b.predict(v[:3], v[3:]))
     v0 = jnp.concatenate([th, kn])
     J = jax.jacfwd(f)(v0)
-    # the split Jacobian the fits use (ODE over its own knobs, the mode term over its knobs)
-    # (eager here, jit above: an adaptive step decision can flip; measured <= 7e-4 of a column)
-    _, jb, jk = b.value_and_jacobians(th, kn)
+    # the split Jacobian the fits use (ODE over its own knobs, the mode term over its knobs),
+    # compiled as the fits compile it: equal to jacfwd of predict (measured: exactly). Eager
+    # against jit differs by up to 3.7 % of a column (an adaptive step decision flips between
+    # the two compilations and the ratchet keeps it), so both sides are jitted here.
+    _, jb, jk = eqx.filter_jit(lambda t, k: b.value_and_jacobians(t, k))(th, kn)
     err = np.max(np.abs(np.concatenate([jb, jk], axis=1) - J), axis=0)
-    assert np.all(err <= 3e-3 * np.max(np.abs(J), axis=0) + 1e-20)
+    assert np.all(err <= 1e-9 * np.max(np.abs(J), axis=0) + 1e-20)
     h = 1e-3
     for i in range(v0.size):
         e = jnp.zeros(v0.size).at[i].set(h)
