@@ -122,6 +122,16 @@ def _pack(baseline, designs):
     return base, gain, basis
 
 
+def _error_text(err) -> str:
+    """The message of an `equinox.EquinoxRuntimeError` (the line naming it, not the stack
+    headers and debugging hints around it)."""
+    lines = [ln.strip() for ln in str(err).splitlines() if ln.strip()]
+    for ln in lines:
+        if "EquinoxRuntimeError:" in ln:
+            return ln.split("EquinoxRuntimeError:", 1)[1].strip()[:300]
+    return (lines or [""])[0][:300]
+
+
 GAIN_TOL = 1e-2  # converged: a Gauss–Newton step would lower the cost by < 0.01 residual variances
 NOISE_TOL = 1.0  # stationary: a rejected step promised < 1 residual variance (evaluation noise)
 
@@ -228,7 +238,7 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=MAX_STEPS) -> 
                                 *(f"s{i}" for i in range(K_MAX))), jac="fwd",
                                 solver=_SOLVER, max_steps=max_steps)  # fmt: skip
     except eqx.EquinoxRuntimeError as err:  # a check inside the model: not a trial rejection
-        return failed(f"the model raised inside the fit: {str(err).splitlines()[0]}")
+        return failed(f"the model raised inside the fit: {_error_text(err)}")
     x = (d * res.theta)[:npar]
     r, J = res.residuals[:n], (res.jacobian / d)[:n, :npar]
     cost = float(r @ r)

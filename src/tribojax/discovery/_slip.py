@@ -46,10 +46,11 @@ from ._core import AbstractBaseline, DiscoveryData
 from ._modes import _oscillator
 
 KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling",
-         "mode_q", "mode_qdot", "mode_log_f", "mode_logit_zeta")  # fmt: skip
+         "mode_q", "mode_qdot", "mode_log_f", "mode_logit_zeta", "mode_static")  # fmt: skip
 ZETA_MAX = 0.3  # damping ratio bound of a structural mode (above: a low-pass of a(t), not a mode)
 N_ODE_KNOBS = 4  # the knobs of the friction element; the mode's knobs act on the reading
 F_MAX_OVER_DRIVE = 100.0  # bound of F_s in units of m·max|a| (beyond: slip ∝ (m a/F_s)², tiny)
+LOG10_VS_RANGE = (-12.0, 3.0)  # bound of log10 v_s (m/s) in the fit
 VS_GRID = tuple(10.0 ** np.arange(-7.0, -3.4, 0.5))  # m/s, Stribeck velocity grid
 
 
@@ -113,7 +114,7 @@ class SlipBaseline(AbstractBaseline):
     t_end: float = eqx.field(static=True)  # s, the last sample (a solver setting)
 
     def knob_null(self):
-        return np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0, np.log(50.0), 0.0])
+        return np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0, np.log(50.0), 0.0, 1.0])
 
     def start(self):
         F, K, C = np.asarray(self.start_values, dtype=float)
@@ -146,18 +147,24 @@ class SlipBaseline(AbstractBaseline):
 
     def element(self, theta, knobs):
         F_s, K, C = self.physical(theta)
+        # v_s within [1e-12, 1e3] m/s: a trial step of the fit cannot underflow it to 0
+        log_vs = jnp.clip(knobs[2], LOG10_VS_RANGE[0], LOG10_VS_RANGE[1])
         return AugmentedPreSlip(F_s, K, C, jnp.abs(knobs[0]) * self.sigma_ref, knobs[1],
-                                10.0 ** knobs[2], knobs[3], self.profile)  # fmt: skip
+                                10.0**log_vs, knobs[3], self.profile)  # fmt: skip
 
     def _solve(self, theta, knobs):
         return simulate_slip(self.element(theta, knobs), self.profile, self.mass, ts=self.t,
                              t_end=self.t_end, adjoint=dfx.ForwardMode(), throw=False)  # fmt: skip
 
     def _mode(self, km):
-        """The mode term of the reading: A_q·q/rms(q) + A_q̇·q̇/rms(q̇), m, for knobs
-        (A_q, A_q̇, log f, logit ζ/`ZETA_MAX`) (`_oscillator`, the `Vibration` effect's shape)."""
+        """The mode term of the reading: A_q·q_s/rms(q_s) + A_q̇·q̇/rms(q̇), m, for knobs
+        (A_q, A_q̇, log f, logit ζ/`ZETA_MAX`, s) (`_oscillator`, the `Vibration` effect's
+        shape), q_s = q + (1 − s)·a/ω²: s = 1 the full response q, s = 0 its dynamic part (the
+        quasi-static deflection −a/ω² compensated, e.g. by a feed-forward)."""
         zeta = ZETA_MAX * jax.nn.sigmoid(km[3:4])
-        q = _oscillator(self.t, self.accel, 2 * jnp.pi * jnp.exp(km[2:3]), zeta)[0]
+        omega = 2 * jnp.pi * jnp.exp(km[2:3])
+        q = _oscillator(self.t, self.accel, omega, zeta)[0]
+        q = q.at[:, 0].add((1.0 - km[4]) * self.accel / omega[0] ** 2)
         rms = jnp.sqrt(jnp.mean(q * q, axis=0)) + 1e-300
         return q[:, 0] / rms[0] * km[0] + q[:, 1] / rms[1] * km[1]
 
