@@ -64,6 +64,25 @@ def test_oscillator_matches_scipy_radau():
             assert np.max(np.abs(qi - ref)) < 1e-6 * np.max(np.abs(ref))
 
 
+def test_mode_term_forms_against_scipy():
+    """The vibration term's two forms (`SlipBaseline._mode`): static 1 the full response q,
+    static 0 its dynamic part q + a/ω², against SciPy DOP853 of the mode equation."""
+    run = syn.hidden_effect_run("clean", 0.0, 0.6, n=N_CI)
+    b = disc.slip_baseline(run)
+    t = np.asarray(b.t)
+    f, zeta = 23.7, 0.045
+    q = syn._oscillator_scipy(t, syn.HIDDEN_PROFILE, f, zeta)
+    a = np.asarray(syn.HIDDEN_PROFILE.acceleration(t))
+    u = np.log(zeta / (ds.ZETA_MAX - zeta))
+    for static, ref in ((1.0, q), (0.0, q + a / (2 * np.pi * f) ** 2)):
+        got = np.asarray(b._mode(jnp.array([1e-9, 0.0, np.log(f), u, static])))
+        want = 1e-9 * ref / np.sqrt(np.mean(ref**2))
+        assert np.max(np.abs(got - want)) < 1e-5 * 1e-9
+    # the dynamic part is the ringing, smaller than the quasi-static deflection −a/ω² (0.25x
+    # here: this drive's ramps are short)
+    assert np.std(q + a / (2 * np.pi * f) ** 2) < 0.3 * np.std(q)
+
+
 def test_stage_travel_is_exact_for_piecewise_linear_drive():
     prof = tj.TrapezoidProfile()  # v_max 0.5 m/s, symmetric: back at rest at 2.15 s
     t = np.linspace(0, 2.3, 461)
@@ -84,8 +103,10 @@ def test_predict_derivatives_match_finite_differences():
     run = syn.hidden_effect_run("clean", 0.0, 0.6, n=N_CI)
     b = disc.slip_baseline(run)
     th = jnp.log(jnp.array([F, K, C]))
-    # the friction knobs, then the mode term's (A_q, A_q̇ in m, log f, logit ζ/ζ_max)
-    kn = jnp.array([0.5, 0.1, -6.0, 0.2, 2e-9, -1e-9, np.log(40.0), 0.3])
+    # the friction knobs, then the mode term's (A_q, A_q̇ in m, log f, logit ζ/ζ_max, static
+    # part: 0.4 between the dynamic part and the full response)
+    kn = jnp.array([0.5, 0.1, -6.0, 0.2, 2e-9, -1e-9, np.log(40.0), 0.3, 0.4])
+    assert kn.size == len(b.knob_names)
     f = jax.jit(lambda v: b.predict(v[:3], v[3:]))
     v0 = jnp.concatenate([th, kn])
     J = jax.jacfwd(f)(v0)

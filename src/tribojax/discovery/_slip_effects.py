@@ -110,7 +110,7 @@ class Vibration(AbstractEffect):
     fitted jointly with the amplitudes in the refit (knobs `mode_*`).
 
     Measured on an independent record (a 48.5 Hz mode's dynamic part, 20 kPa): with the full
-    response q alone the refit had to cancel q's quasi-static part (≈ 10⁴ times the ringing)
+    response q alone the refit had to cancel q's quasi-static part (≈ 100 times the ringing)
     against K_τ and stopped where it started; `static` 0 is its shape.
     """
 
