@@ -197,6 +197,11 @@ class AbstractEffect(eqx.Module):
         the Rao statistic at the current fit. Default: no refinement."""
         return design
 
+    def reject(self, nuisance: dict) -> str | None:
+        """A reason why a refit with these fitted nuisance values is not this effect (it is
+        then not accepted), or None. Default: None."""
+        return None
+
 
 _REGISTRY: dict[str, dict[str, type]] = {}
 

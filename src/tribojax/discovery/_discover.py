@@ -222,6 +222,7 @@ def discover(
         if e.kind != baseline.kind:
             raise ValueError(f"effect {e.name!r} is for {e.kind!r} records, not {baseline.kind!r}")
     names = [e.name for e in effects]
+    by_name = {e.name: e for e in effects}
     if len(set(names)) != len(names):
         raise ValueError(f"effects: duplicate names in {names}")
     data = baseline.data()
@@ -333,6 +334,11 @@ def discover(
                     d, new = dd, f
                 if new.converged and consistent(new):
                     break  # at the noise: further starts cannot do better
+            why = (by_name[c["name"]].reject(_strengths(baseline, new)[c["name"]]["nuisance"])
+                   if new.converged and np.isfinite(new.rss) else None)  # fmt: skip
+            if why:
+                c["refit_message"] = why
+                continue
             if new.converged and np.isfinite(new.rss) and consistent(new):
                 dk_explains = min(dk_explains, d.k + d.n_nuisance)
             if not new.converged or not np.isfinite(new.rss):
