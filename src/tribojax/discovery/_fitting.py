@@ -241,12 +241,16 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=MAX_STEPS) -> 
         return failed(f"the model raised inside the fit: {_error_text(err)}")
     x = (d * res.theta)[:npar]
     r, J = res.residuals[:n], (res.jacobian / d)[:n, :npar]
-    cost = float(r @ r)
-    g = J.T @ r
-    pred = float(g @ np.linalg.lstsq(J.T @ J, g, rcond=1e-12)[0])
-    s2 = max(cost / max(n - npar, 1), 1.0)
     if np.all(r == bad):
         return failed("the model is not finite at the optimum", res.steps)
+    cost = float(r @ r)
+    g, JTJ = J.T @ r, J.T @ J
+    if not (np.all(np.isfinite(JTJ)) and np.all(np.isfinite(g)) and np.isfinite(cost)):
+        # (measured: an independent drift record where a refit ended at a point whose
+        # Jacobian overflowed, and the statistics' least squares raised LinAlgError)
+        return failed("the model's Jacobian is not finite at the optimum", res.steps)
+    pred = float(g @ np.linalg.lstsq(JTJ, g, rcond=1e-12)[0])
+    s2 = max(cost / max(n - npar, 1), 1.0)
     converged, message = res.converged, ""
     if not res.converged:
         message = (f"no convergence in max_steps = {max_steps} steps" if res.steps >= max_steps
