@@ -228,3 +228,14 @@ def test_cli_contact_never_tracebacks(D, G, load):
         assert len(lines) == 1, cap.err
     if code == 0:
         assert math.isfinite(float(load)) and float(load) > 0
+
+
+@pytest.mark.parametrize("text", ["INF", "1.0\nnan\n2.0", "0.1 0.2\n-inf 0.3\n"])
+def test_plain_topography_reader_refuses_non_finite_values(tmp_path, text):
+    """float() reads "inf"/"nan": the reader names the file and line instead of returning them
+    (found by the hypothesis test above: the file "INF" gave heights [inf])."""
+    path = tmp_path / "surf.txt"
+    path.write_text(text)
+    with pytest.raises(tj.DataFileError, match=r"surf\.txt, line \d+: .*not a finite number"):
+        tj.read_topography(path, instrument=False, dx=1e-6)
+    assert path.read_text() == text  # nothing the user gave is overwritten

@@ -109,6 +109,9 @@ def _read_plain(path: Path, dx, unit: str) -> Topography:
         z = np.asarray(z, dtype=np.float64)
         if z.ndim not in (1, 2):
             raise DataFileError(f"{path}: expected a 1-D or 2-D array, got shape {z.shape}")
+        if not np.all(np.isfinite(z)):
+            bad = np.argwhere(~np.isfinite(z))[0].tolist()
+            raise DataFileError(f"{path}: the value at index {bad} is not a finite number")
         return Topography(z * s, dx=dx * s, dy=None if z.ndim == 1 else dx * s, source=path.name)
     rows, width = [], None
     lines = read_text(path).splitlines()
@@ -123,6 +126,9 @@ def _read_plain(path: Path, dx, unit: str) -> Topography:
             if not rows:  # one header line is allowed
                 continue
             raise DataFileError(f"{path}, line {lineno}: {text[:60]!r} is not a row of numbers")
+        if not all(np.isfinite(row)):  # float() takes "inf" and "nan"
+            raise DataFileError(f"{path}, line {lineno}: {text[:60]!r} holds a value that is "
+                                "not a finite number")  # fmt: skip
         if width is not None and len(row) != width:
             raise DataFileError(
                 f"{path}, line {lineno}: {len(row)} values, earlier rows have {width}"
