@@ -122,3 +122,14 @@ def test_import_enables_float64():
     code = "import tribojax, jax.numpy as jnp; print(jnp.asarray(1.0).dtype)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "float64"
+
+
+def test_runtime_message_is_the_check_text_alone(model):
+    from tribojax._checks import runtime_message
+
+    f = eqx.filter_jit(lambda m, F: m(F).K_tau)
+    with pytest.raises(eqx.EquinoxRuntimeError) as info:
+        f(model, -1.0)
+    msg = runtime_message(info.value)
+    assert msg.startswith("load is outside the allowed range") and "\n" not in msg
+    assert runtime_message(RuntimeError("first line\nsecond")) == "first line"

@@ -69,3 +69,14 @@ def fail_if(x, bad, message: str):
             raise ValueError(message)
         return x
     return eqx.error_if(x, bad, message)
+
+
+def runtime_message(exc: BaseException) -> str:
+    """The check's own message from an `equinox.error_if` failure raised inside jit (the text
+    after the last "EquinoxRuntimeError:", without the trace and debugging hints), or the first
+    line of any other exception."""
+    text = str(exc)
+    key = "EquinoxRuntimeError:"
+    if key in text:
+        return text[text.rindex(key) + len(key) :].split("\n\n")[0].strip()
+    return (text.strip().splitlines() or [type(exc).__name__])[0].strip()

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import equinox as eqx
 
+from .._checks import runtime_message
 from .._fit._decimate import DECIMATION_MAX_SAMPLES, decimate_record
 from .._io._files import sidecar_path, write_json_atomic
 
@@ -66,15 +67,6 @@ def warn(message: str, err=None) -> None:
     print(f"{_PROG[0]}: warning: {message}", file=sys.stderr if err is None else err)
 
 
-def _equinox_message(exc) -> str:
-    """The check's own message from an `equinox.error_if` failure (without the JIT trace)."""
-    text = str(exc)
-    key = "EquinoxRuntimeError: "
-    if key in text:
-        text = text[text.rindex(key) + len(key) :]
-    return text.split("\n\n")[0].strip()
-
-
 def describe(exc: BaseException) -> tuple[int, str]:
     """(exit status, one-line message) for an exception raised by a subcommand."""
     if isinstance(exc, CommandError):
@@ -84,7 +76,7 @@ def describe(exc: BaseException) -> tuple[int, str]:
     if isinstance(exc, ValueError):  # DataFileError and every range check
         return BAD_INPUT, str(exc)
     if isinstance(exc, eqx.EquinoxRuntimeError):
-        msg = _equinox_message(exc)
+        msg = runtime_message(exc)
         return (BAD_INPUT if "allowed range" in msg else FAILED), msg
     return FAILED, f"the computation failed: {type(exc).__name__}: {exc} (--debug shows where)"
 

@@ -51,7 +51,7 @@ from .._chain import SLIP_MAX_STEPS as SLIP_MAX_STEPS
 from .._chain import SLIP_RTOL as SLIP_RTOL
 from .._chain import chain_contact as chain_contact
 from .._chain import chain_phase_slips, mu_min, to_physical, to_theta, wang2022_loads
-from .._checks import as_f64
+from .._checks import as_f64, runtime_message
 from .._io._tables import wang2022_table
 from .._presets import CHAIN_DEFAULTS
 from .._results import RESULTS, result_name
@@ -361,10 +361,8 @@ def fit_measured_slips(
     except RuntimeError as err:  # equinox runtime errors inside the compiled fit
         _PROGRESS["on"] = False
         last = dict(zip(PARAMETERS, _PROGRESS.get("last", [])))
-        lines = str(err).splitlines() or [type(err).__name__]
-        cause = next((ln for ln in lines if "EquinoxRuntimeError:" in ln), lines[0])
         raise ChainFitError(
-            f"the full-chain fit failed at the trial point {last}: {cause.strip()} "
+            f"the full-chain fit failed at the trial point {last}: {runtime_message(err)} "
             "(a runtime check inside the chain failed at this trial point; try another start)"
         ) from err
     wall = time.perf_counter() - t0

@@ -18,6 +18,7 @@ import numpy as np
 import optimistix as optx
 
 from .._fit._engine import FAILED_RESIDUAL, fit_statistics, least_squares_fit, value_and_jacobian
+from .._checks import runtime_message
 from .._fit._solver import quiet
 from .._precision import ensure_x64
 from ._core import K_MAX, AbstractBaseline, EffectDesign
@@ -120,16 +121,6 @@ def _pack(baseline, designs):
             basis[:, j : j + d.k] = d.basis
         j += d.k
     return base, gain, basis
-
-
-def _error_text(err) -> str:
-    """The message of an `equinox.EquinoxRuntimeError` (the line naming it, not the stack
-    headers and debugging hints around it)."""
-    lines = [ln.strip() for ln in str(err).splitlines() if ln.strip()]
-    for ln in lines:
-        if "EquinoxRuntimeError:" in ln:
-            return ln.split("EquinoxRuntimeError:", 1)[1].strip()[:300]
-    return (lines or [""])[0][:300]
 
 
 GAIN_TOL = 1e-2  # converged: a Gauss–Newton step would lower the cost by < 0.01 residual variances
@@ -238,7 +229,7 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=MAX_STEPS) -> 
                                 *(f"s{i}" for i in range(K_MAX))), jac="fwd",
                                 solver=_SOLVER, max_steps=max_steps)  # fmt: skip
     except eqx.EquinoxRuntimeError as err:  # a check inside the model: not a trial rejection
-        return failed(f"the model raised inside the fit: {_error_text(err)}")
+        return failed(f"the model raised inside the fit: {runtime_message(err)[:300]}")
     x = (d * res.theta)[:npar]
     r, J = res.residuals[:n], (res.jacobian / d)[:n, :npar]
     if np.all(r == bad):
