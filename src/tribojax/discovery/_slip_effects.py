@@ -123,9 +123,10 @@ class Vibration(AbstractEffect):
     refit_starts: ClassVar[int] = 2  # the best design by score, and the best of the other form
 
     def design(self, baseline, f, z, static=1.0):
-        return self._designs(baseline, [(f, z)], static)[0]
+        return self._designs(baseline, [(f, z)], (static,))[0]
 
-    def _designs(self, baseline, pairs, static):
+    def _designs(self, baseline, pairs, statics):
+        """Designs for every (f, z) pair in each static form (the oscillator runs once)."""
         ys = _y_scale(baseline)
         f, z = np.asarray(pairs, dtype=float).reshape(-1, 2).T
         qs = np.asarray(_oscillator(baseline.t, baseline.accel, 2 * np.pi * f, z))
@@ -134,7 +135,7 @@ class Vibration(AbstractEffect):
         for j, (kn, g) in enumerate(zip(KNOBS[N_ODE_KNOBS:], (ys, ys, 1.0, 1.0))):
             gain[KNOBS.index(kn), j] = g
         out = []
-        for q, fi, zi in zip(qs, f, z):
+        for static, (q, fi, zi) in ((s, x) for s in statics for x in zip(qs, f, z)):
             q0 = q[:, 0] + (1.0 - static) * a / (2 * np.pi * fi) ** 2
             out.append(EffectDesign(
                 ("A_q", "A_qdot", "log_f_shift", "logit_zeta_shift"), ("m", "m", "1", "1"),
@@ -163,7 +164,7 @@ class Vibration(AbstractEffect):
 
     def designs(self, baseline):
         pairs = [(f, z) for f in self.frequencies(baseline) for z in self.zetas]
-        return [d for st in self.statics for d in self._designs(baseline, pairs, st)]
+        return self._designs(baseline, pairs, self.statics)
 
     def refine(self, baseline, design, score):
         f0, z0 = design.nuisance["f_Hz"], design.nuisance["zeta"]
