@@ -219,7 +219,7 @@ def report_step(shown, accepted, steps, cost, gn_step):
 def _solve(residual_fn, theta0, args, solver, max_steps, jac):
     # jitted here so that a module-level `residual_fn` (hashed by identity) is compiled once and
     # a repeated fit with new data in `args` runs warm
-    return optx.least_squares(
+    sol = optx.least_squares(
         residual_fn,
         solver,
         theta0,
@@ -228,6 +228,13 @@ def _solve(residual_fn, theta0, args, solver, max_steps, jac):
         max_steps=max_steps,
         throw=False,
     )
+    # a Gauss–Newton solver's state holds the residual and its linearisation at the returned
+    # point: the statistics take them from there instead of evaluating the model again
+    info = getattr(sol.state, "f_info", None)
+    final = None
+    if jac == "fwd" and isinstance(info, optx.FunctionInfo.ResidualJac):
+        final = (info.residual, info.jac.as_matrix())
+    return sol, final
 
 
 @eqx.filter_jit
@@ -295,12 +302,12 @@ def least_squares_fit(
     if progress is not None:
         _PROGRESS.append((progress, time.perf_counter()))
     try:
-        sol = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
+        sol, final = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
     finally:
         if progress is not None:
             _PROGRESS.pop()
     theta = sol.value
-    r, J = value_and_jacobian(residual_fn, theta, args)
+    r, J = final if final is not None else value_and_jacobian(residual_fn, theta, args)
     r, J = np.asarray(r), np.asarray(J)
     result, message = RESULTS.promote(sol.result), None
     if np.any(r == FAILED_RESIDUAL) or not (np.all(np.isfinite(r)) and np.all(np.isfinite(J))):

@@ -12,7 +12,7 @@ from ._core import (
     AbstractEffect,
     default_effects,
 )
-from ._fitting import _columns, _delta_bic, _fit, _score
+from ._fitting import _columns, _delta_bic, _fit, _score, prefetch_columns, speculatively
 from ._refits import MAX_MOVES, _bic, _moved_optimum, _refit, _seeds, _sharpen
 from ._regions import ar1_inflation, chi2_sf, find_regions, noise_estimate, residual_rho
 from ._report import DiscoveryReport, _fit_dict, _rmse, _strengths
@@ -167,6 +167,9 @@ def discover(
         r = (y - state.yhat) / scale
         J_cur = state.jac
         cache: dict = {}
+        room = K_MAX - sum(d.k for d in state.designs)
+        prefetch_columns(baseline, state, [d for e in effects if e.name not in state.names
+                                           for d in grids[e.name] if d.k <= room], cache)  # fmt: skip
         cands = []
         for e in effects:
             if e.name in state.names:
@@ -222,13 +225,16 @@ def discover(
                 # this one could not beat its ΔBIC by more than the noise allows
                 c["refit_message"] = "not refitted: a candidate with fewer parameters explains"
                 continue
-            for dd in (d, *c["_seeds"]):  # several starts: the best grid points by score
-                f = _refit(baseline, state, dd, c["name"], y, scale, r, cache)
-                if new is None or (f.converged and not _bic(f, dd, n) >= _bic(new, d, n)) \
-                        or not new.converged:
-                    d, new = dd, f
-                if new.converged and consistent(new):
-                    break  # at the noise: further starts cannot do better
+            starts = (d, *c["_seeds"])  # several starts: the best grid points by score
+            with speculatively([lambda dd=dd: _refit(baseline, state, dd, c["name"], y, scale,
+                                                     r, cache) for dd in starts]) as refits:
+                for dd, fut in zip(starts, refits):
+                    f = fut.result()
+                    if new is None or (f.converged and not _bic(f, dd, n) >= _bic(new, d, n)) \
+                            or not new.converged:
+                        d, new = dd, f
+                    if new.converged and consistent(new):
+                        break  # at the noise: further starts cannot do better
             why = (by_name[c["name"]].reject(_strengths(baseline, new)[c["name"]]["nuisance"])
                    if new.converged and np.isfinite(new.rss) else None)  # fmt: skip
             if why:

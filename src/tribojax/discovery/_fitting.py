@@ -9,7 +9,10 @@ record shape. The solver is optimistix Levenberg–Marquardt with the discovery 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import os
+from concurrent.futures import ThreadPoolExecutor
 
 import equinox as eqx
 import jax
@@ -17,8 +20,8 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
-from .._fit._engine import FAILED_RESIDUAL, fit_statistics, least_squares_fit, value_and_jacobian
 from .._checks import runtime_message
+from .._fit._engine import FAILED_RESIDUAL, fit_statistics, least_squares_fit, value_and_jacobian
 from .._fit._solver import quiet
 from .._precision import ensure_x64
 from ._core import K_MAX, AbstractBaseline, EffectDesign
@@ -183,6 +186,49 @@ class _DiscoveryLM(optx.AbstractGaussNewton):
 _SOLVER = _DiscoveryLM(rtol=1e-8, atol=1e-10)
 
 
+# fits run side by side on this many threads (default: the CPU count, at most 4). A fit is one
+# compiled solve whose ODE steps run on one core, and JAX releases the GIL while it runs, so
+# independent fits (the starts of one refit) use the other cores; their results are the same
+# numbers as one after another.
+FIT_WORKERS = int(os.environ.get("TRIBOJAX_FIT_WORKERS", 0)) or min(4, os.cpu_count() or 1)
+_POOL: list = []
+
+
+def in_parallel(calls, wait=True):
+    """Run the zero-argument `calls` on `FIT_WORKERS` threads; their results in order (or the
+    futures, `wait=False`). Calls must not themselves call `in_parallel`."""
+    if FIT_WORKERS <= 1 or len(calls) <= 1 and wait:
+        futures = [_Lazy(c) for c in calls]  # run when read
+    else:
+        if not _POOL:
+            _POOL.append(ThreadPoolExecutor(FIT_WORKERS, thread_name_prefix="tribojax-fit"))
+        futures = [_POOL[0].submit(c) for c in calls]
+    return [f.result() for f in futures] if wait else futures
+
+
+@contextlib.contextmanager
+def speculatively(calls):
+    """Start every zero-argument call on its own thread (each may use `in_parallel`); yields
+    their futures, to be read in order; on exit the ones not started are cancelled and the
+    running ones finish unread (a loop that stops at the first good result)."""
+    if len(calls) <= 1 or FIT_WORKERS <= 1:
+        yield [_Lazy(c) for c in calls]
+        return
+    ex = ThreadPoolExecutor(len(calls), thread_name_prefix="tribojax-start")
+    try:
+        yield [ex.submit(c) for c in calls]
+    finally:
+        ex.shutdown(wait=False, cancel_futures=True)
+
+
+@dataclasses.dataclass
+class _Lazy:
+    call: object
+
+    def result(self):
+        return self.call()
+
+
 MAX_STEPS = 128  # step budget of every discovery fit (accepted and rejected; one compile)
 
 
@@ -286,23 +332,54 @@ def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
     return out
 
 
-def _columns(baseline, state: _State, design: EffectDesign, knob_cache: dict) -> np.ndarray:
-    """∂y/∂s of `design` added to the fitted `state` (n, k), output units."""
+def _design_knobs(baseline, state: _State, design: EffectDesign):
+    """The knob vector at which `design`'s columns need ∂y/∂knobs (None: they do not)."""
+    if design.columns is not None or design.knob_gain is None or not np.any(design.knob_gain):
+        return None
     base, gain, _ = _pack(baseline, state.designs)
     p = len(baseline.param_names)
     knobs = base + gain[:, : state.theta.size - p] @ state.theta[p:]
     for key, value in design.knob_set.items():
         knobs[baseline.knob_names.index(key)] = value
+    return knobs
+
+
+def _knob_key(knobs):
+    return tuple(np.round(knobs, 12))
+
+
+def _cached_knob_jacobian(baseline, theta_b, knobs, n):
+    try:
+        return _knob_jacobian(baseline, theta_b, knobs)
+    except eqx.EquinoxRuntimeError:
+        return np.full((n, knobs.size), np.nan)
+
+
+def prefetch_columns(baseline, state: _State, designs, knob_cache: dict) -> None:
+    """Fill `knob_cache` with the knob Jacobians that `_columns` of `designs` will need,
+    computed side by side (`in_parallel`; e.g. one per Stribeck grid v_s)."""
+    p, n = len(baseline.param_names), baseline.data().y.shape[0]
+    todo = {}
+    for d in designs:
+        knobs = _design_knobs(baseline, state, d)
+        if knobs is not None and _knob_key(knobs) not in knob_cache:
+            todo[_knob_key(knobs)] = knobs
+    results = in_parallel([lambda k=k: _cached_knob_jacobian(baseline, state.theta[:p], k, n)
+                           for k in todo.values()])  # fmt: skip
+    knob_cache.update(zip(todo, results))
+
+
+def _columns(baseline, state: _State, design: EffectDesign, knob_cache: dict) -> np.ndarray:
+    """∂y/∂s of `design` added to the fitted `state` (n, k), output units."""
     if design.columns is not None:
         return np.asarray(design.columns)
-    cols = np.zeros((baseline.data().y.shape[0], design.k))
-    if design.knob_gain is not None and np.any(design.knob_gain):
-        key = tuple(np.round(knobs, 12))
+    p, n = len(baseline.param_names), baseline.data().y.shape[0]
+    cols = np.zeros((n, design.k))
+    knobs = _design_knobs(baseline, state, design)
+    if knobs is not None:
+        key = _knob_key(knobs)
         if key not in knob_cache:
-            try:
-                knob_cache[key] = _knob_jacobian(baseline, state.theta[:p], knobs)
-            except eqx.EquinoxRuntimeError:
-                knob_cache[key] = np.full((cols.shape[0], knobs.size), np.nan)
+            knob_cache[key] = _cached_knob_jacobian(baseline, state.theta[:p], knobs, n)
         cols = cols + knob_cache[key] @ design.knob_gain
     if design.basis is not None:
         cols = cols + design.basis

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._fitting import MAX_STEPS, _columns, _delta_bic, _fit
+from ._fitting import MAX_STEPS, _columns, _delta_bic, _fit, in_parallel
 from ._regions import residual_rho
 
 
@@ -25,18 +25,25 @@ def _refit(baseline, state, design, name, y, scale, r, cache):
     """
     zero = np.concatenate([state.theta, np.zeros(design.k)])
     designs, names = state.designs + (design,), state.names + (name,)
-    fits = []
+
+    def fit_from(x0):
+        return lambda: _fit(baseline, designs, x0, y, scale, names)
+
+    first = []
     A = np.concatenate([state.jac, _columns(baseline, state, design, cache) / scale], axis=1)
     if np.all(np.isfinite(A)):
         step = np.linalg.lstsq(A, r, rcond=None)[0]
         p = state.theta.size
-        gn = np.concatenate([state.theta + step[:p], step[p:]])
-        fits.append(_fit(baseline, designs, gn, y, scale, names))
+        first.append(fit_from(np.concatenate([state.theta + step[:p], step[p:]])))
+    starts = [fit_from(np.concatenate([state.theta, np.asarray(s0, dtype=float)]))
+              for s0 in design.starts]  # fmt: skip
+    # independent fits run side by side (`in_parallel`); the zero start, when the Gauss–Newton
+    # start needs it, on this thread meanwhile
+    running = in_parallel([*first, *starts], wait=False)
+    fits = [running[0].result()] if first else []
     if not fits or not fits[0].converged or not fits[0].rss <= state.rss:
-        fits.append(_fit(baseline, designs, zero, y, scale, names))
-    for s0 in design.starts:
-        start = np.concatenate([state.theta, np.asarray(s0, dtype=float)])
-        fits.append(_fit(baseline, designs, start, y, scale, names))
+        fits.append(fit_from(zero)())
+    fits += [f.result() for f in running[len(first) :]]
     good = [f for f in fits if f.converged and np.isfinite(f.rss)]
     if not good:
         # a fit that ran out of steps while still descending (e.g. an unidentified F_s walking
