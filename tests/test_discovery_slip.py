@@ -200,3 +200,12 @@ def test_parallel_fits_give_the_sequential_report(monkeypatch):
     sequential = disc.discover(base).as_dict()
     assert parallel["effect"] == sequential["effect"]
     assert repr(parallel) == repr(sequential)
+
+
+def test_fit_workers_setting_is_checked():
+    from tribojax.discovery._fitting import _workers
+
+    assert _workers("3") == 3 and _workers(None) >= 1
+    for bad in ("0", "two", "-1", "1.5"):
+        with pytest.raises(ValueError, match=f"TRIBOJAX_FIT_WORKERS = '{bad}'"):
+            _workers(bad)

@@ -190,7 +190,18 @@ _SOLVER = _DiscoveryLM(rtol=1e-8, atol=1e-10)
 # compiled solve whose ODE steps run on one core, and JAX releases the GIL while it runs, so
 # independent fits (the starts of one refit) use the other cores; their results are the same
 # numbers as one after another.
-FIT_WORKERS = int(os.environ.get("TRIBOJAX_FIT_WORKERS", 0)) or min(4, os.cpu_count() or 1)
+def _workers(text) -> int:
+    """Threads for independent fits: `TRIBOJAX_FIT_WORKERS` (a whole number ≥ 1, read when
+    tribojax is imported), else the CPU count, at most 4."""
+    if text is None or text == "":
+        return min(4, os.cpu_count() or 1)
+    if not text.strip().isdigit() or int(text) < 1:
+        raise ValueError(f"TRIBOJAX_FIT_WORKERS = {text!r} is outside the allowed range: a whole "
+                         "number >= 1 (1 runs one fit at a time)")  # fmt: skip
+    return int(text)
+
+
+FIT_WORKERS = _workers(os.environ.get("TRIBOJAX_FIT_WORKERS"))
 _POOL: list = []
 
 
