@@ -185,23 +185,6 @@ def test_wang2022_table_baseline_is_the_published_model():
     assert np.allclose(base.data().y - y0, np.log(np.abs(measured / model)), atol=1e-6)
 
 
-def test_parallel_fits_give_the_sequential_report(monkeypatch):
-    # the starts of a refit and the seeds of a candidate run side by side (FIT_WORKERS threads):
-    # the report must be the same numbers as one fit after another (a viscous record: its
-    # refit runs the Gauss–Newton, zero and two σ2 starts)
-    from tribojax.discovery import _fitting
-
-    run = syn.hidden_effect_run("viscous_friction", syn.NOISE_LEVELS["low"], 2.0, seed=3,
-                                n=N_CI)  # fmt: skip
-    base = disc.slip_baseline(run)
-    monkeypatch.setattr(_fitting, "FIT_WORKERS", 2)
-    parallel = disc.discover(base).as_dict()
-    monkeypatch.setattr(_fitting, "FIT_WORKERS", 1)
-    sequential = disc.discover(base).as_dict()
-    assert parallel["effect"] == sequential["effect"]
-    assert repr(parallel) == repr(sequential)
-
-
 def test_fit_workers_setting_is_checked():
     from tribojax.discovery._fitting import _workers
 

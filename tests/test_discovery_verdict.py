@@ -133,20 +133,30 @@ def test_loop_study_spec_covers_the_issue():
 
 
 @pytest.mark.slow
-def test_discover_on_independent_records():
-    """CI form: slip runs — a clean record, two in-vocabulary physics effects (load coupling
-    with other exponents for F_s and K_τ, an exponential Stribeck curve), an out-of-vocabulary
-    readout step — and loops: a quadratic load variation at constant stiffness, a lag between
-    the force and displacement channels (out of vocabulary); TRIBOJAX_FULL=1: the study's CI
-    subset (benchmarks/discovery_study.py CI_LABELS). These replace the CI cases of
+def test_discover_on_independent_records(monkeypatch):
+    """CI form: slip runs — a clean record, in-vocabulary physics effects (load coupling with
+    other exponents for F_s and K_τ, an exponential Stribeck curve, a stage mode, the mode also
+    run with one fit at a time: the same numbers), an out-of-vocabulary readout step — and
+    loops: a quadratic load variation at constant stiffness, a lag between the force and
+    displacement channels (out of vocabulary); TRIBOJAX_FULL=1: the study's CI subset
+    (benchmarks/discovery_study.py CI_LABELS). These replace the CI cases of
     test_discovery_slip.py's model-made confusion records."""
     from benchmarks import discovery_study as st
+
+    from tribojax.discovery import _fitting
 
     labels = st.CI_LABELS if os.environ.get("TRIBOJAX_FULL") else st.CI_SHORT
     specs = [s for s in st.all_specs() if any(s.label.startswith(c) for c in labels)]
     assert len(specs) == len(labels)
+    monkeypatch.setattr(_fitting, "FIT_WORKERS", max(2, _fitting.FIT_WORKERS))
     rows = list(map(st.run_one, specs))
     assert not [r["label"] for r in rows if not r["ok"]]
+    # fits side by side (a refit's starts, a candidate's seeds) give the same report as one after
+    # another: the mode record runs both (two vibration forms, then the viscous starts)
+    mode = next(i for i, s in enumerate(specs) if s.label.startswith("vibration/"))
+    monkeypatch.setattr(_fitting, "FIT_WORKERS", 1)
+    one = st.run_one(specs[mode])
+    assert {**one, "seconds": 0} == {**rows[mode], "seconds": 0}
     # an estimated noise sd is sharpened by the refits' residuals: a ringing mode inflated the
     # baseline residual's first-difference estimate (s1020: 10x), the explained record's is near
     # the true one

@@ -219,17 +219,18 @@ def in_parallel(calls, wait=True):
 
 @contextlib.contextmanager
 def speculatively(calls):
-    """Start every zero-argument call on its own thread (each may use `in_parallel`); yields
-    their futures, to be read in order; on exit the ones not started are cancelled and the
-    running ones finish unread (a loop that stops at the first good result)."""
+    """Run the zero-argument calls (each may use `in_parallel`) `FIT_WORKERS` at a time ahead of
+    need; yields their futures, to be read in order. On exit (a loop that stops at the first
+    good result) the ones not started are cancelled and the running ones are waited for, so
+    that no work outlives the call."""
     if len(calls) <= 1 or FIT_WORKERS <= 1:
         yield [_Lazy(c) for c in calls]
         return
-    ex = ThreadPoolExecutor(len(calls), thread_name_prefix="tribojax-start")
+    ex = ThreadPoolExecutor(FIT_WORKERS, thread_name_prefix="tribojax-start")
     try:
         yield [ex.submit(c) for c in calls]
     finally:
-        ex.shutdown(wait=False, cancel_futures=True)
+        ex.shutdown(wait=True, cancel_futures=True)
 
 
 @dataclasses.dataclass
