@@ -28,9 +28,10 @@ from ._core import K_MAX, AbstractBaseline, EffectDesign
 from ._regions import ar1_inflation
 
 
-def _predict_jac(baseline, theta_b, knobs):
-    """predict and its forward-mode Jacobians ∂/∂θ_b (n, p), ∂/∂knobs (n, n_knobs): one pass."""
-    return baseline.value_and_jacobians(theta_b, knobs)
+def _predict_jac(baseline, theta_b, knobs, used):
+    """predict and its forward-mode Jacobians ∂/∂θ_b (n, p), ∂/∂knobs (n, n_knobs): one pass
+    (the knobs not `used` need no column)."""
+    return baseline.value_and_jacobians(theta_b, knobs, used)
 
 
 
@@ -60,7 +61,8 @@ def _residual_and_jac(x, a: _Padded):
     p = x.size - K_MAX
     hold = 1.0 - a.mask
     s = x[p:] * a.mask
-    value, jb, jk = _predict_jac(a.baseline, x[:p], a.base + a.gain @ s)
+    used = jnp.any((a.gain != 0) & (a.mask[None, :] > 0), axis=1)  # knobs an active strength moves
+    value, jb, jk = _predict_jac(a.baseline, x[:p], a.base + a.gain @ s, used)
     r = (value + a.basis @ s - a.y) / a.scale
     J = jnp.concatenate([jb, (jk @ a.gain + a.basis) * a.mask[None, :]], axis=1) / a.scale
     ok = jnp.all(jnp.isfinite(r)) & jnp.all(jnp.isfinite(J))
