@@ -135,10 +135,9 @@ class AbstractBaseline(eqx.Module):
     def data(self) -> DiscoveryData:
         """The observed record."""
 
-    def value_and_jacobians(self, theta, knobs, used=None):
+    def value_and_jacobians(self, theta, knobs):
         """`predict` and its forward-mode Jacobians ∂/∂θ (n, p), ∂/∂knobs (n, n_knobs), in one
-        pass (JAX); a baseline may split it (knobs that do not enter an ODE). `used` (bool per
-        knob, traced): the knobs whose columns the caller needs; the others may come back 0."""
+        pass (JAX); a baseline may split it (knobs that do not enter an ODE)."""
 
         def f(tb, kn):
             out = self.predict(tb, kn)

@@ -28,10 +28,9 @@ from ._core import K_MAX, AbstractBaseline, EffectDesign
 from ._regions import ar1_inflation
 
 
-def _predict_jac(baseline, theta_b, knobs, used):
-    """predict and its forward-mode Jacobians ∂/∂θ_b (n, p), ∂/∂knobs (n, n_knobs): one pass
-    (the knobs not `used` need no column)."""
-    return baseline.value_and_jacobians(theta_b, knobs, used)
+def _predict_jac(baseline, theta_b, knobs):
+    """predict and its forward-mode Jacobians ∂/∂θ_b (n, p), ∂/∂knobs (n, n_knobs): one pass."""
+    return baseline.value_and_jacobians(theta_b, knobs)
 
 
 
@@ -61,8 +60,7 @@ def _residual_and_jac(x, a: _Padded):
     p = x.size - K_MAX
     hold = 1.0 - a.mask
     s = x[p:] * a.mask
-    used = jnp.any((a.gain != 0) & (a.mask[None, :] > 0), axis=1)  # knobs an active strength moves
-    value, jb, jk = _predict_jac(a.baseline, x[:p], a.base + a.gain @ s, used)
+    value, jb, jk = _predict_jac(a.baseline, x[:p], a.base + a.gain @ s)
     r = (value + a.basis @ s - a.y) / a.scale
     J = jnp.concatenate([jb, (jk @ a.gain + a.basis) * a.mask[None, :]], axis=1) / a.scale
     ok = jnp.all(jnp.isfinite(r)) & jnp.all(jnp.isfinite(J))

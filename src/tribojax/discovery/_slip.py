@@ -171,11 +171,8 @@ class SlipBaseline(AbstractBaseline):
     def predict(self, theta, knobs):
         return self._solve(theta, knobs[:N_ODE_KNOBS]).slip + self._mode(knobs[N_ODE_KNOBS:])
 
-    def value_and_jacobians(self, theta, knobs, used=None):
-        """The ODE differentiated over θ and its own knobs only, the mode term over its knobs;
-        knobs not `used` (no active effect moves them) are not differentiated (columns 0: a
-        fit without a friction-law effect carries 3 tangents through the ODE instead of 7)."""
-        kode, kmode = knobs[:N_ODE_KNOBS], knobs[N_ODE_KNOBS:]
+    def value_and_jacobians(self, theta, knobs):
+        """The ODE differentiated over θ and its own knobs only, the mode term over its knobs."""
 
         def ode(tb, kn):
             out = self._solve(tb, kn).slip
@@ -185,27 +182,9 @@ class SlipBaseline(AbstractBaseline):
             out = self._mode(km)
             return out, out
 
-        def ode_all():
-            (jb, jk), value = jax.jacfwd(ode, argnums=(0, 1), has_aux=True)(theta, kode)
-            return value, jb, jk
-
-        def ode_theta():
-            jb, value = jax.jacfwd(lambda tb: ode(tb, kode), has_aux=True)(theta)
-            return value, jb, jnp.zeros((value.size, kode.size))
-
-        def mode_all():
-            jm, vm = jax.jacfwd(mode, has_aux=True)(kmode)
-            return vm, jm
-
-        def mode_value():
-            vm = self._mode(kmode)
-            return vm, jnp.zeros((vm.size, kmode.size))
-
-        if used is None:
-            (value, jb, jk), (vm, jm) = ode_all(), mode_all()
-        else:
-            value, jb, jk = jax.lax.cond(jnp.any(used[:N_ODE_KNOBS]), ode_all, ode_theta)
-            vm, jm = jax.lax.cond(jnp.any(used[N_ODE_KNOBS:]), mode_all, mode_value)
+        (jb, jk), value = jax.jacfwd(ode, argnums=(0, 1), has_aux=True)(theta,
+                                                                        knobs[:N_ODE_KNOBS])
+        jm, vm = jax.jacfwd(mode, has_aux=True)(knobs[N_ODE_KNOBS:])
         return value + vm, jb, jnp.concatenate([jk, jm], axis=1)
 
     def solver_ok(self, theta, knobs):
