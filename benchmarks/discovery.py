@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 import tribojax.discovery as disc
-from tribojax.discovery import _fitting
+from tribojax.discovery import _parallel
 from tribojax.discovery.synthetic import NOISE_LEVELS, hidden_effect_run
 
 N, T_END = 5001, 2.5
@@ -75,14 +75,14 @@ def run(quick: bool = False) -> list[dict]:
         rep = disc.discover(base)
         times.append(time.perf_counter() - t0)
     warm_s = float(np.median(times))
-    workers = _fitting.FIT_WORKERS
-    _fitting.FIT_WORKERS = 1  # the same run with one fit at a time (the same report)
+    workers = _parallel.FIT_WORKERS
+    _parallel.FIT_WORKERS = 1  # the same run with one fit at a time (the same report)
     try:
         t0 = time.perf_counter()
         seq = disc.discover(base)
         sequential_s = time.perf_counter() - t0
     finally:
-        _fitting.FIT_WORKERS = workers
+        _parallel.FIT_WORKERS = workers
     sp_s, sp = scipy_baseline_fit(rec, np.asarray(base.start_values))
     return [
         {

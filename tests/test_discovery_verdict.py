@@ -143,18 +143,18 @@ def test_discover_on_independent_records(monkeypatch):
     test_discovery_slip.py's model-made confusion records."""
     from benchmarks import discovery_study as st
 
-    from tribojax.discovery import _fitting
+    from tribojax.discovery import _parallel
 
     labels = st.CI_LABELS if os.environ.get("TRIBOJAX_FULL") else st.CI_SHORT
     specs = [s for s in st.all_specs() if any(s.label.startswith(c) for c in labels)]
     assert len(specs) == len(labels)
-    monkeypatch.setattr(_fitting, "FIT_WORKERS", max(2, _fitting.FIT_WORKERS))
+    monkeypatch.setattr(_parallel, "FIT_WORKERS", max(2, _parallel.FIT_WORKERS))
     rows = list(map(st.run_one, specs))
     assert not [r["label"] for r in rows if not r["ok"]]
     # fits side by side (a refit's starts, a candidate's seeds) give the same report as one after
     # another: the mode record runs both (two vibration forms, then the viscous starts)
     mode = next(i for i, s in enumerate(specs) if s.label.startswith("vibration/"))
-    monkeypatch.setattr(_fitting, "FIT_WORKERS", 1)
+    monkeypatch.setattr(_parallel, "FIT_WORKERS", 1)
     one = st.run_one(specs[mode])
     assert {**one, "seconds": 0} == {**rows[mode], "seconds": 0}
     # an estimated noise sd is sharpened by the refits' residuals: a ringing mode inflated the

@@ -12,7 +12,8 @@ from ._core import (
     AbstractEffect,
     default_effects,
 )
-from ._fitting import _columns, _delta_bic, _fit, _score, prefetch_columns, speculatively
+from ._fitting import _columns, _delta_bic, _fit, _score, prefetch_columns
+from ._parallel import speculatively
 from ._refits import MAX_MOVES, _bic, _moved_optimum, _refit, _seeds, _sharpen
 from ._regions import ar1_inflation, chi2_sf, find_regions, noise_estimate, residual_rho
 from ._report import DiscoveryReport, _fit_dict, _rmse, _strengths

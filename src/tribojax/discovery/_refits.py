@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._fitting import MAX_STEPS, _columns, _delta_bic, _fit, in_parallel
+from ._fitting import MAX_STEPS, _columns, _delta_bic, _fit
+from ._parallel import in_parallel
 from ._regions import residual_rho
 
 
