@@ -270,7 +270,8 @@ def _fit(baseline, designs, theta0, y, scale, names=(), max_steps=MAX_STEPS) -> 
 def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
     """∂y/∂knobs (n, n_knobs) at (θ_b, knobs), output units: the fit's own compiled residual
     Jacobian (`value_and_jacobian(_residual, ...)`) with the knobs as the padded strengths, K_MAX
-    knobs per call, so scoring compiles no second copy of the model and its Jacobian."""
+    knobs per call, so scoring compiles no second copy of the model and its Jacobian. NaN
+    columns where the model is not finite or a check inside it fails."""
     p, m = len(theta_b), len(knobs)
     n = baseline.data().y.shape[0]
     x = jnp.asarray(np.concatenate([theta_b, np.zeros(K_MAX)]), dtype=jnp.float64)
@@ -282,7 +283,10 @@ def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
         arrays = (knobs, gain, np.zeros((n, K_MAX)), np.arange(K_MAX) < k, np.zeros(n), 1.0,
                   np.inf, np.ones(p + K_MAX))  # fmt: skip
         args = _Padded(baseline, *(jnp.asarray(v, dtype=jnp.float64) for v in arrays))
-        r, J = (np.asarray(v) for v in value_and_jacobian(_residual, x, args))
+        try:
+            r, J = (np.asarray(v) for v in value_and_jacobian(_residual, x, args))
+        except eqx.EquinoxRuntimeError:
+            r = J = np.full((n + K_MAX, p + K_MAX), np.nan)
         out[:, j : j + k] = J[:n, p : p + k] if np.all(np.isfinite(r[:n])) else np.nan
     return out
 
@@ -303,23 +307,16 @@ def _knob_key(knobs):
     return tuple(np.round(knobs, 12))
 
 
-def _cached_knob_jacobian(baseline, theta_b, knobs, n):
-    try:
-        return _knob_jacobian(baseline, theta_b, knobs)
-    except eqx.EquinoxRuntimeError:
-        return np.full((n, knobs.size), np.nan)
-
-
 def prefetch_columns(baseline, state: _State, designs, knob_cache: dict) -> None:
     """Fill `knob_cache` with the knob Jacobians that `_columns` of `designs` will need,
     computed side by side (`in_parallel`; e.g. one per Stribeck grid v_s)."""
-    p, n = len(baseline.param_names), baseline.data().y.shape[0]
+    p = len(baseline.param_names)
     todo = {}
     for d in designs:
         knobs = _design_knobs(baseline, state, d)
         if knobs is not None and _knob_key(knobs) not in knob_cache:
             todo[_knob_key(knobs)] = knobs
-    results = in_parallel([lambda k=k: _cached_knob_jacobian(baseline, state.theta[:p], k, n)
+    results = in_parallel([lambda k=k: _knob_jacobian(baseline, state.theta[:p], k)
                            for k in todo.values()])  # fmt: skip
     knob_cache.update(zip(todo, results))
 
@@ -334,7 +331,7 @@ def _columns(baseline, state: _State, design: EffectDesign, knob_cache: dict) ->
     if knobs is not None:
         key = _knob_key(knobs)
         if key not in knob_cache:
-            knob_cache[key] = _cached_knob_jacobian(baseline, state.theta[:p], knobs, n)
+            knob_cache[key] = _knob_jacobian(baseline, state.theta[:p], knobs)
         cols = cols + knob_cache[key] @ design.knob_gain
     if design.basis is not None:
         cols = cols + design.basis
