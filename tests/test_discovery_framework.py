@@ -179,6 +179,28 @@ def test_chi2_sf_matches_scipy():
             assert chi2_sf(x, dof) == pytest.approx(want, rel=1e-10, abs=1e-300)
 
 
+def test_chi2_logsf_where_the_p_value_underflows():
+    # closed forms, independent of the series: Q(1/2, x/2) = erfc(√(x/2)) = 2Φ(−√x), and for
+    # even dof Q(a, z) = e^{−z} Σ_{j<a} z^j/j!
+    from math import factorial, log
+
+    from scipy import special
+
+    from tribojax.discovery._regions import chi2_logsf, chi2_sf
+
+    for x in (5.0, 300.0, 1300.0, 1500.0, 2e3, 1e4, 1e6):
+        want = log(2.0) + special.log_ndtr(-np.sqrt(x))
+        assert chi2_logsf(x, 1) == pytest.approx(want, rel=1e-12)
+        for a in (1, 2, 5, 20):
+            z = x / 2.0
+            want = -z + log(sum(z**j / factorial(j) for j in range(a)))
+            assert chi2_logsf(x, 2 * a) == pytest.approx(want, rel=1e-12)
+    # both p-values underflow; in log form the same score with one more dof is less significant
+    assert chi2_sf(2e3, 1) == chi2_sf(2e3, 2) == 0.0 and chi2_logsf(2e3, 2) > chi2_logsf(2e3, 1)
+    # a design with one more strength ranks first only if it adds enough to the score
+    assert chi2_logsf(5e4 + 1, 2) > chi2_logsf(5e4, 1) > chi2_logsf(5e4 + 20, 2)
+
+
 def test_fit_shares_one_compiled_solve_across_effects():
     # strengths padded to K_MAX: adding effects to the model reuses the baseline fit's solve
     from tribojax._fit import _engine

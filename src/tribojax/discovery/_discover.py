@@ -15,7 +15,14 @@ from ._core import (
 from ._fitting import _columns, _delta_bic, _fit, _score, prefetch_columns
 from ._parallel import speculatively
 from ._refits import MAX_MOVES, _bic, _moved_optimum, _refit, _seeds, _sharpen
-from ._regions import ar1_inflation, chi2_sf, find_regions, noise_estimate, residual_rho
+from ._regions import (
+    ar1_inflation,
+    chi2_logsf,
+    chi2_sf,
+    find_regions,
+    noise_estimate,
+    residual_rho,
+)
 from ._report import DiscoveryReport, _fit_dict, _rmse, _strengths
 from ._verdict import correlations, excess_rmse, flexible_correction, noise_consistent, verdict
 
@@ -75,9 +82,10 @@ def discover(
        hidden mode) and the mode was then named.
     2. Regions: residual windows against the noise (sidecar sd, else estimated; AR(1) ρ).
     3. Rank each candidate effect by its Rao score statistic at the current fit (LM form
-       n·‖P r‖²/‖r‖², χ²_k; for a grid of nuisance settings the largest score, p-value
-       Bonferroni-corrected over the grid: the Davies problem of parameters not identified under
-       the null). An effect may then refine its nuisance values around the best grid point
+       n·‖P r‖²/‖r‖², χ²_k; for a grid of nuisance settings the design with the smallest
+       p-value, compared in log form (`chi2_logsf`: a strong effect's p-values underflow to 0
+       and the larger design took the tie), its p-value Bonferroni-corrected over the grid:
+       the Davies problem of parameters not identified under the null). An effect may then refine its nuisance values around the best grid point
        (`AbstractEffect.refine`, e.g. the vibration frequency); the p-value keeps the grid's
        Bonferroni factor, which makes it somewhat optimistic after refinement.
     4. Refit the `n_refit` best candidates whose p-value is below alpha/(number of candidates),
@@ -183,10 +191,14 @@ def discover(
             scored = []
             for d in grid:
                 S, rank = _score(r, J_cur, _columns(baseline, state, d, cache) / scale)
-                pv = chi2_sf(S, rank) if rank else 1.0
-                scored.append((pv, -S, len(scored), rank, d))
+                # designs of one effect by log p-value: p underflows to 0 for a strong effect,
+                # and a tie then went to the design with more strengths (a quadratic position
+                # error where the linear one reaches the noise)
+                log_pv = chi2_logsf(S, rank) if rank else 0.0
+                scored.append((log_pv, -S, len(scored), rank, d))
             scored.sort(key=lambda z: z[:3])
-            best = (-scored[0][1], scored[0][0], scored[0][3], scored[0][4])
+            S, rank = -scored[0][1], scored[0][3]
+            best = (S, chi2_sf(S, rank) if rank else 1.0, rank, scored[0][4])
             seeds = _seeds(scored, max(n_starts, e.refit_starts))  # further refit starts
             S, pv, rank, d = best
             if rank:
