@@ -31,31 +31,43 @@ def model():
 TABLE3_LOADS = (3.6912, 4.9638, 6.7818, 9.5088, 12.2358, 21.3258)
 
 
-# --- scheduling over pytest-xdist workers (`--dist loadgroup --no-loadscope-reorder`) -------------
-# A test file is one unit of work, so its module fixtures compile once. Files that compile the same
-# large programs (equal shapes) share a unit: one worker process, one compile. Units are handed out
-# heaviest first (seconds measured on an idle 2-core machine) so that the workers finish together.
+# --- scheduling over pytest-xdist workers (`--dist loadscope --no-loadscope-reorder`) -------------
+# A unit of work is a test file, so its module fixtures compute and compile once; files that compile
+# the same large programs (equal shapes) share a unit. Units are handed out heaviest first (seconds
+# measured on an idle 2-core machine) so that the workers finish together. The units are the
+# scheduler's scopes (`_UnitScheduling`): xdist's `xdist_group` marks do nothing under pytest 9
+# (xdist 3.8 renames `item._nodeid`, which pytest 9 no longer reads), which split test_docs.py
+# over both workers, so that the site build re-executed a notebook the other one was still running.
 SHARED_COMPILE = {
     # discover() on 461-sample slip records: one ~60 s compile of the slip baseline and candidates
     "test_discovery_verdict.py": "slip_discovery",
     "test_cli_discover.py": "slip_discovery",
 }
 WEIGHT_S = {
-    "test_docs.py": 560, "test_reproduce.py": 195, "slip_discovery": 220,
-    "test_discovery_slip.py": 75, "test_fit_chain.py": 142, "test_slip.py": 91,
-    "test_sensitivity.py": 75, "test_fit_user.py": 59, "test_mhb_excitation.py": 58,
-    "test_contact.py": 53, "test_mhb.py": 32, "test_fitting_studies.py": 31, "test_cli_fit.py": 29,
-    "test_real_discovery_brfd.py": 25,
-}  # the rest: a few seconds each, in file order
+    "test_docs.py": 280, "test_fit_chain.py": 100, "slip_discovery": 95, "test_reproduce.py": 76,
+    "test_contact.py": 71, "test_slip.py": 56, "test_sensitivity.py": 53,
+    "test_discovery_slip.py": 51, "test_fit_user.py": 46, "test_fitting_studies.py": 26,
+    "test_mhb_excitation.py": 26, "test_mhb.py": 24, "test_discovery_loop.py": 24,
+}  # the rest: under 20 s each, in file order
 
 
-def _unit(item) -> str:
-    name = item.path.name
+def _unit(nodeid: str) -> str:
+    name = nodeid.split("::")[0].rsplit("/", 1)[-1]
     return SHARED_COMPILE.get(name, name)
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist's own hook reads the group marks
 def pytest_collection_modifyitems(config, items):
-    for item in items:
-        item.add_marker(pytest.mark.xdist_group(_unit(item)))
-    items.sort(key=lambda item: -WEIGHT_S.get(_unit(item), 0.0))  # stable: file order kept
+    items.sort(key=lambda item: -WEIGHT_S.get(_unit(item.nodeid), 0.0))  # stable: file order kept
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    if config.getvalue("dist") != "loadscope":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class _UnitScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid):
+            return _unit(nodeid)
+
+    return _UnitScheduling(config, log)

@@ -1,6 +1,6 @@
 """The documentation site: notebooks executed once, `mkdocs build --strict`, pages in Chromium.
 
-The tests run in definition order on one worker (`--dist loadfile`):
+The tests run in definition order on one worker (one unit of work, tests/conftest.py):
 
 1. each notebook in `notebooks/` runs top to bottom in a fresh kernel (nbclient); a cell error
    fails with the notebook's name and the cell's traceback. The executed copy is staged in
