@@ -49,6 +49,9 @@ def test_notebooks_exist():
     assert NOTEBOOKS, f"no notebooks found in {hooks.NOTEBOOK_DIR}"
 
 
+EXECUTED: set = set()  # notebooks executed by this process
+
+
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
 def test_notebook_runs(path):
     try:
@@ -56,6 +59,7 @@ def test_notebook_runs(path):
     except hooks.NotebookError as err:
         pytest.fail(str(err), pytrace=False)
     assert hooks.staged_fresh(path) and staged.exists()
+    EXECUTED.add(path)
 
 
 def test_cell_error_names_notebook_and_cell(tmp_path, monkeypatch):
@@ -107,9 +111,16 @@ def site(tmp_path_factory):
     return out, run, time.perf_counter() - t0
 
 
-def test_site_builds_strict(site):
+def test_site_builds_strict(site, request):
     out, run, _ = site
     assert run.returncode == 0, f"mkdocs build --strict failed:\n{run.stderr[-6000:]}"
+    selected = {i.callspec.params["path"] for i in request.session.items
+                if i.originalname == "test_notebook_runs"}  # fmt: skip
+    if selected == set(NOTEBOOKS):
+        # this file is one unit of work (tests/conftest.py): the notebooks ran in this process,
+        # before the build, which reuses their staged copies
+        assert EXECUTED == set(NOTEBOOKS), "notebook tests ran in another worker process"
+        assert "no fresh staged copy" not in run.stderr, run.stderr[-3000:]
     for page in ("index.html", "api/contact/index.html", "reproduction/index.html"):
         assert (out / page).exists(), page
     api = (out / "api" / "contact" / "index.html").read_text()
