@@ -85,9 +85,10 @@ def discover(
        n·‖P r‖²/‖r‖², χ²_k; for a grid of nuisance settings the design with the smallest
        p-value, compared in log form (`chi2_logsf`: a strong effect's p-values underflow to 0
        and the larger design took the tie), its p-value Bonferroni-corrected over the grid:
-       the Davies problem of parameters not identified under the null). An effect may then refine its nuisance values around the best grid point
-       (`AbstractEffect.refine`, e.g. the vibration frequency); the p-value keeps the grid's
-       Bonferroni factor, which makes it somewhat optimistic after refinement.
+       the Davies problem of parameters not identified under the null). An effect may then
+       refine its nuisance values around the best grid point (`AbstractEffect.refine`, e.g.
+       the vibration frequency); the p-value keeps the grid's Bonferroni factor, which makes it
+       somewhat optimistic after refinement.
     4. Refit the `n_refit` best candidates whose p-value is below alpha/(number of candidates),
        and those of effects with `score_gate` False whatever their p-value, from one
        Gauss–Newton step (and from zero new strengths when that fails, then from each of the
