@@ -184,7 +184,6 @@ def discover(
         for e in effects:
             if e.name in state.names:
                 continue
-            best = None
             room = K_MAX - sum(d.k for d in state.designs)
             grid = [d for d in grids[e.name] if d.k <= room]  # designs that fit in K_MAX
             if not grid:
@@ -198,10 +197,9 @@ def discover(
                 log_pv = chi2_logsf(S, rank) if rank else 0.0
                 scored.append((log_pv, -S, len(scored), rank, d))
             scored.sort(key=lambda z: z[:3])
-            S, rank = -scored[0][1], scored[0][3]
-            best = (S, chi2_sf(S, rank) if rank else 1.0, rank, scored[0][4])
+            S, rank, d = -scored[0][1], scored[0][3], scored[0][4]
+            pv = chi2_sf(S, rank) if rank else 1.0
             seeds = _seeds(scored, max(n_starts, e.refit_starts))  # further refit starts
-            S, pv, rank, d = best
             if rank:
 
                 def score_of(dd, r=r, J_cur=J_cur, cache=cache):

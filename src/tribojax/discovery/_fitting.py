@@ -285,8 +285,9 @@ def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
         args = _Padded(baseline, *(jnp.asarray(v, dtype=jnp.float64) for v in arrays))
         try:
             r, J = (np.asarray(v) for v in value_and_jacobian(_residual, x, args))
-        except eqx.EquinoxRuntimeError:
-            r = J = np.full((n + K_MAX, p + K_MAX), np.nan)
+        except eqx.EquinoxRuntimeError:  # a check inside the model failed
+            out[:, j : j + k] = np.nan
+            continue
         out[:, j : j + k] = J[:n, p : p + k] if np.all(np.isfinite(r[:n])) else np.nan
     return out
 
