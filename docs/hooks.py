@@ -73,20 +73,21 @@ API_PAGES = [
     (
         "io",
         "Data and records",
-        ("_io",),
-        "Published tables, slip runs, hysteresis loops, atomic writes.",
+        ("_io", "_tables", "_decimate"),
+        "Published tables, slip runs, hysteresis loops, record reduction, atomic writes.",
     ),
     (
         "fit",
         "Fitting and sensitivity",
-        ("_fit",),
-        "The one least-squares engine and the fits and sensitivities built on it.",
+        ("_fit", "_sensitivity"),
+        "The one least-squares engine, the fits of records built on it, and sensitivities.",
     ),
     (
         "reproduce",
         "Reproduction and presets",
         ("_reproduce", "_presets", "_results", "_sweep", "_chain"),
-        "The papers' constants, the reproduced tables, result codes and sweeps.",
+        "The papers' constants, the reproduced tables, the fits of wang2022's measured slips, "
+        "result codes and sweeps.",
     ),
 ]
 DISCOVERY_PAGE = ("discovery", "Discovery", "`tribojax.discovery`: baselines, named effects, "

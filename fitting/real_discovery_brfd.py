@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import tribojax as tj
-from tribojax._fit._decimate import DISCOVER_MAX_SAMPLES
+from tribojax._decimate import DISCOVER_MAX_SAMPLES
 from tribojax._io._brfd import brfd_test
 from tribojax.discovery import discover, loop_baseline
 

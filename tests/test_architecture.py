@@ -7,7 +7,8 @@ Read from the source with `ast` (nothing is imported), so a violation names the 
   move it);
 - every module at most 400 lines (the house limit);
 - every third-party module imported at run time is a declared dependency (optional ones only
-  inside the optional-dependency guards).
+  inside the optional-dependency guards);
+- imports go down the layer order `LAYERS` (issue 29), never up.
 """
 
 import ast
@@ -27,6 +28,35 @@ OPTIONAL = {
 }
 # distribution name -> import name where they differ
 IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
+# The layer order, lowest first: a module imports modules of its own layer and of the layers
+# below it, never of a layer above. Each unit is a subpackage or top-level module of tribojax
+# ("" is tribojax/__init__.py). Within a layer any direction goes (cycles are caught above).
+# - foundation: float64 switch, validation, result codes, the matplotlib guard, and the validating
+#   CSV reader with the bundled published tables (`_tables`), which physics and constants read;
+# - physics: contact, surfaces, friction elements, dynamics, and the papers' constants
+#   (`_presets` builds contact pairs; `_dynamics` takes masses from it): no records, no fits;
+# - model chain: wang2022's one path parameters → contact → element → phase slips (`_chain`);
+# - model analyses: sweeps and sensitivities of the model, which need no records;
+# - records: user records and files (`_io`);
+# - fits: the one least-squares engine and the fits of records, record models (`_model`);
+# - record reduction (`_decimate`), which states its noise with the fit's noise model;
+# - paper studies: the reproduced tables and the fits of wang2022's measured slips (`_reproduce`);
+# - discovery; the public re-exports (tribojax/__init__.py); the command line, which nothing
+#   else imports.
+LAYERS = (
+    ("foundation", {"_precision", "_checks", "_results", "_plot", "_tables"}),
+    ("physics", {"_contact", "_roughness", "_friction", "_dynamics", "_presets"}),
+    ("model chain", {"_chain"}),
+    ("model analyses", {"_sweep", "_sensitivity"}),
+    ("records", {"_io"}),
+    ("fits", {"_fit", "_model"}),
+    ("record reduction", {"_decimate"}),
+    ("paper studies", {"_reproduce"}),
+    ("discovery", {"discovery"}),
+    ("public API", {""}),
+    ("command line", {"_cli"}),
+)
+LAYER_OF = {unit: (i, name) for i, (name, units) in enumerate(LAYERS) for unit in units}
 
 
 def _module_name(path: Path) -> str:
@@ -50,8 +80,14 @@ def _subpackage(mod: str) -> str:
     return parts[1] if len(parts) > 2 else ""
 
 
+def _unit(mod: str) -> str:
+    """The subpackage or top-level module of `mod` ("" for tribojax itself): what LAYERS orders."""
+    parts = mod.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
 def _scan():
-    edges, hidden, private, external = {}, [], [], {}
+    edges, hidden, private, external, sites = {}, [], [], {}, []
     for mod, path in MODULES.items():
         tree = ast.parse(path.read_text(), filename=str(path))
         top = {id(node) for node in tree.body}
@@ -63,6 +99,7 @@ def _scan():
                     if name == "tribojax":
                         if id(node) not in top:
                             hidden.append(f"{path}:{node.lineno}")
+                        sites.append((path, node.lineno, mod, alias.name))
                     else:
                         external.setdefault(name, set()).add(mod)
                 continue
@@ -79,14 +116,15 @@ def _scan():
                 dep = full if full in MODULES else target
                 if dep != mod and dep in MODULES:
                     edges.setdefault(mod, set()).add(dep)
+                    sites.append((path, node.lineno, mod, dep))
                 name = alias.name
                 if (name.startswith("_") and not name.startswith("__") and full not in MODULES
                         and _subpackage(target) != _subpackage(mod)):  # fmt: skip
                     private.append(f"{path}:{node.lineno} imports {name} from {target}")
-    return edges, hidden, private, external
+    return edges, hidden, private, external, sites
 
 
-EDGES, HIDDEN, PRIVATE, EXTERNAL = _scan()
+EDGES, HIDDEN, PRIVATE, EXTERNAL, SITES = _scan()
 
 
 def test_no_import_cycles():
@@ -128,6 +166,24 @@ def test_no_function_level_imports_of_tribojax():
 
 def test_no_private_names_across_subpackages():
     assert not PRIVATE, "\n".join(PRIVATE)
+
+
+def test_every_module_is_in_a_layer():
+    missing = sorted({_unit(mod) for mod in MODULES} - set(LAYER_OF))
+    assert not missing, f"not in LAYERS (tests/test_architecture.py), place them: {missing}"
+
+
+def test_imports_go_down_the_layers():
+    """An import of a higher layer (e.g. physics reading `_io`, `_fit` importing `_reproduce`,
+    anything but the command line importing `_cli`) fails with its file and line."""
+    upward = []
+    for path, lineno, mod, dep in SITES:
+        if _unit(mod) not in LAYER_OF or _unit(dep) not in LAYER_OF:
+            continue  # test_every_module_is_in_a_layer names it
+        (low, low_name), (high, high_name) = LAYER_OF[_unit(mod)], LAYER_OF[_unit(dep)]
+        if high > low:
+            upward.append(f"{path}:{lineno}: {mod} ({low_name}) imports {dep} ({high_name})")
+    assert not upward, "imports up the layer order (LAYERS):\n" + "\n".join(upward)
 
 
 @pytest.mark.parametrize("mod", sorted(MODULES))

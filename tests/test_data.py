@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import tribojax as tj
-from tribojax._io._tables import data_dir
+from tribojax._tables import data_dir
 
 REPO = Path(__file__).resolve().parents[1]
 

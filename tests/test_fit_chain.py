@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import tribojax as tj
-from tribojax._fit import _chain as fc
-from tribojax._io._tables import wang2022_table
+from tribojax._reproduce import _chain_fit as fc
+from tribojax._tables import wang2022_table
 
 P0 = np.array([fc.DEFAULTS[k] for k in fc.PARAMETERS])  # D, G, μ_t, σ_s, α
 ONE_LOAD = jnp.array([3.6912])  # N, 0.6 kPa

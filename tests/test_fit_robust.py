@@ -16,8 +16,8 @@ import pytest
 from scipy import optimize, stats
 
 import tribojax as tj
-from tribojax._fit import _profile as pr
-from tribojax._fit import _robust as rb
+from tribojax._reproduce import _profile_likelihood as pr
+from tribojax._reproduce import _robust_fit as rb
 
 # --- the likelihood, weights, flags (no model) -------------------------------------------------
 

@@ -41,7 +41,7 @@ def test_installed_wheel_finds_its_data_from_another_directory(wheel, tmp_path):
         capture_output=True,
     )  # fmt: skip
     code = (
-        "import tribojax as tj, tribojax._io._tables as d\n"
+        "import tribojax as tj, tribojax._tables as d\n"
         "print(tj.__file__)\n"
         "print(d.data_dir())\n"
         "print(tj.wang2022_table(3)['load_N'][0])\n"

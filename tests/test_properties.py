@@ -22,7 +22,7 @@ import tribojax as tj  # noqa: E402
 from tribojax._cli import _fit as cli_fit  # noqa: E402
 from tribojax._cli._main import main  # noqa: E402
 from tribojax._io._records import read_record  # noqa: E402
-from tribojax._io._tables import read_table  # noqa: E402
+from tribojax._tables import read_table  # noqa: E402
 
 FAST = settings(max_examples=30, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture])  # fmt: skip

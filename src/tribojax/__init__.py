@@ -34,6 +34,8 @@ from ._contact._materials import (
     Material as Material,
 )
 from ._contact._surface import FractalSurface as FractalSurface
+from ._decimate import Decimation as Decimation
+from ._decimate import decimate_record as decimate_record
 from ._dynamics._adjoint import ForwardJacobianAdjoint as ForwardJacobianAdjoint
 from ._dynamics._continuation import FrequencyResponse as FrequencyResponse
 from ._dynamics._continuation import frequency_response as frequency_response
@@ -68,25 +70,11 @@ from ._dynamics._structure import Excitation as Excitation
 from ._dynamics._structure import FrictionContact as FrictionContact
 from ._dynamics._structure import Structure as Structure
 from ._dynamics._transient import integrate_steady as integrate_steady
-from ._fit._chain import DEFAULT_FREE as CHAIN_DEFAULT_FREE  # noqa: F401
-from ._fit._chain import PARAMETERS as CHAIN_PARAMETERS  # noqa: F401
-from ._fit._chain import ChainFit as ChainFit
-from ._fit._chain import ChainFitError as ChainFitError
-from ._fit._chain import chain_phase_slips as chain_phase_slips
-from ._fit._chain import fit_measured_slips as fit_measured_slips
-from ._fit._chain import measured_slips as wang2022_measured_slips  # noqa: F401
-from ._fit._chain import paper_theory_slips as wang2022_theory_slips  # noqa: F401
-from ._fit._chain import rms_relative as rms_relative
-from ._fit._chain import symmetric_bound as symmetric_bound
-from ._fit._chain import wang2022_loads as wang2022_loads
 from ._fit._curve import fit_steady_curve as fit_steady_curve
 from ._fit._curve import fit_transient as fit_transient
 from ._fit._curve import transient_nrmse as transient_nrmse
-from ._fit._decimate import Decimation as Decimation
-from ._fit._decimate import decimate_record as decimate_record
 from ._fit._engine import FitResult as FitResult
 from ._fit._engine import least_squares_fit as least_squares_fit
-from ._fit._figure import plot_fit_measured as plot_fit_measured
 from ._fit._history import BOUC_WEN_STARTS as BOUC_WEN_STARTS
 from ._fit._history import HistoryFit as HistoryFit
 from ._fit._history import fit_history as fit_history
@@ -95,16 +83,6 @@ from ._fit._loop import LoopAnalysis as LoopAnalysis
 from ._fit._loop import analyse_loop as analyse_loop
 from ._fit._loop import fit_loop as fit_loop
 from ._fit._loop import loop_residuals as loop_residuals
-from ._fit._profile import profile_likelihood as chain_profile_likelihood  # noqa: F401
-from ._fit._robust import NOISE_MODELS as CHAIN_NOISE_MODELS  # noqa: F401
-from ._fit._robust import RobustChainFit as RobustChainFit
-from ._fit._robust import robust_fit_measured_slips as robust_fit_measured_slips
-from ._fit._sensitivity import Elasticities as Elasticities
-from ._fit._sensitivity import LoopChain as LoopChain
-from ._fit._sensitivity import ReticleChain as ReticleChain
-from ._fit._sensitivity import elasticities as elasticities
-from ._fit._sensitivity import hysteresis_sensitivities as hysteresis_sensitivities
-from ._fit._sensitivity import slip_sensitivities as slip_sensitivities
 from ._fit._slip import fit_slip_run as fit_slip_run
 from ._fit._start import slip_run_start as slip_run_start
 from ._fit._surface import fit_surface_from_runs as fit_surface_from_runs
@@ -138,10 +116,6 @@ from ._io._slip_run import read_slip_run as read_slip_run
 from ._io._slip_run import simulate_run as simulate_run
 from ._io._slip_run import synthetic_slip_run as synthetic_slip_run
 from ._io._slip_run import write_slip_run as write_slip_run
-from ._io._tables import DataFileError as DataFileError
-from ._io._tables import read_table as read_table
-from ._io._tables import wang2022_table as wang2022_table
-from ._io._tables import wu2015_table as wu2015_table
 from ._presets import CHAIN_DEFAULTS as CHAIN_DEFAULTS
 from ._presets import WANG2022_A_MAX as WANG2022_A_MAX
 from ._presets import WANG2022_CALIBRATED as WANG2022_CALIBRATED
@@ -154,6 +128,22 @@ from ._presets import wang2022_reticle as wang2022_reticle
 from ._presets import wang2022_surface as wang2022_surface
 from ._presets import wang2022_table3_model as wang2022_table3_model
 from ._presets import wu2015_eq5_stiffness as wu2015_eq5_stiffness
+from ._reproduce._chain_fit import DEFAULT_FREE as CHAIN_DEFAULT_FREE  # noqa: F401
+from ._reproduce._chain_fit import PARAMETERS as CHAIN_PARAMETERS  # noqa: F401
+from ._reproduce._chain_fit import ChainFit as ChainFit
+from ._reproduce._chain_fit import ChainFitError as ChainFitError
+from ._reproduce._chain_fit import chain_phase_slips as chain_phase_slips
+from ._reproduce._chain_fit import fit_measured_slips as fit_measured_slips
+from ._reproduce._chain_fit import measured_slips as wang2022_measured_slips  # noqa: F401
+from ._reproduce._chain_fit import paper_theory_slips as wang2022_theory_slips  # noqa: F401
+from ._reproduce._chain_fit import rms_relative as rms_relative
+from ._reproduce._chain_fit import symmetric_bound as symmetric_bound
+from ._reproduce._chain_fit import wang2022_loads as wang2022_loads
+from ._reproduce._fit_figure import plot_fit_measured as plot_fit_measured
+from ._reproduce._profile_likelihood import profile_likelihood as chain_profile_likelihood  # noqa: F401
+from ._reproduce._robust_fit import NOISE_MODELS as CHAIN_NOISE_MODELS  # noqa: F401
+from ._reproduce._robust_fit import RobustChainFit as RobustChainFit
+from ._reproduce._robust_fit import robust_fit_measured_slips as robust_fit_measured_slips
 from ._reproduce._table3 import calibrate_table3 as calibrate_table3
 from ._reproduce._table3 import equivalent_G as equivalent_G
 from ._reproduce._table3 import reproduce_table3 as reproduce_table3
@@ -175,8 +165,18 @@ from ._roughness._synthesis import wm_profile as wm_profile
 from ._roughness._synthesis import yk_heights as yk_heights
 from ._roughness._topography import Topography as Topography
 from ._roughness._topography import read_topography as read_topography
+from ._sensitivity import Elasticities as Elasticities
+from ._sensitivity import LoopChain as LoopChain
+from ._sensitivity import ReticleChain as ReticleChain
+from ._sensitivity import elasticities as elasticities
+from ._sensitivity import hysteresis_sensitivities as hysteresis_sensitivities
+from ._sensitivity import slip_sensitivities as slip_sensitivities
 from ._sweep import product_grid as product_grid
 from ._sweep import sweep as sweep
+from ._tables import DataFileError as DataFileError
+from ._tables import read_table as read_table
+from ._tables import wang2022_table as wang2022_table
+from ._tables import wu2015_table as wu2015_table
 
 try:
     __version__ = version("tribojax")

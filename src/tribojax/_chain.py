@@ -4,8 +4,9 @@
     (F_s, K_τ, C_τ, α) --PreSlipLuGre, Eq 27, slip ODE-->  phase slips T4…T7 (Tables 4–7)
 
 under the stage cycle `TrapezoidProfile(a_max)` (docs/reproduction.md). Used by the Table 3
-calibration and the Tables 4–7 reproduction (`tribojax._reproduce`), the chain and surface fits
-and the sensitivities (`tribojax._fit`) and discovery's table baseline. Also the one mapping
+calibration, the Tables 4–7 reproduction and the full-chain fits (`tribojax._reproduce`), the
+surface fit (`tribojax._fit`), the sensitivities (`tribojax._sensitivity`) and discovery's table
+baseline. Also the one mapping
 between unconstrained fit coordinates θ and physical parameters (`to_physical`, `to_theta`).
 
 Derivatives of the contact at many loads. optimistix 0.1.0's forward linearisation of a residual
@@ -28,7 +29,6 @@ from ._checks import as_f64
 from ._dynamics._profiles import TrapezoidProfile
 from ._dynamics._slip import slip_phase_averages
 from ._friction._lugre import PreSlipLuGre
-from ._io._tables import wang2022_table
 from ._presets import (
     CHAIN_DEFAULTS,
     WANG2022_A_MAX,
@@ -36,6 +36,7 @@ from ._presets import (
     WANG2022_TANGENTIAL_LOAD_N,
     wang2022_table3_model,
 )
+from ._tables import wang2022_table
 
 # --- θ (unconstrained) <-> physical -------------------------------------------------------------
 # Search boxes for D and log G (scaled logits keep Levenberg–Marquardt inside them).

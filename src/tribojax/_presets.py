@@ -24,7 +24,7 @@ from ._checks import check_range
 from ._contact._contact import FractalContact
 from ._contact._materials import ContactPair, Material
 from ._contact._surface import FractalSurface
-from ._io._tables import wang2022_table
+from ._tables import wang2022_table
 
 # --- wang2022 -----------------------------------------------------------------------------------
 WANG2022_RETICLE_MASS_KG = 0.321  # m in Eqs 24 and 28

@@ -20,7 +20,7 @@ from pathlib import Path
 import equinox as eqx
 
 from .._checks import runtime_message
-from .._fit._decimate import DECIMATION_MAX_SAMPLES, decimate_record
+from .._decimate import DECIMATION_MAX_SAMPLES, decimate_record
 from .._io._files import sidecar_path, write_json_atomic
 
 __all__ = [

@@ -21,7 +21,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .._fit._decimate import DISCOVER_MAX_SAMPLES
+from .._decimate import DISCOVER_MAX_SAMPLES
 from .._io._curve import FrictionCurve, FrictionTransient
 from .._io._loop import HysteresisLoop
 from .._io._records import RECORD_FORMATS, read_record

@@ -50,8 +50,8 @@ from .._friction._elastic2d import ElasticDryFriction2D
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._config import read_config
 from .._io._files import write_text_atomic
-from .._io._tables import DataFileError
 from .._plot import pyplot, save_figure
+from .._tables import DataFileError
 from ._common import claim_outputs, error, progress, write_json_atomic
 
 SCHEMA = {

@@ -20,10 +20,10 @@ import time
 from pathlib import Path
 
 from .. import __version__
-from .._fit import _chain as chain_fit
-from .._fit import _robust as robust_fit
-from .._fit._figure import plot_fit_measured
 from .._plot import pyplot, save_figure
+from .._reproduce import _chain_fit as chain_fit
+from .._reproduce import _robust_fit as robust_fit
+from .._reproduce._fit_figure import plot_fit_measured
 from .._reproduce._table3 import calibrate_table3, max_rel_error, reproduce_table3
 from .._reproduce._tables4to7 import plot_figure10, print_tables4to7, reproduce_tables4to7
 from .._reproduce._wu2015 import plot_wu2015, wu2015_comparison

@@ -16,7 +16,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike
 
 from .._checks import as_f64, check_range, fail_if
-from .._io._tables import read_table
+from .._tables import read_table
 
 
 class AbstractProfile(eqx.Module):

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from .._presets import INCH_M, KIP_N
+from .._tables import DataFileError, read_text
 from ._loop import HysteresisLoop
-from ._tables import DataFileError, read_text
 
 BRFD_UNITS = {
     "time units": "s",

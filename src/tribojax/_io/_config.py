@@ -13,7 +13,7 @@ import math
 import tomllib
 from pathlib import Path
 
-from ._tables import DataFileError
+from .._tables import DataFileError
 
 
 def _number(v) -> bool:

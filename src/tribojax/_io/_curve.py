@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .._tables import DataFileError, read_table, read_text
 from ._epos import read_epos
 from ._files import csv_header, refuse_existing, sidecar_path, write_text_atomic
-from ._tables import DataFileError, read_table, read_text
 
 CURVE_COLUMNS = ("velocity", "friction", "friction_scatter", "velocity_scatter", "samples")
 TRANSIENT_COLUMNS = ("time_s", "velocity", "friction")

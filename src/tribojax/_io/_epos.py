@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .._presets import EPOS_NOMINAL_TORQUE_NM, RPM_RAD_S
-from ._tables import DataFileError, read_text
+from .._tables import DataFileError, read_text
 
 EPOS_UNITS = ("ms", "rpm", "%")
 _SCALE = (1e-3, RPM_RAD_S, EPOS_NOMINAL_TORQUE_NM / 100.0)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._tables import DataFileError, read_text
+from .._tables import DataFileError, read_text
 
 
 def positive_or_none(value, name: str, source: str, unit: str, *, required=False):

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._dynamics._profiles import DisplacementHistory
+from .._tables import DataFileError, read_table
 from ._files import (
     csv_header,
     data_line_number,
@@ -27,7 +28,6 @@ from ._files import (
     sidecar_text,
     write_record_files,
 )
-from ._tables import DataFileError, read_table
 
 LOOP_COLUMNS = ("t_s", "u_m", "f_N")  # the legacy format, no sidecar needed
 LOOP_FILE_COLUMNS = ("time_s", "displacement_m", "force_N")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .._tables import DataFileError
 from ._brfd import read_brfd
 from ._curve import (
     CURVE_COLUMNS,
@@ -18,7 +19,6 @@ from ._epos import is_epos
 from ._files import csv_header, data_line_number
 from ._loop import LOOP_COLUMNS, LOOP_FILE_COLUMNS, HysteresisLoop, read_loop
 from ._slip_run import SLIP_COLUMNS, SlipRun, read_slip_run
-from ._tables import DataFileError
 
 RECORD_FORMATS = ("slip", "loop", "brfd", "epos_steady", "epos", "curve")
 _READERS = {

@@ -26,8 +26,8 @@ import numpy as np
 from .._dynamics._profiles import AbstractProfile, MeasuredProfile, TrapezoidProfile
 from .._dynamics._slip import simulate_slip
 from .._presets import WANG2022_RETICLE_MASS_KG
+from .._tables import DataFileError, read_table
 from ._files import data_line_number, positive_or_none, read_sidecar, write_record_files
-from ._tables import DataFileError, read_table
 
 SLIP_COLUMNS = ("time_s", "stage_accel_m_s2", "slip_m")
 

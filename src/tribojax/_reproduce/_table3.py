@@ -30,7 +30,6 @@ import numpy as np
 from .._chain import mu_min, to_physical, to_theta
 from .._contact._asperity import REGIME_NAMES
 from .._fit._engine import FitResult, least_squares_fit
-from .._io._tables import wang2022_table
 from .._presets import (
     CALIBRATED_M,
     WANG2022_GAMMA,
@@ -41,6 +40,7 @@ from .._presets import (
     wang2022_surface,
     wang2022_table3_model,
 )
+from .._tables import wang2022_table
 
 CALIBRATED_NAMES = ("G_m", "mu_t", "sigma_s_Pa")
 FIXED_M = CALIBRATED_M

@@ -24,9 +24,9 @@ from .._chain import lugre_phase_slips_nm, table3_contact
 from .._dynamics._slip import simulate_slip
 from .._fit._engine import FitResult, least_squares_fit
 from .._friction._lugre import PreSlipLuGre
-from .._io._tables import wang2022_table
 from .._plot import pyplot
 from .._presets import WANG2022_RETICLE_MASS_KG
+from .._tables import wang2022_table
 
 TABLES = (4, 5, 6, 7)
 

@@ -17,7 +17,7 @@ import equinox as eqx
 import numpy as np
 from jaxtyping import Array, Float
 
-from .._io._tables import DataFileError, read_text
+from .._tables import DataFileError, read_text
 
 UNITS = {
     "m": 1.0,

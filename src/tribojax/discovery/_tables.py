@@ -39,7 +39,7 @@ from jaxtyping import Array
 
 from .._chain import phase_slips, table3_contact, wang2022_loads
 from .._dynamics._profiles import TrapezoidProfile
-from .._io._tables import wang2022_table
+from .._tables import wang2022_table
 from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign
 from ._slip import VS_GRID, AugmentedPreSlip
 

@@ -2,10 +2,10 @@
 
 For a chain parameter p_k and a grid of values, the profile log-likelihood is
 ℓ_P(p_k) = max ℓ over the other free parameters and the scale with p_k held at the value (the
-Student-t ℓ of `tribojax._fit._robust`). Each grid point starts from its neighbour's optimum
-with the robust optimum's EM weights, then takes a few EM steps. By Wilks' theorem
-2(ℓ̂ − ℓ_P) is approximately χ²₁, so the 95 % interval is where it stays below 3.84; a side
-where it never gets there inside the grid is open: the data do not bound the parameter there.
+Student-t ℓ of `tribojax._reproduce._robust_fit`). Each grid point starts from its
+neighbour's optimum with the robust optimum's EM weights, then takes a few EM steps. By Wilks'
+theorem 2(ℓ̂ − ℓ_P) is approximately χ²₁, so the 95 % interval is where it stays below 3.84; a
+side where it never gets there inside the grid is open: the data do not bound the parameter there.
 A parameter that was fixed in the robust fit is profiled with the fit's free parameters free
 (its ℓ_P then tells whether freeing it would pay).
 """
@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from ._chain import fit_measured_slips
-from ._robust import RobustChainFit, residual_form, robust_fit_measured_slips
+from ._chain_fit import fit_measured_slips
+from ._robust_fit import RobustChainFit, residual_form, robust_fit_measured_slips
 
 CHI2_95 = float(stats.chi2.ppf(0.95, 1))  # 3.84
 

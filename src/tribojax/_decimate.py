@@ -33,9 +33,9 @@ import math
 
 import numpy as np
 
-from .._io._loop import HysteresisLoop, cycle_starts
-from .._io._slip_run import SlipRun
-from ._engine import noise_limit
+from ._fit._engine import noise_limit
+from ._io._loop import HysteresisLoop, cycle_starts
+from ._io._slip_run import SlipRun
 
 # The reduced record's default size: fits and discovery resolve wang2022's slip dynamics (ring-
 # downs near 1 kHz over a 2.3 s cycle) with 20,000 samples (blocks of 0.12 ms, hω < 1).

@@ -52,11 +52,11 @@ from .._chain import SLIP_RTOL as SLIP_RTOL
 from .._chain import chain_contact as chain_contact
 from .._chain import chain_phase_slips, mu_min, to_physical, to_theta, wang2022_loads
 from .._checks import as_f64, runtime_message
-from .._io._tables import wang2022_table
+from .._fit._engine import FAILED_RESIDUAL, FitResult, gauss_newton_step, least_squares_fit
+from .._fit._solver import NoiseFloorLM
 from .._presets import CHAIN_DEFAULTS
 from .._results import RESULTS, result_name
-from ._engine import FAILED_RESIDUAL, FitResult, gauss_newton_step, least_squares_fit
-from ._solver import NoiseFloorLM
+from .._tables import wang2022_table
 
 PARAMETERS = ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha")
 """Parameters of the full chain, in order: D, G (m), μ_t, σ_s (Pa) of the contact model (wang2022

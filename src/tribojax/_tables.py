@@ -1,4 +1,5 @@
-"""Bundled published data and a validating CSV reader.
+"""Bundled published data and a validating CSV reader (below every other layer: the physics,
+`_presets` and the records of `_io` all read through it).
 
 Data live in the repository's top-level `data/` folder; wheels ship a copy as `tribojax/_data`
 (hatch force-include), so the loaders work from any working directory and from a non-editable
@@ -43,7 +44,7 @@ def data_dir() -> Path:
     installed = resources.files("tribojax") / "_data"
     if installed.is_dir():
         return Path(str(installed))
-    source = Path(__file__).resolve().parents[3] / "data"
+    source = Path(__file__).resolve().parents[2] / "data"
     if source.is_dir():
         return source
     raise FileNotFoundError(

@@ -39,9 +39,9 @@ import math
 import numpy as np
 from scipy import special, stats
 
-from .._io._tables import wang2022_table
 from .._results import RESULTS, result_name
-from ._chain import TABLES, ChainFit, fit_measured_slips, measured_slips, paper_theory_slips
+from .._tables import wang2022_table
+from ._chain_fit import TABLES, ChainFit, fit_measured_slips, measured_slips, paper_theory_slips
 
 NOISE_MODELS = ("relative", "absolute", "mixed")
 """Noise shapes of `robust_fit_measured_slips`: relative (on ln|T|), absolute (nm) and mixed

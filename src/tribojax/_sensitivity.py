@@ -30,16 +30,16 @@ import equinox as eqx
 import jax
 import numpy as np
 
-from .._chain import phase_slips
-from .._checks import check_range, fail_if
-from .._contact._contact import ContactParameters
-from .._contact._materials import ContactPair
-from .._dynamics._harmonic import harmonic_balance
-from .._friction._lugre import PreSlipLuGre
-from .._friction._rate_independent import Jenkins, Mindlin
-from .._plot import pyplot
-from .._precision import ensure_x64
-from .._presets import (
+from ._chain import phase_slips
+from ._checks import check_range, fail_if
+from ._contact._contact import ContactParameters
+from ._contact._materials import ContactPair
+from ._dynamics._harmonic import harmonic_balance
+from ._friction._lugre import PreSlipLuGre
+from ._friction._rate_independent import Jenkins, Mindlin
+from ._plot import pyplot
+from ._precision import ensure_x64
+from ._presets import (
     CALIBRATED_G_M,
     CALIBRATED_MU_T,
     CALIBRATED_SIGMA_S,

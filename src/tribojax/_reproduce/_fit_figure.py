@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._io._tables import wang2022_table
 from .._plot import pyplot, save_figure
-from ._chain import TABLES, measured_slips, paper_theory_slips
-from ._robust import rms_relative_masked
+from .._tables import wang2022_table
+from ._chain_fit import TABLES, measured_slips, paper_theory_slips
+from ._robust_fit import rms_relative_masked
 
 
 def plot_fit_measured(plain_nm, robust_nm, flagged, path=None, *, files=True):
