@@ -1,6 +1,6 @@
 """Independent hidden-effect loop records for the discovery study (issue 14).
 
-Nothing here is shared with tribojax's loop models or candidate effects (`discovery._loop_models`,
+Nothing here is shared with tribojax's loop models or candidate effects (`_model._loop_force`,
 `_loop_synthetic`): the force is computed by this module's own NumPy code, sample by sample on a
 time grid 8× finer than the record (then decimated), with its own parameterisations:
 

@@ -79,8 +79,9 @@ API_PAGES = [
     (
         "fit",
         "Fitting and sensitivity",
-        ("_fit", "_sensitivity"),
-        "The one least-squares engine, the fits of records built on it, and sensitivities.",
+        ("_fit", "_model", "_sensitivity"),
+        "The one least-squares engine, the record models that fit, predict and discover share "
+        "(slip runs, loops), the fits built on them, and sensitivities.",
     ),
     (
         "reproduce",

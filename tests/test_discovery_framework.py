@@ -1,7 +1,6 @@
 """The discovery engine on a cheap analytic baseline (no ODE): selection, `none`, custom effects,
 regions, report contract."""
 
-import dataclasses
 from typing import ClassVar
 
 import jax
@@ -156,12 +155,12 @@ def test_fit_rejects_steps_that_do_not_lower_the_cost():
     # near the optimum small steps leave the quantized cost unchanged; accepting such steps
     # (cost <= instead of <) walked on for 35 steps here (and 100+ on a hidden-Stribeck slip
     # record near gross slip, never converging); rejecting them ends the fit as stationary
-    from tribojax.discovery import _fitting as _core
+    from tribojax._model import fit_model
 
     t = jnp.linspace(0.0, 3.0, 300)
     y = np.exp(-np.asarray(t) / 0.8) + 0.005 * np.random.default_rng(0).standard_normal(300)
     b = QuantizedDecay(t=t, y=jnp.asarray(y), noise=0.005)
-    st = _core._fit(b, (), b.start(), y, 0.005)
+    st = fit_model(b, (), b.start(), y, 0.005)
     assert st.converged and st.message.startswith("stationary"), st.message
     assert st.steps <= 10
     assert np.allclose(np.exp(st.theta), [1.0, 0.8], rtol=2e-3)
@@ -171,7 +170,7 @@ def test_chi2_sf_matches_scipy():
     # the score and window p-values: SciPy's chi2.sf without SciPy at run time
     from scipy import stats
 
-    from tribojax.discovery._regions import chi2_sf
+    from tribojax._fit._noise import chi2_sf
 
     for dof in (1, 2, 3, 4, 8, 0.7, 3.3, 12.5, 40.0):
         for x in (0.0, 1e-3, 0.5, 3.0, 10.0, 60.0, 300.0, 1000.0):
@@ -186,7 +185,7 @@ def test_chi2_logsf_where_the_p_value_underflows():
 
     from scipy import special
 
-    from tribojax.discovery._regions import chi2_logsf, chi2_sf
+    from tribojax._fit._noise import chi2_logsf, chi2_sf
 
     for x in (5.0, 300.0, 1300.0, 1500.0, 2e3, 1e4, 1e6):
         want = log(2.0) + special.log_ndtr(-np.sqrt(x))
@@ -204,15 +203,15 @@ def test_chi2_logsf_where_the_p_value_underflows():
 def test_fit_shares_one_compiled_solve_across_effects():
     # strengths padded to K_MAX: adding effects to the model reuses the baseline fit's solve
     from tribojax._fit import _engine
-    from tribojax.discovery import _fitting as _core
+    from tribojax._model import fit_model
 
     base = _record("tone")
     y = np.asarray(base.y)
-    st = _core._fit(base, (), base.start(), y, 0.005)
+    st = fit_model(base, (), base.start(), y, 0.005)
     size = _engine._solve._cached._cache_size()
     for designs in ([Ramp().designs(base)[0]], [Bump().designs(base)[0], Tone().designs(base)[1]]):
         th = np.concatenate([st.theta, np.zeros(sum(d.k for d in designs))])
-        fit = _core._fit(base, tuple(designs), th, y, 0.005)
+        fit = fit_model(base, tuple(designs), th, y, 0.005)
         assert fit.converged and fit.theta.size == 2 + sum(d.k for d in designs)
     assert _engine._solve._cached._cache_size() == size
 
@@ -220,15 +219,17 @@ def test_fit_shares_one_compiled_solve_across_effects():
 def test_undetermined_parameter_gives_infinite_not_nan_std_error():
     # a parameter along an undetermined direction has infinite variance; the physical standard
     # errors of the others stayed NaN (0·inf in T·cov·Tᵀ) before
-    from tribojax.discovery import _discover, _fitting
+    from tribojax._fit._engine import fit_statistics
+    from tribojax._results import RESULTS
 
-    base = _record("none")
-    y = np.asarray(base.y)
-    st = _fitting._fit(base, (), base.start(), y, 0.005)
-    cov = st.cov.copy()
-    cov[1, :] = cov[:, 1] = 0.0
-    cov[1, 1] = np.inf
-    out = _discover._fit_dict(base, dataclasses.replace(st, cov=cov), 0.005)
-    A, tau = out["std_errors"]["A"], out["std_errors"]["tau"]
-    assert tau == np.inf
-    assert np.isfinite(A) and A == pytest.approx(np.exp(st.theta[0]) * np.sqrt(st.cov[0, 0]))
+    rng = np.random.default_rng(3)
+    J = np.stack([rng.standard_normal(50), np.zeros(50)], axis=1)  # tau undetermined
+    r = rng.standard_normal(50)
+    theta = np.array([0.3, -1.0])
+    st = fit_statistics(theta, r, J, names=("A", "tau"), transform=jnp.exp, sigma_known=False,
+                        result=RESULTS.successful, steps=1)
+    A, tau = st.std_errors
+    assert tau == np.inf and st.theta_covariance[1, 1] == np.inf
+    want = np.exp(0.3) * np.sqrt(st.theta_covariance[0, 0])
+    assert np.isfinite(A) and A == pytest.approx(want)
+    assert st.theta_covariance[0, 0] == pytest.approx((r @ r / 48) / (J[:, 0] @ J[:, 0]))

@@ -14,8 +14,8 @@ import pytest
 import tribojax as tj
 import tribojax.discovery as disc
 from tribojax.discovery import AbstractEffect, EffectDesign
-from tribojax.discovery._loop import cycle_noise
-from tribojax.discovery._loop_models import LoopSpec, loop_force, prepare_loop
+from tribojax._model import cycle_noise
+from tribojax._model import LoopSpec, loop_force, prepare_loop
 from tribojax.discovery._loop_synthetic import (
     LOAD_GRADIENT,
     LOOP_EFFECTS,

@@ -12,7 +12,7 @@ import pytest
 
 import tribojax as tj
 import tribojax.discovery as disc
-from tribojax.discovery import _slip as ds
+from tribojax import _model as ds
 from tribojax.discovery import synthetic as syn
 
 N_CI = 231  # samples over 2.3 s (10 ms apart: the hidden profile's kinks fall on samples)

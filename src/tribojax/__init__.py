@@ -79,12 +79,6 @@ from ._fit._history import BOUC_WEN_STARTS as BOUC_WEN_STARTS
 from ._fit._history import HistoryFit as HistoryFit
 from ._fit._history import fit_history as fit_history
 from ._fit._history import predict_history as predict_history
-from ._fit._loop import LoopAnalysis as LoopAnalysis
-from ._fit._loop import analyse_loop as analyse_loop
-from ._fit._loop import fit_loop as fit_loop
-from ._fit._loop import loop_residuals as loop_residuals
-from ._fit._slip import fit_slip_run as fit_slip_run
-from ._fit._start import slip_run_start as slip_run_start
 from ._fit._surface import fit_surface_from_runs as fit_surface_from_runs
 from ._friction._bouc_wen import BoucWen as BoucWen
 from ._friction._elastic2d import ElasticDryFriction2D as ElasticDryFriction2D
@@ -116,6 +110,12 @@ from ._io._slip_run import read_slip_run as read_slip_run
 from ._io._slip_run import simulate_run as simulate_run
 from ._io._slip_run import synthetic_slip_run as synthetic_slip_run
 from ._io._slip_run import write_slip_run as write_slip_run
+from ._model import LoopAnalysis as LoopAnalysis
+from ._model import analyse_loop as analyse_loop
+from ._model import fit_loop as fit_loop
+from ._model import fit_slip_run as fit_slip_run
+from ._model import loop_residuals as loop_residuals
+from ._model import slip_run_start as slip_run_start
 from ._presets import CHAIN_DEFAULTS as CHAIN_DEFAULTS
 from ._presets import WANG2022_A_MAX as WANG2022_A_MAX
 from ._presets import WANG2022_CALIBRATED as WANG2022_CALIBRATED

@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from ._fit._engine import noise_limit
+from ._fit._noise import ALPHA, chi2_sf
 from ._io._loop import HysteresisLoop, cycle_starts
 from ._io._slip_run import SlipRun
 
@@ -195,7 +195,8 @@ def decimate_record(
         source = "estimated from the scatter of the samples about their block quadratics"
         chi2 = None
     reduced_std = float(sigma * math.sqrt(float(np.mean(g))))
-    follow = None if chi2 is None else bool(chi2 <= noise_limit(dof))
+    # the χ² part of the one noise test (`noise_consistent`), on the block residuals
+    follow = None if chi2 is None else bool(chi2_sf(chi2 * dof, dof) >= ALPHA / 3)
     info = Decimation(
         factor=factor, method=METHOD, samples_in_record=n, samples_used=len(tc) * factor,
         cycles_kept=None if len(t) == n else len(cycle_starts(t, drive)) - 1,

@@ -1,7 +1,7 @@
 """`tribojax fit FILE.csv`: fit a friction model to a user's slip run or hysteresis loop.
 
     tribojax fit run.csv [--out DIR] [--alpha free|VALUE]          # PreSlipLuGre F_s, K_τ, C_τ, α
-    tribojax fit loop.csv [--out DIR] [--element jenkins|mindlin]  # μN and K_d
+    tribojax fit loop.csv [--out DIR] [--element jenkins|mindlin]  # μN and K_d (loop model)
     tribojax fit RECORD --model jenkins|mindlin|lugre|bouc_wen|best  # through the history
     tribojax fit DRIVE/steady_state/0.096kg [--format epos_steady]   # LuGre steady law
 
@@ -22,13 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .._fit._loop import fit_loop, loop_residuals
-from .._fit._slip import fit_slip_run
-from .._fit._start import noise_scale
-from .._friction._lugre import PreSlipLuGre
+from .._fit._measures import nrmse, rms
 from .._io._curve import FrictionCurve, FrictionTransient
 from .._io._records import RECORD_FORMATS, read_record
-from .._io._slip_run import SlipRun, simulate_run
+from .._io._slip_run import SlipRun
+from .._model import evaluate, fit_loop, fit_slip_run, loop_residuals, slip_baseline
 from .._plot import pyplot, save_figure
 from ._common import (
     FAILED,
@@ -75,7 +73,8 @@ def add_arguments(parser) -> None:
         "--model",
         choices=("steady", "history", *ELEMENT_MODELS, "best"),
         default=None,
-        help="loops: 'steady' (default for a periodic loop) or 'history' fit --element; "
+        help="loops: 'history' (default for a periodic loop: the loop model that discover also "
+        "fits) or 'steady' (wu2015's steady-loop formula) fit --element; "
         "jenkins|mindlin|lugre|bouc_wen drive that element (+ force offset) through the measured "
         "history, best: all four, lowest BIC (default for a non-periodic history); friction "
         "curves: lugre (the steady law, default) or best",
@@ -188,7 +187,7 @@ def _summary(fit, kind, source, n_data, resid, unit, sigma, sigma_source) -> dic
         source=str(source),
         fitted=list(fit.names),
         n_data=int(n_data),
-        rms_residual=float(np.sqrt(np.mean(np.square(resid)))),
+        rms_residual=rms(resid),
         residual_unit=unit,
         sigma=sigma,
         sigma_source=sigma_source,
@@ -206,17 +205,18 @@ def _full_record(full, result, args, reduction) -> dict:
     """Residual statistics of the fitted model on every sample of the unreduced record."""
     p = result["parameters"]
     if isinstance(full, SlipRun):
-        alpha = p.get("alpha", result.get("fixed", {}).get("alpha", 1.0))
-        element = PreSlipLuGre(p["F_s"], p["K_tau"], p["C_tau"], alpha)
-        sol = simulate_run(element, full, throw=False)
-        resid = np.asarray(sol.slip) - full.slip
+        # the fitted model (its θ) on the full record: the same model, not a rebuilt element
+        model = slip_baseline(full, alpha=None if "alpha" in p else result["fixed"]["alpha"])
+        theta = model.theta_of([p[name] for name in model.param_names])
+        resid = evaluate(model, theta) - full.slip
     else:
-        resid = loop_residuals(full, args.element, p["mu_N"], p["K_d"], model=args.model)
+        resid = loop_residuals(full, args.element, p["mu_N"], p["K_d"],
+                               model=args.model or "history")
     sigma = reduction.noise_std_original
     dof = max(len(resid) - len(result["fitted"]), 1)
     return {
         "n_data": len(resid),
-        "rms_residual": float(np.sqrt(np.mean(resid**2))),
+        "rms_residual": rms(resid),
         "reduced_chi2": float(np.sum((resid / sigma) ** 2) / dof) if sigma else None,
         "sigma": sigma,
         "what": "the fitted model on every sample of the record before the reduction",
@@ -243,13 +243,12 @@ def _fit_slip(run, args, start, reduction, note=None):
         sigma, how = None, "estimated from the residuals"
     steps = args.max_steps or ODE_FIT_STEPS
     fit = fit_slip_run(run, alpha=alpha, max_steps=steps, start=start or None, progress=note)
-    scale = run.noise_std if run.noise_std is not None else noise_scale(run.slip)
-    resid = fit.residuals * scale  # model − data, m
+    resid = fit.prediction - run.slip  # model − data, m
     if sigma is None:
         sigma = float(np.sqrt(np.sum(resid**2) / max(len(run) - len(fit.names), 1)))
     d = _summary(fit, "slip_run", run.source, len(run), resid, "m", sigma, how)
     d["model"] = "PreSlipLuGre (wang2022 Eq 27), slip at every sample"
-    d["nrmse"] = float(np.sqrt(np.mean(resid**2)) / np.std(run.slip))
+    d["nrmse"] = nrmse(resid, run.slip)
     d["mass_kg"] = run.mass
     curves = dict(x=run.t, data=run.slip, model=run.slip + resid, xlabel="t (s)",
                   ylabel="slip Δx (m)", resid_x=run.t, resid=resid)  # fmt: skip
@@ -260,11 +259,13 @@ def _fit_loop(loop, args, start, reduction):
     if len(loop.t) <= 2:
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
     steps = args.max_steps or ODE_FIT_STEPS
-    fit = fit_loop(loop, args.element, model=args.model or "steady", max_steps=steps,
-                   start=start or None)  # fmt: skip
-    scale = loop.noise_std if loop.noise_std is not None else 1.0
-    resid = fit.residuals * scale  # N, on the fitted samples (the last len(resid))
-    m = len(resid)
+    model = args.model or "history"
+    fit = fit_loop(loop, args.element, model=model, max_steps=steps, start=start or None)
+    if fit.prediction is not None:  # the loop model: the samples from the first reversal on
+        resid = fit.prediction - loop.f[-len(fit.prediction) :]
+    else:
+        resid = fit.residuals * (loop.noise_std if loop.noise_std is not None else 1.0)
+    m = len(resid)  # N, on the fitted samples (the last m)
     how = "sidecar noise_std_N" if loop.noise_std is not None else "estimated from the residuals"
     how = _reduced_sigma_source(reduction, how)
     sigma = loop.noise_std
@@ -272,10 +273,10 @@ def _fit_loop(loop, args, start, reduction):
         sigma = float(np.sqrt(np.sum(resid**2) / max(m - 2, 1)))
     d = _summary(fit, "loop", loop.source, m, resid, "N", sigma, how)
     d["model"] = (
-        f"{args.element} ({args.model or 'steady'} loop, wu2015 Eq "
+        f"{args.element} ({model} loop, wu2015 Eq "
         f"{1 if args.element == 'jenkins' else 2})"
     )
-    d["nrmse"] = float(np.sqrt(np.mean(resid**2)) / np.std(loop.f[-m:]))
+    d["nrmse"] = nrmse(resid, loop.f[-m:])
     d["normal_load_N"], d["frequency_Hz"] = loop.normal_load, loop.frequency
     if loop.normal_load is not None:
         d["mu"] = float(fit.values[0] / loop.normal_load)

@@ -15,15 +15,11 @@ import numpy as np
 
 from .._fit._curve import fit_steady_curve
 from .._fit._history import HISTORY_MODELS, fit_history, predict_history
+from .._fit._measures import bic, nrmse
 from .._io._curve import FrictionCurve
 from ._common import ODE_FIT_STEPS, CommandError
 
 ELEMENT_MODELS = tuple(HISTORY_MODELS)  # jenkins, mindlin, lugre, bouc_wen
-
-
-def bic(rss: float, n: int, p: int) -> float:
-    """Bayesian information criterion for Gaussian residuals, n·ln(RSS/n) + p·ln(n)."""
-    return float(n * np.log(rss / n) + p * np.log(n))
 
 
 def fit_history_record(loop, model: str, args, start, summary):
@@ -69,7 +65,7 @@ def fit_curve_record(curve: FrictionCurve, model: str, args, summary):
     sides = {}
     for side, sign in (("positive", 1), ("negative", -1)):
         sides[side] = fit_steady_curve(curve, direction=sign, **steps).as_dict()
-    d.update(model="lugre", nrmse=float(np.sqrt(np.mean(resid**2)) / np.std(curve.friction)),
+    d.update(model="lugre", nrmse=nrmse(resid, curve.friction),
              route="steady law with direction asymmetry T0", units=curve.units,
              per_direction=sides)  # fmt: skip
     curves = dict(x=curve.velocity, data=curve.friction, model=curve.friction + resid,

@@ -20,11 +20,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._dynamics._harmonic import harmonic_balance, harmonic_response
-from .._fit._loop import analyse_loop, fit_loop
 from .._friction._lugre import PreSlipLuGre
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._files import write_text_atomic
 from .._io._loop import read_loop
+from .._model import analyse_loop, fit_loop
 from .._plot import pyplot, save_figure
 from .._reproduce._wu2015 import wu2015_eq5_stiffness
 from ._common import claim_outputs, error, write_json_atomic

@@ -21,22 +21,14 @@ import optimistix as optx
 
 from .._precision import ensure_x64
 from .._results import RESULTS, result_name
+from ._noise import noise_consistent as _noise_test
+from ._solver import _PROGRESS, FAILED_RESIDUAL, LevenbergMarquardt, gauss_newton_step
 
 # A direction of θ whose singular value is below this fraction of the largest is reported as not
 # identifiable (the Jacobian is numerically rank-deficient at the square root of float64's eps).
 IDENTIFIABLE_RTOL = 1e-8
 
 
-def noise_limit(dof: int) -> float:
-    """Largest reduced χ² still consistent with the stated noise: 2, or 1 + 5·√(2/dof) for few
-    degrees of freedom (χ²/dof has standard deviation √(2/dof))."""
-    return max(2.0, 1.0 + 5.0 * (2.0 / max(dof, 1)) ** 0.5)
-
-
-# Residual (in units of the uncertainty) of a row where the model could not be evaluated (ODE
-# budget, failed load balance, all-plastic contact): far above any real misfit, so that LM
-# rejects the trial point.
-FAILED_RESIDUAL = 1e6
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,12 +51,18 @@ class FitResult:
         jacobian: ∂residuals/∂θ at the optimum, (n, p) (`least_squares_fit`; None elsewhere).
         result: the outcome, a `tribojax.RESULTS` member.
         reduced_chi2: RSS/(n − p) of the residuals (in units of the stated noise if known).
-        noise_consistent: with a stated noise, whether `reduced_chi2` is consistent with it
-            (≤ `noise_limit`); when not, the standard errors are scaled by the residual. None
-            when the noise scale was estimated from the residuals.
+        noise_consistent: whether the residual is the stated noise (`tribojax._fit._noise.
+            noise_consistent`: its χ² at level α/3, or a record model's full test, which also
+            judges an estimated noise); when not, the standard errors are scaled by the
+            residual. None when the noise scale was estimated and no record test applies.
         unidentifiable: the directions of θ that the data do not determine (relative singular
             value ≤ `IDENTIFIABLE_RTOL`), each {"direction": {name: component},
             "relative_singular_value": s_k/s_max}; `converged` says nothing about these.
+        theta_covariance: covariance of θ itself (inf along undetermined directions).
+        prediction: the model's samples at the optimum (output units; record models).
+        scale: the residual unit (output units; residuals = (prediction − data)/scale).
+        model: the fitted record model (`tribojax._model`), effects: names of the effects it
+            carries, designs: their `EffectDesign`s (record models only).
     """
 
     names: tuple[str, ...]
@@ -84,6 +82,18 @@ class FitResult:
     reduced_chi2: float | None = None
     noise_consistent: bool | None = None
     unidentifiable: tuple = ()
+    theta_covariance: np.ndarray | None = None
+    prediction: np.ndarray | None = dataclasses.field(default=None, repr=False)
+    scale: float | None = None
+    model: object = dataclasses.field(default=None, repr=False)
+    effects: tuple = ()
+    designs: tuple = dataclasses.field(default=(), repr=False)
+
+    @property
+    def rss(self) -> float:
+        """Σ residuals² (in units of `scale`²); inf when a residual is not finite."""
+        r = np.asarray(self.residuals, dtype=float)
+        return float(r @ r) if np.all(np.isfinite(r)) else float("inf")
 
     def __post_init__(self):
         result = self.result
@@ -125,33 +135,17 @@ class FitResult:
         }
 
 
-def gauss_newton_step(r, J):
-    """The Gauss–Newton step −(JᵀJ)⁺Jᵀr from θ, in units of θ's standard errors; traceable.
-
-    Standard errors from s²(JᵀJ)⁺ with s² = rᵀr/(n − p) (the residual scale estimated from the
-    fit). Entries ≪ 1: the step still left is far below the statistical uncertainty. Directions
-    with singular values below 1e-14 of the largest are dropped; a zero standard error gives inf.
-    """
-    r, J = jnp.asarray(r), jnp.asarray(J)
-    u, sv, vt = jnp.linalg.svd(J, full_matrices=False)
-    keep = sv > sv[0] * 1e-14
-    inv = jnp.where(keep, 1.0 / jnp.where(keep, sv, 1.0), 0.0)
-    step = -(vt.T @ ((u.T @ r) * inv))
-    se = jnp.sqrt(jnp.sum((vt * inv[:, None]) ** 2, axis=0))
-    n, p = J.shape
-    s = jnp.maximum(jnp.sqrt(r @ r / max(n - p, 1)), 1e-300)
-    return jnp.where(se > 0, step / jnp.where(se > 0, se * s, 1.0), jnp.inf)
-
-
-def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps, message=None):
+def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps, message=None,
+                   noise_consistent=None, **extra):
     """A FitResult from the optimum θ, its residuals r and Jacobian J = ∂r/∂θ.
 
     Covariance of θ: s²(JᵀJ)⁻¹ through the SVD of J (s² = RSS/(n − p), or 1 if `sigma_known`);
     directions with singular values ≤ 1e-14 of the largest get infinite variance. Mapped to the
     physical parameters `transform(θ)` by the delta method, T·cov·Tᵀ with T = ∂transform/∂θ.
-    With `sigma_known` and a reduced χ² above `noise_limit` the stated noise is contradicted by
-    the misfit: `noise_consistent` is False and s² = RSS/(n − p) is used instead of 1. Directions
-    of θ with singular values ≤ `IDENTIFIABLE_RTOL` of the largest are listed in `unidentifiable`.
+    With `sigma_known` and a χ² that `noise_consistent` rejects (or `noise_consistent` given
+    False: a record model's full test) the stated noise is contradicted by the misfit:
+    `noise_consistent` is False and s² = RSS/(n − p) is used instead of 1. Directions of θ
+    with singular values ≤ `IDENTIFIABLE_RTOL` of the largest are listed in `unidentifiable`.
     """
     theta = np.asarray(theta, dtype=np.float64)
     r, J = np.asarray(r, dtype=np.float64), np.asarray(J, dtype=np.float64)
@@ -161,18 +155,24 @@ def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps,
     _, sv, vt = np.linalg.svd(J if finite else np.zeros_like(J), full_matrices=False)
     tiny = sv <= (sv[0] if sv.size else 0.0) * 1e-14  # (no parameters: nothing is tiny)
     chi2 = float(r @ r) / max(n - p, 1)
-    consistent = bool(chi2 <= noise_limit(n - p)) if sigma_known else None
-    scale2 = 1.0 if consistent else chi2
-    T = np.asarray(jax.jacfwd(transform)(jnp.asarray(theta)))
-    # T·V·S⁻¹ over the determined directions; a parameter that moves along an undetermined one
-    # (singular value ~0) gets infinite variance (and no NaN from 0·inf)
-    A = (T @ vt[~tiny].T) / sv[~tiny][None, :]
-    cov = scale2 * (A @ A.T)
-    # (a component at round-off level, |T·v| ≤ 1e-10·|T row|, is not a dependence: driveNo2's
-    # negative-direction σ2 loaded its null Stribeck directions by 6e-17 and got an infinite error)
-    load = np.abs(T @ vt[tiny].T)
-    free = np.any(load > 1e-10 * np.linalg.norm(T, axis=1, keepdims=True), axis=1)
-    cov[np.ix_(free, free)] = np.inf
+    consistent = noise_consistent
+    if consistent is None and sigma_known:  # the χ² part of the one noise test
+        consistent = _noise_test(r, 1.0, n_params=p)[0]
+    scale2 = 1.0 if sigma_known and consistent else chi2
+
+    def delta(T):
+        # T·V·S⁻¹ over the determined directions; a parameter that moves along an undetermined
+        # one (singular value ~0) gets infinite variance (and no NaN from 0·inf). (A component
+        # at round-off level, |T·v| ≤ 1e-10·|T row|, is not a dependence: driveNo2's negative-
+        # direction σ2 loaded its null Stribeck directions by 6e-17 and got an infinite error.)
+        A = (T @ vt[~tiny].T) / sv[~tiny][None, :]
+        cov = scale2 * (A @ A.T)
+        load = np.abs(T @ vt[tiny].T)
+        free = np.any(load > 1e-10 * np.linalg.norm(T, axis=1, keepdims=True), axis=1)
+        cov[np.ix_(free, free)] = np.inf
+        return cov
+
+    cov = delta(np.asarray(jax.jacfwd(transform)(jnp.asarray(theta))))
     with np.errstate(invalid="ignore"):
         std = np.sqrt(np.diag(cov))
         corr = cov / np.outer(std, std)
@@ -181,6 +181,7 @@ def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps,
         covariance=cov, correlation=corr, theta=theta, residuals=r, singular_values=sv,
         steps=int(steps), message=message, jacobian=J, result=result, reduced_chi2=chi2,
         noise_consistent=consistent, unidentifiable=_singular_directions(sv, vt, names),
+        theta_covariance=delta(np.eye(p)), **extra,
     )  # fmt: skip
 
 
@@ -195,24 +196,6 @@ def _singular_directions(sv, vt, names) -> tuple:
         out.append({"direction": dict(zip(labels, v.tolist())),
                     "relative_singular_value": float(sv[k] / top) if top > 0 else 0.0})  # fmt: skip
     return tuple(out)
-
-
-# Progress of the running fit: `NoiseFloorLM` reports each step through `report_step` (a
-# jax.debug.callback), which forwards to the callable `least_squares_fit(progress=...)` set here.
-# A module-level hook keeps the compiled solve independent of the callable.
-_PROGRESS: list = []
-
-
-def report_step(shown, accepted, steps, cost, gn_step):
-    """Host side of a solver step: steps taken, ½‖r‖² at the last accepted point and, after an
-    accepted step, the Gauss–Newton step left (max over parameters, in standard errors). Under
-    `jax.vmap` the batch is summarised (most steps, summed cost, largest step left)."""
-    if _PROGRESS and np.any(shown):
-        progress, t0 = _PROGRESS[-1]
-        gn = f"Gauss-Newton step {np.max(gn_step):.2g} std errors"
-        gn = gn if np.all(accepted) else "step rejected"
-        progress(f"LM: {np.max(steps)} steps, cost {np.sum(cost):.8g}, {gn}, "
-                 f"{time.perf_counter() - t0:.1f} s")  # fmt: skip
 
 
 @eqx.filter_jit
@@ -298,7 +281,7 @@ def least_squares_fit(
     ensure_x64()
     theta0 = jnp.asarray(theta0, dtype=jnp.float64)
     if solver is None:
-        solver = optx.LevenbergMarquardt(rtol=float(rtol), atol=float(atol))
+        solver = LevenbergMarquardt(float(rtol), float(atol))
     if progress is not None:
         _PROGRESS.append((progress, time.perf_counter()))
     try:

@@ -24,6 +24,7 @@ from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._loop import HysteresisLoop
 from .._results import RESULTS
 from ._engine import FitResult, least_squares_fit
+from ._measures import nrmse
 from ._solver import NoiseFloorLM
 
 # parameters of each model: (name, positive?) — positive ones are fitted as logarithms
@@ -193,10 +194,9 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
 
 def _nrmse(residuals, records) -> float:
     """rms(residual)/std(measured) over all records (residuals are divided by each std)."""
-    r = np.asarray(residuals)
     scales = np.concatenate([np.full(len(rec[2]), rec[3]) for rec in records])
     f = np.concatenate([np.asarray(rec[2]) for rec in records])
-    return float(np.sqrt(np.mean((r * scales) ** 2)) / np.std(f))
+    return nrmse(np.asarray(residuals) * scales, f)
 
 
 def predict_history(fit: HistoryFit, loop: HysteresisLoop, *, decimate=None):

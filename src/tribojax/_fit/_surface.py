@@ -20,7 +20,7 @@ from .._presets import (
     wang2022_table3_model,
 )
 from ._engine import FitResult, least_squares_fit
-from ._slip import fit_slip_run
+from .._model import fit_slip_run
 
 SURFACE_NAMES = ("D", "G_m", "mu_t")
 

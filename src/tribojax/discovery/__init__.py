@@ -73,14 +73,23 @@ directions, each point weighted by its standard error; effects `stribeck` (LuGre
 `discover_curve`, `plot_curve_discovery`): see `tribojax.discovery._curve`.
 """
 
+from .._fit._noise import find_regions as find_regions
+from .._fit._noise import noise_estimate as noise_estimate
+from .._model import K_MAX as K_MAX
+from .._model import AbstractBaseline as AbstractBaseline
+from .._model import AugmentedPreSlip as AugmentedPreSlip
+from .._model import DiscoveryData as DiscoveryData
+from .._model import EffectDesign as EffectDesign
+from .._model import LoopBaseline as LoopBaseline
+from .._model import SlipBaseline as SlipBaseline
+from .._model import loop_baseline as loop_baseline
+from .._model import slip_baseline as slip_baseline
+from .._model import slip_start as slip_start
+from .._model import stage_travel as stage_travel
 from . import _slip_effects  # noqa: F401  (registers the slip effects)
-from ._core import ALPHA as ALPHA
+from .._model import ALPHA as ALPHA
 from ._core import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
-from ._core import K_MAX as K_MAX
-from ._core import AbstractBaseline as AbstractBaseline
 from ._core import AbstractEffect as AbstractEffect
-from ._core import DiscoveryData as DiscoveryData
-from ._core import EffectDesign as EffectDesign
 from ._core import default_effects as default_effects
 from ._core import register_effect as register_effect
 from ._curve import CurveBaseline as CurveBaseline  # registers the curve effects
@@ -89,21 +98,13 @@ from ._curve import discover_curve as discover_curve
 from ._curve import plot_curve_discovery as plot_curve_discovery
 from ._discover import DiscoveryReport as DiscoveryReport
 from ._discover import discover as discover
-from ._loop import LoopBaseline as LoopBaseline  # registers the loop effects
+from ._loop import GAP_GRID as GAP_GRID  # registers the loop effects
 from ._loop import discover_loop as discover_loop
-from ._loop import loop_baseline as loop_baseline
 from ._loop import plot_loop_discovery as plot_loop_discovery
 from ._loop_synthetic import eq7_standin_loop as eq7_standin_loop
 from ._loop_synthetic import eq7_standin_shape as eq7_standin_shape
 from ._loop_synthetic import hidden_effect_loop as hidden_effect_loop
 from ._plot import plot_correction as plot_correction
 from ._plot import plot_discovery as plot_discovery
-from ._regions import find_regions as find_regions
-from ._regions import noise_estimate as noise_estimate
-from ._slip import AugmentedPreSlip as AugmentedPreSlip
-from ._slip import SlipBaseline as SlipBaseline
-from ._slip import slip_baseline as slip_baseline
-from ._slip import slip_start as slip_start
-from ._slip import stage_travel as stage_travel
 from ._tables import wang2022_table_baseline as wang2022_table_baseline
 from ._tables import wang2022_table_effects as wang2022_table_effects

@@ -1,176 +1,19 @@
-"""Discovery contracts (issue 6): the observed record, effect designs, baselines, effects, registry.
-
-See the package docstring (`tribojax.discovery`) for the contract a baseline and an effect fulfil;
-the fit is in `_fitting`, the workflow in `_discover`.
+"""Discovery contracts (issue 6): effects and their registry. The record models (baselines), the
+observed record and effect designs are `tribojax._model`'s; the workflow is in `_discover`.
 """
 
 from __future__ import annotations
 
 import abc
-import dataclasses
 from typing import ClassVar
 
 import equinox as eqx
-import jax
-import numpy as np
 
-from ._regions import noise_estimate
+from .._model import AbstractBaseline, EffectDesign
 
-K_MAX = 12  # effect strengths in one fit, padded to this size (one compiled solve per record shape)
-"""Most effect strengths in one model; fits are padded to this size so that one compiled solve
-serves every combination of effects on a record shape."""
 DELTA_BIC_THRESHOLD = -10.0  # "very strong" evidence (Kass & Raftery 1995)
 """An effect is accepted only when it lowers BIC by more than 10 ("very strong" evidence, Kass &
 Raftery 1995)."""
-ALPHA = 0.01  # family-wise level of the score tests (Bonferroni over grid points and candidates)
-"""Family-wise level of the Rao score tests that rank candidate effects (Bonferroni over grid
-points and candidates)."""
-
-
-@dataclasses.dataclass(frozen=True)
-class DiscoveryData:
-    """What a baseline compares with: observed samples and where they sit.
-
-    y: observed samples (output units, e.g. m of slip or N of force), shape (n,).
-    x: abscissa of each sample for regions and plots (e.g. time in s, displacement in m).
-    segment: integer label per sample; windows never straddle a change of label (0 for one
-        record; loop branches 0/1, ...). Sample order is the order of the record.
-    noise_std: noise sd of y in output units from the sidecar, or None (estimated then).
-    x_label, y_label: axis labels with units.
-    segment_names: optional names of the labels (e.g. {0: "falling", 1: "rising"}).
-    """
-
-    y: np.ndarray
-    x: np.ndarray
-    segment: np.ndarray
-    noise_std: float | None
-    x_label: str
-    y_label: str
-    segment_names: dict = dataclasses.field(default_factory=dict)
-
-
-@dataclasses.dataclass(frozen=True)
-class EffectDesign:
-    """One effect at one nuisance setting, in the affine form the engine fits.
-
-    With strengths s (k,), the augmented model is
-        y = baseline.predict(θ_b, knobs) + basis @ s,   knobs = knob_null ⊕ knob_set + knob_gain @ s
-    so s = 0 is the null (an interior point: strengths are signed). An effect returns one design
-    per point of its grid of nonlinear nuisance parameters (frequencies, velocity scales); the
-    grid point only seeds them when the design makes them free: a strength that shifts a knob
-    (e.g. log v_s), fitted jointly with the others in the refit (`free`).
-
-    strength_names / strength_units: names and units of the physical strengths.
-    strength_scale: physical strength per unit of s (k,), for reporting (s is O(1) in fits).
-    knob_gain: (n_knobs, k) or None — how s moves the baseline's physics knobs.
-    knob_set: {knob name: value} — nuisance knobs fixed while the effect is active.
-    basis: (n, k) additive columns in output units per unit s, or None.
-    nuisance: {name: value} reported with the result; n_nuisance counts the fixed ones in ΔBIC.
-    free: ((strength index, nuisance name, physical strength → nuisance value), ...): strengths
-        that are nuisance shifts (counted in k, reported under "nuisance", not as strengths).
-    columns: (n, k) ∂y/∂s at s = 0 whatever the fit (additive effects whose knobs move a term
-        outside the physics: the score test then needs no model solve), or None.
-    starts: further strength vectors (k,) from which the refit starts (with the baseline at its
-        current fit) while the Gauss–Newton and zero starts leave a misfit: seeds of an optimum
-        far from the null along a valley that the local score cannot see.
-    """
-
-    strength_names: tuple[str, ...]
-    strength_units: tuple[str, ...]
-    strength_scale: np.ndarray
-    knob_gain: np.ndarray | None = None
-    knob_set: dict = dataclasses.field(default_factory=dict)
-    basis: np.ndarray | None = None
-    nuisance: dict = dataclasses.field(default_factory=dict)
-    n_nuisance: int = 0
-    free: tuple = ()
-    columns: np.ndarray | None = None
-    starts: tuple = ()
-
-    @property
-    def k(self) -> int:
-        return len(self.strength_names)
-
-
-class AbstractBaseline(eqx.Module):
-    """A baseline model of one record, with physics knobs that effects may move.
-
-    Concrete baselines are equinox Modules holding the record's arrays (so one compiled fit
-    serves every record of the same shape). θ is unconstrained (e.g. log of positive values).
-    """
-
-    kind: eqx.AbstractClassVar[str]  # "slip" or "loop"
-    param_names: eqx.AbstractClassVar[tuple[str, ...]]
-    param_units: eqx.AbstractClassVar[tuple[str, ...]]
-    knob_names: eqx.AbstractClassVar[tuple[str, ...]]
-    # False where the noise of the record cannot be told from its residual (a few summary
-    # values, no sidecar): the baseline is then never declared consistent with the noise
-    noise_gate: ClassVar[bool] = True
-
-    @abc.abstractmethod
-    def knob_null(self) -> np.ndarray:
-        """Knob values under which every effect vanishes (the baseline physics)."""
-
-    @abc.abstractmethod
-    def start(self) -> np.ndarray:
-        """Start θ for the baseline fit (unconstrained)."""
-
-    def starts(self) -> list:
-        """Start points of the baseline fit; the lowest converged cost is kept. Default
-        `[self.start()]`."""
-        return [self.start()]
-
-    @abc.abstractmethod
-    def physical(self, theta):
-        """θ → physical parameters (JAX, differentiable)."""
-
-    @abc.abstractmethod
-    def predict(self, theta, knobs):
-        """Model samples (output units), shape (n,), at θ and knob vector `knobs` (JAX).
-
-        Runs inside the compiled fit, forward-differentiated: it must not raise at a trial point
-        (use `throw=False` in ODE solves); non-finite samples reject that trial step."""
-
-    @abc.abstractmethod
-    def data(self) -> DiscoveryData:
-        """The observed record."""
-
-    def value_and_jacobians(self, theta, knobs):
-        """`predict` and its forward-mode Jacobians ∂/∂θ (n, p), ∂/∂knobs (n, n_knobs), in one
-        pass (JAX); a baseline may split it (knobs that do not enter an ODE)."""
-
-        def f(tb, kn):
-            out = self.predict(tb, kn)
-            return out, out
-
-        (jb, jk), value = jax.jacfwd(f, argnums=(0, 1), has_aux=True)(theta, knobs)
-        return value, jb, jk
-
-    def noise_model(self, r) -> tuple[float, float]:
-        """(σ̂, AR(1) ρ̂) of the noise in the baseline residual `r` (output units). Default:
-        `noise_estimate` (first differences within segments); a baseline may override it with a
-        record-specific estimator (e.g. differences between loop cycles)."""
-        return noise_estimate(r, self.data().segment)
-
-    def region_info(self, region: dict) -> dict:
-        """Extra keys for a flagged region (e.g. a loop's branch and displacement range);
-        default none."""
-        return {}
-
-    def unidentified(self, values: dict, std_errors: dict) -> dict:
-        """Parameters the record does not determine, {name: {"lower_bound", "upper_bound",
-        "unit"}}, from the fitted values and standard errors; default none."""
-        return {}
-
-    def signals(self) -> dict:
-        """Measured signals (name → (n,) array) a remaining misfit is correlated with; default
-        the abscissa."""
-        d = self.data()
-        return {d.x_label: np.asarray(d.x, dtype=float)}
-
-    def solver_ok(self, theta, knobs) -> bool:
-        """False when the model could not be evaluated (e.g. ODE failure); default True."""
-        return True
 
 
 class AbstractEffect(eqx.Module):

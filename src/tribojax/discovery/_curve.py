@@ -44,15 +44,9 @@ from jaxtyping import Array
 
 from .._friction._lugre import stribeck_curve
 from .._io._curve import FrictionCurve
+from .._model import AbstractBaseline, DiscoveryData, EffectDesign
 from .._plot import pyplot, save_figure
-from ._core import (
-    AbstractBaseline,
-    AbstractEffect,
-    DiscoveryData,
-    EffectDesign,
-    default_effects,
-    register_effect,
-)
+from ._core import AbstractEffect, default_effects, register_effect
 from ._discover import DiscoveryReport, discover
 
 CURVE_KNOBS = ("stribeck", "log10_v_s", "log_beta", "asymmetry", "log_viscous_exponent")

@@ -4,27 +4,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._core import (
-    ALPHA,
-    DELTA_BIC_THRESHOLD,
-    K_MAX,
-    AbstractBaseline,
-    AbstractEffect,
-    default_effects,
-)
-from ._fitting import _columns, _delta_bic, _fit, _score, prefetch_columns
-from ._parallel import speculatively
-from ._refits import MAX_MOVES, _bic, _moved_optimum, _refit, _seeds, _sharpen
-from ._regions import (
+from .._fit._measures import delta_bic, rms
+from .._fit._noise import (
     ar1_inflation,
     chi2_logsf,
     chi2_sf,
+    excess_rmse,
     find_regions,
-    noise_estimate,
+    noise_consistent,
     residual_rho,
 )
-from ._report import DiscoveryReport, _fit_dict, _rmse, _strengths
-from ._verdict import correlations, excess_rmse, flexible_correction, noise_consistent, verdict
+from .._model import ALPHA, K_MAX, AbstractBaseline, fit_record
+from ._core import DELTA_BIC_THRESHOLD, AbstractEffect, default_effects
+from ._fitting import _columns, _delta_bic, _score, prefetch_columns
+from ._parallel import speculatively
+from ._refits import MAX_MOVES, _bic, _moved_optimum, _refit, _seeds, _sharpen
+from ._report import DiscoveryReport, _fit_dict, _strengths
+from ._verdict import correlations, flexible_correction, verdict
 
 
 def _public(cands):
@@ -42,13 +38,13 @@ def _misfit(baseline, data, r0, rf, state, sigma, rho, alpha, n_windows, base):
     base_ok, p0 = base
     final_ok, p1, remaining = noise_consistent(rf, sigma, rho, seg, x, n_final, **kw)
     e0, e1 = excess_rmse(r0, sigma), excess_rmse(rf, sigma)
-    v = verdict(len(state.names), base_ok, final_ok, e0, e1)
+    v = verdict(len(state.effects), base_ok, final_ok, e0, e1)
     if not baseline.noise_gate:  # no noise test: the ΔBIC selection alone decides
-        v = "explained" if state.names else "none"
+        v = "explained" if state.effects else "none"
     misfit = {"baseline_noise_p_value": p0, "final_noise_p_value": p1,
               "baseline_consistent": base_ok, "final_consistent": final_ok}  # fmt: skip
     if v in ("partly_explained", "unexplained"):
-        signals = {**baseline.signals(), "model": np.asarray(state.yhat)}
+        signals = {**baseline.signals(), "model": np.asarray(state.prediction)}
         for rg in remaining:
             rg.update(baseline.region_info(rg))
         misfit["regions"] = remaining
@@ -133,29 +129,23 @@ def discover(
     data = baseline.data()
     y = np.asarray(data.y, dtype=float)
     n = y.size
-    scale0 = data.noise_std if data.noise_std else noise_estimate(y, data.segment)[0]
-    scale = float(scale0) if scale0 > 0 else float(np.std(y) or 1.0)
-    fits = []
-    for th in baseline.starts() if theta0 is None else [theta0]:
-        fits.append(_fit(baseline, (), np.asarray(th, dtype=float), y, scale))
-        if fits[-1].converged:  # the next starts only when this one fails
-            break
-    state = min(fits, key=lambda f: (not f.converged, f.rss))
+    state = fit_record(baseline, None if theta0 is None else [theta0])
+    scale = state.scale
     estimated = not data.noise_std
     kw = {"alpha": alpha, "n_windows": n_windows, "estimated": estimated}
     n_base = len(baseline.param_names)
 
     def baseline_view(st):
         """The baseline residual, its noise model, flagged regions and noise test."""
-        r = y - st.yhat
-        sd, rho = baseline.noise_model(r)  # ρ always from the data
-        nz = {"sigma": sd if estimated else float(data.noise_std), "rho": rho, "hat": sd}
-        rg = find_regions(r, data.x, data.segment, nz["sigma"], rho, n_windows=n_windows,
+        r = y - st.prediction
+        consistent, p, sigma, rho = baseline.noise_test(r, n_base, alpha=alpha,
+                                                        n_windows=n_windows)  # fmt: skip
+        nz = {"sigma": sigma, "rho": rho, "hat": baseline.noise_model(r)[0]}
+        rg = find_regions(r, data.x, data.segment, sigma, rho, n_windows=n_windows,
                           alpha=alpha, segment_names=data.segment_names)  # fmt: skip
         for g in rg:
             g.update(baseline.region_info(g))
-        test = noise_consistent(r, nz["sigma"], rho, data.segment, data.x, n_base, **kw)[:2]
-        return r, nz, rg, test
+        return r, nz, rg, (consistent, p)
 
     base_state = state
     # noise: the current noise model (see `_sharpen`), from the baseline residual
@@ -165,7 +155,7 @@ def discover(
         if st is not base_state:
             _sharpen(baseline, st, y, noise, estimated)
         n_par = len(baseline.param_names) + sum(d.k + d.n_nuisance for d in st.designs)
-        return baseline.noise_gate and noise_consistent(y - st.yhat, noise["sigma"],
+        return baseline.noise_gate and noise_consistent(y - st.prediction, noise["sigma"],
                                                         noise["rho"], data.segment, data.x,
                                                         n_par, **kw)[0]  # fmt: skip
 
@@ -173,16 +163,17 @@ def discover(
     moves = 0  # better optima of the current model found by a refit (`_moved_optimum`)
     rounds = []
     grids = {e.name: e.designs(baseline) for e in effects}
-    while state.converged and len(state.names) < max_effects and not (rounds and base_ok):
-        r = (y - state.yhat) / scale
-        J_cur = state.jac
+    while state.converged and len(state.effects) < max_effects and not (rounds and base_ok):
+        r = (y - state.prediction) / scale
+        J_cur = state.jacobian
         cache: dict = {}
         room = K_MAX - sum(d.k for d in state.designs)
-        prefetch_columns(baseline, state, [d for e in effects if e.name not in state.names
-                                           for d in grids[e.name] if d.k <= room], cache)  # fmt: skip
+        todo = [d for e in effects if e.name not in state.effects for d in grids[e.name]
+                if d.k <= room]  # fmt: skip
+        prefetch_columns(baseline, state, todo, cache)
         cands = []
         for e in effects:
-            if e.name in state.names:
+            if e.name in state.effects:
                 continue
             room = K_MAX - sum(d.k for d in state.designs)
             grid = [d for d in grids[e.name] if d.k <= room]  # designs that fit in K_MAX
@@ -257,9 +248,9 @@ def discover(
             if not new.converged or not np.isfinite(new.rss):
                 c["refit_message"] = new.message or "refit failed"
                 continue
-            rho1 = residual_rho(y - new.yhat)
+            rho1 = residual_rho(y - new.prediction)
             c["delta_bic"] = _delta_bic(new.rss, state.rss, n, d.k + d.n_nuisance, rho1)
-            c["rmse_after"] = _rmse(y - new.yhat)
+            c["rmse_after"] = rms(y - new.prediction)
             if c["delta_bic"] < delta_bic_threshold:
                 accepted.append((c, new, d.k + d.n_nuisance, ar1_inflation(rho1)))
         if not accepted:
@@ -275,8 +266,7 @@ def discover(
         # drift named `position_error` with twice the RMS misfit of `sensor_drift`).
         c_common = min(accepted, key=lambda a: a[1].rss)[3]
         for c, new, dk, _ in accepted:
-            gain = n * np.log(new.rss / state.rss) / c_common
-            c["delta_bic_common"] = float(gain + dk * np.log(n))
+            c["delta_bic_common"] = delta_bic(new.rss, state.rss, n, dk, c_common)
         best_c, best = min(accepted, key=lambda a: a[0]["delta_bic_common"])[:2]
         moved = _moved_optimum(baseline, state, best, y, scale, delta_bic_threshold)
         if moved is not None and moves < MAX_MOVES:
@@ -298,18 +288,18 @@ def discover(
         state = best
         if consistent(state):  # explained: nothing is left to name
             break
-    rf = y - state.yhat
+    rf = y - state.prediction
     sigma, rho_n = noise["sigma"], noise["rho"]
     for rg in regions:
-        rg["rmse_before"] = _rmse(r0[rg["i0"] : rg["i1"]])
-        rg["rmse_after"] = _rmse(rf[rg["i0"] : rg["i1"]])
+        rg["rmse_before"] = rms(r0[rg["i0"] : rg["i1"]])
+        rg["rmse_after"] = rms(rf[rg["i0"] : rg["i1"]])
     misfit, verdict, e0, e1 = _misfit(baseline, data, r0, rf, state, sigma, rho_n, alpha,
                                       n_windows, base_test)  # fmt: skip
     return DiscoveryReport(
         kind=baseline.kind,
-        effects=state.names,
-        baseline_rmse=_rmse(r0),
-        final_rmse=_rmse(rf),
+        effects=state.effects,
+        baseline_rmse=rms(r0),
+        final_rmse=rms(rf),
         regions=regions,
         candidates=rounds[0] if rounds else [],
         rounds=rounds,
@@ -340,8 +330,8 @@ def discover(
         },  # fmt: skip
         x=np.asarray(data.x),
         y=y,
-        baseline_y=base_state.yhat,
-        final_y=state.yhat,
+        baseline_y=base_state.prediction,
+        final_y=state.prediction,
         segment=np.asarray(data.segment),
-        signals={**baseline.signals(), "model": np.asarray(state.yhat)},
+        signals={**baseline.signals(), "model": np.asarray(state.prediction)},
     )

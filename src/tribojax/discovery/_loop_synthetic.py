@@ -31,6 +31,7 @@ import numpy as np
 import optimistix as optx
 
 from .._checks import check_range
+from .._fit._solver import LevenbergMarquardt
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._loop import HysteresisLoop, synthetic_loop
 from .._presets import WU2015_EQ5_EXPONENT, wu2015_eq5_stiffness
@@ -154,7 +155,7 @@ def _shape_residual(y, args):
 def _solve_shape(y0, args):
     sol = optx.least_squares(
         _shape_residual,
-        optx.LevenbergMarquardt(1e-12, 1e-14),
+        LevenbergMarquardt(1e-12, 1e-14),
         y0,
         args,
         throw=False,

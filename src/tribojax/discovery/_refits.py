@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._fitting import MAX_STEPS, _columns, _delta_bic, _fit
+from .._fit._measures import bic
+from .._fit._noise import residual_rho
+from .._model import MAX_STEPS, fit_model
+from ._fitting import _columns, _delta_bic
 from ._parallel import in_parallel
-from ._regions import residual_rho
 
 
 def _refit(baseline, state, design, name, y, scale, r, cache):
@@ -25,13 +27,13 @@ def _refit(baseline, state, design, name, y, scale, r, cache):
     hidden 0.1) at the noise level.
     """
     zero = np.concatenate([state.theta, np.zeros(design.k)])
-    designs, names = state.designs + (design,), state.names + (name,)
+    designs, names = state.designs + (design,), state.effects + (name,)
 
     def fit_from(x0):
-        return lambda: _fit(baseline, designs, x0, y, scale, names)
+        return lambda: fit_model(baseline, designs, x0, y, scale, names)
 
     first = []
-    A = np.concatenate([state.jac, _columns(baseline, state, design, cache) / scale], axis=1)
+    A = np.concatenate([state.jacobian, _columns(baseline, state, design, cache) / scale], axis=1)
     if np.all(np.isfinite(A)):
         step = np.linalg.lstsq(A, r, rcond=None)[0]
         p = state.theta.size
@@ -52,7 +54,7 @@ def _refit(baseline, state, design, name, y, scale, r, cache):
         # stopped, once
         run = [f for f in fits if np.isfinite(f.rss) and f.steps >= MAX_STEPS]
         if run:
-            fits.append(_fit(baseline, designs, min(run, key=lambda f: f.rss).theta, y, scale,
+            fits.append(fit_model(baseline, designs, min(run, key=lambda f: f.rss).theta, y, scale,
                              names))  # fmt: skip
             good = [f for f in fits[-1:] if f.converged and np.isfinite(f.rss)]
     return min(good, key=lambda f: f.rss) if good else fits[-1]
@@ -70,9 +72,9 @@ def _apart(d1, d2):
 
 
 def _bic(fit, design, n):
-    """n·log RSS + (k + nuisance)·log n: compares refits of one effect's designs (the RSS
+    """BIC with k + nuisance parameters: compares refits of one effect's designs (the RSS
     alone when they have as many parameters)."""
-    return n * np.log(fit.rss) + (design.k + design.n_nuisance) * np.log(n)
+    return bic(fit.rss, n, design.k + design.n_nuisance)
 
 
 def _seeds(scored, n):
@@ -93,9 +95,9 @@ def _sharpen(baseline, fit, y, noise, estimated):
     holds a misfit is inflated by it, and ρ̂ with it (measured: σ̂ 4.6x the true σ and ρ̂ at its
     0.95 bound on a hidden-Stribeck record, so that a refit leaving 3.8 σ of misfit passed as
     noise); every refit's residual is a further estimate, the smallest the least contaminated."""
-    if not (fit.converged and np.all(np.isfinite(fit.yhat))):
+    if not (fit.converged and np.all(np.isfinite(fit.prediction))):
         return
-    s_new, rho_new = baseline.noise_model(y - fit.yhat)
+    s_new, rho_new = baseline.noise_model(y - fit.prediction)
     if 0 < s_new < noise["hat"]:
         noise["hat"], noise["rho"] = float(s_new), float(rho_new)
         if estimated:
@@ -112,13 +114,13 @@ def _moved_optimum(baseline, state, best, y, scale, threshold):
     not from the effect (measured: a lagged slip reading, 0.6 kPa, where `load_coupling` was
     added with κ = 0.0006 ± 0.0004 per g and 24 noise sd of misfit went to 0.2). Else None."""
     k = best.designs[-1].k
-    s, se = best.theta[-k:], np.sqrt(np.abs(np.diag(best.cov)))[-k:]
+    s, se = best.theta[-k:], np.sqrt(np.abs(np.diag(best.theta_covariance)))[-k:]
     if np.any(np.abs(s) > 2 * se) or not np.all(np.isfinite(se)):
         return None
-    f = _fit(baseline, state.designs, best.theta[:-k], y, scale, state.names)
+    f = fit_model(baseline, state.designs, best.theta[:-k], y, scale, state.effects)
     if not (f.converged and np.isfinite(f.rss) and f.rss < state.rss):
         return None
     dk = best.designs[-1].k + best.designs[-1].n_nuisance
-    if _delta_bic(best.rss, f.rss, y.size, dk, residual_rho(y - best.yhat)) < threshold:
+    if _delta_bic(best.rss, f.rss, y.size, dk, residual_rho(y - best.prediction)) < threshold:
         return None  # the effect still earns its place against the moved model
     return f

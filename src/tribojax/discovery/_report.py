@@ -4,11 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
-import jax
-import jax.numpy as jnp
 import numpy as np
-
-from ._fitting import _State
 
 
 @dataclasses.dataclass(frozen=True)
@@ -134,20 +130,10 @@ class DiscoveryReport:
         return "\n".join(lines)
 
 
-def _fit_dict(baseline, state: _State, scale: float) -> dict:
+def _fit_dict(baseline, state, scale: float) -> dict:
     p = len(baseline.param_names)
-    theta_b = jnp.asarray(state.theta[:p])
-    values = np.asarray(baseline.physical(theta_b))
-    T = np.asarray(jax.jacfwd(baseline.physical)(theta_b))
-    cov_b = state.cov[:p, :p]
-    # a physical parameter that depends on an undetermined one is undetermined (inf), not 0·inf
-    free = np.isfinite(np.diag(cov_b))
-    cov_f = np.where(np.isfinite(cov_b), cov_b, 0.0)
-    var = np.einsum("ij,jk,ik->i", T, cov_f, T)
-    var = np.where(np.any((T != 0) & ~free[None, :], axis=1), np.inf, var)
-    std = np.sqrt(np.clip(var, 0, None))
-    vals = dict(zip(baseline.param_names, values.tolist()))
-    stds = dict(zip(baseline.param_names, std.tolist()))
+    vals = dict(zip(baseline.param_names, state.values[:p].tolist()))
+    stds = dict(zip(baseline.param_names, state.std_errors[:p].tolist()))
     return {
         "parameters": vals,
         "std_errors": stds,
@@ -156,21 +142,21 @@ def _fit_dict(baseline, state: _State, scale: float) -> dict:
         "converged": state.converged,
         "steps": state.steps,
         "message": state.message,
-        "effects": list(state.names),
+        "effects": list(state.effects),
         "rss": state.rss * scale**2,
     }
 
 
-def _strengths(baseline, state: _State) -> dict:
+def _strengths(baseline, state) -> dict:
     p = len(baseline.param_names)
     out, j = {}, 0
-    for name, d in zip(state.names, state.designs):
+    for name, d in zip(state.effects, state.designs):
         entry = {}
         nuisance = {k: float(v) for k, v in d.nuisance.items()}
         free = {i: (name, fn) for i, name, fn in d.free}
         for i, (sn, su) in enumerate(zip(d.strength_names, d.strength_units)):
             s = state.theta[p + j + i]
-            var = state.cov[p + j + i, p + j + i]
+            var = state.theta_covariance[p + j + i, p + j + i]
             if i in free:  # a fitted nuisance value (the grid point seeded it)
                 nuisance[free[i][0]] = float(free[i][1](s * d.strength_scale[i]))
                 continue
@@ -183,8 +169,3 @@ def _strengths(baseline, state: _State) -> dict:
         out[name] = entry
         j += d.k
     return out
-
-
-def _rmse(a):
-    a = np.asarray(a)
-    return float(np.sqrt(np.mean(a * a))) if a.size else float("nan")

@@ -9,10 +9,18 @@ from typing import ClassVar
 
 import numpy as np
 
-from ._core import AbstractEffect, EffectDesign, register_effect
-from ._modes import _golden_max, _oscillator
-from ._regions import noise_estimate
-from ._slip import KNOBS, N_ODE_KNOBS, VS_GRID, ZETA_MAX, stage_travel
+from .._fit._noise import noise_estimate
+from .._model import (
+    KNOBS,
+    N_ODE_KNOBS,
+    VS_GRID,
+    ZETA_MAX,
+    EffectDesign,
+    golden_max,
+    oscillator,
+    stage_travel,
+)
+from ._core import AbstractEffect, register_effect
 
 KAPPA_STARTS = (-0.3, 1.0)  # load-coupling refit starts, κ per g
 # viscous refit starts, σ2 in units of the start C_τ (a start at 1 was the lowest cost in none of
@@ -132,7 +140,7 @@ class Vibration(AbstractEffect):
         """Designs for every (f, z) pair in each static form (the oscillator runs once)."""
         ys = _y_scale(baseline)
         f, z = np.asarray(pairs, dtype=float).reshape(-1, 2).T
-        qs = np.asarray(_oscillator(baseline.t, baseline.accel, 2 * np.pi * f, z))
+        qs = np.asarray(oscillator(baseline.t, baseline.accel, 2 * np.pi * f, z))
         a = np.asarray(baseline.accel)
         gain = np.zeros((len(KNOBS), 4))
         for j, (kn, g) in enumerate(zip(KNOBS[N_ODE_KNOBS:], (ys, ys, 1.0, 1.0))):
@@ -173,9 +181,9 @@ class Vibration(AbstractEffect):
         f0, z0 = design.nuisance["f_Hz"], design.nuisance["zeta"]
         st = design.nuisance["static"]
         step = float(np.log(self.frequencies(baseline)[1] / self.frequencies(baseline)[0]))
-        lf, _ = _golden_max(lambda u: score(self.design(baseline, np.exp(u), z0, st)),
+        lf, _ = golden_max(lambda u: score(self.design(baseline, np.exp(u), z0, st)),
                             np.log(f0) - step, np.log(f0) + step)  # fmt: skip
-        lz, _ = _golden_max(lambda u: score(self.design(baseline, np.exp(lf), np.exp(u), st)),
+        lz, _ = golden_max(lambda u: score(self.design(baseline, np.exp(lf), np.exp(u), st)),
                             np.log(z0 / 3), np.log(min(3 * z0, 0.8 * ZETA_MAX)),
                             iters=12)  # fmt: skip
         return self.design(baseline, np.exp(lf), np.exp(lz), st)

@@ -39,9 +39,9 @@ from jaxtyping import Array
 
 from .._chain import phase_slips, table3_contact, wang2022_loads
 from .._dynamics._profiles import TrapezoidProfile
+from .._model import VS_GRID, AbstractBaseline, AugmentedPreSlip, DiscoveryData, EffectDesign
 from .._tables import wang2022_table
-from ._core import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign
-from ._slip import VS_GRID, AugmentedPreSlip
+from ._core import AbstractEffect
 
 TABLE_KNOBS = ("position_error", "sensor_drift", "gross_sliding", "load_coupling", "stribeck",
                "log10_v_s", "viscous")  # fmt: skip

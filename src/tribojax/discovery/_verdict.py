@@ -30,53 +30,13 @@ term that is a function of that signal alone could explain.
 
 from __future__ import annotations
 
-from math import erfc
-
 import numpy as np
 
-from ._regions import chi2_sf, find_regions
+from .._fit._noise import excess_rmse
 
 N_KNOTS = 12  # knots of the flexible correction
 
 
-def excess_rmse(r, sigma) -> float:
-    """sqrt(max(mean(r²) − σ², 0)): the RMS misfit beyond the noise (output units)."""
-    r = np.asarray(r, dtype=float)
-    return float(np.sqrt(max(float(np.mean(r * r)) - float(sigma) ** 2, 0.0)))
-
-
-def noise_consistent(r, sigma, rho, segment, x, n_params, *, alpha=0.01, n_windows=32,
-                     estimated=False):  # fmt: skip
-    """(consistent, p_value, regions): the module's noise-consistency test of residual r;
-    `estimated`: σ is the first-difference estimate from r itself, not the sidecar's."""
-    r = np.asarray(r, dtype=float)
-    n = r.size
-    rho = float(np.clip(rho, 0.0, 0.95))
-    c = (1.0 + rho**2) / (1.0 - rho**2)
-    q = float(np.sum((r / sigma) ** 2))
-    if estimated:
-        # σ̂ from first differences carries its own error: relative variance of σ̂² ≈ 8/n
-        # (MAD scale: 1.36σ²/n for σ̂, ×1.5 for the lag-1 correlation −½ of differences);
-        # normal approximation of mean(r²)/σ̂² − 1 with both variances
-        z = (q / max(n - n_params, 1) - 1.0) / np.sqrt(2.0 * c / n + 8.0 / n)
-        p_global = float(0.5 * erfc(z / np.sqrt(2.0)))
-    else:
-        p_global = chi2_sf(q / c, max(n - n_params, 1) / c)
-    regions = find_regions(r, x, segment, sigma, rho, n_windows=n_windows, alpha=alpha / 3)
-    p_line = fisher_g(r[1:] - rho * r[:-1])
-    ok = p_global >= alpha / 3 and p_line >= alpha / 3 and not regions
-    return bool(ok), min(1.0, 3 * min(p_global, p_line)), regions
-
-
-def fisher_g(w) -> float:
-    """p-value of Fisher's g test for a periodic component in w (white under the null)."""
-    w = np.asarray(w, dtype=float) - np.mean(w)
-    power = np.abs(np.fft.rfft(w)[1 : (w.size - 1) // 2 + 1]) ** 2
-    m = power.size
-    if m < 2 or not np.sum(power) > 0:
-        return 1.0
-    g = float(np.max(power) / np.sum(power))
-    return float(min(1.0, m * (1.0 - g) ** (m - 1)))
 
 
 def verdict(n_effects, base_ok, final_ok, excess_before, excess_after) -> str:

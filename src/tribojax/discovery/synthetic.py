@@ -45,10 +45,10 @@ from scipy.integrate import solve_ivp
 from .._dynamics._profiles import PiecewiseLinearProfile
 from .._friction._lugre import LuGre, PreSlipLuGre
 from .._io._slip_run import SlipRun, synthetic_slip_run
+from .._model import AugmentedPreSlip, slip_baseline, stage_travel
 from .._presets import WANG2022_RETICLE_MASS_KG
 from .._tables import wang2022_table
 from ._discover import discover
-from ._slip import AugmentedPreSlip, slip_baseline, stage_travel
 
 SLIP_EFFECTS = (
     "sensor_drift",

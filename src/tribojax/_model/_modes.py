@@ -19,7 +19,7 @@ def _transition(M, h):
 
 @jax.jit
 @functools.partial(jax.vmap, in_axes=(None, None, 0, 0))
-def _oscillator(t, a, omega, zeta):
+def oscillator(t, a, omega, zeta):
     """q, q̇ of q̈ + 2ζωq̇ + ω²q = −a(t), a linear between samples (exact discretisation), for
     each (ω, ζ) pair of the vectors `omega`, `zeta`: shape (pairs, n, 2)."""
     A = jnp.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]])
@@ -37,7 +37,7 @@ def _oscillator(t, a, omega, zeta):
     return jnp.concatenate([jnp.zeros((1, 2)), xs])
 
 
-def _golden_max(f, lo, hi, iters=18):
+def golden_max(f, lo, hi, iters=18):
     """Maximiser of a unimodal f on [lo, hi] (golden section)."""
     g = (np.sqrt(5) - 1) / 2
     a, b = lo, hi

@@ -7,8 +7,8 @@ form:
     Δx(t) = (F_s/K_τ) · Σ_k s_k·[ln(1 − s_k F_{k−1}/F_s) − ln(1 − s_k F_k/F_s)],  s_k = sgn(ΔF_k)
 
 which is linear in 1/K_τ for fixed F_s. F_s comes from a 1-D search (1/K_τ by linear least
-squares at each F_s). This is the one start heuristic of slip runs: `fit_slip_run` and
-discovery's slip baseline (`tribojax.discovery.slip_start`) both use it.
+squares at each F_s). This is the one start heuristic of the slip-run model (`SlipBaseline`),
+which `fit_slip_run` and `discover` share.
 """
 
 from __future__ import annotations
@@ -28,13 +28,6 @@ def _quasi_static_shape(force, F_s):
     lo = np.log1p(-s * force[:-1] / F_s)
     hi = np.log1p(-s * force[1:] / F_s)
     return np.concatenate([[0.0], np.cumsum(s * F_s * (lo - hi))])
-
-
-def noise_scale(slip) -> float:
-    """Rough slip noise (m) from the second differences (MAD), for scaling the residuals."""
-    d2 = np.diff(slip, 2)
-    mad = float(np.median(np.abs(d2 - np.median(d2)))) / 0.6745 / np.sqrt(6.0)
-    return mad if mad > 0 else max(1e-3 * float(np.sqrt(np.mean(slip**2))), 1e-300)
 
 
 def slip_run_start(run: SlipRun) -> dict:

@@ -1,4 +1,4 @@
-"""Slip side of discovery: the pre-slip LuGre baseline (wang2022 Eq 27, α = 1) and six effects.
+"""The slip-run model: the pre-slip LuGre baseline (wang2022 Eq 27, α = 1) and six effects.
 
 Baseline: `PreSlipLuGre(F_s, K_τ, C_τ, α=1)` in the two-body slip model (wang2022 Eq 27,
 consistent reading, `tribojax.simulate_slip`), driven by the record's own acceleration
@@ -27,6 +27,7 @@ Additive (measurement) effects, linear in their strengths:
 
 from __future__ import annotations
 
+import dataclasses
 from typing import ClassVar
 
 import diffrax as dfx
@@ -38,12 +39,14 @@ from jaxtyping import Array
 
 from .._dynamics._profiles import MeasuredProfile
 from .._dynamics._slip import simulate_slip
-from .._fit._start import C_TAU_START_FACTORS, slip_run_start
 from .._friction._lugre import DEFAULT_VELOCITY_SCALE, PreSlipLuGre
 from .._io._slip_run import SlipRun
 from .._presets import STANDARD_GRAVITY_WANG2022 as G_ACC  # m/s², wang2022 Eq 28
-from ._core import AbstractBaseline, DiscoveryData
-from ._modes import _oscillator
+from .._results import RESULTS
+from ._base import AbstractBaseline, DiscoveryData
+from ._fit import fit_record
+from ._modes import oscillator
+from ._start import C_TAU_START_FACTORS, slip_run_start
 
 KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling",
          "mode_q", "mode_qdot", "mode_log_f", "mode_logit_zeta", "mode_static")  # fmt: skip
@@ -55,7 +58,7 @@ VS_GRID = tuple(10.0 ** np.arange(-7.0, -3.4, 0.5))  # m/s, Stribeck velocity gr
 
 
 def AugmentedPreSlip(F_s, K_tau, C_tau, sigma2, stribeck, v_s, kappa, profile,  # noqa: N802
-                     *, velocity_scale=DEFAULT_VELOCITY_SCALE) -> PreSlipLuGre:
+                     *, velocity_scale=DEFAULT_VELOCITY_SCALE, alpha=1.0) -> PreSlipLuGre:
     """Discovery's pre-slip element: `PreSlipLuGre` (wang2022 Eq 27, α = 1) with its knobs.
 
         N(t)/N₀ = 1 + κ·a(t)/g,   K = K_τ·N/N₀,   g(v) = F_s·N/N₀·(1 − δ(1 − exp(−(v/v_s)²)))
@@ -64,9 +67,10 @@ def AugmentedPreSlip(F_s, K_tau, C_tau, sigma2, stribeck, v_s, kappa, profile,  
     σ2 (N s/m), δ (—) and κ (per g, g = `G_ACC`) are signed; δ and κa/g pass through
     x ↦ 0.9·tanh(x/0.9) (`knob_bound=0.9`). `profile` is the stage drive (also passed to
     `simulate_slip`); the element's state is (z, τ). A constructor of the one element, kept
-    under its public name; with σ2 = δ = κ = 0 it is `PreSlipLuGre(F_s, K_τ, C_τ, 1)`.
+    under its public name; with σ2 = δ = κ = 0 it is `PreSlipLuGre(F_s, K_τ, C_τ, α)` (α = 1:
+    the paper's law; `alpha` is the bristle exponent of wang2022 Eq 25).
     """
-    return PreSlipLuGre(F_s, K_tau, C_tau, 1.0, sigma2=sigma2, stribeck=stribeck, v_s=v_s,
+    return PreSlipLuGre(F_s, K_tau, C_tau, alpha, sigma2=sigma2, stribeck=stribeck, v_s=v_s,
                         kappa=kappa / G_ACC, drive=profile, knob_bound=0.9,
                         velocity_scale=velocity_scale)  # fmt: skip
 
@@ -96,11 +100,11 @@ def slip_start(t, accel, slip, mass) -> np.ndarray:
 
 
 class SlipBaseline(AbstractBaseline):
-    """wang2022's pre-slip baseline on one slip record (α = 1; F_s, K_τ, C_τ fitted)."""
+    """wang2022's pre-slip model of one slip run (Eq 27, consistent reading): F_s, K_τ, C_τ
+    fitted, the bristle exponent α held at `alpha` (1: the paper's law, discovery's baseline) or
+    fitted as a fourth parameter (`free_alpha`)."""
 
     kind: ClassVar[str] = "slip"
-    param_names: ClassVar[tuple] = ("F_s", "K_tau", "C_tau")
-    param_units: ClassVar[tuple] = ("N", "N/m", "N s/m")
     knob_names: ClassVar[tuple] = KNOBS
     t: Array  # s
     accel: Array  # m/s²
@@ -112,6 +116,16 @@ class SlipBaseline(AbstractBaseline):
     f_max: Array  # N: upper bound of F_s (`F_MAX_OVER_DRIVE` × m·max|a|)
     profile: MeasuredProfile
     t_end: float = eqx.field(static=True)  # s, the last sample (a solver setting)
+    alpha: float = eqx.field(static=True, default=1.0)  # bristle exponent (start when free)
+    free_alpha: bool = eqx.field(static=True, default=False)
+
+    @property
+    def param_names(self):
+        return ("F_s", "K_tau", "C_tau", "alpha")[: 4 if self.free_alpha else 3]
+
+    @property
+    def param_units(self):
+        return ("N", "N/m", "N s/m", "")[: 4 if self.free_alpha else 3]
 
     def knob_null(self):
         return np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0, np.log(50.0), 0.0, 1.0])
@@ -120,20 +134,36 @@ class SlipBaseline(AbstractBaseline):
         F, K, C = np.asarray(self.start_values, dtype=float)
         cap = np.log(float(self.f_max))
         u = min(np.log(F), cap - 0.7)  # invert the cap (F below half the bound)
-        return np.array([cap - np.log(np.expm1(cap - u)), np.log(K), np.log(C)])
+        th = [cap - np.log(np.expm1(cap - u)), np.log(K), np.log(C)]
+        return np.array(th + ([np.log(float(self.alpha))] if self.free_alpha else []))
 
     def starts(self):
         """The start and its C_τ multiplied by 0.1 and 10 (`C_TAU_START_FACTORS`), as
         `fit_slip_run` does: the cost has separate minima in C_τ."""
-        return [self.start() + np.log([1.0, 1.0, c]) for c in C_TAU_START_FACTORS]
+        one = [1.0] * (4 if self.free_alpha else 3)
+        return [self.start() + np.log([1.0, 1.0, c, *one[3:]]) for c in C_TAU_START_FACTORS]
 
     def physical(self, theta):
         """θ → (F_s, K_τ, C_τ): F_s = exp(L − softplus(L − θ₀)), L = log `f_max` (≈ exp θ₀ below
         the bound, never above it: a fit that cannot see F_s stops at the bound instead of
-        running it off), K_τ = exp θ₁, C_τ = exp θ₂."""
+        running it off), K_τ = exp θ₁, C_τ = exp θ₂ (α = exp θ₃ when free)."""
         cap = jnp.log(self.f_max)
-        return jnp.stack([jnp.exp(cap - jax.nn.softplus(cap - theta[0])), jnp.exp(theta[1]),
-                          jnp.exp(theta[2])])  # fmt: skip
+        F_s = jnp.exp(cap - jax.nn.softplus(cap - theta[0]))
+        return jnp.concatenate([F_s[None], jnp.exp(theta[1:])])
+
+    def theta_of(self, values) -> np.ndarray:
+        """θ of physical values (F_s, K_τ, C_τ[, α]): the inverse of `physical` (F_s below the
+        cap `f_max`)."""
+        v = np.asarray(values, dtype=float)
+        cap = np.log(float(self.f_max))
+        if not v[0] < float(self.f_max):
+            raise ValueError(f"F_s = {v[0]:g} N is outside the model's range "
+                             f"(0, {float(self.f_max):g})")
+        return np.concatenate([[cap - np.log(np.expm1(cap - np.log(v[0])))], np.log(v[1:])])
+
+    def bristle_exponent(self, theta):
+        """α: fitted (exp θ₃) or held."""
+        return jnp.exp(theta[3]) if self.free_alpha else self.alpha
 
     def unidentified(self, values: dict, std_errors: dict) -> dict:
         """Parameters the record does not determine, with their bound: F_s within 10 % of
@@ -146,11 +176,12 @@ class SlipBaseline(AbstractBaseline):
         return {}
 
     def element(self, theta, knobs):
-        F_s, K, C = self.physical(theta)
+        F_s, K, C = self.physical(theta)[:3]
         # v_s within [1e-12, 1e3] m/s: a trial step of the fit cannot underflow it to 0
         log_vs = jnp.clip(knobs[2], LOG10_VS_RANGE[0], LOG10_VS_RANGE[1])
         return AugmentedPreSlip(F_s, K, C, jnp.abs(knobs[0]) * self.sigma_ref, knobs[1],
-                                10.0**log_vs, knobs[3], self.profile)  # fmt: skip
+                                10.0**log_vs, knobs[3], self.profile,
+                                alpha=self.bristle_exponent(theta))  # fmt: skip
 
     def _solve(self, theta, knobs):
         return simulate_slip(self.element(theta, knobs), self.profile, self.mass, ts=self.t,
@@ -158,12 +189,12 @@ class SlipBaseline(AbstractBaseline):
 
     def _mode(self, km):
         """The mode term of the reading: A_q·q_s/rms(q_s) + A_q̇·q̇/rms(q̇), m, for knobs
-        (A_q, A_q̇, log f, logit ζ/`ZETA_MAX`, s) (`_oscillator`, the `Vibration` effect's
+        (A_q, A_q̇, log f, logit ζ/`ZETA_MAX`, s) (`oscillator`, the `Vibration` effect's
         shape), q_s = q + (1 − s)·a/ω²: s = 1 the full response q, s = 0 its dynamic part (the
         quasi-static deflection −a/ω² compensated, e.g. by a feed-forward)."""
         zeta = ZETA_MAX * jax.nn.sigmoid(km[3:4])
         omega = 2 * jnp.pi * jnp.exp(km[2:3])
-        q = _oscillator(self.t, self.accel, omega, zeta)[0]
+        q = oscillator(self.t, self.accel, omega, zeta)[0]
         q = q.at[:, 0].add((1.0 - km[4]) * self.accel / omega[0] ** 2)
         rms = jnp.sqrt(jnp.mean(q * q, axis=0)) + 1e-300
         return q[:, 0] / rms[0] * km[0] + q[:, 1] / rms[1] * km[1]
@@ -213,9 +244,10 @@ def _ok(baseline, theta, knobs):
     return baseline._solve(theta, knobs).ok
 
 
-def slip_baseline(run, start=None) -> SlipBaseline:
-    """The baseline for a slip record (`SlipRun`, or any object with t, accel, slip, mass and
-    optionally noise_std). `start`: (F_s, K_τ, C_τ) start values, default `slip_start`."""
+def slip_baseline(run, start=None, alpha=1.0) -> SlipBaseline:
+    """The model of a slip record (`SlipRun`, or any object with t, accel, slip, mass and
+    optionally noise_std). `start`: (F_s, K_τ, C_τ) start values, default `slip_start`;
+    `alpha`: the bristle exponent held fixed (> 0), or None to fit it (from 1)."""
     t = np.asarray(run.t, float)
     if t[0] < 0 or np.any(np.diff(t) <= 0):
         raise ValueError("slip record: t must be >= 0 and strictly increasing")
@@ -235,4 +267,84 @@ def slip_baseline(run, start=None) -> SlipBaseline:
         f_max=jnp.asarray(F_MAX_OVER_DRIVE * float(run.mass) * float(np.max(np.abs(run.accel)))),
         profile=record.profile(),
         t_end=float(t[-1]),
+        alpha=1.0 if alpha is None else float(alpha),
+        free_alpha=alpha is None,
     )
+
+
+def fit_slip_run(run: SlipRun, *, alpha=None, start=None, sigma=None, max_steps: int = 200,
+                 progress=None):  # fmt: skip
+    """Fit F_s (N), K_τ (N/m), C_τ (N s/m) and, if `alpha` is None, α of the slip-run model.
+
+    The model is `SlipBaseline` (wang2022 Eq 27, consistent reading, driven by the run's own
+    sampled acceleration from rest), the same model, residual, transforms, starts and solver as
+    `discover`'s baseline (`fit_record`): with `alpha=1` and the same samples both give the same
+    parameters. Residuals (model − measured slip)/σ at every sample; parameters as logarithms
+    (F_s below a soft cap of 100·m·max|a|); starts from `slip_run_start` (the quasi-static limit)
+    with C_τ × (1, 0.1, 10) in turn until one converges; standard errors by the delta method;
+    `noise_consistent` from `SlipBaseline.noise_test`.
+
+    Args:
+        run: the slip run.
+        alpha: fixed bristle exponent (> 0), or None to fit it (start 1).
+        start: dict of start values (keys F_s, K_tau, C_tau[, alpha]); missing keys from
+            `slip_run_start(run)`; a given C_tau is the only C_τ start.
+        sigma: slip noise sd (m); default the run's `noise_std`; if neither, the residual unit is
+            the first-difference estimate and the standard errors use the residual scale.
+        max_steps: LM step budget (per start).
+        progress: optional callable receiving one line per start and its outcome.
+    Returns:
+        FitResult (names ("F_s", "K_tau", "C_tau"[, "alpha"]); `fixed` holds α when fixed) with
+        the fitted `model`, its `prediction` and `scale`. Never raises for non-convergence.
+    Raises:
+        ValueError for fewer data than parameters, a bad α/σ/start, or a model that cannot be
+        evaluated at any start.
+    """
+    names = ("F_s", "K_tau", "C_tau", "alpha")[: 4 if alpha is None else 3]
+    if len(run) <= len(names):
+        raise ValueError(f"{run.source}: {len(run)} slip samples are too few to fit "
+                         f"{len(names)} parameters {names}; need more data than parameters")
+    if alpha is not None:
+        alpha = _positive(alpha, "alpha", "")
+    start = dict(start or {})
+    unknown = set(start) - {"F_s", "K_tau", "C_tau", "alpha"}
+    if unknown:
+        raise ValueError(f"start has unknown key(s) {sorted(unknown)}; allowed "
+                         "['F_s', 'K_tau', 'C_tau', 'alpha']")  # fmt: skip
+    for key, value in start.items():
+        start[key] = _positive(value, f"start[{key!r}]", "")
+    sigma = run.noise_std if sigma is None else _positive(sigma, "sigma", "m")
+    if sigma is not None and sigma != run.noise_std:
+        run = dataclasses.replace(run, noise_std=float(sigma))
+    guess = {**slip_run_start(run), **start} if not {"F_s", "K_tau", "C_tau"} <= set(start) \
+        else start  # fmt: skip
+    model = slip_baseline(run, [guess["F_s"], guess["K_tau"], guess["C_tau"]], alpha=alpha)
+    starts = [model.start()] if "C_tau" in start else model.starts()
+    if alpha is None:  # the α start
+        starts = [np.concatenate([th[:3], [np.log(start.get("alpha", 1.0))]]) for th in starts]
+    if progress is not None:
+        progress(f"start: {len(starts)} C_tau start(s) from F_s = {guess['F_s']:.5g}, K_tau = "
+                 f"{guess['K_tau']:.5g}, C_tau = {guess['C_tau']:.5g}")  # fmt: skip
+    fit = fit_record(model, starts, max_steps=max_steps)
+    if fit.result == RESULTS.model_failed_at_start:
+        raise ValueError(f"{run.source}: the slip solver fails at the start values; give a "
+                         "start closer to the data (start=, or tribojax fit --start NAME=VALUE)")
+    if progress is not None:
+        progress(f"LM: {fit.steps} steps, {'converged' if fit.converged else fit.message}")
+    names = model.param_names
+    p = len(names)
+    fit = dataclasses.replace(fit, names=names, values=fit.values[:p],
+                              std_errors=fit.std_errors[:p], covariance=fit.covariance[:p, :p],
+                              correlation=fit.correlation[:p, :p])  # fmt: skip
+    return fit if alpha is None else dataclasses.replace(fit, fixed={"alpha": float(alpha)})
+
+
+def _positive(x, name, unit):
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number, got {x!r}") from None
+    if not (np.isfinite(x) and x > 0):
+        unit = f" {unit}" if unit else ""
+        raise ValueError(f"{name} = {x:g}{unit} is outside the allowed range (0, inf)")
+    return x

@@ -42,10 +42,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import fail_if
-from .._fit._loop import analyse_loop
 from .._friction._rate_independent import IwanBank, mindlin_unit_bank
 from .._io._loop import HysteresisLoop, cycle_starts
 from .._presets import WU2015_EQ5_EXPONENT
+from ._loop_analysis import analyse_loop
 
 KD_LOAD_EXPONENT = WU2015_EQ5_EXPONENT  # wu2015 Eq 5: K_d ∝ N^0.7616
 N_IWAN = 128  # Iwan elements of the Mindlin law (interpolation error ~ 1/n² of μN)

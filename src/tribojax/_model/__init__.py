@@ -1,0 +1,44 @@
+"""One model per record kind (issue 29): the record models that `fit`, `predict` and `discover`
+share, the contract of their effects, and the one fit of a model with its effects."""
+
+from ._base import ALPHA as ALPHA
+from ._base import K_MAX as K_MAX
+from ._base import N_WINDOWS as N_WINDOWS
+from ._base import AbstractBaseline as AbstractBaseline
+from ._base import DiscoveryData as DiscoveryData
+from ._base import EffectDesign as EffectDesign
+from ._fit import MAX_STEPS as MAX_STEPS
+from ._fit import evaluate as evaluate
+from ._fit import fit_model as fit_model
+from ._fit import fit_record as fit_record
+from ._fit import pack_designs as pack_designs
+from ._fit import padded_args as padded_args
+from ._fit import padded_residual as padded_residual
+from ._loop import LOOP_KNOBS as LOOP_KNOBS
+from ._loop import LoopBaseline as LoopBaseline
+from ._loop import cycle_noise as cycle_noise
+from ._loop import fit_loop as fit_loop
+from ._loop import history_start as history_start
+from ._loop import loop_baseline as loop_baseline
+from ._loop import loop_residuals as loop_residuals
+from ._loop_analysis import LoopAnalysis as LoopAnalysis
+from ._loop_analysis import analyse_loop as analyse_loop
+from ._loop_force import KD_LOAD_EXPONENT as KD_LOAD_EXPONENT
+from ._loop_force import LoopData as LoopData
+from ._loop_force import LoopSpec as LoopSpec
+from ._loop_force import loop_branch as loop_branch
+from ._loop_force import loop_force as loop_force
+from ._loop_force import prepare_loop as prepare_loop
+from ._modes import golden_max as golden_max
+from ._modes import oscillator as oscillator
+from ._slip import KNOBS as KNOBS
+from ._slip import N_ODE_KNOBS as N_ODE_KNOBS
+from ._slip import VS_GRID as VS_GRID
+from ._slip import ZETA_MAX as ZETA_MAX
+from ._slip import AugmentedPreSlip as AugmentedPreSlip
+from ._slip import SlipBaseline as SlipBaseline
+from ._slip import fit_slip_run as fit_slip_run
+from ._slip import slip_baseline as slip_baseline
+from ._slip import slip_start as slip_start
+from ._slip import stage_travel as stage_travel
+from ._start import slip_run_start as slip_run_start

@@ -1,0 +1,250 @@
+"""The fit of a record model with its effects: the one residual, solver and statistics that
+`fit`, `predict` and `discover` share.
+
+Every fit minimises ‖(model − y)/scale‖² over x = [θ_b, s] with the effect strengths s padded to
+`K_MAX` (inactive ones masked out of the model and held at 0), through one module-level residual
+function (`padded_residual`), so one compiled solve serves the model alone and every combination
+of effects on one record shape. The solver is `LevenbergMarquardt.record` (the library's one LM);
+the statistics are `fit_statistics` (the one delta method) on the active columns.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._checks import runtime_message
+from .._fit._engine import FAILED_RESIDUAL, fit_statistics, least_squares_fit, value_and_jacobian
+from .._fit._noise import noise_estimate
+from .._fit._solver import LevenbergMarquardt
+from .._precision import ensure_x64
+from .._results import RESULTS
+from ._base import K_MAX, AbstractBaseline
+
+GAIN_TOL = 1e-2  # converged: a Gauss–Newton step would lower the cost by < 0.01 residual variances
+NOISE_TOL = 1.0  # stationary: a rejected step promised < 1 residual variance (evaluation noise)
+MAX_STEPS = 128  # step budget of every record-model fit (accepted and rejected; one compile)
+SOLVER = LevenbergMarquardt.record(1e-8, 1e-10, gain_tol=GAIN_TOL, noise_tol=NOISE_TOL,
+                                   max_rejections=12, padded=K_MAX)  # fmt: skip
+
+
+class Padded(eqx.Module):
+    """Everything the residual needs, with the effect strengths padded to `K_MAX` (array leaves
+    only, so one compiled solve serves every combination of effects on one record shape)."""
+
+    baseline: AbstractBaseline
+    base: jax.Array  # knob vector at s = 0 (n_knobs,)
+    gain: jax.Array  # ∂knobs/∂s (n_knobs, K_MAX)
+    basis: jax.Array  # additive columns (n, K_MAX), output units per unit s
+    mask: jax.Array  # 1 for the active strengths (K_MAX,)
+    y: jax.Array  # observed samples (n,)
+    scale: jax.Array  # residual unit (output units)
+    bad: jax.Array  # residual of every row where the model is not finite
+    d: jax.Array  # variable scaling: x = d·u (p + K_MAX,)
+
+
+def _residual_and_jac(x, a: Padded):
+    """Residual [(model − y)/scale, held strengths] and its Jacobian ∂/∂x at x = [θ_b, s].
+
+    Inactive strengths are masked out of the model and held at 0 by a row each (residual s,
+    Jacobian 1), so the normal matrix stays regular. A model that is not finite gives `a.bad` in
+    every row and a zero Jacobian: the trial is rejected as a rise of the cost.
+    """
+    p = x.size - K_MAX
+    hold = 1.0 - a.mask
+    s = x[p:] * a.mask
+    value, jb, jk = a.baseline.value_and_jacobians(x[:p], a.base + a.gain @ s)
+    r = (value + a.basis @ s - a.y) / a.scale
+    J = jnp.concatenate([jb, (jk @ a.gain + a.basis) * a.mask[None, :]], axis=1) / a.scale
+    ok = jnp.all(jnp.isfinite(r)) & jnp.all(jnp.isfinite(J))
+    r = jnp.concatenate([jnp.where(ok, r, a.bad), hold * x[p:]])
+    J_hold = jnp.concatenate([jnp.zeros((K_MAX, p)), jnp.diag(hold)], axis=1)
+    return r, jnp.concatenate([jnp.where(ok, J, 0.0), J_hold], axis=0)
+
+
+@eqx.filter_custom_jvp
+def padded_residual(u, a):
+    """The residual function of every record-model fit, in scaled variables u = x/d (module
+    level: the solve compiles once per record shape)."""
+    return _residual_and_jac(a.d * u, a)[0]
+
+
+@padded_residual.def_jvp
+def _residual_jvp(primals, tangents):
+    # the Jacobian from one forward pass over (θ_b, knobs), not over the K_MAX padded strengths:
+    # optimistix's linearisation and the statistics then cost one model pass per point
+    u, a = primals
+    r, J = _residual_and_jac(a.d * u, a)
+    tu = tangents[0]
+    return r, (jnp.zeros_like(r) if tu is None else (J * a.d[None, :]) @ tu)
+
+
+def pack_designs(baseline, designs):
+    """Knob base vector, knob gain (n_knobs, K_MAX) and additive basis (n, K_MAX) of the active
+    designs (their k strengths first, zero columns after)."""
+    names = baseline.knob_names
+    n = baseline.data().y.shape[0]
+    k = sum(d.k for d in designs)
+    if k > K_MAX:
+        raise ValueError(f"{k} effect strengths in one model: more than K_MAX = {K_MAX}")
+    gain = np.zeros((len(names), K_MAX))
+    base = np.asarray(baseline.knob_null(), dtype=float).copy()
+    basis = np.zeros((n, K_MAX))
+    j = 0
+    for d in designs:
+        if d.knob_gain is not None:
+            gain[:, j : j + d.k] = d.knob_gain
+        for key, value in d.knob_set.items():
+            base[names.index(key)] = value
+        if d.basis is not None:
+            basis[:, j : j + d.k] = d.basis
+        j += d.k
+    return base, gain, basis
+
+
+def padded_args(baseline, base, gain, basis, k, y, scale, bad=np.inf, d=None) -> Padded:
+    """The `Padded` arguments of `padded_residual` (float64 leaves)."""
+    p = len(baseline.param_names)
+    d = np.ones(p + K_MAX) if d is None else d
+    arrays = (base, gain, basis, np.arange(K_MAX) < k, y, scale, bad, d)
+    return Padded(baseline, *(jnp.asarray(v, dtype=jnp.float64) for v in arrays))
+
+
+def _names(baseline, designs):
+    out = list(baseline.param_names)
+    for d in designs:
+        out += [f"s:{name}" for name in d.strength_names]
+    return tuple(out)
+
+
+def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
+              max_steps=MAX_STEPS, sigma_known=False, noise_consistent=None):  # fmt: skip
+    """Fit [θ_b, s] of `baseline` with the effects' `designs`, minimising ‖(model − y)/scale‖².
+
+    Solver `LevenbergMarquardt.record`; the variables are scaled by the start Jacobian's column
+    norms (Marquardt's scaling, so the damping is relative to the curvature). Converged when the
+    predicted decrease of a Gauss–Newton step gᵀ(JᵀJ)⁻¹g at the optimum is below `GAIN_TOL`
+    residual variances (s² = cost/(n − p), at least 1), or, as "stationary" (successful, with a
+    message), when no trial step lowered the cost (a local minimum of the cost as evaluated: ODE
+    evaluation noise, or a kink where contacts start sliding). A trial point where the model is
+    not finite counts as a rejected step.
+
+    Args:
+        theta0: start [θ_b, s] (default `baseline.start()` and zero strengths); y: the data
+            (default the record's); scale: the residual unit (output units).
+        sigma_known: `scale` is the noise sd (statistics in its units) rather than a unit.
+        noise_consistent: the record's noise verdict for the statistics (see `fit_statistics`).
+    Returns:
+        `FitResult` with the fitted `model`, `prediction` (output units), `residuals` (in units of
+        `scale`), `theta_covariance`, the `effects` and `designs`, and `result`: successful,
+        `model_failed_at_start` (not finite at the start), `model_failed` (not finite at the
+        optimum, a check inside the model failed, or its solver reported a failure),
+        `nonlinear_max_steps_reached`.
+    """
+    ensure_x64()
+    designs = tuple(designs)
+    y = np.asarray(baseline.data().y if y is None else y, dtype=float)
+    base, gain, basis = pack_designs(baseline, designs)
+    p, k, n = len(baseline.param_names), sum(d.k for d in designs), y.shape[0]
+    npar = p + k
+    x0 = np.zeros(p + K_MAX)
+    x0[:npar] = np.asarray(baseline.start() if theta0 is None else theta0, dtype=float)
+    args = padded_args(baseline, base, gain, basis, k, y, scale)
+    names = _names(baseline, designs)
+    extra = dict(model=baseline, effects=tuple(effects), designs=designs, scale=float(scale))
+
+    def transform(x):
+        strengths = [jnp.asarray(d.strength_scale, dtype=jnp.float64) for d in designs]
+        return jnp.concatenate([baseline.physical(x[:p]), x[p:] * jnp.concatenate(
+            [jnp.zeros(0), *strengths])])  # fmt: skip
+
+    def failed(result, message, steps=0):
+        return fit_statistics(x0[:npar], np.full(n, np.nan), np.full((n, npar), np.nan),
+                              names=names, transform=transform, sigma_known=sigma_known,
+                              result=result, steps=steps, message=message,
+                              prediction=np.full(n, np.nan), **extra)  # fmt: skip
+
+    try:
+        # d = 1 here: u = x; the engine's statistics reuse this compile
+        r0, J0 = (np.asarray(v) for v in value_and_jacobian(padded_residual, jnp.asarray(x0),
+                                                            args))  # fmt: skip
+        if not np.all(np.isfinite(r0)):
+            return failed(RESULTS.model_failed_at_start,
+                          "the model is not finite at the start values")
+        # a failed trial point costs more than the start (100x)
+        bad = max(FAILED_RESIDUAL, 10.0 * float(np.max(np.abs(r0))))
+        norms = np.linalg.norm(J0, axis=0)
+        d = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
+        new = (jnp.asarray(bad, dtype=jnp.float64), jnp.asarray(d, dtype=jnp.float64))
+        args = eqx.tree_at(lambda t: (t.bad, t.d), args, new)
+        res = least_squares_fit(padded_residual, x0 / d, args,
+                                names=tuple(f"u{i}" for i in range(p + K_MAX)), jac="fwd",
+                                solver=SOLVER, max_steps=max_steps)  # fmt: skip
+    except eqx.EquinoxRuntimeError as err:  # a check inside the model: not a trial rejection
+        return failed(RESULTS.model_failed,
+                      f"the model raised inside the fit: {runtime_message(err)[:300]}")
+    x = (d * res.theta)[:npar]
+    r, J = res.residuals[:n], (res.jacobian / d)[:n, :npar]
+    if np.all(r == bad):
+        return failed(RESULTS.model_failed, "the model is not finite at the optimum", res.steps)
+    cost = float(r @ r)
+    g, JTJ = J.T @ r, J.T @ J
+    if not (np.all(np.isfinite(JTJ)) and np.all(np.isfinite(g)) and np.isfinite(cost)):
+        # (measured: an independent drift record where a refit ended at a point whose
+        # Jacobian overflowed, and the statistics' least squares raised LinAlgError)
+        return failed(RESULTS.model_failed, "the model's Jacobian is not finite at the optimum",
+                      res.steps)  # fmt: skip
+    pred = float(g @ np.linalg.lstsq(JTJ, g, rcond=1e-12)[0])
+    s2 = max(cost / max(n - npar, 1), 1.0)
+    result, message = res.result, res.message
+    if res.result == RESULTS.nonlinear_max_steps_reached:
+        message = f"no convergence in max_steps = {max_steps} steps"
+    elif res.converged and pred >= GAIN_TOL * s2:
+        message = f"stationary: no descent step (predicted gain {pred / s2:.3g} s²)"
+    elif res.converged:
+        message = ""
+    knobs = jnp.asarray(base + gain[:, :k] @ x[p:])
+    if res.converged and not baseline.solver_ok(jnp.asarray(x[:p]), knobs):
+        result = RESULTS.model_failed
+        message = "the model's solver reported a failure at the optimum"
+    if noise_consistent is None and baseline.noise_gate:
+        noise_consistent = baseline.noise_test(scale * r, npar)[0]
+    return fit_statistics(x, r, J, names=names, transform=transform, sigma_known=sigma_known,
+                          result=result, steps=res.steps, message=message,
+                          noise_consistent=noise_consistent, prediction=y + scale * r,
+                          **extra)  # fmt: skip
+
+
+def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_known=None):
+    """Fit a record model alone (no effects): the fit that `fit` reports and `discover` starts
+    from. From each of `starts` (θ; default `baseline.starts()`) in turn until one converges;
+    the converged one (else the lowest cost) is kept. `scale`: the residual unit (default the
+    record's noise sd, else the first-difference estimate `noise_estimate` of the data, else
+    its sd); `sigma_known` (default: the record states its noise) makes the statistics use the
+    stated noise when the residual is consistent with it."""
+    data = baseline.data()
+    y = np.asarray(data.y, dtype=float)
+    if scale is None:
+        scale0 = data.noise_std if data.noise_std else noise_estimate(y, data.segment)[0]
+        scale = float(scale0) if scale0 > 0 else float(np.std(y) or 1.0)
+    known = bool(data.noise_std) if sigma_known is None else sigma_known
+    fits = []
+    for th in baseline.starts() if starts is None else starts:
+        fits.append(fit_model(baseline, (), np.asarray(th, dtype=float), y, scale,
+                              max_steps=max_steps, sigma_known=known))  # fmt: skip
+        if fits[-1].converged:  # the next starts only when this one fails
+            break
+    return min(fits, key=lambda f: (not f.converged, f.rss))
+
+
+@eqx.filter_jit
+def _predict(baseline, theta, knobs):
+    return baseline.predict(theta, knobs)
+
+
+def evaluate(baseline, theta) -> np.ndarray:
+    """The model's samples (output units) at θ with every effect at its null (compiled)."""
+    knobs = jnp.asarray(baseline.knob_null(), dtype=jnp.float64)
+    return np.asarray(_predict(baseline, jnp.asarray(theta, dtype=jnp.float64), knobs))
