@@ -8,7 +8,9 @@ Read from the source with `ast` (nothing is imported), so a violation names the 
 - every module at most 400 lines (the house limit);
 - every third-party module imported at run time is a declared dependency (optional ones only
   inside the optional-dependency guards);
-- imports go down the layer order `LAYERS` (issue 29), never up.
+- imports go down the layer order `LAYERS` (issue 29), never up;
+- the command line and the record reduction ask a record (`AbstractRecord`: its `kind`, its
+  methods), never test its class with `isinstance` (issue 29).
 """
 
 import ast
@@ -211,3 +213,37 @@ def test_runtime_imports_are_declared():
         undeclared.append(f"{name} (in {sorted(users)})")
     assert not undeclared, f"runtime imports not declared in pyproject.toml: {undeclared}"
     assert not misplaced, misplaced
+
+
+# modules that treat the record kinds differently through the records' interface (issue 29)
+RECORD_DISPATCH = [m for m in MODULES if m.startswith("tribojax._cli.")] + ["tribojax._decimate"]
+
+
+def _record_classes() -> set[str]:
+    """AbstractRecord and the record classes of `_io` that subclass it (read from the source)."""
+    names = {"AbstractRecord"}
+    for path in sorted((SRC / "_io").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            if isinstance(node, ast.ClassDef) and any(
+                isinstance(b, ast.Name) and b.id == "AbstractRecord" for b in node.bases
+            ):
+                names.add(node.name)
+    return names
+
+
+def test_no_isinstance_dispatch_on_records():
+    """`isinstance`/`issubclass` on a record class in the command line or `_decimate` fails with
+    its file and line: dispatch on `record.kind` or a method of the record instead."""
+    records = _record_classes()
+    assert {"SlipRun", "HysteresisLoop", "FrictionCurve", "FrictionTransient"} <= records
+    found = []
+    for mod in RECORD_DISPATCH:
+        path = MODULES[mod]
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            func = getattr(node, "func", None)
+            if getattr(func, "id", None) not in ("isinstance", "issubclass") or len(node.args) < 2:
+                continue
+            named = {getattr(n, "id", getattr(n, "attr", None)) for n in ast.walk(node.args[1])}
+            if named & records:
+                found.append(f"{path}:{node.lineno}: {func.id} on {sorted(named & records)}")
+    assert not found, "isinstance dispatch on records:\n" + "\n".join(found)

@@ -222,3 +222,61 @@ def test_read_record_refuses_unknown_headers(tmp_path):
         tj.read_record(path)
     with pytest.raises(tj.DataFileError, match=r"x.csv: cannot be read"):
         tj.read_record(tmp_path / "missing" / "x.csv")
+
+
+# --- one record family (issue 29): an abstract record, the kinds its final subclasses -----------
+
+RECORD_KINDS = {
+    tj.SlipRun: ("slip_run", "a slip run"),
+    tj.HysteresisLoop: ("loop", "a hysteresis loop"),
+    tj.FrictionCurve: ("friction_curve", "a friction curve"),
+    tj.FrictionTransient: ("friction_transient", "a friction transient"),
+}
+
+
+def _subclasses(cls):
+    return {s for c in cls.__subclasses__() for s in {c} | _subclasses(c)}
+
+
+def test_records_are_final_kinds_of_one_abstract_record():
+    # every record class is a direct, concrete subclass of AbstractRecord with its declared kind;
+    # nothing else subclasses the base, and nothing subclasses a concrete record
+    assert _subclasses(tj.AbstractRecord) == set(RECORD_KINDS)
+    for cls, (kind, description) in RECORD_KINDS.items():
+        assert cls.__bases__ == (tj.AbstractRecord,)
+        assert (cls.kind, cls.description) == (kind, description)
+        assert cls.__final__ is True  # typing.final, for type checkers
+        with pytest.raises(TypeError, match=f"{cls.__name__} is a final record class"):
+            type("Sub", (cls,), {})
+    assert len({cls.kind for cls in RECORD_KINDS}) == len(RECORD_KINDS)
+    with pytest.raises(TypeError, match="abstract"):
+        tj.AbstractRecord()
+
+
+def test_every_record_answers_the_record_interface(run):
+    loop = _loop()
+    curve = tj.FrictionCurve([-1.0, 1.0], [-0.2, 0.2], [0.01, 0.01], [0.0, 0.0], [10, 10])
+    transient = tj.FrictionTransient([0.0, 1.0, 2.0], [0.0, 1.0, 0.0], [0.0, 0.2, 0.0])
+    assert [len(r) for r in (run, loop, curve, transient)] == [461, len(loop.t), 2, 3]
+    # the drive/response series of the reducible kinds, and a resampled copy of the same kind
+    for record, channels, unit in ((run, ("t", "accel", "slip"), "m"),
+                                   (loop, ("t", "u", "f"), "N")):  # fmt: skip
+        assert record.reducible and record.response_unit == unit
+        for x, name in zip(record.series(), channels):
+            assert x is getattr(record, name)
+        t, d, r = (x[::2] for x in record.series())
+        half = record.resampled(t, d, r, noise_std=1e-3)
+        assert type(half) is type(record) and half.noise_std == 1e-3 and len(half) == len(t)
+        assert half.source == record.source
+    assert run.resampled(*run.series(), noise_std=None).drive is not None  # the full drive kept
+    # whole cycles: the upward mean-crossings of a periodic loop's displacement, every 1/22 s
+    assert len(loop.cycle_times()) >= 2 and run.cycle_times() is None
+    np.testing.assert_allclose(np.diff(loop.cycle_times()), 2 * np.pi / OMEGA, rtol=1e-3)
+    history = tj.HysteresisLoop(loop.t, loop.u, loop.f, periodic=False)
+    assert history.cycle_times() is None
+    for record in (curve, transient):
+        assert not record.reducible
+        with pytest.raises(ValueError, match=f"{record.description} is not a drive/response"):
+            record.series()
+        with pytest.raises(ValueError, match="must be a SlipRun or a HysteresisLoop"):
+            tj.decimate_record(record)

@@ -103,6 +103,7 @@ from ._io._loop import HysteresisLoop as HysteresisLoop
 from ._io._loop import read_loop as read_loop
 from ._io._loop import synthetic_loop as synthetic_loop
 from ._io._loop import write_loop as write_loop
+from ._io._record import AbstractRecord as AbstractRecord
 from ._io._records import detect_format as detect_format
 from ._io._records import read_record as read_record
 from ._io._slip_run import SlipRun as SlipRun

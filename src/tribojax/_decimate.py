@@ -34,8 +34,7 @@ import math
 import numpy as np
 
 from ._fit._noise import ALPHA, chi2_sf
-from ._io._loop import HysteresisLoop, cycle_starts
-from ._io._slip_run import SlipRun
+from ._io._record import AbstractRecord
 
 # The reduced record's default size: fits and discovery resolve wang2022's slip dynamics (ring-
 # downs near 1 kHz over a 2.3 s cycle) with 20,000 samples (blocks of 0.12 ms, hω < 1).
@@ -81,10 +80,10 @@ class Decimation:
         return dataclasses.asdict(self)
 
 
-def _factor(record, n: int, max_samples: int) -> int:
+def _factor(record: AbstractRecord, n: int, max_samples: int) -> int:
     factor, cap = max(1, math.ceil(n / max_samples)), n
-    if isinstance(record, HysteresisLoop) and record.periodic:
-        starts = cycle_starts(record.t, record.u)
+    starts = record.cycle_times()
+    if starts is not None:  # a periodic record keeps MIN_SAMPLES_PER_CYCLE per cycle
         per_cycle = n * (starts[-1] - starts[0]) / (len(starts) - 1) / (record.t[-1] - record.t[0])
         cap = max(1, int(per_cycle // MIN_SAMPLES_PER_CYCLE))
         factor = min(factor, cap)
@@ -93,14 +92,14 @@ def _factor(record, n: int, max_samples: int) -> int:
     return factor
 
 
-def _whole_cycles(loop: HysteresisLoop, n_keep: int) -> HysteresisLoop:
-    """The loop's first samples, ending just after an upward crossing, at most `n_keep` of them
-    (at least two crossings, one whole cycle)."""
-    starts = cycle_starts(loop.t, loop.u)
-    ends = np.searchsorted(loop.t, starts) + 1  # one sample past each crossing
+def _whole_cycles(record: AbstractRecord, n_keep: int) -> AbstractRecord:
+    """A periodic record's first samples, ending just after an upward crossing, at most `n_keep`
+    of them (at least two crossings, one whole cycle)."""
+    t, drive, resp = record.series()
+    ends = np.searchsorted(t, record.cycle_times()) + 1  # one sample past each crossing
     fits = ends[ends <= n_keep]
     end = int(fits[-1]) if len(fits) >= 2 else int(ends[1])
-    return dataclasses.replace(loop, t=loop.t[:end], u=loop.u[:end], f=loop.f[:end])
+    return record.resampled(t[:end], drive[:end], resp[:end], noise_std=record.noise_std)
 
 
 def _block_quadratics(t, channels, factor: int):
@@ -129,8 +128,8 @@ def decimate_record(
     """Reduce a long `SlipRun` or `HysteresisLoop` by block local quadratics (module docstring).
 
     Args:
-        record: a `SlipRun` (channels t, accel, slip; response slip) or `HysteresisLoop`
-            (t, u, f; response f).
+        record: a `reducible` record (`AbstractRecord.series`): a `SlipRun` (channels t,
+            accel, slip; response slip) or `HysteresisLoop` (t, u, f; response f).
         factor: samples per block (≥ 1); None chooses the smallest factor that leaves at most
             `max_samples` samples (for a loop at most what keeps `MIN_SAMPLES_PER_CYCLE` reduced
             samples per cycle).
@@ -147,19 +146,16 @@ def decimate_record(
         ValueError for a factor < 1 or one leaving fewer than 4 samples (or, for a loop, less
         than one whole cycle).
     """
-    if isinstance(record, SlipRun):
-        t, drive, resp, unit = record.t, record.accel, record.slip, "m"
-    elif isinstance(record, HysteresisLoop):
-        t, drive, resp, unit = record.t, record.u, record.f, "N"
-    else:
+    if not getattr(record, "reducible", False):  # a record kind with a drive/response series
         raise ValueError(f"record must be a SlipRun or a HysteresisLoop, got {type(record)}")
+    t, drive, resp = record.series()
+    unit = record.response_unit
     n = len(t)
-    periodic_loop = isinstance(record, HysteresisLoop) and record.periodic
-    if whole_cycles and periodic_loop and factor is None:
+    if whole_cycles and record.cycle_times() is not None and factor is None:
         keep = _factor(record, n, int(max_samples)) * int(max_samples)
         if keep < n:
             record = _whole_cycles(record, keep)
-            t, drive, resp = record.t, record.u, record.f
+            t, drive, resp = record.series()
     if factor is None:
         if int(max_samples) < 4:
             raise ValueError(f"max_samples = {max_samples} is outside the allowed range [4, inf)")
@@ -173,7 +169,7 @@ def decimate_record(
         return record, Decimation(1, "none", n, len(t), len(t), "white, per sample",
                                   None if sigma is None else "the record's noise_std", sigma,
                                   sigma, cycles_kept=None if len(t) == n else
-                                  len(cycle_starts(t, drive)) - 1)  # fmt: skip
+                                  len(record.cycle_times()) - 1)  # fmt: skip
     if len(t) // factor < 4:
         raise ValueError(
             f"{record.source}: factor = {factor} leaves {len(t) // factor} samples of "
@@ -199,16 +195,12 @@ def decimate_record(
     follow = None if chi2 is None else bool(chi2_sf(chi2 * dof, dof) >= ALPHA / 3)
     info = Decimation(
         factor=factor, method=METHOD, samples_in_record=n, samples_used=len(tc) * factor,
-        cycles_kept=None if len(t) == n else len(cycle_starts(t, drive)) - 1,
+        cycles_kept=None if len(t) == n else len(record.cycle_times()) - 1,
         samples=len(tc), noise_std_original=float(sigma), noise_std=reduced_std,
         noise_source=source, block_chi2=chi2, blocks_follow_signal=follow,
         noise_model=(f"white noise of sd sigma per sample ({unit}); each reduced sample has sd "
                      f"sigma*sqrt(g), g = {float(np.mean(g)):.4g} (local quadratic over "
                      f"{factor} samples, evaluated at the block's mean time)"),
     )  # fmt: skip
-    if isinstance(record, SlipRun):
-        reduced = dataclasses.replace(record, t=tc, accel=dc, slip=rc, noise_std=reduced_std,
-                                      drive=record.profile())  # fmt: skip
-    else:
-        reduced = dataclasses.replace(record, t=tc, u=dc, f=rc, noise_std=reduced_std)
-    return reduced, info
+    # a slip run keeps its full-resolution drive (`SlipRun.resampled`)
+    return record.resampled(tc, dc, rc, noise_std=reduced_std), info

@@ -22,8 +22,6 @@ import sys
 from pathlib import Path
 
 from .._decimate import DISCOVER_MAX_SAMPLES
-from .._io._curve import FrictionCurve, FrictionTransient
-from .._io._loop import HysteresisLoop
 from .._io._records import RECORD_FORMATS, read_record
 from ..discovery import (
     curve_baseline,
@@ -56,13 +54,28 @@ def add_arguments(parser) -> None:
     add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
 
 
+def _plot_series(report, record, path) -> bool:
+    return plot_discovery(report, path)
+
+
+# per record kind: its discovery baseline and figure (a kind not listed has no baseline yet)
+_DISCOVERY = {
+    "slip_run": (slip_baseline, _plot_series),
+    "loop": (loop_baseline, _plot_series),
+    "friction_curve": (curve_baseline, plot_curve_discovery),
+}
+
+
+def _discovery_of(record, src):
+    if record.kind not in _DISCOVERY:
+        raise CommandError(f"{src}: discovery has no baseline for a {type(record).__name__} "
+                           "yet; fit it with `tribojax fit`")  # fmt: skip
+    return _DISCOVERY[record.kind]
+
+
 def baseline_for(record):
     """The discovery baseline for a loaded record (slip run, hysteresis loop, friction curve)."""
-    if isinstance(record, FrictionCurve):
-        return curve_baseline(record)
-    if isinstance(record, HysteresisLoop):
-        return loop_baseline(record)
-    return slip_baseline(record)
+    return _discovery_of(record, record.source)[0](record)
 
 
 def run_discover(args, out=None, err=None) -> int:
@@ -74,14 +87,12 @@ def run_discover(args, out=None, err=None) -> int:
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
     with claim_outputs(src, [target, figure], force=args.force):
         record = read_record(src, args.format)
-        if isinstance(record, FrictionTransient):
-            raise CommandError(f"{src}: discovery has no baseline for a {type(record).__name__} "
-                               "yet; fit it with `tribojax fit`")  # fmt: skip
-        curve = isinstance(record, FrictionCurve)  # a few points: never reduced
-        record, reduction = (record, None) if curve else reduce_record(record, args,
-                                                                       whole_cycles=True)
+        make_baseline, plot = _discovery_of(record, src)
+        # a long series is reduced; a curve (a few points) never is
+        record, reduction = (reduce_record(record, args, whole_cycles=True) if record.reducible
+                             else (record, None))  # fmt: skip
         try:
-            baseline = baseline_for(record)
+            baseline = make_baseline(record)
             with progress(args, "discover"):
                 report = discover(baseline, max_effects=args.max_effects)
         except ValueError as exc:
@@ -92,10 +103,7 @@ def run_discover(args, out=None, err=None) -> int:
         data["source"] = str(src)
         data["decimation"] = reduction.as_dict() if reduction else None
         write_json_atomic(target, data, exclusive=not args.force)
-        if curve:
-            drew = plot_curve_discovery(report, record, figure)
-        else:
-            drew = plot_discovery(report, figure)
+        drew = plot(report, record, figure)
     print(f"{src}: {report.kind} record, {len(report.y)} samples", file=out)
     print(report.summary(), file=out)
     print(f"wrote {target}" + (f" and {figure}" if drew else " (no figure: matplotlib missing)"),

@@ -23,9 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .._fit._measures import nrmse, rms
-from .._io._curve import FrictionCurve, FrictionTransient
 from .._io._records import RECORD_FORMATS, read_record
-from .._io._slip_run import SlipRun
 from .._model import evaluate, fit_loop, fit_slip_run, loop_residuals, slip_baseline
 from .._plot import pyplot, save_figure
 from ._common import (
@@ -40,7 +38,12 @@ from ._common import (
     warn,
     write_json_atomic,
 )
-from ._fit_real import ELEMENT_MODELS, fit_curve_record, fit_history_record
+from ._fit_real import ELEMENT_MODELS, fit_curve_record, fit_history_record, fit_summary
+
+# record kinds `tribojax fit` does not fit, and what to do instead
+_NOT_FITTED = {
+    "friction_transient": "fit its steady curve first (tribojax.fit_transient in Python)",
+}
 
 
 def add_arguments(parser) -> None:
@@ -100,31 +103,13 @@ def run_fit(args) -> int:
     start = _parse_start(args.start)
     with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force):
         full = read_record(path, args.format)
-        if isinstance(full, FrictionTransient):
-            return error(f"{path} is a friction transient: fit its steady curve first "
-                         "(tribojax.fit_transient in Python)")  # fmt: skip
-        if args.alpha is not None and not isinstance(full, SlipRun):
-            kind = "a friction curve" if isinstance(full, FrictionCurve) else "a hysteresis loop"
-            return error(f"--alpha is for slip runs; {path} is {kind}")
+        if full.kind in _NOT_FITTED:
+            return error(f"{path} is {full.description}: {_NOT_FITTED[full.kind]}")
+        if args.alpha is not None and full.kind != "slip_run":
+            return error(f"--alpha is for slip runs; {path} is {full.description}")
         t0 = time.perf_counter()
-        model = args.model
-        history = not isinstance(full, SlipRun | FrictionCurve) and (
-            model in (*ELEMENT_MODELS, "best") or (model is None and not full.periodic)
-        )
         with progress(args, "fit") as bar:
-            if isinstance(full, FrictionCurve):
-                result, curves = fit_curve_record(full, model or "lugre", args, _summary)
-            elif history:
-                result, curves = fit_history_record(full, model or "best", args, start, _summary)
-            else:
-                record, reduction = reduce_record(full, args)
-                if isinstance(record, SlipRun):
-                    result, curves = _fit_slip(record, args, start, reduction, bar.note)
-                else:
-                    result, curves = _fit_loop(record, args, start, reduction)
-                result["decimation"] = reduction.as_dict()
-                if reduction.factor > 1:
-                    result["full_record"] = _full_record(full, result, args, reduction)
+            result, curves = _FITS[full.kind](full, args, start, bar.note)
         result["wall_time_s"] = time.perf_counter() - t0
         write_json_atomic(out / "fit.json", result, exclusive=not args.force)
         drew = _plot(curves, result, out / "fit.png")
@@ -180,38 +165,57 @@ def uncertainty_warnings(result: dict) -> list[str]:
     return out
 
 
-def _summary(fit, kind, source, n_data, resid, unit, sigma, sigma_source) -> dict:
-    d = fit.as_dict()
-    d.update(
-        kind=kind,
-        source=str(source),
-        fitted=list(fit.names),
-        n_data=int(n_data),
-        rms_residual=rms(resid),
-        residual_unit=unit,
-        sigma=sigma,
-        sigma_source=sigma_source,
-        message=fit.message,
-    )
-    if fit.noise_consistent is False:
-        d["uncertainty_model"] = (
-            f"the stated noise ({sigma_source}) is contradicted by the residuals (reduced chi2 = "
-            f"{fit.reduced_chi2:.4g}): standard errors are scaled by sqrt(reduced chi2)"
-        )
-    return d
+def _fit_slip_record(run, args, start, note):
+    """A slip run: reduced as `--decimate` asks, then the pre-slip LuGre model."""
+    return _fit_reduced(run, args, start, note, _fit_slip, _slip_full_residuals)
 
 
-def _full_record(full, result, args, reduction) -> dict:
-    """Residual statistics of the fitted model on every sample of the unreduced record."""
+def _fit_loop_record(loop, args, start, note):
+    """A loop: through its history (`--model` an element or best; default for a non-periodic
+    history), else reduced as `--decimate` asks and fitted with the loop model of --element."""
+    model = args.model
+    if model in (*ELEMENT_MODELS, "best") or (model is None and not loop.periodic):
+        return fit_history_record(loop, model or "best", args.max_steps, start)
+    return _fit_reduced(loop, args, start, note, _fit_loop, _loop_full_residuals)
+
+
+def _fit_curve_record(curve, args, start, note):
+    """A friction curve (a few points, never reduced): the LuGre steady law."""
+    return fit_curve_record(curve, args.model or "lugre", args.max_steps)
+
+
+# the fit of each record kind (those in _NOT_FITTED excepted)
+_FITS = {"slip_run": _fit_slip_record, "loop": _fit_loop_record,
+         "friction_curve": _fit_curve_record}  # fmt: skip
+
+
+def _fit_reduced(full, args, start, note, fit, full_residuals):
+    """`fit` on the record reduced as `--decimate` asks; after a reduction, the fitted model's
+    residuals on every original sample (`full_residuals`) in "full_record"."""
+    record, reduction = reduce_record(full, args)
+    result, curves = fit(record, args, start, reduction, note)
+    result["decimation"] = reduction.as_dict()
+    if reduction.factor > 1:
+        resid = full_residuals(full, result, args)
+        result["full_record"] = _full_record(resid, result, reduction)
+    return result, curves
+
+
+def _slip_full_residuals(full, result, args):
+    # the fitted model (its θ) on the full record: the same model, not a rebuilt element
     p = result["parameters"]
-    if isinstance(full, SlipRun):
-        # the fitted model (its θ) on the full record: the same model, not a rebuilt element
-        model = slip_baseline(full, alpha=None if "alpha" in p else result["fixed"]["alpha"])
-        theta = model.theta_of([p[name] for name in model.param_names])
-        resid = evaluate(model, theta) - full.slip
-    else:
-        resid = loop_residuals(full, args.element, p["mu_N"], p["K_d"],
-                               model=args.model or "history")
+    model = slip_baseline(full, alpha=None if "alpha" in p else result["fixed"]["alpha"])
+    theta = model.theta_of([p[name] for name in model.param_names])
+    return evaluate(model, theta) - full.slip
+
+
+def _loop_full_residuals(full, result, args):
+    p = result["parameters"]
+    return loop_residuals(full, args.element, p["mu_N"], p["K_d"], model=args.model or "history")
+
+
+def _full_record(resid, result, reduction) -> dict:
+    """Residual statistics of the fitted model on every sample of the unreduced record."""
     sigma = reduction.noise_std_original
     dof = max(len(resid) - len(result["fitted"]), 1)
     return {
@@ -246,7 +250,7 @@ def _fit_slip(run, args, start, reduction, note=None):
     resid = fit.prediction - run.slip  # model − data, m
     if sigma is None:
         sigma = float(np.sqrt(np.sum(resid**2) / max(len(run) - len(fit.names), 1)))
-    d = _summary(fit, "slip_run", run.source, len(run), resid, "m", sigma, how)
+    d = fit_summary(fit, run, len(run), resid, "m", sigma, how)
     d["model"] = "PreSlipLuGre (wang2022 Eq 27), slip at every sample"
     d["nrmse"] = nrmse(resid, run.slip)
     d["mass_kg"] = run.mass
@@ -255,7 +259,7 @@ def _fit_slip(run, args, start, reduction, note=None):
     return d, curves
 
 
-def _fit_loop(loop, args, start, reduction):
+def _fit_loop(loop, args, start, reduction, note=None):
     if len(loop.t) <= 2:
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
     steps = args.max_steps or ODE_FIT_STEPS
@@ -271,7 +275,7 @@ def _fit_loop(loop, args, start, reduction):
     sigma = loop.noise_std
     if sigma is None:
         sigma = float(np.sqrt(np.sum(resid**2) / max(m - 2, 1)))
-    d = _summary(fit, "loop", loop.source, m, resid, "N", sigma, how)
+    d = fit_summary(fit, loop, m, resid, "N", sigma, how)
     d["model"] = (
         f"{args.element} ({model} loop, wu2015 Eq "
         f"{1 if args.element == 'jenkins' else 2})"

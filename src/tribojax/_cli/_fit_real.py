@@ -6,7 +6,7 @@ the lowest BIC = n·ln(RSS/n) + p·ln(n). A friction curve (a folder of EPOS ste
 or a curve CSV) is fitted with the LuGre steady law and a direction asymmetry
 (`tribojax.fit_steady_curve`; `--model lugre` or `best`). Each returns the fit.json dictionary
 (with "model" the fitted model's name and "nrmse" = rms(residual)/std(measured)) and the plot
-curves.
+curves; `fit_summary` is the part of that dictionary every record kind shares.
 """
 
 from __future__ import annotations
@@ -15,20 +15,44 @@ import numpy as np
 
 from .._fit._curve import fit_steady_curve
 from .._fit._history import HISTORY_MODELS, fit_history, predict_history
-from .._fit._measures import bic, nrmse
+from .._fit._measures import bic, nrmse, rms
 from .._io._curve import FrictionCurve
 from ._common import ODE_FIT_STEPS, CommandError
 
 ELEMENT_MODELS = tuple(HISTORY_MODELS)  # jenkins, mindlin, lugre, bouc_wen
 
 
-def fit_history_record(loop, model: str, args, start, summary):
-    """Fit `model` (or every element for "best") through the loop's displacement history."""
+def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:
+    """The fit.json entries of a fit of `record` (its kind and source) on `n_data` data with
+    residuals `resid` (model − data, `unit`) and noise sd `sigma` (from `sigma_source`)."""
+    d = fit.as_dict()
+    d.update(
+        kind=record.kind,
+        source=str(record.source),
+        fitted=list(fit.names),
+        n_data=int(n_data),
+        rms_residual=rms(resid),
+        residual_unit=unit,
+        sigma=sigma,
+        sigma_source=sigma_source,
+        message=fit.message,
+    )
+    if fit.noise_consistent is False:
+        d["uncertainty_model"] = (
+            f"the stated noise ({sigma_source}) is contradicted by the residuals (reduced chi2 = "
+            f"{fit.reduced_chi2:.4g}): standard errors are scaled by sqrt(reduced chi2)"
+        )
+    return d
+
+
+def fit_history_record(loop, model: str, max_steps: int | None, start: dict):
+    """Fit `model` (or every element for "best") through the loop's displacement history, with
+    at most `max_steps` LM steps (None: `ODE_FIT_STEPS`) from the `start` values given."""
     names = ELEMENT_MODELS if model == "best" else (model,)
     fits = {}
     for name in names:
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
-        steps = args.max_steps or ODE_FIT_STEPS
+        steps = max_steps or ODE_FIT_STEPS
         fits[name] = fit_history(loop, name, start=given or None, max_steps=steps)
     pred = {k: predict_history(h, loop)[0] for k, h in fits.items()}
     n = len(loop.f)
@@ -38,7 +62,7 @@ def fit_history_record(loop, model: str, args, start, summary):
     h = fits[best]
     resid = pred[best] - loop.f
     sigma = float(np.sqrt(np.sum(resid**2) / max(n - len(h.fit.names), 1)))
-    d = summary(h.fit, "loop", loop.source, n, resid, "N", sigma, "estimated from the residuals")
+    d = fit_summary(h.fit, loop, n, resid, "N", sigma, "estimated from the residuals")
     d.update(model=best, nrmse=h.nrmse, route="history", bic=scores[best],
              normal_load_N=loop.normal_load, frequency_Hz=loop.frequency)  # fmt: skip
     if model == "best":
@@ -50,18 +74,19 @@ def fit_history_record(loop, model: str, args, start, summary):
     return d, curves
 
 
-def fit_curve_record(curve: FrictionCurve, model: str, args, summary):
-    """Fit the LuGre steady law with a direction asymmetry to a friction curve."""
+def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
+    """Fit the LuGre steady law with a direction asymmetry to a friction curve, with at most
+    `max_steps` LM steps (None: the curve fit's own budget)."""
     if model not in ("lugre", "best"):
         raise CommandError(f"--model {model} does not apply to a friction curve; use lugre or best")
     # without --max-steps: the curve fit's own budget (a steady-law step costs microseconds)
-    steps = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    steps = {} if max_steps is None else {"max_steps": max_steps}
     fit = fit_steady_curve(curve, **steps)
     resid = fit.residuals * curve.friction_error
     unit = curve.units["friction_unit"]
     sigma = float(np.median(curve.friction_error))
-    d = summary(fit, "friction_curve", curve.source, len(curve.velocity), resid, unit, sigma,
-                "per-point scatter / sqrt(samples)")  # fmt: skip
+    d = fit_summary(fit, curve, len(curve), resid, unit, sigma,
+                    "per-point scatter / sqrt(samples)")  # fmt: skip
     sides = {}
     for side, sign in (("positive", 1), ("negative", -1)):
         sides[side] = fit_steady_curve(curve, direction=sign, **steps).as_dict()

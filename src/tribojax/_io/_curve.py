@@ -12,12 +12,14 @@ from __future__ import annotations
 import dataclasses
 import json
 from pathlib import Path
+from typing import ClassVar, final
 
 import numpy as np
 
 from .._tables import DataFileError, read_table, read_text
 from ._epos import read_epos
 from ._files import csv_header, refuse_existing, sidecar_path, write_text_atomic
+from ._record import AbstractRecord
 
 CURVE_COLUMNS = ("velocity", "friction", "friction_scatter", "velocity_scatter", "samples")
 TRANSIENT_COLUMNS = ("time_s", "velocity", "friction")
@@ -41,8 +43,9 @@ def _checked(source, **arrays):
     return out
 
 
+@final
 @dataclasses.dataclass(frozen=True)
-class FrictionCurve:
+class FrictionCurve(AbstractRecord):
     """Steady friction versus velocity: per point the mean `velocity`, the mean `friction`, the
     standard deviation of the friction samples `friction_scatter` (> 0) and of the velocity
     samples `velocity_scatter` (>= 0), and the number of independent `samples` (>= 1) averaged:
@@ -64,6 +67,9 @@ class FrictionCurve:
     )
     source: str = "<array>"
 
+    kind: ClassVar[str] = "friction_curve"
+    description: ClassVar[str] = "a friction curve"
+
     def __post_init__(self):
         cols = _checked(self.source, **{c: getattr(self, c) for c in CURVE_COLUMNS})
         for name, x in cols.items():
@@ -77,6 +83,9 @@ class FrictionCurve:
         if set(self.units) != set(_UNIT_KEYS):
             raise ValueError(f"{self.source}: units must have the keys {list(_UNIT_KEYS)}")
 
+    def __len__(self) -> int:
+        return len(self.velocity)
+
     @property
     def friction_error(self) -> np.ndarray:
         """Standard error of each mean friction, scatter/√samples (same unit as friction)."""
@@ -88,8 +97,9 @@ class FrictionCurve:
         return dataclasses.replace(self, **{c: getattr(self, c)[keep] for c in CURVE_COLUMNS})
 
 
+@final
 @dataclasses.dataclass(frozen=True)
-class FrictionTransient:
+class FrictionTransient(AbstractRecord):
     """A measured friction transient: times t (s, increasing), velocity and friction samples in
     `units` (as for `FrictionCurve`). A start–stop run: rest, one direction, rest, the other."""
 
@@ -101,6 +111,9 @@ class FrictionTransient:
     )
     source: str = "<array>"
 
+    kind: ClassVar[str] = "friction_transient"
+    description: ClassVar[str] = "a friction transient"
+
     def __post_init__(self):
         cols = _checked(self.source, t=self.t, velocity=self.velocity, friction=self.friction)
         for name, x in cols.items():
@@ -108,6 +121,9 @@ class FrictionTransient:
         steps = np.flatnonzero(np.diff(self.t) <= 0)
         if steps.size:
             raise ValueError(f"{self.source}: time is not increasing at sample {steps[0] + 1}")
+
+    def __len__(self) -> int:
+        return len(self.t)
 
 
 EPOS_UNITS_SI = {"velocity_unit": "rad/s", "friction_unit": "N m"}

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import ClassVar, final
 
 import jax
 import jax.numpy as jnp
@@ -28,13 +29,15 @@ from ._files import (
     sidecar_text,
     write_record_files,
 )
+from ._record import AbstractRecord
 
 LOOP_COLUMNS = ("t_s", "u_m", "f_N")  # the legacy format, no sidecar needed
 LOOP_FILE_COLUMNS = ("time_s", "displacement_m", "force_N")
 
 
+@final
 @dataclasses.dataclass(frozen=True)
-class HysteresisLoop:
+class HysteresisLoop(AbstractRecord):
     """A measured (or synthetic) loop: times t (s, increasing), displacement u (m), force f (N).
 
     Optional metadata (keyword-only): `normal_load` (N) of the contact, the drive `frequency`
@@ -54,6 +57,11 @@ class HysteresisLoop:
     frequency: float | None = dataclasses.field(default=None, kw_only=True)
     noise_std: float | None = dataclasses.field(default=None, kw_only=True)
     periodic: bool = dataclasses.field(default=True, kw_only=True)
+
+    kind: ClassVar[str] = "loop"
+    description: ClassVar[str] = "a hysteresis loop"
+    reducible: ClassVar[bool] = True
+    response_unit: ClassVar[str] = "N"
 
     def __post_init__(self):
         arrays = [np.asarray(x, dtype=np.float64) for x in (self.t, self.u, self.f)]
@@ -89,6 +97,21 @@ class HysteresisLoop:
         (what `fit_loop(model="history")` does with the loop's samples).
         """
         return DisplacementHistory(self.t, self.u)
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(t, u, f): the displacement drives, the force responds."""
+        return self.t, self.u, self.f
+
+    def resampled(self, t, drive, response, *, noise_std) -> HysteresisLoop:
+        """The loop on new samples (t, u, f) with force noise sd `noise_std`."""
+        return dataclasses.replace(self, t=t, u=drive, f=response, noise_std=noise_std)
+
+    def cycle_times(self) -> np.ndarray | None:
+        """`cycle_starts(t, u)` for a periodic loop; None for an arbitrary history."""
+        return cycle_starts(self.t, self.u) if self.periodic else None
 
 
 _LOOP_SIDECAR = {"normal_load_N": False, "frequency_Hz": True, "noise_std_N": False}

@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from pathlib import Path
+from typing import ClassVar, final
 
 import numpy as np
 
@@ -28,14 +29,16 @@ from .._dynamics._slip import simulate_slip
 from .._presets import WANG2022_RETICLE_MASS_KG
 from .._tables import DataFileError, read_table
 from ._files import data_line_number, positive_or_none, read_sidecar, write_record_files
+from ._record import AbstractRecord
 
 SLIP_COLUMNS = ("time_s", "stage_accel_m_s2", "slip_m")
 
 _SLIP_SIDECAR = {"mass_kg": True, "normal_load_N": False, "noise_std_m": False}
 
 
+@final
 @dataclasses.dataclass(frozen=True)
-class SlipRun:
+class SlipRun(AbstractRecord):
     """A measured or synthetic slip run: t (s), stage acceleration (m/s²), slip Δx (m).
 
     `mass` (kg) is the driven body's mass; `normal_load` (N) the normal load of the contact, if
@@ -63,6 +66,11 @@ class SlipRun:
     drive: AbstractProfile | None = dataclasses.field(
         default=None, kw_only=True, compare=False, repr=False
     )
+
+    kind: ClassVar[str] = "slip_run"
+    description: ClassVar[str] = "a slip run"
+    reducible: ClassVar[bool] = True
+    response_unit: ClassVar[str] = "m"
 
     def __post_init__(self):
         src = self.source
@@ -100,6 +108,17 @@ class SlipRun:
 
     def __len__(self) -> int:
         return len(self.t)
+
+    def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(t, accel, slip): the stage acceleration drives, the slip responds."""
+        return self.t, self.accel, self.slip
+
+    def resampled(self, t, drive, response, *, noise_std) -> SlipRun:
+        """The run on new samples (t, accel, slip) with slip noise sd `noise_std`, still driven
+        by this run's full-resolution acceleration profile (`profile`): reducing the samples
+        must not smooth the drive (see `tribojax.decimate_record`)."""
+        return dataclasses.replace(self, t=t, accel=drive, slip=response, noise_std=noise_std,
+                                   drive=self.profile())  # fmt: skip
 
     def profile(self) -> MeasuredProfile:
         """The run's drive: its stage acceleration a(t) (m/s²), linear between the samples.

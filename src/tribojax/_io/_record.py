@@ -1,0 +1,73 @@
+"""`AbstractRecord`: what every user record answers, whatever its kind.
+
+The records are one family in equinox's abstract/final pattern: this abstract base declares the
+interface, and each kind is a final (never subclassed) frozen dataclass:
+
+    SlipRun            kind "slip_run"            t, accel (drive), slip (response, m)
+    HysteresisLoop     kind "loop"                t, u (drive), f (response, N)
+    FrictionCurve      kind "friction_curve"      steady points: velocity, friction, scatter
+    FrictionTransient  kind "friction_transient"  t, velocity, friction
+
+Code that treats the kinds differently (the command line, `decimate_record`) asks the record
+(`kind`, `description`, `reducible`, `series`, `resampled`, `cycle_times`) or looks its `kind` up
+in a table, never tests its class: a new kind is one new subclass, not a branch at every use.
+"""
+
+from __future__ import annotations
+
+import abc
+from typing import ClassVar
+
+import numpy as np
+
+
+class AbstractRecord(abc.ABC):
+    """A user record: a measured (or synthetic) data set with the file it came from.
+
+    Every concrete record sets the ClassVars
+    - `kind`: its name in tables and in `fit.json` ("slip_run", "loop", "friction_curve",
+      "friction_transient");
+    - `description`: the kind in words, with its article ("a slip run"), for messages;
+    - `reducible`: True for a time series of a drive and a response with a white-noise sd
+      `noise_std` (None when unknown), which `tribojax.decimate_record` can reduce by block
+      local quadratics; such a record also sets `response_unit` and implements `series` and
+      `resampled`;
+    and has `source` (the file or folder it came from, "<array>" when built in memory) and a
+    length (`len`: its samples, or its points for a curve).
+
+    The concrete records are final: subclassing one raises TypeError (add a kind as a new
+    subclass of `AbstractRecord` instead).
+    """
+
+    kind: ClassVar[str]
+    description: ClassVar[str]
+    reducible: ClassVar[bool] = False
+    response_unit: ClassVar[str | None] = None
+    source: str
+
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        for base in cls.__mro__[1:]:  # a record class that sets its kind is concrete: final
+            if issubclass(base, AbstractRecord) and "kind" in vars(base):
+                raise TypeError(f"{base.__name__} is a final record class and cannot be "
+                                f"subclassed (subclass AbstractRecord for a new kind)")  # fmt: skip
+
+    @abc.abstractmethod
+    def __len__(self) -> int:
+        """The number of samples (points, for a curve)."""
+
+    def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(t, drive, response): the channels a block reduction acts on (`reducible` records).
+
+        Raises ValueError for a record that is not such a time series."""
+        raise ValueError(f"{self.source}: {self.description} is not a drive/response series")
+
+    def resampled(self, t, drive, response, *, noise_std):
+        """The record with the channels of `series` replaced (reduced or cut samples) and the
+        response's noise sd `noise_std`; the other fields kept (`reducible` records)."""
+        raise ValueError(f"{self.source}: {self.description} is not a drive/response series")
+
+    def cycle_times(self) -> np.ndarray | None:
+        """Times of the upward mean-crossings of the drive (the starts of whole cycles) for a
+        periodic record; None for a record without cycles."""
+        return None
