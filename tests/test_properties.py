@@ -6,6 +6,7 @@ CLI), never a traceback and never a partial output. Example counts are small to 
 fast; the generators are plain hypothesis strategies, independent of the readers.
 """
 
+import json
 import math
 import shutil
 import tempfile
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 
 hypothesis = pytest.importorskip("hypothesis")
-from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import HealthCheck, assume, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import tribojax as tj  # noqa: E402
@@ -213,21 +214,57 @@ _number = st.sampled_from(["0", "-1", "nan", "inf", "1e-300", "1e300", "2.5", "3
 @given(D=_number | st.floats(2.0, 3.0).map(repr), G=_number | st.floats(1e-12, 1e-6).map(repr),
        load=_number | st.floats(0.1, 100.0).map(repr))  # fmt: skip
 def test_cli_contact_never_tracebacks(D, G, load):
-    with _Capture() as cap:
+    """Exit 0 with finite, non-negative contact numbers in the JSON (warnings only on stderr), or
+    1 (a solve did not converge) / 2 (bad input, nothing written) with one line on stderr; never
+    a traceback, never a success with a NaN or negative physical quantity."""
+    assume(load != "1e300")  # a known defect: test_cli_contact_huge_load_is_not_a_success
+    with tempfile.TemporaryDirectory() as tmp, _Capture() as cap:
+        out = Path(tmp) / "contact.json"
         try:
-            code = main(["contact", "--D", D, "--G", G, "--load", load])
+            code = main(["contact", "--D", D, "--G", G, "--load", load, "--json", str(out)])
         except SystemExit as exit_:  # argparse refuses a value that is not a float
             code = ("argparse", exit_.code)
+        result = json.loads(out.read_text()) if out.exists() else None
+    args = (D, G, load, code, cap.err)
     if isinstance(code, tuple):
-        assert code[1] == 2 and "invalid float value" in cap.err
+        assert code[1] == 2 and "invalid float value" in cap.err and result is None, args
         return
-    assert "Traceback" not in cap.err
-    assert code in (0, 1, 2), (D, G, load, cap.err)
-    if code == 2:
-        lines = [ln for ln in cap.err.splitlines() if ln.startswith("tribojax contact: error: ")]
-        assert len(lines) == 1, cap.err
+    assert "Traceback" not in cap.err, args
+    lines = cap.err.strip().splitlines()
     if code == 0:
-        assert math.isfinite(float(load)) and float(load) > 0
+        assert all(ln.startswith("tribojax contact: warning: ") for ln in lines), args
+        assert 2 < result["surface"]["D"] < 3 and 0 < result["surface"]["G"] < math.inf, args
+        (row,) = result["contact"]
+        assert row["converged"] and row["load_N"] == float(load), (args, row)
+        for key in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m", "zmax_m"):
+            assert isinstance(row[key], float) and 0.0 <= row[key] < math.inf, (args, row)
+        share = row["load_share"]
+        assert all(0.0 <= s <= 1.0 for s in share) and math.isclose(sum(share), 1.0), (args, row)
+    elif code == 1:  # the load balance failed: said once, and the JSON says which load
+        (line,) = lines
+        assert line.startswith("tribojax contact: warning: ") and "did not converge" in line, args
+        assert not result["contact"][0]["converged"], (args, result)
+    else:
+        assert code == 2, args
+        (line,) = lines
+        assert line.startswith("tribojax contact: error: ") and result is None, args
+
+
+_HUGE_LOAD = ("known defect: --load 1e300 exits 0 with F_s, C_tau and z_max NaN (null in the "
+              "JSON); a failed computation should exit 1 or 2")  # fmt: skip
+
+
+@pytest.mark.xfail(strict=True, reason=_HUGE_LOAD)
+def test_cli_contact_huge_load_is_not_a_success(tmp_path):
+    out = tmp_path / "contact.json"
+    code = main(["contact", "--D", "2.88", "--G", "4.36e-8", "--load", "1e300", "--json",
+                 str(out)])  # fmt: skip
+    if code == 0:
+        (row,) = json.loads(out.read_text())["contact"]
+        for key in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m", "zmax_m"):
+            assert isinstance(row[key], float) and 0.0 <= row[key] < math.inf, row
+    else:
+        assert code in (1, 2)  # a failed computation, or the load refused
 
 
 @pytest.mark.parametrize("text", ["INF", "1.0\nnan\n2.0", "0.1 0.2\n-inf 0.3\n"])

@@ -117,7 +117,12 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2
 
 def steady_element(fit: FitResult, sigma0=1.0, sigma1=0.0) -> tuple[LuGre, float]:
     """(LuGre with the fitted steady law and σ0, σ1; the asymmetry T0, 0 if none)."""
-    p = dict(zip(fit.names, fit.values))
+    return _law_element(dict(zip(fit.names, fit.values)), sigma0, sigma1)
+
+
+def _law_element(p: dict, sigma0=1.0, sigma1=0.0) -> tuple[LuGre, float]:
+    """`steady_element` from the steady law's parameters by name (F_c, F_s, v_s, beta, sigma2
+    and T0 if fitted)."""
     el = LuGre(sigma0, sigma1, p["sigma2"], p["F_c"], p["F_s"], p["v_s"], 1.0, p["beta"])
     return el, float(p.get("T0", 0.0))
 
@@ -140,8 +145,9 @@ class _TransientResiduals(eqx.Module):
         return ((model - f) / err)[moving]
 
 
-def _transient_args(tr: FrictionTransient, steady: FitResult, curve_error=None):
-    law, T0 = steady_element(steady)
+def _transient_args(tr: FrictionTransient, steady: dict, curve_error=None):
+    """The residuals' args; `steady`: the steady law's parameters by name."""
+    law, T0 = _law_element(steady)
     moving = jnp.asarray(np.flatnonzero(tr.velocity != 0.0))  # at rest the drive is off
     err = curve_error if curve_error is not None else float(np.std(tr.friction[tr.velocity != 0]))
     return (law, T0, jnp.asarray(tr.velocity), jnp.asarray(np.diff(tr.t)),
@@ -161,7 +167,7 @@ def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start
     Returns FitResult with names (sigma0, sigma1), fitted as logarithms; the sampling of the
     record bounds what can be resolved (standard errors and `unidentifiable` say so).
     """
-    args = _transient_args(tr, steady, sigma)
+    args = _transient_args(tr, dict(zip(steady.names, steady.values)), sigma)
     fit = least_squares_fit(_TransientResiduals(), jnp.log(jnp.asarray(start)), args,
                             names=("sigma0", "sigma1"), transform=jnp.exp,
                             sigma_known=sigma is not None, max_steps=max_steps,
@@ -172,11 +178,6 @@ def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start
 
 def transient_nrmse(fit: FitResult, tr: FrictionTransient) -> float:
     """NRMSE of a `fit_transient` result over the record's moving samples."""
-    steady = fit.fixed["steady"]
-    names = tuple(steady)
-    fake = FitResult(names=names, values=np.asarray(list(steady.values())), std_errors=None,
-                     covariance=None, correlation=None, theta=None, residuals=None,
-                     singular_values=None, converged=True)  # fmt: skip
-    args = _transient_args(tr, fake, 1.0)
+    args = _transient_args(tr, fit.fixed["steady"], 1.0)
     r = np.asarray(_TransientResiduals()(jnp.asarray(fit.theta), args))
     return float(np.sqrt(np.mean(r**2)) / np.std(tr.friction[tr.velocity != 0]))
