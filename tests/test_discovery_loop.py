@@ -13,9 +13,8 @@ import pytest
 
 import tribojax as tj
 import tribojax.discovery as disc
+from tribojax._model import LoopSpec, cycle_noise, loop_force, prepare_loop
 from tribojax.discovery import AbstractEffect, EffectDesign
-from tribojax._model import cycle_noise
-from tribojax._model import LoopSpec, loop_force, prepare_loop
 from tribojax.discovery._loop_synthetic import (
     LOAD_GRADIENT,
     LOOP_EFFECTS,

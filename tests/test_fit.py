@@ -133,7 +133,7 @@ def test_noise_floor_lm_stops_on_the_statistical_rule():
     # test off (rtol = atol = 0) and rejections allowed up to 100, only the Gauss-Newton rule
     # (step left < 0.05 standard errors after an accepted step) can stop it within 50 steps.
     from tribojax._fit._engine import gauss_newton_step
-    from tribojax._fit._solver import NoiseFloorLM
+    from tribojax._fit._solver import LevenbergMarquardt
 
     rng = np.random.default_rng(3)
     x = jnp.linspace(0.0, 1.0, 50)
@@ -147,7 +147,7 @@ def test_noise_floor_lm_stops_on_the_statistical_rule():
     lines = []
     fit = tj.least_squares_fit(residuals, jnp.array([1.0, 0.0]), (x, y), names=("A", "b"),
                                sigma_known=True, max_steps=50, jac="fwd",
-                               solver=NoiseFloorLM(0.0, 0.0, max_rejections=100),
+                               solver=LevenbergMarquardt.noise_floor(0.0, 0.0, max_rejections=100),
                                progress=lines.append)  # fmt: skip
     assert fit.result == tj.RESULTS.successful and fit.steps < 50
     assert float(jnp.max(jnp.abs(gauss_newton_step(fit.residuals, fit.jacobian)))) < 0.05

@@ -168,9 +168,9 @@ def test_distinct_starts_reach_the_same_optimum(two_fits):
     a, b = two_fits
     assert a.converged and b.converged
     spread = np.abs(a.fit.values - b.fit.values) / a.fit.std_errors
-    # each fit stops once the Gauss–Newton step left is < 0.05 standard errors (NoiseFloorLM),
+    # each fit stops once the Gauss–Newton step left is < 0.05 standard errors (step_tol),
     # so two starts may end up to ~0.1 apart; measured 0.086 — far inside "within the errors"
-    assert np.max(spread) < 2 * fc.NoiseFloorLM(1e-3, 1e-4).step_tol
+    assert np.max(spread) < 2 * fc.LevenbergMarquardt.noise_floor(1e-3, 1e-4).step_tol
     assert b.evaluations > 0 and b.wall_s < a.wall_s  # the second fit ran warm (compiled once)
 
 

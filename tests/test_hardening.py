@@ -95,14 +95,17 @@ def test_stated_noise_contradicted_scales_the_errors(tmp_path, capsys):
     assert res["noise_consistent"] is False and res["reduced_chi2"] > 1e18
     assert "reduced chi2" in capsys.readouterr().err
     assert "scaled" in res["uncertainty_model"]
-    # the same errors as a fit that estimates the noise from the residuals (within 1 %)
-    free = tj.fit_loop(tj.read_loop(src), "jenkins", sigma=None)
-    ref = tj.fit_loop(dataclasses.replace(tj.read_loop(src), noise_std=None), "jenkins")
+    # the same errors as a fit that estimates the noise from the residuals (within 1 %; the
+    # loop model, as `tribojax fit` fits by default)
+    free = tj.fit_loop(tj.read_loop(src), "jenkins", sigma=None, model="history")
+    ref = tj.fit_loop(dataclasses.replace(tj.read_loop(src), noise_std=None), "jenkins",
+                      model="history")
     for k, name in enumerate(ref.names):
         assert res["std_errors"][name] == pytest.approx(ref.std_errors[k], rel=1e-2)
         assert free.std_errors[k] == pytest.approx(ref.std_errors[k], rel=1e-2)
     # a stated noise that is right keeps its own errors and says so
-    good = tj.fit_loop(dataclasses.replace(tj.read_loop(src), noise_std=0.004), "jenkins")
+    good = tj.fit_loop(dataclasses.replace(tj.read_loop(src), noise_std=0.004), "jenkins",
+                       model="history")
     assert good.noise_consistent is True and 0.5 < good.reduced_chi2 < 2
 
 

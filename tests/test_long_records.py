@@ -109,7 +109,11 @@ def test_cli_fit_states_the_reduction(tmp_path, capsys):
     assert "samples reduced to" in stdout and "on all" in stdout
     d = json.loads((out / "fit.json").read_text())
     dec, full = d["decimation"], d["full_record"]
-    assert dec["factor"] > 1 and dec["samples"] == d["n_data"] and dec["method"]
+    assert dec["factor"] > 1 and dec["method"]
+    # the loop model compares the samples from the first reversal after the first upward
+    # crossing on (the virgin loading and the lead-in are not fitted): less than two cycles fewer
+    per_cycle = dec["samples"] / dec["cycles_kept"]
+    assert dec["samples"] - 2 * per_cycle < d["n_data"] < dec["samples"]
     assert dec["noise_std"] < dec["noise_std_original"] == 0.004
     assert full["n_data"] > 6000 and full["reduced_chi2"] == pytest.approx(1.0, abs=0.05)
     assert d["noise_consistent"] is True

@@ -19,8 +19,9 @@ class RESULTS(optx.RESULTS):  # pyright: ignore
       or a load balance failed there; its residuals carry the failed-evaluation value).
     - `model_failed_at_start`: the model could not be evaluated at the start values and the
       solver did not move away from them.
-    - `short_of_optimum`: the solver stopped on its noise-floor rule (`NoiseFloorLM`), but the
-      Gauss-Newton step still left is above the fit's tolerance in standard errors.
+    - `short_of_optimum`: the solver stopped on its noise-floor rule
+      (`LevenbergMarquardt.noise_floor`), but the Gauss-Newton step still left is above the
+      fit's tolerance in standard errors.
     - `not_converged`: the fit did not converge, cause not recorded (a `FitResult` built with
       `converged=False` and no result).
     - `continuation_failed`, `continuation_incomplete`: a pseudo-arclength continuation

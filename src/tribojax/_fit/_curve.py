@@ -26,12 +26,13 @@ import numpy as np
 from .._friction._lugre import LuGre, stribeck_curve
 from .._io._curve import FrictionCurve, FrictionTransient
 from ._engine import FitResult, least_squares_fit
-from ._solver import NoiseFloorLM
+from ._solver import LevenbergMarquardt
 
 # Plain LM never stops on a curve whose points leave a parameter undetermined (driveNo2's
-# Stribeck dip: β walks towards a step, every late step rejected); NoiseFloorLM also stops when
+# Stribeck dip: β walks towards a step, every late step rejected); the noise-floor LM stops when
 # the Gauss–Newton step left is below 0.05 standard errors in every parameter.
 _RTOL, _ATOL = 1e-10, 1e-12
+_SOLVER = LevenbergMarquardt.noise_floor(_RTOL, _ATOL)
 
 STEADY_NAMES = ("F_c", "F_s", "v_s", "beta", "sigma2")
 
@@ -77,7 +78,7 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2
             velocity unit, β dimensionless).
         direction: +1 or −1 fits the points of that velocity sign alone; None fits both
             directions with the asymmetry T0.
-        max_steps: LM budget (`NoiseFloorLM`); a curve whose points do not resolve the
+        max_steps: LM budget (the noise-floor LM); a curve whose points do not resolve the
             Stribeck dip (driveNo2: no point below v_s) walks β towards a step for a few hundred
             steps, each of microseconds.
     Returns:
@@ -110,7 +111,7 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2
 
     fit = least_squares_fit(_SteadyResiduals(joint), jnp.asarray(theta0), (v, f, err),
                             names=names, transform=tr, sigma_known=True, max_steps=max_steps,
-                            jac="fwd", solver=NoiseFloorLM(_RTOL, _ATOL))  # fmt: skip
+                            jac="fwd", solver=_SOLVER)  # fmt: skip
     fixed = {"direction": "both" if joint else int(direction), **c.units}
     return dataclasses.replace(fit, fixed=fixed)
 
@@ -171,7 +172,7 @@ def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start
     fit = least_squares_fit(_TransientResiduals(), jnp.log(jnp.asarray(start)), args,
                             names=("sigma0", "sigma1"), transform=jnp.exp,
                             sigma_known=sigma is not None, max_steps=max_steps,
-                            jac="fwd", solver=NoiseFloorLM(_RTOL, _ATOL))  # fmt: skip
+                            jac="fwd", solver=_SOLVER)  # fmt: skip
     law = dict(zip(steady.names, steady.values.tolist()))
     return dataclasses.replace(fit, fixed={"steady": law})
 

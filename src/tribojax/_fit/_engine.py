@@ -265,11 +265,11 @@ def least_squares_fit(
             non-finite in optimistix 0.1.0, although jax.jacfwd of the same residual is finite (a
             `jax.custom_jvp` around the root find avoids it, see `fit_measured_slips`).
         solver: an optimistix least-squares solver in place of LevenbergMarquardt(rtol, atol);
-            `NoiseFloorLM` for residuals computed through an ODE solve.
+            `LevenbergMarquardt.noise_floor(...)` for residuals computed through an ODE solve.
         optimum_tol: if given, a successful stop counts only when the Gauss–Newton step still
             left is below this many standard errors in every parameter (else
-            `RESULTS.short_of_optimum`): the check for `NoiseFloorLM`'s stop on rejected steps.
-        progress: callable receiving one line per solver step (`NoiseFloorLM` only).
+            `RESULTS.short_of_optimum`): the check for the `step_tol` stop on rejected steps.
+        progress: callable receiving one line per solver step (a solver with `report=True`).
     The solve is compiled once per `residual_fn` object: pass a module-level function (data in
     `args`) and repeated fits run warm.
 

@@ -25,7 +25,7 @@ from .._io._loop import HysteresisLoop
 from .._results import RESULTS
 from ._engine import FitResult, least_squares_fit
 from ._measures import nrmse
-from ._solver import NoiseFloorLM
+from ._solver import LevenbergMarquardt
 
 # parameters of each model: (name, positive?) — positive ones are fitted as logarithms
 HISTORY_MODELS = {
@@ -143,7 +143,8 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
             for a thorough fit, three times the work).
         decimate: keep every `decimate`-th sample (1: all).
         max_steps, rtol: the Levenberg–Marquardt budget and relative tolerance (atol 1e-3 rtol);
-            `NoiseFloorLM` also stops when the step left is below 0.05 standard errors.
+            `LevenbergMarquardt.noise_floor` also stops when the step left is below 0.05
+            standard errors.
     Returns:
         `HistoryFit`: parameters and standard errors (`least_squares_fit`, the noise scale
         estimated from the residuals; positive parameters fitted as logarithms) and the NRMSE.
@@ -176,7 +177,7 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         for _ in range(3):  # a noise-floor stop short of the optimum restarts where it stopped
             fit = least_squares_fit(fn, theta, records, names=tuple(n for n, _ in spec),
                                     transform=tr, max_steps=max_steps, jac="fwd",
-                                    solver=NoiseFloorLM(rtol, 1e-3 * rtol),
+                                    solver=LevenbergMarquardt.noise_floor(rtol, 1e-3 * rtol),
                                     optimum_tol=1.0)  # fmt: skip
             if fit.result != RESULTS.short_of_optimum:
                 break

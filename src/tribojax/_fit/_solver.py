@@ -61,8 +61,9 @@ def gauss_newton_step(r, J):
     return jnp.where(se > 0, step / jnp.where(se > 0, se * s, 1.0), jnp.inf)
 
 
-# Progress of the running fit: `NoiseFloorLM` reports each step through `report_step` (a
-# jax.debug.callback), which forwards to the callable `least_squares_fit(progress=...)` set here.
+# Progress of the running fit: a solver with `report=True` reports each step through
+# `report_step` (a jax.debug.callback), which forwards to the callable
+# `least_squares_fit(progress=...)` set here.
 # A module-level hook keeps the compiled solve independent of the callable.
 _PROGRESS: list = []
 
@@ -174,8 +175,3 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
             test = jnp.where(since == 0, gain < self.gain_tol * s2, rejected < self.noise_tol * s2)
             stop = stop | (~state.first_step & test)
         return stop, state.result
-
-
-def NoiseFloorLM(rtol, atol, max_rejections=6, step_tol=0.05):  # noqa: N802
-    """`LevenbergMarquardt.noise_floor(...)`, under the name it had before the one solver."""
-    return LevenbergMarquardt.noise_floor(rtol, atol, max_rejections, step_tol)

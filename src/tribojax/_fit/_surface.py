@@ -11,6 +11,7 @@ import numpy as np
 
 from .._chain import mu_min as _mu_min
 from .._chain import to_physical, to_theta
+from .._model import fit_slip_run
 from .._presets import (
     CALIBRATED_G_M,
     CALIBRATED_M,
@@ -20,7 +21,6 @@ from .._presets import (
     wang2022_table3_model,
 )
 from ._engine import FitResult, least_squares_fit
-from .._model import fit_slip_run
 
 SURFACE_NAMES = ("D", "G_m", "mu_t")
 

@@ -26,6 +26,16 @@ TRANSIENT_COLUMNS = ("time_s", "velocity", "friction")
 _UNIT_KEYS = ("velocity_unit", "friction_unit")
 
 
+def _si_units() -> dict:
+    return {"velocity_unit": "m/s", "friction_unit": "N"}
+
+
+def _set_checked(record, names):
+    """Replace the fields `names` of a frozen record by their checked float64 arrays."""
+    for name, x in _checked(record.source, **{c: getattr(record, c) for c in names}).items():
+        object.__setattr__(record, name, x)
+
+
 def _checked(source, **arrays):
     out = {}
     n = None
@@ -62,18 +72,14 @@ class FrictionCurve(AbstractRecord):
     friction_scatter: np.ndarray
     velocity_scatter: np.ndarray
     samples: np.ndarray
-    units: dict = dataclasses.field(
-        default_factory=lambda: {"velocity_unit": "m/s", "friction_unit": "N"}
-    )
+    units: dict = dataclasses.field(default_factory=_si_units)
     source: str = "<array>"
 
     kind: ClassVar[str] = "friction_curve"
     description: ClassVar[str] = "a friction curve"
 
     def __post_init__(self):
-        cols = _checked(self.source, **{c: getattr(self, c) for c in CURVE_COLUMNS})
-        for name, x in cols.items():
-            object.__setattr__(self, name, x)
+        _set_checked(self, CURVE_COLUMNS)
         if len(self.velocity) < 2:
             raise ValueError(f"{self.source}: a friction curve needs at least two points")
         if np.any(self.friction_scatter <= 0) or np.any(self.velocity_scatter < 0):
@@ -106,18 +112,14 @@ class FrictionTransient(AbstractRecord):
     t: np.ndarray
     velocity: np.ndarray
     friction: np.ndarray
-    units: dict = dataclasses.field(
-        default_factory=lambda: {"velocity_unit": "m/s", "friction_unit": "N"}
-    )
+    units: dict = dataclasses.field(default_factory=_si_units)
     source: str = "<array>"
 
     kind: ClassVar[str] = "friction_transient"
     description: ClassVar[str] = "a friction transient"
 
     def __post_init__(self):
-        cols = _checked(self.source, t=self.t, velocity=self.velocity, friction=self.friction)
-        for name, x in cols.items():
-            object.__setattr__(self, name, x)
+        _set_checked(self, ("t", "velocity", "friction"))
         steps = np.flatnonzero(np.diff(self.t) <= 0)
         if steps.size:
             raise ValueError(f"{self.source}: time is not increasing at sample {steps[0] + 1}")

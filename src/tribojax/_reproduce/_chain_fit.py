@@ -20,10 +20,11 @@ Derivatives. Forward mode is the cheap direction for a handful of parameters (th
 `diffrax.ForwardMode()`; the contact through the custom JVP of `tribojax._chain`).
 
 Convergence. The slips come from an adaptive ODE solver (accurate to ~2e-4 here, `SLIP_ATOL`);
-near the optimum the misfit is flat to that level along the D–G valley. `NoiseFloorLM` therefore
-stops on statistical grounds (the Gauss–Newton step left is below 0.05 standard errors) or after
-six rejected steps in a row, and a fit counts as converged only if the Gauss–Newton step still
-left is below `GN_STEP_TOL` standard errors (else `RESULTS.short_of_optimum`). Rows where
+near the optimum the misfit is flat to that level along the D–G valley.
+`LevenbergMarquardt.noise_floor` therefore stops on statistical grounds (the Gauss–Newton step left
+is below 0.05 standard errors) or after six rejected steps in a row, and a fit counts as converged
+only if the Gauss–Newton step still left is below `GN_STEP_TOL` standard errors (else
+`RESULTS.short_of_optimum`). Rows where
 F_s <= m·a_max (the reticle would slide grossly, outside Eq 27's pre-sliding model) or the contact
 fails get the failed-evaluation residual `FAILED_RESIDUAL`, so LM backs off.
 
@@ -53,7 +54,7 @@ from .._chain import chain_contact as chain_contact
 from .._chain import chain_phase_slips, mu_min, to_physical, to_theta, wang2022_loads
 from .._checks import as_f64, runtime_message
 from .._fit._engine import FAILED_RESIDUAL, FitResult, gauss_newton_step, least_squares_fit
-from .._fit._solver import NoiseFloorLM
+from .._fit._solver import LevenbergMarquardt
 from .._presets import CHAIN_DEFAULTS
 from .._results import RESULTS, result_name
 from .._tables import wang2022_table
@@ -356,7 +357,8 @@ def fit_measured_slips(
         fit = least_squares_fit(
             residuals, theta_full0[idx], args, names=free, transform=transform, rtol=rtol,
             atol=atol, max_steps=max_steps, jac=jac,
-            solver=NoiseFloorLM(float(rtol), float(atol)), optimum_tol=GN_STEP_TOL,
+            solver=LevenbergMarquardt.noise_floor(float(rtol), float(atol)),
+            optimum_tol=GN_STEP_TOL,
         )  # fmt: skip
     except RuntimeError as err:  # equinox runtime errors inside the compiled fit
         _PROGRESS["on"] = False

@@ -75,6 +75,7 @@ directions, each point weighted by its standard error; effects `stribeck` (LuGre
 
 from .._fit._noise import find_regions as find_regions
 from .._fit._noise import noise_estimate as noise_estimate
+from .._model import ALPHA as ALPHA
 from .._model import K_MAX as K_MAX
 from .._model import AbstractBaseline as AbstractBaseline
 from .._model import AugmentedPreSlip as AugmentedPreSlip
@@ -87,7 +88,6 @@ from .._model import slip_baseline as slip_baseline
 from .._model import slip_start as slip_start
 from .._model import stage_travel as stage_travel
 from . import _slip_effects  # noqa: F401  (registers the slip effects)
-from .._model import ALPHA as ALPHA
 from ._core import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
 from ._core import AbstractEffect as AbstractEffect
 from ._core import default_effects as default_effects

@@ -71,7 +71,11 @@ class CurveBaseline(AbstractBaseline):
     f_ref: Array  # median |F| (friction unit)
     theta0: Array
     units: tuple = eqx.field(static=True)  # (velocity unit, friction unit)
-    param_units: tuple = eqx.field(static=True)  # units of F_c and σ2 (from the record's)
+    unit_of_params: tuple = eqx.field(static=True)  # units of F_c and σ2 (from the record's)
+
+    @property
+    def param_units(self):
+        return self.unit_of_params
 
     def knob_null(self):
         return np.array([0.0, np.log10(float(self.v_ref) / 10.0), np.log(BETA_START), 0.0, 0.0])
@@ -146,7 +150,7 @@ def curve_baseline(curve: FrictionCurve) -> CurveBaseline:
         f_ref=jnp.asarray(f_ref),
         theta0=jnp.asarray(theta0),
         units=(vu, fu),
-        param_units=(fu, f"{fu} per {vu}"),
+        unit_of_params=(fu, f"{fu} per {vu}"),
     )
 
 

@@ -235,12 +235,12 @@ class Stribeck(AbstractEffect):
     """Velocity weakening g(v) = F_s(1 − δ(1 − exp(−(v/v_s)²))) (wang2022 Eq 25, β = 2); v_s
     scored on the grid `VS_GRID` and fitted jointly with δ in the refit.
 
-    Refit starts: the best grid v_s by score, then δ = `DELTA_START` at v_s = v_pk·`VS_START_FACTORS`,
-    v_pk the record's own peak slip speed (`record_slip_speed`): a velocity weakening changes the
-    slip only where v is near v_s. Measured on an independent record (exponential weakening,
-    4 kPa, fast drive, true v_s near v_pk = 2.1 µm/s): the score's best v_s was the grid's top
-    (0.32 mm/s) and its refits stopped at 3.8 noise sd; from v_s = 3.2 µm/s the refit reached the
-    noise (δ = 0.114, v_s = 1.4 µm/s; Eq 25's β = 2 fits the exponential shape).
+    Refit starts: the best grid v_s by score, then δ = `DELTA_START` at v_s =
+    v_pk·`VS_START_FACTORS`, v_pk the record's own peak slip speed (`record_slip_speed`): a velocity
+    weakening changes the slip only where v is near v_s. Measured on an independent record
+    (exponential weakening, 4 kPa, fast drive, true v_s near v_pk = 2.1 µm/s): the score's best v_s
+    was the grid's top (0.32 mm/s) and its refits stopped at 3.8 noise sd; from v_s = 3.2 µm/s the
+    refit reached the noise (δ = 0.114, v_s = 1.4 µm/s; Eq 25's β = 2 fits the exponential shape).
     """
 
     name: ClassVar[str] = "stribeck"
