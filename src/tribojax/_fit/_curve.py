@@ -26,6 +26,7 @@ import numpy as np
 from .._friction._lugre import LuGre, stribeck_curve
 from .._io._curve import FrictionCurve, FrictionTransient
 from ._engine import FitResult, least_squares_fit
+from ._measures import nrmse
 from ._solver import LevenbergMarquardt
 
 # Plain LM never stops on a curve whose points leave a parameter undetermined (driveNo2's
@@ -181,4 +182,4 @@ def transient_nrmse(fit: FitResult, tr: FrictionTransient) -> float:
     """NRMSE of a `fit_transient` result over the record's moving samples."""
     args = _transient_args(tr, fit.fixed["steady"], 1.0)
     r = np.asarray(_TransientResiduals()(jnp.asarray(fit.theta), args))
-    return float(np.sqrt(np.mean(r**2)) / np.std(tr.friction[tr.velocity != 0]))
+    return nrmse(r, tr.friction[tr.velocity != 0])

@@ -16,10 +16,13 @@ def nrmse(residual, measured) -> float:
     return rms(residual) / float(np.std(np.asarray(measured, dtype=float)))
 
 
-def bic(rss, n, k) -> float:
-    """Bayesian information criterion of a Gaussian model with unknown variance:
-    n·log(RSS/n) + k·log n (k free parameters, n data)."""
-    return float(n * np.log(rss / n) + k * np.log(n))
+def bic(rss=None, n=None, k=None, *, log_likelihood=None) -> float:
+    """Bayesian information criterion k·log n − 2·log L (k free parameters, n data); from the
+    maximised `log_likelihood`, or for Gaussian errors of unknown variance from the RSS
+    (−2·log L = n·log(RSS/n) up to a constant): n·log(RSS/n) + k·log n."""
+    if log_likelihood is None:
+        log_likelihood = -0.5 * n * np.log(rss / n)
+    return float(k * np.log(n) - 2.0 * log_likelihood)
 
 
 def delta_bic(rss1, rss0, n, dk, inflation=1.0) -> float:

@@ -39,6 +39,7 @@ import math
 import numpy as np
 from scipy import special, stats
 
+from .._fit._measures import bic
 from .._results import RESULTS, result_name
 from .._tables import wang2022_table
 from ._chain_fit import TABLES, ChainFit, fit_measured_slips, measured_slips, paper_theory_slips
@@ -196,7 +197,7 @@ class RobustChainFit:
 
     @property
     def bic(self) -> float:
-        return self.n_parameters * math.log(self.target_nm.size) - 2 * self.log_likelihood
+        return bic(n=self.target_nm.size, k=self.n_parameters, log_likelihood=self.log_likelihood)
 
     @property
     def rms_relative_residual(self) -> float:
