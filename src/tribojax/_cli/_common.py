@@ -22,6 +22,7 @@ import equinox as eqx
 from .._checks import runtime_message
 from .._decimate import DECIMATION_MAX_SAMPLES, decimate_record
 from .._io._files import sidecar_path, write_json_atomic
+from .._model._fit import MAX_STEPS
 
 __all__ = [
     "BAD_INPUT",
@@ -43,7 +44,7 @@ __all__ = [
 BAD_INPUT = 2  # malformed input, a parameter out of range or a refused output
 FAILED = 1  # the computation failed (did not converge, the model could not be evaluated)
 INTERRUPTED = 130  # Ctrl-C (128 + SIGINT)
-ODE_FIT_STEPS = 200  # `tribojax fit` LM budget for slip-run and loop fits (an ODE solve a step)
+ODE_FIT_STEPS = MAX_STEPS  # `tribojax fit` LM budget for slip-run and loop fits: the model's
 
 _PROG = ["tribojax"]  # "tribojax <cmd>" of the running subcommand, for messages
 

@@ -134,7 +134,9 @@ class AbstractBaseline(eqx.Module):
         """Model samples (output units), shape (n,), at θ and knob vector `knobs` (JAX).
 
         Runs inside the compiled fit, forward-differentiated: it must not raise at a trial point
-        (use `throw=False` in ODE solves); non-finite samples reject that trial step."""
+        (use `throw=False` in ODE solves) and must return non-finite samples where its solver
+        failed (diffrax fills the times it did not reach with inf); non-finite samples reject
+        that trial step, and at the optimum fail the fit (`model_failed`)."""
 
     @abc.abstractmethod
     def data(self) -> DiscoveryData:
@@ -150,6 +152,18 @@ class AbstractBaseline(eqx.Module):
 
         (jb, jk), value = jax.jacfwd(f, argnums=(0, 1), has_aux=True)(theta, knobs)
         return value, jb, jk
+
+    def value_and_jacobian(self, theta):
+        """The model alone (every knob at `knob_null`) and ∂/∂θ (n, p) (JAX): the pass of a fit
+        whose effects move no knob. Default from `value_and_jacobians`; a baseline whose null
+        physics is a simpler program (the paper's element without the knob states) overrides it
+        and `predict_null`."""
+        value, jb, _ = self.value_and_jacobians(theta, jax.numpy.asarray(self.knob_null()))
+        return value, jb
+
+    def predict_null(self, theta):
+        """`predict` with every knob at `knob_null` (JAX)."""
+        return self.predict(theta, jax.numpy.asarray(self.knob_null()))
 
     def noise_model(self, r) -> tuple[float, float]:
         """(σ̂, AR(1) ρ̂) of the noise in the baseline residual `r` (output units). Default:
@@ -188,6 +202,3 @@ class AbstractBaseline(eqx.Module):
         d = self.data()
         return {d.x_label: np.asarray(d.x, dtype=float)}
 
-    def solver_ok(self, theta, knobs) -> bool:
-        """False when the model could not be evaluated (e.g. ODE failure); default True."""
-        return True

@@ -43,6 +43,7 @@ class Padded(eqx.Module):
     scale: jax.Array  # residual unit (output units)
     bad: jax.Array  # residual of every row where the model is not finite
     d: jax.Array  # variable scaling: x = d·u (p + K_MAX,)
+    knobs: bool = eqx.field(static=True, default=True)  # an active effect moves a knob
 
 
 def _residual_and_jac(x, a: Padded):
@@ -55,9 +56,14 @@ def _residual_and_jac(x, a: Padded):
     p = x.size - K_MAX
     hold = 1.0 - a.mask
     s = x[p:] * a.mask
-    value, jb, jk = a.baseline.value_and_jacobians(x[:p], a.base + a.gain @ s)
+    if a.knobs:
+        value, jb, jk = a.baseline.value_and_jacobians(x[:p], a.base + a.gain @ s)
+        js = jk @ a.gain + a.basis
+    else:  # no knob moves: the null physics alone, differentiated over θ only
+        value, jb = a.baseline.value_and_jacobian(x[:p])
+        js = a.basis
     r = (value + a.basis @ s - a.y) / a.scale
-    J = jnp.concatenate([jb, (jk @ a.gain + a.basis) * a.mask[None, :]], axis=1) / a.scale
+    J = jnp.concatenate([jb, js * a.mask[None, :]], axis=1) / a.scale
     ok = jnp.all(jnp.isfinite(r)) & jnp.all(jnp.isfinite(J))
     r = jnp.concatenate([jnp.where(ok, r, a.bad), hold * x[p:]])
     J_hold = jnp.concatenate([jnp.zeros((K_MAX, p)), jnp.diag(hold)], axis=1)
@@ -105,11 +111,14 @@ def pack_designs(baseline, designs):
 
 
 def padded_args(baseline, base, gain, basis, k, y, scale, bad=np.inf, d=None) -> Padded:
-    """The `Padded` arguments of `padded_residual` (float64 leaves)."""
+    """The `Padded` arguments of `padded_residual` (float64 leaves). Where no knob leaves its
+    null (no gain, no knob set), the residual evaluates the null physics alone
+    (`value_and_jacobian`: the fit of the model alone, or with additive effects only)."""
     p = len(baseline.param_names)
     d = np.ones(p + K_MAX) if d is None else d
     arrays = (base, gain, basis, np.arange(K_MAX) < k, y, scale, bad, d)
-    return Padded(baseline, *(jnp.asarray(v, dtype=jnp.float64) for v in arrays))
+    knobs = bool(np.any(gain != 0) or np.any(base != baseline.knob_null()))
+    return Padded(baseline, *(jnp.asarray(v, dtype=jnp.float64) for v in arrays), knobs=knobs)
 
 
 def _names(baseline, designs):
@@ -205,10 +214,6 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
         message = f"stationary: no descent step (predicted gain {pred / s2:.3g} s²)"
     elif res.converged:
         message = ""
-    knobs = jnp.asarray(base + gain[:, :k] @ x[p:])
-    if res.converged and not baseline.solver_ok(jnp.asarray(x[:p]), knobs):
-        result = RESULTS.model_failed
-        message = "the model's solver reported a failure at the optimum"
     if noise_consistent is None and baseline.noise_gate:
         noise_consistent = baseline.noise_test(scale * r, npar)[0]
     return fit_statistics(x, r, J, names=names, transform=transform, sigma_known=sigma_known,
@@ -240,11 +245,10 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
 
 
 @eqx.filter_jit
-def _predict(baseline, theta, knobs):
-    return baseline.predict(theta, knobs)
+def _predict(baseline, theta):
+    return baseline.predict_null(theta)
 
 
 def evaluate(baseline, theta) -> np.ndarray:
     """The model's samples (output units) at θ with every effect at its null (compiled)."""
-    knobs = jnp.asarray(baseline.knob_null(), dtype=jnp.float64)
-    return np.asarray(_predict(baseline, jnp.asarray(theta, dtype=jnp.float64), knobs))
+    return np.asarray(_predict(baseline, jnp.asarray(theta, dtype=jnp.float64)))

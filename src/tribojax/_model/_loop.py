@@ -32,7 +32,7 @@ from .._fit._engine import FitResult, least_squares_fit
 from .._fit._noise import RHO_MAX, lag1, noise_estimate
 from .._io._loop import HysteresisLoop
 from ._base import AbstractBaseline, DiscoveryData
-from ._fit import evaluate, fit_record
+from ._fit import MAX_STEPS, evaluate, fit_record
 from ._loop_analysis import _ELEMENTS, _loop_phase, analyse_loop
 from ._loop_force import KD_LOAD_EXPONENT, LoopData, LoopSpec, loop_branch, loop_force, prepare_loop
 
@@ -170,7 +170,7 @@ def cycle_noise(r, t, period, segment=None) -> tuple[float, float]:
 
 
 def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, window: float = 0.05,
-             model: str = "steady", max_steps: int = 500, start=None) -> FitResult:  # fmt: skip
+             model: str = "steady", max_steps: int | None = None, start=None) -> FitResult:  # fmt: skip
     """Least-squares fit of μN (N) and K_d (N/m) of a Jenkins or Mindlin element to a loop.
 
     model="history": the loop model `LoopBaseline` (the element driven through the measured
@@ -187,7 +187,8 @@ def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, wind
 
     Args:
         sigma: force noise sd, N (None: the loop's `noise_std` if set, else estimated).
-        window: `analyse_loop`'s slope window; max_steps: the LM step budget.
+        window: `analyse_loop`'s slope window; max_steps: the LM step budget (default
+            `MAX_STEPS` of the loop model, the budget `discover` uses; 500 for "steady").
     Returns:
         FitResult with names ("mu_N", "K_d"); `result` (`tribojax.RESULTS`) says whether the fit
         succeeded (it never raises for that).
@@ -212,9 +213,9 @@ def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, wind
         if base.record.f.shape[0] <= 2:
             raise ValueError(f"{loop.source}: {base.record.f.shape[0]} samples are too few to "
                              "fit mu_N and K_d")  # fmt: skip
-        fit = fit_record(base, [theta0], max_steps=max_steps)
+        fit = fit_record(base, [theta0], max_steps=max_steps or MAX_STEPS)
     else:
-        fit = _fit_steady(loop, _ELEMENTS[element], analysis, theta0, sigma, max_steps)
+        fit = _fit_steady(loop, _ELEMENTS[element], analysis, theta0, sigma, max_steps or 500)
     A_fit = 0.5 * float(np.ptp(loop.u)) * fit.values[1] / fit.values[0]
     if element == "jenkins" and A_fit <= 1.0 + 1e-3:
         # no slip in the fitted Jenkins loop: μN is only bounded below by the peak force

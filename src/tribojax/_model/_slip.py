@@ -44,7 +44,7 @@ from .._io._slip_run import SlipRun
 from .._presets import STANDARD_GRAVITY_WANG2022 as G_ACC  # m/s², wang2022 Eq 28
 from .._results import RESULTS
 from ._base import AbstractBaseline, DiscoveryData
-from ._fit import fit_record
+from ._fit import MAX_STEPS, fit_record
 from ._modes import oscillator
 from ._start import C_TAU_START_FACTORS, slip_run_start
 
@@ -202,6 +202,22 @@ class SlipBaseline(AbstractBaseline):
     def predict(self, theta, knobs):
         return self._solve(theta, knobs[:N_ODE_KNOBS]).slip + self._mode(knobs[N_ODE_KNOBS:])
 
+    def predict_null(self, theta):
+        """The paper's element alone (`PreSlipLuGre(F_s, K_τ, C_τ, α)`, state z only): the
+        model with every knob at its null, without the knob states (a smaller program)."""
+        F_s, K, C = self.physical(theta)[:3]
+        element = PreSlipLuGre(F_s, K, C, self.bristle_exponent(theta))
+        return simulate_slip(element, self.profile, self.mass, ts=self.t, t_end=self.t_end,
+                             adjoint=dfx.ForwardMode(), throw=False).slip  # fmt: skip
+
+    def value_and_jacobian(self, theta):
+        def f(tb):
+            out = self.predict_null(tb)
+            return out, out
+
+        jb, value = jax.jacfwd(f, has_aux=True)(theta)
+        return value, jb
+
     def value_and_jacobians(self, theta, knobs):
         """The ODE differentiated over θ and its own knobs only, the mode term over its knobs."""
 
@@ -217,9 +233,6 @@ class SlipBaseline(AbstractBaseline):
                                                                         knobs[:N_ODE_KNOBS])
         jm, vm = jax.jacfwd(mode, has_aux=True)(knobs[N_ODE_KNOBS:])
         return value + vm, jb, jnp.concatenate([jk, jm], axis=1)
-
-    def solver_ok(self, theta, knobs):
-        return bool(_ok(self, theta, knobs[:N_ODE_KNOBS]))
 
     def signals(self):
         t, a = np.asarray(self.t), np.asarray(self.accel)
@@ -237,11 +250,6 @@ class SlipBaseline(AbstractBaseline):
             x_label="time (s)",
             y_label="slip (m)",
         )
-
-
-@eqx.filter_jit
-def _ok(baseline, theta, knobs):
-    return baseline._solve(theta, knobs).ok
 
 
 def slip_baseline(run, start=None, alpha=1.0) -> SlipBaseline:
@@ -272,7 +280,7 @@ def slip_baseline(run, start=None, alpha=1.0) -> SlipBaseline:
     )
 
 
-def fit_slip_run(run: SlipRun, *, alpha=None, start=None, sigma=None, max_steps: int = 200,
+def fit_slip_run(run: SlipRun, *, alpha=None, start=None, sigma=None, max_steps: int = MAX_STEPS,
                  progress=None):  # fmt: skip
     """Fit F_s (N), K_τ (N/m), C_τ (N s/m) and, if `alpha` is None, α of the slip-run model.
 

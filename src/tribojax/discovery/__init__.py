@@ -22,11 +22,12 @@ A **baseline** is a concrete `AbstractBaseline` (an equinox Module holding the r
         def data(self): return DiscoveryData(y=f, x=u, segment=branch, noise_std=None or sd,
                                              x_label="u (m)", y_label="force (N)",
                                              segment_names={0: "falling", 1: "rising"})
-        # optional: def solver_ok(self, theta, knobs) -> bool
 
 `predict` must be jit/jacfwd-able in (theta, knobs); the record arrays are fields, so one compiled
 fit serves all records of the same shape. Knobs are always present (their null values give the
-baseline), so every augmented model shares one compiled function.
+baseline), so every augmented model whose effects move a knob shares one compiled function; the
+model alone and its additive effects share a second (`value_and_jacobian`, the null physics
+differentiated over θ only: a smaller program, e.g. the slip model without its knob states).
 
 An **effect** is a concrete `AbstractEffect` with ClassVars `name`, `kind` and a method
 `designs(baseline) -> list[EffectDesign]`, one design per point of its nuisance grid. A design is
