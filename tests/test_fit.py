@@ -100,6 +100,13 @@ def test_a_fit_stopped_by_max_steps_says_so():
     assert "maximum number of steps" in fit.message and "max_steps = 1" in fit.message
     assert fit.as_dict()["result"] == "nonlinear_max_steps_reached"
     assert fit.as_dict()["converged"] is False
+    # throw=True: the same failure raised at the boundary, the FitResult inside the error
+    with pytest.raises(tj.FitError, match="nonlinear_max_steps_reached") as err:
+        tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=1,
+                             throw=True)  # fmt: skip
+    assert err.value.fit.result == tj.RESULTS.nonlinear_max_steps_reached
+    ok = tj.least_squares_fit(residuals, jnp.array([13.0]), names=("a",), throw=True)
+    assert ok.converged and ok.values[0] == pytest.approx(np.log(1e6), rel=1e-6)
 
 
 def test_a_failed_model_evaluation_is_reported():

@@ -133,6 +133,15 @@ def test_identified_fit_reports_no_direction(tmp_path):
     assert d["identified"] and d["unidentifiable"] == [] and d["noise_consistent"] is None
 
 
+def test_a_failed_loop_fit_raises_only_when_asked(tmp_path):
+    loop = tj.read_loop(_loop(tmp_path))
+    fit = tj.fit_loop(loop, "jenkins", max_steps=1)
+    assert not fit.converged and fit.result == tj.RESULTS.nonlinear_max_steps_reached
+    with pytest.raises(tj.FitError, match="max_steps = 1") as err:
+        tj.fit_loop(loop, "jenkins", max_steps=1, throw=True)
+    assert np.array_equal(err.value.fit.values, fit.values)
+
+
 def test_D_near_either_end_is_not_silent():
     def model(D, throw=True):
         return tj.FractalContact(tj.FractalSurface(D, 4.36e-8, 1.0),
@@ -170,6 +179,22 @@ def test_fit_start_from_the_command_line(tmp_path, capsys):
     assert main(["fit", str(src), "--out", str(tmp_path / "p"), "--start", "F_s=1"]) == 2
     assert "unknown key" in _one_error_line(capsys.readouterr().err, "fit")
     assert not (tmp_path / "p").exists()
+
+
+def test_a_start_the_data_cannot_inform_is_never_identified(tmp_path, capsys):
+    # issue 33 probe: a Mindlin start mu_N = 10 N, above every measured force (|f| < 1 N): the
+    # element never slips, the gradient in mu_N vanishes, and the fit ended at mu_N = 2.6e9 +- 1e14
+    # reported "identified"
+    src, out = _loop(tmp_path), tmp_path / "o"
+    code = main(["fit", str(src), "--out", str(out), "--element", "mindlin", "--start",
+                 "mu_N=10"])  # fmt: skip
+    res = json.loads((out / "fit.json").read_text())
+    se, v = res["std_errors"]["mu_N"], res["parameters"]["mu_N"]
+    if se is None or se > abs(v):  # the data do not determine mu_N from this start
+        assert res["identified"] is False and "mu_N" in res["undetermined"]
+        assert "mu_N = " in capsys.readouterr().err
+    else:  # the fit found the slip force after all: then it is near the truth
+        assert v == pytest.approx(MU * N, rel=0.3) and code == 0
 
 
 def test_alpha_is_refused_for_loops(tmp_path, capsys):

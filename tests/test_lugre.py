@@ -8,6 +8,7 @@ from scipy.integrate import solve_ivp
 
 import tribojax as tj
 from conftest import make_model
+from tribojax.discovery import AugmentedPreSlip
 
 LUGRE = dict(sigma0=1e5, sigma1=300.0, sigma2=0.4, F_c=1.0, F_s=1.5, v_s=1e-3, alpha=1.0)
 
@@ -113,37 +114,48 @@ def test_lugre_bad_input():
         tj.LuGre(**dict(LUGRE, alpha=-0.5))
 
 
-def test_preslip_knobs_at_zero_and_their_lugre_form():
+def test_augmented_preslip_at_null_knobs_is_the_papers_element():
     F_s, K, C = 1.5, 1e5, 300.0
     plain = tj.PreSlipLuGre(F_s, K, C)
-    zero = tj.PreSlipLuGre(F_s, K, C, sigma2=0.0, stribeck=0.0, v_s=1e-3)
+    zero = AugmentedPreSlip(F_s, K, C, 0.0, 0.0, 1e-3, 0.0, tj.TrapezoidProfile())
     for z, v in [(2e-6, 1e-3), (-5e-6, -4e-4), (1e-5, 0.0)]:
-        for f in ("force", "state_rate"):
-            ref = float(getattr(plain, f)(z, v))
-            assert float(getattr(zero, f)(z, v)) == pytest.approx(ref, rel=1e-14)
-    # Stribeck and viscous knobs are LuGre's g(v) (F_c = (1 − δ)F_s, β = 2) and σ2 (Eq 25)
-    knobs = tj.PreSlipLuGre(F_s, K, C, sigma2=0.4, stribeck=0.3, v_s=1e-3)
-    lugre = tj.LuGre(K, C, 0.4, 0.7 * F_s, F_s, 1e-3)
+        assert float(zero.force((z, 0.4), v)) == pytest.approx(float(plain.force(z, v)), rel=1e-14)
+        ref = float(plain.state_rate(z, v))
+        assert float(zero.state_rate((z, 0.4), v)[0]) == pytest.approx(ref, rel=1e-14)
+
+
+def test_augmented_preslip_knobs_are_lugre_terms():
+    # Stribeck and viscous knobs are LuGre's g(v) (F_c = (1 − δ_b)F_s, β = 2) and σ2 (Eq 25),
+    # δ_b = 0.9·tanh(δ/0.9) (the knob bound)
+    F_s, K, C, delta = 1.5, 1e5, 300.0, 0.3
+    el = AugmentedPreSlip(F_s, K, C, 0.4, delta, 1e-3, 0.0, tj.TrapezoidProfile())
+    d_b = 0.9 * np.tanh(delta / 0.9)
+    lugre = tj.LuGre(K, C, 0.4, (1 - d_b) * F_s, F_s, 1e-3)
     for z, v in [(2e-6, 1e-3), (-5e-6, -4e-4), (1e-5, 2e-3)]:
-        assert float(knobs.force(z, v)) == pytest.approx(float(lugre.force(z, v)), rel=1e-12)
+        assert float(el.force((z, 0.0), v)) == pytest.approx(float(lugre.force(z, v)), rel=1e-12)
         ref = float(lugre.steady_force(v))
-        assert float(knobs.steady_force(v)) == pytest.approx(ref, rel=1e-12)
+        assert float(el.steady_force(v)) == pytest.approx(ref, rel=1e-12)
 
 
-def test_preslip_load_coupling_reads_the_drive_through_a_time_state():
+def test_augmented_preslip_load_coupling_reads_the_drive_through_a_time_state():
     prof = tj.TrapezoidProfile()
-    el = tj.PreSlipLuGre(1.5, 1e5, 300.0, kappa=0.05, drive=prof)
+    kappa_g = 0.5  # per g: N/N0 = 1 + 0.9 tanh(κ a/(g 0.9)), K_τ and F_s scale, z_max does not
+    el = AugmentedPreSlip(1.5, 1e5, 300.0, 0.0, 0.0, 1e-3, kappa_g, prof)
     z0, tau0 = el.initial_state()
     assert float(z0) == 0.0 and float(tau0) == 0.0
-    t = 0.4  # a = 1 m/s²: N/N0 = 1.05, K_τ and F_s scale with it, z_max does not
-    plain = tj.PreSlipLuGre(1.5 * 1.05, 1e5 * 1.05, 300.0)
+    t = 0.4
     assert float(prof.acceleration(t)) == pytest.approx(1.0)
+    m = 1 + 0.9 * np.tanh(kappa_g * 1.0 / (9.8 * 0.9))  # g = 9.8 m/s² (wang2022 Eq 28)
+    assert 1.04 < m < 1.06
+    plain = tj.PreSlipLuGre(1.5 * m, 1e5 * m, 300.0)
     ref = float(plain.force(2e-6, 1e-4))
     assert float(el.force((2e-6, t), 1e-4)) == pytest.approx(ref, rel=1e-12)
     zdot, taudot = el.state_rate((2e-6, t), 1e-4)
     assert float(taudot) == 1.0
     assert float(zdot) == pytest.approx(float(plain.state_rate(2e-6, 1e-4)), rel=1e-12)
-    with pytest.raises(ValueError, match="drive"):
-        tj.PreSlipLuGre(1.5, 1e5, 300.0, kappa=0.05)
+    with pytest.raises(ValueError, match="profile"):
+        AugmentedPreSlip(1.5, 1e5, 300.0, 0.0, 0.0, 1e-3, 0.05, None)
     with pytest.raises(ValueError, match="v_s"):
-        tj.PreSlipLuGre(1.5, 1e5, 300.0, stribeck=0.1)
+        AugmentedPreSlip(1.5, 1e5, 300.0, 0.0, 0.1, 0.0, 0.0, prof)
+    with pytest.raises(TypeError):  # the paper's element has no knobs
+        tj.PreSlipLuGre(1.5, 1e5, 300.0, kappa=0.05, drive=prof)

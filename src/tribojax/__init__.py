@@ -73,6 +73,7 @@ from ._dynamics._transient import integrate_steady as integrate_steady
 from ._fit._curve import fit_steady_curve as fit_steady_curve
 from ._fit._curve import fit_transient as fit_transient
 from ._fit._curve import transient_nrmse as transient_nrmse
+from ._fit._engine import FitError as FitError
 from ._fit._engine import FitResult as FitResult
 from ._fit._engine import least_squares_fit as least_squares_fit
 from ._fit._history import BOUC_WEN_STARTS as BOUC_WEN_STARTS

@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import signal
 import sys
 import threading
 import time
@@ -82,21 +83,37 @@ def describe(exc: BaseException) -> tuple[int, str]:
     return FAILED, f"the computation failed: {type(exc).__name__}: {exc} (--debug shows where)"
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (`kill`, `timeout`, Slurm, systemd) raised as an interrupt, so that it unwinds
+    like Ctrl-C: claimed outputs and lock files are removed on the way out."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated
+
+
 def run_command(name: str, func, args, *, debug: bool = False) -> int:
-    """Run a subcommand `func(args)` through the one error path; its exit status."""
+    """Run a subcommand `func(args)` through the one error path; its exit status (130 after
+    Ctrl-C or SIGTERM, with every claimed output and lock removed)."""
     _PROG[0] = f"tribojax {name}"
+    main = threading.current_thread() is threading.main_thread()
+    before = signal.signal(signal.SIGTERM, _on_sigterm) if main else None
     try:
         return int(func(args))
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         if debug:
             raise
-        print(f"{_PROG[0]}: interrupted (Ctrl-C)", file=sys.stderr)
+        how = "SIGTERM" if isinstance(exc, Terminated) else "Ctrl-C"
+        print(f"{_PROG[0]}: interrupted ({how})", file=sys.stderr)
         return INTERRUPTED
     except Exception as exc:
         if debug:
             raise
         status, message = describe(exc)
         return error(message, status=status)
+    finally:
+        if main:
+            signal.signal(signal.SIGTERM, before)
 
 
 def refused_outputs(src, targets, *, force: bool) -> str | None:
@@ -145,15 +162,7 @@ def claim_outputs(src, targets, *, force: bool):
     except OSError as err:
         raise CommandError(f"cannot create the output folder {folder}: {err.strerror}") from None
     lock = folder / f".{targets[0].name}.lock"
-    try:
-        fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-    except FileExistsError:
-        raise CommandError(
-            f"another tribojax run is writing {targets[0]} (lock file {lock}); wait for it, "
-            "choose another --out, or delete the lock if no run is active"
-        ) from None
-    except OSError as err:
-        raise CommandError(f"cannot write into the folder {folder}: {err.strerror}") from None
+    fd = _take_lock(lock, targets[0], folder)
     with os.fdopen(fd, "w") as f:
         f.write(f"{os.getpid()}\n")
     before = {t: t.exists() for t in targets}
@@ -169,6 +178,41 @@ def claim_outputs(src, targets, *, force: bool):
         lock.unlink(missing_ok=True)
         if created and not any(folder.iterdir()):
             folder.rmdir()  # a folder made for outputs that were not written
+
+
+def _lock_owner_dead(lock: Path) -> int | None:
+    """The PID written in `lock` when that process no longer runs on this machine, else None."""
+    try:
+        pid = int(lock.read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        return None  # unreadable or being written: treat as held
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return pid
+    except OSError:  # exists (another user's process): held
+        return None
+    return None
+
+
+def _take_lock(lock: Path, target: Path, folder: Path) -> int:
+    """Create `lock` exclusively; a lock whose owner process is dead (a run killed with
+    SIGKILL, or a crash) is taken over with a note."""
+    for attempt in range(2):
+        try:
+            return os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            pid = _lock_owner_dead(lock) if attempt == 0 else None
+            if pid is None:
+                raise CommandError(
+                    f"another tribojax run is writing {target} (lock file {lock}); wait for it, "
+                    "choose another --out, or delete the lock if no run is active"
+                ) from None
+            warn(f"taking over the lock {lock}: its run (process {pid}) is no longer running")
+            lock.unlink(missing_ok=True)
+        except OSError as err:
+            raise CommandError(f"cannot write into the folder {folder}: {err.strerror}") from None
+    raise AssertionError("unreachable")
 
 
 class Progress:

@@ -61,6 +61,9 @@ def add_arguments(parser) -> None:
         help="fit the steady loop (default) or drive the element through the measured history",
     )
     parser.add_argument("--out", default="tribojax-out/hysteresis", help="output folder")
+    parser.add_argument("--force", action="store_true",
+                        help="replace an earlier result in --out (its files from an earlier run "
+                        "that this run does not write are removed)")  # fmt: skip
 
 
 def run_hysteresis(args) -> int:
@@ -87,9 +90,16 @@ def run_hysteresis(args) -> int:
     lo, hi = args.A if args.A is not None else [a * A0 for a in (args.abar or (0.05, 4.5))]
     if not 0 < lo < hi < math.inf:
         raise ValueError(f"amplitude range ({lo:g}, {hi:g}) m must satisfy 0 < min < max < inf")
-    targets = [out / "hysteresis.csv", out / "hysteresis.png"]
-    targets += [out / "loop_fit.json"] if loop_result is not None else []
+    outputs = [out / "hysteresis.csv", out / "hysteresis.png", out / "loop_fit.json"]
+    targets = outputs[:3] if loop_result is not None else outputs[:2]
+    earlier = [p for p in outputs if p.exists()]
+    if earlier and not args.force:
+        return error(f"{out} holds an earlier result ({', '.join(p.name for p in earlier)}); "
+                     "refusing to replace it (use --force or another --out)")  # fmt: skip
     with claim_outputs(args.loop, targets, force=True):
+        for p in earlier:  # --force: no file of the earlier run stays beside this run's
+            if p not in targets:
+                p.unlink()
         A = jnp.linspace(lo, hi, args.n)
         if args.element == "lugre":
             hb = _lugre_response(element, A, args.omega, K_d, A0)

@@ -31,6 +31,22 @@ IDENTIFIABLE_RTOL = 1e-8
 
 
 
+class FitError(RuntimeError):
+    """A fit asked to throw (`throw=True`) did not succeed; `fit` holds its `FitResult` (the
+    failure is a `RESULTS` value inside, raised only at the entry point, as in optimistix)."""
+
+    def __init__(self, fit: FitResult):
+        self.fit = fit
+        super().__init__(f"the fit did not succeed ({result_name(fit.result)}): {fit.message}")
+
+
+def thrown(fit, throw: bool):
+    """`fit` itself, or `FitError` when `throw` and the fit did not succeed (the boundary)."""
+    if throw and not fit.converged:
+        raise FitError(fit)
+    return fit
+
+
 @dataclasses.dataclass(frozen=True)
 class FitResult:
     """Outcome of a fit (NumPy arrays; physical coordinates unless stated).
@@ -130,9 +146,18 @@ class FitResult:
             "result": result_name(self.result),
             "reduced_chi2": self.reduced_chi2,
             "noise_consistent": self.noise_consistent,
-            "identified": not self.unidentifiable,
+            "identified": not (self.unidentifiable or self.undetermined),
             "unidentifiable": [dict(d) for d in self.unidentifiable],
+            "undetermined": list(self.undetermined),
         }
+
+    @property
+    def undetermined(self) -> tuple[str, ...]:
+        """Parameters whose standard error is not finite or exceeds their magnitude: the data
+        do not determine them (e.g. a start above every measured force, where the gradient in
+        μN vanishes). A fit with any is never `identified`."""
+        se, v = np.asarray(self.std_errors, float), np.abs(np.asarray(self.values, float))
+        return tuple(n for n, s, x in zip(self.names, se, v) if not (np.isfinite(s) and s <= x))
 
 
 def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps, message=None,
@@ -248,6 +273,7 @@ def least_squares_fit(
     solver=None,
     optimum_tol: float | None = None,
     progress=None,
+    throw: bool = False,
 ) -> FitResult:
     """Fit θ minimising ½‖residual_fn(θ, args)‖² with an optimistix least-squares solver.
 
@@ -270,13 +296,14 @@ def least_squares_fit(
             left is below this many standard errors in every parameter (else
             `RESULTS.short_of_optimum`): the check for the `step_tol` stop on rejected steps.
         progress: callable receiving one line per solver step (a solver with `report=True`).
+        throw: raise `FitError` when the fit does not succeed (default: return it).
     The solve is compiled once per `residual_fn` object: pass a module-level function (data in
     `args`) and repeated fits run warm.
 
     Returns:
         FitResult with `result` (`tribojax.RESULTS`): the solver's code, `model_failed` /
         `model_failed_at_start` if the returned residuals contain `FAILED_RESIDUAL`, or
-        `short_of_optimum`. Never raises for non-convergence: the caller decides.
+        `short_of_optimum`. Raises for non-convergence only with `throw=True`.
     """
     ensure_x64()
     theta0 = jnp.asarray(theta0, dtype=jnp.float64)
@@ -305,5 +332,6 @@ def least_squares_fit(
             message = (f"{RESULTS[result]} The step left is {gn:.3g} standard errors "
                        f"(tolerance {optimum_tol:g}).")  # fmt: skip
     steps = int(sol.stats["num_steps"])
-    return fit_statistics(theta, r, J, names=names, transform=transform, sigma_known=sigma_known,
-                          result=result, steps=steps, message=message)  # fmt: skip
+    return thrown(fit_statistics(theta, r, J, names=names, transform=transform,
+                                 sigma_known=sigma_known, result=result, steps=steps,
+                                 message=message), throw)  # fmt: skip

@@ -23,7 +23,7 @@ from .._friction._lugre import LuGre
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._loop import HysteresisLoop
 from .._results import RESULTS
-from ._engine import FitResult, least_squares_fit
+from ._engine import FitResult, least_squares_fit, thrown
 from ._measures import nrmse
 from ._solver import LevenbergMarquardt
 
@@ -125,7 +125,7 @@ class HistoryFit:
 
 def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
                 max_steps: int = 300, rtol: float = 1e-8,
-                n_starts=(2.0,)) -> HistoryFit:  # fmt: skip
+                n_starts=(2.0,), throw: bool = False) -> HistoryFit:  # fmt: skip
     """Fit one friction element (+ a force offset f0, N) to one or several measured histories.
 
     Args:
@@ -145,6 +145,8 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         max_steps, rtol: the Levenberg–Marquardt budget and relative tolerance (atol 1e-3 rtol);
             `LevenbergMarquardt.noise_floor` also stops when the step left is below 0.05
             standard errors.
+        throw: raise `tribojax.FitError` when the fit does not succeed (default: `.fit.result`
+            says so).
     Returns:
         `HistoryFit`: parameters and standard errors (`least_squares_fit`, the noise scale
         estimated from the residuals; positive parameters fitted as logarithms) and the NRMSE.
@@ -190,7 +192,7 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         fit = min(fits, key=lambda f: float(np.sum(f.residuals**2)))
     else:
         fit = solve(init)
-    return HistoryFit(model, fit, _nrmse(fit.residuals, records), decimate)
+    return HistoryFit(model, thrown(fit, throw), _nrmse(fit.residuals, records), decimate)
 
 
 def _nrmse(residuals, records) -> float:

@@ -35,10 +35,10 @@ from ._slip import KNOBS as KNOBS
 from ._slip import N_ODE_KNOBS as N_ODE_KNOBS
 from ._slip import VS_GRID as VS_GRID
 from ._slip import ZETA_MAX as ZETA_MAX
-from ._slip import AugmentedPreSlip as AugmentedPreSlip
 from ._slip import SlipBaseline as SlipBaseline
 from ._slip import fit_slip_run as fit_slip_run
 from ._slip import slip_baseline as slip_baseline
 from ._slip import slip_start as slip_start
 from ._slip import stage_travel as stage_travel
+from ._slip_element import AugmentedPreSlip as AugmentedPreSlip
 from ._start import slip_run_start as slip_run_start

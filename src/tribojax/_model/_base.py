@@ -153,17 +153,17 @@ class AbstractBaseline(eqx.Module):
         (jb, jk), value = jax.jacfwd(f, argnums=(0, 1), has_aux=True)(theta, knobs)
         return value, jb, jk
 
-    def value_and_jacobian(self, theta):
-        """The model alone (every knob at `knob_null`) and ∂/∂θ (n, p) (JAX): the pass of a fit
-        whose effects move no knob. Default from `value_and_jacobians`; a baseline whose null
-        physics is a simpler program (the paper's element without the knob states) overrides it
-        and `predict_null`."""
-        value, jb, _ = self.value_and_jacobians(theta, jax.numpy.asarray(self.knob_null()))
+    def value_and_jacobian(self, theta, null):
+        """The model alone and ∂/∂θ (n, p) (JAX): the pass of a fit whose effects move no knob;
+        `null` is `knob_null()` as an array (passed in: inside a fit the fields are traced).
+        Default from `value_and_jacobians`; a baseline whose null physics is a smaller program
+        (the paper's element without the knob states) overrides it and `predict_null`."""
+        value, jb, _ = self.value_and_jacobians(theta, null)
         return value, jb
 
-    def predict_null(self, theta):
-        """`predict` with every knob at `knob_null` (JAX)."""
-        return self.predict(theta, jax.numpy.asarray(self.knob_null()))
+    def predict_null(self, theta, null):
+        """`predict` with every knob at its null, `null` = `knob_null()` (JAX)."""
+        return self.predict(theta, null)
 
     def noise_model(self, r) -> tuple[float, float]:
         """(σ̂, AR(1) ρ̂) of the noise in the baseline residual `r` (output units). Default:

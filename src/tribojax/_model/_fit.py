@@ -16,7 +16,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import runtime_message
-from .._fit._engine import FAILED_RESIDUAL, fit_statistics, least_squares_fit, value_and_jacobian
+from .._fit._engine import (
+    FAILED_RESIDUAL,
+    fit_statistics,
+    least_squares_fit,
+    thrown,
+    value_and_jacobian,
+)
 from .._fit._noise import noise_estimate
 from .._fit._solver import LevenbergMarquardt
 from .._precision import ensure_x64
@@ -60,7 +66,7 @@ def _residual_and_jac(x, a: Padded):
         value, jb, jk = a.baseline.value_and_jacobians(x[:p], a.base + a.gain @ s)
         js = jk @ a.gain + a.basis
     else:  # no knob moves: the null physics alone, differentiated over θ only
-        value, jb = a.baseline.value_and_jacobian(x[:p])
+        value, jb = a.baseline.value_and_jacobian(x[:p], a.base)
         js = a.basis
     r = (value + a.basis @ s - a.y) / a.scale
     J = jnp.concatenate([jb, js * a.mask[None, :]], axis=1) / a.scale
@@ -222,13 +228,15 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
                           **extra)  # fmt: skip
 
 
-def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_known=None):
+def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_known=None,
+               throw=False):  # fmt: skip
     """Fit a record model alone (no effects): the fit that `fit` reports and `discover` starts
     from. From each of `starts` (θ; default `baseline.starts()`) in turn until one converges;
     the converged one (else the lowest cost) is kept. `scale`: the residual unit (default the
     record's noise sd, else the first-difference estimate `noise_estimate` of the data, else
     its sd); `sigma_known` (default: the record states its noise) makes the statistics use the
-    stated noise when the residual is consistent with it."""
+    stated noise when the residual is consistent with it. `throw`: raise `FitError` when no
+    start succeeded (default: return the failed fit, `result` says why)."""
     data = baseline.data()
     y = np.asarray(data.y, dtype=float)
     if scale is None:
@@ -241,14 +249,15 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
                               max_steps=max_steps, sigma_known=known))  # fmt: skip
         if fits[-1].converged:  # the next starts only when this one fails
             break
-    return min(fits, key=lambda f: (not f.converged, f.rss))
+    return thrown(min(fits, key=lambda f: (not f.converged, f.rss)), throw)
 
 
 @eqx.filter_jit
-def _predict(baseline, theta):
-    return baseline.predict_null(theta)
+def _predict(baseline, theta, null):
+    return baseline.predict_null(theta, null)
 
 
 def evaluate(baseline, theta) -> np.ndarray:
     """The model's samples (output units) at θ with every effect at its null (compiled)."""
-    return np.asarray(_predict(baseline, jnp.asarray(theta, dtype=jnp.float64)))
+    null = jnp.asarray(baseline.knob_null(), dtype=jnp.float64)
+    return np.asarray(_predict(baseline, jnp.asarray(theta, dtype=jnp.float64), null))

@@ -28,7 +28,7 @@ import numpy as np
 from jaxtyping import Array
 
 from .._checks import check_range
-from .._fit._engine import FitResult, least_squares_fit
+from .._fit._engine import FitResult, least_squares_fit, thrown
 from .._fit._noise import RHO_MAX, lag1, noise_estimate
 from .._io._loop import HysteresisLoop
 from ._base import AbstractBaseline, DiscoveryData
@@ -170,7 +170,8 @@ def cycle_noise(r, t, period, segment=None) -> tuple[float, float]:
 
 
 def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, window: float = 0.05,
-             model: str = "steady", max_steps: int | None = None, start=None) -> FitResult:  # fmt: skip
+             model: str = "steady", max_steps=None, start=None,
+             throw: bool = False) -> FitResult:  # fmt: skip
     """Least-squares fit of μN (N) and K_d (N/m) of a Jenkins or Mindlin element to a loop.
 
     model="history": the loop model `LoopBaseline` (the element driven through the measured
@@ -191,7 +192,7 @@ def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, wind
             `MAX_STEPS` of the loop model, the budget `discover` uses; 500 for "steady").
     Returns:
         FitResult with names ("mu_N", "K_d"); `result` (`tribojax.RESULTS`) says whether the fit
-        succeeded (it never raises for that).
+        succeeded (with `throw=True` a failure raises `tribojax.FitError` instead).
     """
     if element not in _ELEMENTS:
         raise ValueError(f"element must be one of {sorted(_ELEMENTS)}, got {element!r}")
@@ -227,7 +228,7 @@ def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, wind
                f"does not slip (A_bar = {A_fit:.4g} <= 1)")  # fmt: skip
         fit = dataclasses.replace(fit, std_errors=std, covariance=cov, correlation=corr,
                                   message=msg)  # fmt: skip
-    return fit
+    return thrown(fit, throw)
 
 
 def _fit_steady(loop, cls, analysis, theta0, sigma, max_steps):

@@ -14,8 +14,8 @@ Physics knobs of the baseline (null values in brackets), all inside one friction
                           same factor (stage acceleration a, g = 9.8 m/s², wang2022 Eq 28)
 and four knobs of a mode term added to the reading (`vibration`): amplitudes mode_q, mode_qdot
 [0], mode_log_f (log f) and mode_logit_zeta (ζ = ZETA_MAX/(1 + e^−u): a lightly damped mode).
-The element (`AugmentedPreSlip`, a `PreSlipLuGre` with knob fields) carries the time as a
-second state (τ' = 1) so that it can read a(τ).
+The element (`AugmentedPreSlip`, `_slip_element.py`) carries the time as a second state
+(τ' = 1) so that it can read a(τ); the model alone runs the paper's `PreSlipLuGre`.
 
 Additive (measurement) effects, linear in their strengths:
     sensor_drift     c₀ + c₁P₁(s) + c₂P₂(s) + c₃P₃(s), Legendre in s = scaled time ∈ [−1, 1]
@@ -39,13 +39,14 @@ from jaxtyping import Array
 
 from .._dynamics._profiles import MeasuredProfile
 from .._dynamics._slip import simulate_slip
-from .._friction._lugre import DEFAULT_VELOCITY_SCALE, PreSlipLuGre
+from .._fit._engine import thrown
+from .._friction._lugre import PreSlipLuGre
 from .._io._slip_run import SlipRun
-from .._presets import STANDARD_GRAVITY_WANG2022 as G_ACC  # m/s², wang2022 Eq 28
 from .._results import RESULTS
 from ._base import AbstractBaseline, DiscoveryData
 from ._fit import MAX_STEPS, fit_record
 from ._modes import oscillator
+from ._slip_element import AugmentedPreSlip
 from ._start import C_TAU_START_FACTORS, slip_run_start
 
 KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling",
@@ -55,24 +56,6 @@ N_ODE_KNOBS = 4  # the knobs of the friction element; the mode's knobs act on th
 F_MAX_OVER_DRIVE = 100.0  # bound of F_s in units of m·max|a| (beyond: slip ∝ (m a/F_s)², tiny)
 LOG10_VS_RANGE = (-12.0, 3.0)  # bound of log10 v_s (m/s) in the fit
 VS_GRID = tuple(10.0 ** np.arange(-7.0, -3.4, 0.5))  # m/s, Stribeck velocity grid
-
-
-def AugmentedPreSlip(F_s, K_tau, C_tau, sigma2, stribeck, v_s, kappa, profile,  # noqa: N802
-                     *, velocity_scale=DEFAULT_VELOCITY_SCALE, alpha=1.0) -> PreSlipLuGre:
-    """Discovery's pre-slip element: `PreSlipLuGre` (wang2022 Eq 27, α = 1) with its knobs.
-
-        N(t)/N₀ = 1 + κ·a(t)/g,   K = K_τ·N/N₀,   g(v) = F_s·N/N₀·(1 − δ(1 − exp(−(v/v_s)²)))
-        dz/dt = v·(1 − s(v)·K z/g(v)),   F_f = K z + C_τ dz/dt + σ2·v   (wang2022 Eqs 25–27)
-
-    σ2 (N s/m), δ (—) and κ (per g, g = `G_ACC`) are signed; δ and κa/g pass through
-    x ↦ 0.9·tanh(x/0.9) (`knob_bound=0.9`). `profile` is the stage drive (also passed to
-    `simulate_slip`); the element's state is (z, τ). A constructor of the one element, kept
-    under its public name; with σ2 = δ = κ = 0 it is `PreSlipLuGre(F_s, K_τ, C_τ, α)` (α = 1:
-    the paper's law; `alpha` is the bristle exponent of wang2022 Eq 25).
-    """
-    return PreSlipLuGre(F_s, K_tau, C_tau, alpha, sigma2=sigma2, stribeck=stribeck, v_s=v_s,
-                        kappa=kappa / G_ACC, drive=profile, knob_bound=0.9,
-                        velocity_scale=velocity_scale)  # fmt: skip
 
 
 def stage_travel(t, accel):
@@ -202,7 +185,7 @@ class SlipBaseline(AbstractBaseline):
     def predict(self, theta, knobs):
         return self._solve(theta, knobs[:N_ODE_KNOBS]).slip + self._mode(knobs[N_ODE_KNOBS:])
 
-    def predict_null(self, theta):
+    def predict_null(self, theta, null=None):
         """The paper's element alone (`PreSlipLuGre(F_s, K_τ, C_τ, α)`, state z only): the
         model with every knob at its null, without the knob states (a smaller program)."""
         F_s, K, C = self.physical(theta)[:3]
@@ -210,7 +193,7 @@ class SlipBaseline(AbstractBaseline):
         return simulate_slip(element, self.profile, self.mass, ts=self.t, t_end=self.t_end,
                              adjoint=dfx.ForwardMode(), throw=False).slip  # fmt: skip
 
-    def value_and_jacobian(self, theta):
+    def value_and_jacobian(self, theta, null=None):
         def f(tb):
             out = self.predict_null(tb)
             return out, out
@@ -281,7 +264,7 @@ def slip_baseline(run, start=None, alpha=1.0) -> SlipBaseline:
 
 
 def fit_slip_run(run: SlipRun, *, alpha=None, start=None, sigma=None, max_steps: int = MAX_STEPS,
-                 progress=None):  # fmt: skip
+                 progress=None, throw: bool = False):  # fmt: skip
     """Fit F_s (N), K_τ (N/m), C_τ (N s/m) and, if `alpha` is None, α of the slip-run model.
 
     The model is `SlipBaseline` (wang2022 Eq 27, consistent reading, driven by the run's own
@@ -301,9 +284,11 @@ def fit_slip_run(run: SlipRun, *, alpha=None, start=None, sigma=None, max_steps:
             the first-difference estimate and the standard errors use the residual scale.
         max_steps: LM step budget (per start).
         progress: optional callable receiving one line per start and its outcome.
+        throw: raise `tribojax.FitError` (holding the FitResult) when the fit does not succeed.
     Returns:
         FitResult (names ("F_s", "K_tau", "C_tau"[, "alpha"]); `fixed` holds α when fixed) with
-        the fitted `model`, its `prediction` and `scale`. Never raises for non-convergence.
+        the fitted `model`, its `prediction` and `scale`. Raises for non-convergence only with
+        `throw=True`.
     Raises:
         ValueError for fewer data than parameters, a bad α/σ/start, or a model that cannot be
         evaluated at any start.
@@ -344,7 +329,8 @@ def fit_slip_run(run: SlipRun, *, alpha=None, start=None, sigma=None, max_steps:
     fit = dataclasses.replace(fit, names=names, values=fit.values[:p],
                               std_errors=fit.std_errors[:p], covariance=fit.covariance[:p, :p],
                               correlation=fit.correlation[:p, :p])  # fmt: skip
-    return fit if alpha is None else dataclasses.replace(fit, fixed={"alpha": float(alpha)})
+    fit = fit if alpha is None else dataclasses.replace(fit, fixed={"alpha": float(alpha)})
+    return thrown(fit, throw)
 
 
 def _positive(x, name, unit):

@@ -1,10 +1,15 @@
-"""The outcome of `discover` (discovery.json) and its parameter/strength tables."""
+"""Step 5 of discovery, the report: the outcome of `discover` (discovery.json), its verdict and
+remaining misfit, and its parameter/strength tables."""
 
 from __future__ import annotations
 
 import dataclasses
 
 import numpy as np
+
+from .._fit._measures import rms
+from .._fit._noise import excess_rmse, noise_consistent
+from ._verdict import correlations, flexible_correction, verdict
 
 
 @dataclasses.dataclass(frozen=True)
@@ -169,3 +174,52 @@ def _strengths(baseline, state) -> dict:
         out[name] = entry
         j += d.k
     return out
+
+
+def _misfit(run, rf, state):
+    """Noise tests of the final residual `rf`, the verdict, the excess misfits and, where a
+    misfit remains, its regions, signal correlations and flexible correction."""
+    baseline, data, nz = run.baseline, run.data, run.noise
+    n_final = len(baseline.param_names) + sum(d.k + d.n_nuisance for d in state.designs)
+    base_ok, p0 = run.base_test
+    final_ok, p1, remaining = noise_consistent(rf, nz.sigma, nz.rho, data.segment, data.x,
+                                               n_final, alpha=run.alpha, n_windows=run.n_windows,
+                                               estimated=not data.noise_std)  # fmt: skip
+    e0, e1 = excess_rmse(run.r0, nz.sigma), excess_rmse(rf, nz.sigma)
+    v = verdict(len(state.effects), base_ok, final_ok, e0, e1)
+    if not baseline.noise_gate:  # no noise test: the ΔBIC selection alone decides
+        v = "explained" if state.effects else "none"
+    misfit = {"baseline_noise_p_value": p0, "final_noise_p_value": p1,
+              "baseline_consistent": base_ok, "final_consistent": final_ok}  # fmt: skip
+    if v in ("partly_explained", "unexplained"):
+        signals = {**baseline.signals(), "model": np.asarray(state.prediction)}
+        for rg in remaining:
+            rg.update(baseline.region_info(rg))
+        misfit["regions"] = remaining
+        misfit["correlations"] = correlations(rf, signals)
+        misfit["correction"] = flexible_correction(rf, signals, nz.sigma)
+    return misfit, v, e0, e1
+
+
+def report(run, state, rounds: list, settings: dict) -> DiscoveryReport:
+    """The `DiscoveryReport` of a run (`discover`'s `_Run`) that ended at `state`."""
+    baseline, data, y = run.baseline, run.data, run.y
+    rf = y - state.prediction
+    for rg in run.regions:
+        rg["rmse_before"] = rms(run.r0[rg["i0"] : rg["i1"]])
+        rg["rmse_after"] = rms(rf[rg["i0"] : rg["i1"]])
+    misfit, v, e0, e1 = _misfit(run, rf, state)
+    unit = data.y_label.split("(")[-1].rstrip(")") if "(" in data.y_label else ""
+    return DiscoveryReport(
+        kind=baseline.kind, effects=state.effects, baseline_rmse=rms(run.r0), final_rmse=rms(rf),
+        regions=run.regions, candidates=rounds[0] if rounds else [], rounds=rounds,
+        strengths=_strengths(baseline, state),
+        baseline_fit=_fit_dict(baseline, run.base_state, run.scale),
+        final_fit=_fit_dict(baseline, state, run.scale), noise_std=run.noise.sigma,
+        noise_estimated=not data.noise_std, rho=run.noise.rho, settings=settings, verdict=v,
+        excess_rmse_before=e0, excess_rmse_after=e1, misfit=misfit,
+        labels={"x": data.x_label, "y": data.y_label, "y_unit": unit}, x=np.asarray(data.x),
+        y=y, baseline_y=run.base_state.prediction, final_y=state.prediction,
+        segment=np.asarray(data.segment),
+        signals={**baseline.signals(), "model": np.asarray(state.prediction)},
+    )  # fmt: skip

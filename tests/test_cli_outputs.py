@@ -1,0 +1,111 @@
+"""What the commands write: never an existing result or their own input without --force, never
+two runs' files mixed, no folder left stuck after a kill (issue 33, items 4 and 5)."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from tribojax._cli._main import main
+
+CONTACT = ["contact", "--D", "2.5", "--G", "1e-9", "--load", "5"]
+
+
+def _err_line(capsys, cmd):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"tribojax {cmd}: error:"), err
+    return err[0]
+
+
+def test_contact_json_never_replaces_a_file_or_its_input_without_force(tmp_path, capsys):
+    target = tmp_path / "r.json"
+    target.write_text("earlier")
+    assert main([*CONTACT, "--json", str(target)]) == 2
+    assert "exists" in _err_line(capsys, "contact") and target.read_text() == "earlier"
+    assert main([*CONTACT, "--json", str(target), "--force"]) == 0
+    assert json.loads(target.read_text())["contact"][0]["load_N"] == 5.0
+    # its own input: refused even with --force (the surface would become JSON)
+    topo = tmp_path / "t.npy"
+    x = np.linspace(0, 1, 64)
+    np.save(topo, np.outer(np.sin(7 * x), np.cos(5 * x)) * 1e-6)
+    before = topo.read_bytes()
+    args = ["contact", "--topography", str(topo), "--dx", "1e-6", "--load", "5"]
+    assert main([*args, "--json", str(topo), "--force"]) == 2
+    assert "is an input file" in _err_line(capsys, "contact") and topo.read_bytes() == before
+
+
+def test_hysteresis_out_keeps_an_earlier_result_and_never_mixes_runs(tmp_path, capsys):
+    out = tmp_path / "h"
+    out.mkdir()
+    (out / "loop_fit.json").write_text("{}")  # an earlier run with --loop
+    cmd = ["hysteresis", "--n", "4", "--out", str(out)]
+    assert main(cmd) == 2
+    assert "earlier result" in _err_line(capsys, "hysteresis")
+    assert sorted(p.name for p in out.iterdir()) == ["loop_fit.json"]
+    assert main([*cmd, "--force"]) == 0
+    # the earlier run's loop fit does not stay beside this run's files
+    assert sorted(p.name for p in out.iterdir()) == ["hysteresis.csv", "hysteresis.png"]
+
+
+def test_a_lock_left_by_a_dead_run_is_taken_over(tmp_path, capsys):
+    out = tmp_path / "c"
+    out.mkdir()
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)  # fmt: skip
+    (out / ".r.json.lock").write_text(dead.stdout)
+    assert main([*CONTACT, "--json", str(out / "r.json")]) == 0
+    err = capsys.readouterr().err
+    assert "taking over the lock" in err and f"process {dead.stdout.strip()}" in err
+    assert sorted(p.name for p in out.iterdir()) == ["r.json"]
+    # a live owner (this process) still keeps a second run out
+    (out / ".s.json.lock").write_text(f"{os.getpid()}\n")
+    assert main([*CONTACT, "--json", str(out / "s.json")]) == 2
+    assert "another tribojax run is writing" in _err_line(capsys, "contact")
+
+
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGINT"])
+def test_a_killed_run_exits_130_and_leaves_no_lock_or_output(tmp_path, sig):
+    out = tmp_path / "o"
+    code = textwrap.dedent(f"""
+        import os, signal, sys, time
+        from tribojax._cli._common import claim_outputs, run_command
+        def work(args):
+            with claim_outputs(None, [{str(out / "r.json")!r}], force=False):
+                open({str(out / "r.json")!r}, "w").write("partial")
+                os.kill(os.getpid(), signal.{sig})
+                time.sleep(30)
+            return 0
+        sys.exit(run_command("fit", work, None))
+    """)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)  # fmt: skip
+    how = "SIGTERM" if sig == "SIGTERM" else "Ctrl-C"
+    assert proc.returncode == 130, proc.stderr
+    assert proc.stderr.strip() == f"tribojax fit: interrupted ({how})"
+    assert not out.exists()  # output, lock and the folder made for them removed
+
+
+def test_contact_numbers_outside_their_physical_range_are_not_a_result(tmp_path, capsys):
+    # issue 33 probe: C_tau = 7.82, 0.139, -0.287, -852, 3.3e5 N s/m at these loads, exit 0
+    out = tmp_path / "c.json"
+    loads = ["1e2", "1e4", "1e6", "1e8", "1e12"]
+    assert main(["contact", "--D", "2.5", "--G", "1e-9", "--load", *loads,
+                 "--json", str(out)]) == 1  # fmt: skip
+    rows = json.loads(out.read_text())["contact"]
+    err = capsys.readouterr().err
+    for row in rows:
+        values = [row[k] for k in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m", "zmax_m")]
+        ok = all(v is not None and np.isfinite(v) and v >= 0 for v in values)
+        assert row["in_range"] == ok
+        assert (f"load {row['load_N']:g} N:" in err) == (not ok)
+    assert rows[0]["in_range"] and not all(r["in_range"] for r in rows)
+
+
+@pytest.mark.parametrize("flag, value", [("--mu-t", "inf"), ("--mass", "0"), ("--gamma", "1")])
+def test_contact_constants_outside_their_range_are_bad_input(capsys, flag, value):
+    assert main([*CONTACT, flag, value]) == 2
+    assert f"{flag} = " in _err_line(capsys, "contact")
