@@ -181,22 +181,6 @@ def test_fit_start_from_the_command_line(tmp_path, capsys):
     assert not (tmp_path / "p").exists()
 
 
-def test_a_start_the_data_cannot_inform_is_never_identified(tmp_path, capsys):
-    # issue 33 probe: a Mindlin start mu_N = 10 N, above every measured force (|f| < 1 N): the
-    # element never slips, the gradient in mu_N vanishes, and the fit ended at mu_N = 2.6e9 +- 1e14
-    # reported "identified"
-    src, out = _loop(tmp_path), tmp_path / "o"
-    code = main(["fit", str(src), "--out", str(out), "--element", "mindlin", "--start",
-                 "mu_N=10"])  # fmt: skip
-    res = json.loads((out / "fit.json").read_text())
-    se, v = res["std_errors"]["mu_N"], res["parameters"]["mu_N"]
-    if se is None or se > abs(v):  # the data do not determine mu_N from this start
-        assert res["identified"] is False and "mu_N" in res["undetermined"]
-        assert "mu_N = " in capsys.readouterr().err
-    else:  # the fit found the slip force after all: then it is near the truth
-        assert v == pytest.approx(MU * N, rel=0.3) and code == 0
-
-
 def test_alpha_is_refused_for_loops(tmp_path, capsys):
     src = _loop(tmp_path)
     assert main(["fit", str(src), "--out", str(tmp_path / "o"), "--alpha", "1"]) == 2

@@ -17,7 +17,6 @@ exists or would overwrite the input).
 
 from __future__ import annotations
 
-import math
 import time
 from pathlib import Path
 
@@ -163,14 +162,6 @@ def uncertainty_warnings(result: dict) -> list[str]:
             f"not identifiable from these data: the direction {combo} (relative singular value "
             f"{d['relative_singular_value']:.2g}); its standard errors are not finite"
         )
-    params, errors = result.get("parameters", {}), result.get("std_errors", {})
-    for name in result.get("undetermined", []):
-        v, se = params.get(name), errors.get(name)
-        se_text = "not finite" if se is None or not math.isfinite(se) else f"{se:.3g}"
-        v = f"{v:.4g}" if isinstance(v, (int, float)) else v
-        out.append(f"{name} = {v} is not determined by these data (standard error "
-                   f"{se_text}, above its value): a start outside the data's range, or a "
-                   "parameter the record does not inform")  # fmt: skip
     return out
 
 

@@ -146,18 +146,9 @@ class FitResult:
             "result": result_name(self.result),
             "reduced_chi2": self.reduced_chi2,
             "noise_consistent": self.noise_consistent,
-            "identified": not (self.unidentifiable or self.undetermined),
+            "identified": not self.unidentifiable,
             "unidentifiable": [dict(d) for d in self.unidentifiable],
-            "undetermined": list(self.undetermined),
         }
-
-    @property
-    def undetermined(self) -> tuple[str, ...]:
-        """Parameters whose standard error is not finite or exceeds their magnitude: the data
-        do not determine them (e.g. a start above every measured force, where the gradient in
-        μN vanishes). A fit with any is never `identified`."""
-        se, v = np.asarray(self.std_errors, float), np.abs(np.asarray(self.values, float))
-        return tuple(n for n, s, x in zip(self.names, se, v) if not (np.isfinite(s) and s <= x))
 
 
 def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps, message=None,
