@@ -109,3 +109,13 @@ def test_contact_numbers_outside_their_physical_range_are_not_a_result(tmp_path,
 def test_contact_constants_outside_their_range_are_bad_input(capsys, flag, value):
     assert main([*CONTACT, flag, value]) == 2
     assert f"{flag} = " in _err_line(capsys, "contact")
+
+
+@pytest.mark.parametrize("flag, value", [("--omega", "0"), ("--omega", "nan"), ("--N", "-1"),
+                                         ("--C-tau", "-1")])  # fmt: skip
+def test_hysteresis_bad_numbers_are_one_line_and_exit_2(tmp_path, capsys, flag, value):
+    # issue 33 probe: --omega 0 printed two JAX/equinox tracebacks and exited 1
+    out = tmp_path / "h"
+    assert main(["hysteresis", "--n", "4", "--out", str(out), flag, value]) == 2
+    assert f"{flag} = " in _err_line(capsys, "hysteresis")
+    assert not out.exists()

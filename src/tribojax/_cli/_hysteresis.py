@@ -77,6 +77,13 @@ def run_hysteresis(args) -> int:
         return error("--out must not be the folder of the --loop file")
     if args.n < 2:
         return error(f"--n = {args.n} must be at least 2")
+    for flag, value, lo in (("--omega", args.omega, 0.0), ("--mu", args.mu, 0.0),
+                            ("--N", args.N, 0.0), ("--K-d", args.K_d, 0.0),
+                            ("--C-tau", args.C_tau, None)):  # fmt: skip
+        ok = value is None or (math.isfinite(value) and (value >= 0 if lo is None else value > lo))
+        if not ok:
+            bound = "[0, inf)" if lo is None else "(0, inf)"
+            return error(f"{flag} = {value:g} is outside the allowed range {bound}")
     if args.loop is not None and args.element == "lugre":
         return error("--loop fits a jenkins or mindlin element, not lugre")
     loop_result = _fit_loop(args) if args.loop is not None else None
