@@ -52,15 +52,12 @@ class Padded(eqx.Module):
     knobs: bool = eqx.field(static=True, default=True)  # an active effect moves a knob
 
 
-@eqx.filter_jit
 def _residual_and_jac(x, a: Padded):
     """Residual [(model − y)/scale, held strengths] and its Jacobian ∂/∂x at x = [θ_b, s].
 
     Inactive strengths are masked out of the model and held at 0 by a row each (residual s,
     Jacobian 1), so the normal matrix stays regular. A model that is not finite gives `a.bad` in
-    every row and a zero Jacobian: the trial is rejected as a rise of the cost. Jitted on its
-    own: the start Jacobian's program and the solve's share its trace (the model's forward
-    derivatives through the ODE are traced once per record shape, not once per program).
+    every row and a zero Jacobian: the trial is rejected as a rise of the cost.
     """
     p = x.size - K_MAX
     hold = 1.0 - a.mask
