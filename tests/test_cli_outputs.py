@@ -119,3 +119,22 @@ def test_hysteresis_bad_numbers_are_one_line_and_exit_2(tmp_path, capsys, flag, 
     assert main(["hysteresis", "--n", "4", "--out", str(out), flag, value]) == 2
     assert f"{flag} = " in _err_line(capsys, "hysteresis")
     assert not out.exists()
+
+
+@pytest.mark.parametrize("name, data, expect", [
+    ("u16.csv", "t_s,u_m,f_N\n0,0,0\n".encode("utf-16"), "UTF-16 text"),
+    ("nul.csv", b"\x00" * 4096, "line 1: a NUL byte"),
+    ("semi.csv", b"t_s;u_m;f_N\n0;0,1;0\n", "separated by semicolons"),
+    ("tab.csv", b"t_s\tu_m\tf_N\n0\t0\t0\n", "separated by tabs"),
+    ("long.csv", b"t_s,u_m,f_N\n" + b"1" * 200_000 + b",0,0\n", "long.csv, line 2: field larger"),
+])  # fmt: skip
+def test_unreadable_files_are_named_with_the_reason(tmp_path, capsys, name, data, expect):
+    # issue 33 probes: UTF-16 was called "Windows-1252 or Latin-1 text?", a zero-byte file and a
+    # line over 131,072 characters gave csv's message without file or line, other separators no
+    # hint
+    src = tmp_path / name
+    src.write_bytes(data)
+    assert main(["fit", str(src), "--out", str(tmp_path / "o")]) == 2
+    line = _err_line(capsys, "fit")
+    assert expect in line and name in line, line
+    assert not (tmp_path / "o").exists()

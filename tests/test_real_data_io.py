@@ -61,12 +61,42 @@ def test_brfd_bad_files_name_file_and_line(tmp_path, text, match):
         tj.read_brfd(path)
 
 
-def _epos(folder, name, rows):
+def _epos(folder, name, rows, announced=None):
     folder.mkdir(exist_ok=True)
     path = folder / name
     body = "\n".join(f"{i * 51.2:.3f};{v};{q}" for i, (v, q) in enumerate(rows))
-    path.write_text(EPOS_HEAD + EPOS_COLS + body + "\n")
+    head = EPOS_HEAD.replace(";4", f";{len(rows) if announced is None else announced}")
+    path.write_text(head + EPOS_COLS + body + "\n")
     return path
+
+
+def test_epos_folder_refuses_what_is_not_one_steady_point(tmp_path):
+    # issue 33: a start-stop export dropped into a steady folder was taken as a point (the fit
+    # collapsed), an export cut short was accepted silently, a Windows copy counted twice
+    folder = tmp_path / "0.1kg"
+    _epos(folder, "10.csv", [(-10, -30.0), (-10, -32.0), (-11, -31.0)])
+    _epos(folder, "n10.csv", [(10, 35.0), (10, 36.0), (9, 37.0)])
+    assert len(tj.read_record(folder)) == 2
+    stray = _epos(folder, "start_stop.csv", [(0, 1.0), (50, 30.0), (-50, -30.0), (0, 1.0)])
+    with pytest.raises(tj.DataFileError, match=r"start_stop.csv: not a steady point"):
+        tj.read_record(folder)
+    stray.unlink()
+    cut = _epos(folder, "20.csv", [(-20, -40.0), (-20, -41.0)], announced=500)
+    with pytest.raises(tj.DataFileError, match=r"20.csv, line \d+: 2 samples, but the header "
+                       "announces 500"):  # fmt: skip
+        tj.read_record(folder)
+    cut.unlink()
+    copy = folder / "10 (1).csv"
+    copy.write_bytes((folder / "10.csv").read_bytes())
+    with pytest.raises(tj.DataFileError, match=r"10.csv: the same samples as 10 \(1\).csv"):
+        tj.read_record(folder)
+
+
+@needs_shared
+def test_the_rig_steady_folders_pass_the_steady_point_check():
+    for drive in ("driveNo1", "driveNo2"):
+        curve = tj.read_record(SHARED / "screwdrive" / drive / "steady_state" / "0.096kg")
+        assert len(curve) == 32 if drive == "driveNo1" else len(curve) == 30
 
 
 def test_epos_folder_is_one_curve_in_si(tmp_path):

@@ -26,7 +26,16 @@ def read_text(path) -> str:
     file, and the line of the first byte that is not UTF-8, when it cannot be read."""
     path = Path(path)
     try:
-        raw = path.read_bytes()
+        with open(path, "rb") as f:
+            head = f.read(1 << 16)  # checked before the rest is read (a large binary file)
+            if head[:2] in (b"\xff\xfe", b"\xfe\xff"):
+                raise DataFileError(f"{path}: UTF-16 text (byte-order mark); save the file as "
+                                    "UTF-8")  # fmt: skip
+            if b"\x00" in head:
+                line = head[: head.index(b"\x00")].count(b"\n") + 1
+                raise DataFileError(f"{path}, line {line}: a NUL byte (a binary file, or "
+                                    "UTF-16 text without a byte-order mark); save it as UTF-8")
+            raw = head + f.read()
     except OSError as err:
         raise DataFileError(f"{path}: cannot be read ({err.strerror or err})") from err
     try:
@@ -72,16 +81,18 @@ def read_table(path, *, columns=None, text_columns=()) -> dict[str, np.ndarray]:
         text = raw.strip()
         if not text or text.startswith("#"):
             continue
-        fields = [f.strip() for f in next(csv.reader([text]))]
+        try:
+            fields = [f.strip() for f in next(csv.reader([text]))]
+        except csv.Error as err:
+            raise DataFileError(f"{path}, line {lineno}: {err}") from None
         if header is None:
             header = fields
             if len(set(header)) != len(header) or "" in header:
                 raise DataFileError(f"{path}, line {lineno}: header has empty or repeated names")
             missing = [c for c in (columns or ()) if c not in header]
             if missing:
-                raise DataFileError(
-                    f"{path}, line {lineno}: missing column(s) {missing}; header is {header}"
-                )
+                raise DataFileError(f"{path}, line {lineno}: missing column(s) {missing}; header "
+                                    f"is {header}{separator_hint(text)}")  # fmt: skip
             continue
         if len(fields) != len(header):
             raise DataFileError(
@@ -111,6 +122,15 @@ def read_table(path, *, columns=None, text_columns=()) -> dict[str, np.ndarray]:
         values = [r[j] for r in rows]
         out[name] = np.asarray(values, dtype=str if name in text_columns else np.float64)
     return out
+
+
+def separator_hint(header: str) -> str:
+    """A hint when a header line looks separated by something other than commas."""
+    for sep, name in ((";", "semicolons"), ("\t", "tabs")):
+        if sep in header and header.count(sep) >= header.count(","):
+            return (f" (it looks separated by {name}: tribojax reads comma-separated values with "
+                    "a decimal point; export as CSV with ',' between fields and '.' in numbers)")
+    return ""
 
 
 _WANG2022 = {

@@ -10,6 +10,7 @@ commanded speed, reads as one curve (`read_epos_steady`).
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 from pathlib import Path
 from typing import ClassVar, final
@@ -159,14 +160,22 @@ def read_epos_steady(folder) -> FrictionCurve:
     and torque (N m) samples, and the torque's `effective_samples` (the samples are correlated, so
     the point's standard error is the batch-means one, not scatter/√count). The direction is the
     measured velocity's sign (not the file name). Points are sorted by velocity. DataFileError
-    (naming the file and line) for a bad export or a folder without exports."""
+    (naming the file and line) for a bad export, a file that is not one steady point (fewer
+    samples than its header announces, or a velocity that reverses: `_check_steady_point`), two
+    files with the same samples, or a folder without exports."""
     folder = Path(folder)
     files = sorted(folder.glob("*.csv"))
     if not files:
         raise DataFileError(f"{folder}: no EPOS exports (*.csv) in this folder")
-    rows = []
+    rows, seen = [], {}
     for path in files:
         ex = read_epos(path)
+        _check_steady_point(path, ex)
+        key = hashlib.sha256(ex.velocity.tobytes() + ex.torque.tobytes()).hexdigest()
+        if key in seen:
+            raise DataFileError(f"{path}: the same samples as {seen[key]} (a duplicate export, "
+                                "e.g. a copy of a file?); keep one of them")  # fmt: skip
+        seen[key] = path.name
         scatter = float(np.std(ex.torque, ddof=1))
         if not scatter > 0:
             raise DataFileError(f"{path}, line {ex.units_line + 1}: the torque is constant")
@@ -175,6 +184,32 @@ def read_epos_steady(folder) -> FrictionCurve:
     rows.sort()
     cols = dict(zip(CURVE_COLUMNS, np.asarray(rows).T))
     return FrictionCurve(**cols, units=dict(EPOS_UNITS_SI), source=str(folder))
+
+
+STEADY_OPPOSITE_MAX = 0.01  # share of samples against the mean's direction in a steady point
+
+
+def _check_steady_point(path, ex) -> None:
+    """DataFileError unless the export `ex` is one steady point: every sample its header
+    announces (`Recorded samples`) is there, and the velocity keeps one direction (at most
+    `STEADY_OPPOSITE_MAX` of the samples against the mean's; a start-stop run reverses)."""
+    announced = ex.header.get("Recorded samples")
+    n = ex.t.size
+    if announced is not None:
+        try:
+            count = int(float(announced.split(";")[0]))
+        except ValueError:
+            why = f"{path}: 'Recorded samples' is {announced!r}, not a count"
+            raise DataFileError(why) from None
+        if count != n:
+            raise DataFileError(f"{path}, line {ex.units_line + n}: {n} samples, but the header "
+                                f"announces {count} (a cut or edited export?)")  # fmt: skip
+    direction = np.sign(np.mean(ex.velocity))
+    against = float(np.mean(np.sign(ex.velocity) == -direction)) if direction else 1.0
+    if against > STEADY_OPPOSITE_MAX:
+        raise DataFileError(f"{path}: not a steady point: {100 * against:.0f} % of the samples "
+                            "move against the mean direction (a start-stop export?); a "
+                            "steady-state folder holds one commanded speed per file")  # fmt: skip
 
 
 def read_epos_transient(path) -> FrictionTransient:

@@ -47,7 +47,8 @@ def read_epos(path) -> EposExport:
     Raises DataFileError naming the file and the line for: no `ms;rpm;%` units line, a sample
     line that is not three numbers (a truncated last line included), time that does not
     increase, or no samples at all. Fewer samples than the header's `Recorded samples` are
-    accepted (the rig's own files have that); the count is kept in `header`.
+    accepted here (a transient cut short is still a transient); a steady-state folder refuses
+    them (`read_epos_steady`). The count read is kept in `header` ("samples read").
     """
     path = Path(path)
     lines = read_text(path).splitlines()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .._tables import DataFileError
+from .._tables import DataFileError, separator_hint
 from ._brfd import read_brfd
 from ._curve import (
     CURVE_COLUMNS,
@@ -54,7 +54,7 @@ def detect_format(path) -> str:
         f"{path}, line {data_line_number(path, -1)}: header {list(fields)} is neither a slip "
         f"run ({','.join(SLIP_COLUMNS)}), a loop ({','.join(LOOP_FILE_COLUMNS)}, or legacy "
         f"{','.join(LOOP_COLUMNS)}), a friction curve ({','.join(CURVE_COLUMNS)}) nor a "
-        f"transient ({','.join(TRANSIENT_COLUMNS)})"
+        f"transient ({','.join(TRANSIENT_COLUMNS)}){separator_hint(','.join(fields))}"
     )
 
 
