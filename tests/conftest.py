@@ -1,9 +1,17 @@
-"""Test configuration: float64 (via the tribojax import) and strict rank promotion."""
+"""Test configuration: float64 (via the tribojax import), strict rank promotion, and the
+persistent compilation cache in the build folder (shared by the workers, the CLI and notebook
+subprocesses; a clean clone starts it empty)."""
 
-import jax
-import pytest
+import os
+from pathlib import Path
 
-import tribojax as tj
+_BUILD = Path(__file__).resolve().parents[1] / "build"
+os.environ.setdefault("TRIBOJAX_CACHE_DIR", str(_BUILD / "jax-cache"))
+
+import jax  # noqa: E402
+import pytest  # noqa: E402
+
+import tribojax as tj  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_rank_promotion", "raise")

@@ -5,12 +5,37 @@ the offending value and the allowed range. Traced values (inside jit/vmap/grad) 
 `equinox.error_if`, whose return value must be used for the check to survive tracing.
 """
 
+import contextlib
+
 import equinox as eqx
+import equinox._errors as _eqx_errors
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ._precision import ensure_x64
+
+
+# How a traced check fails: "default" follows EQX_ON_ERROR (a host callback that raises);
+# "nan" makes the checked value NaN instead. The fit engine traces its programs with "nan" so
+# that they hold no host callback (JAX's persistent cache skips such programs, jax 0.10) and a
+# parameter the optimiser steps out of range is a rejected step, not an exception.
+_ON_ERROR = "default"
+
+
+@contextlib.contextmanager
+def failures_as_nan():
+    """Within this block, checks traced under jit return NaN on failure instead of raising: the
+    library's own (`on_error="nan"`, a distinct trace) and those inside diffrax and lineax
+    (equinox's `EQX_ON_ERROR`, read when a check is traced; equinox 0.13). For programs whose
+    caller turns a non-finite result into a `RESULTS` value."""
+    global _ON_ERROR
+    before = _ON_ERROR, _eqx_errors.EQX_ON_ERROR
+    _ON_ERROR = _eqx_errors.EQX_ON_ERROR = "nan"
+    try:
+        yield
+    finally:
+        _ON_ERROR, _eqx_errors.EQX_ON_ERROR = before
 
 
 def _is_concrete(*xs) -> bool:
@@ -56,7 +81,8 @@ def check_range(x, name: str, lo=None, hi=None, *, lo_open=True, hi_open=True, u
             value = np.asarray(x)[bad_np].ravel()[0]
             raise ValueError(f"{name} = {value:g}{unit_s} is outside the allowed range {rng}")
         return x
-    return eqx.error_if(x, bad, f"{name} is outside the allowed range {rng}{unit_s} (or NaN)")
+    message = f"{name} is outside the allowed range {rng}{unit_s} (or NaN)"
+    return eqx.error_if(x, bad, message, on_error=_ON_ERROR)
 
 
 def fail_if(x, bad, message: str):
@@ -68,7 +94,7 @@ def fail_if(x, bad, message: str):
         if np.asarray(bad).any():
             raise ValueError(message)
         return x
-    return eqx.error_if(x, bad, message)
+    return eqx.error_if(x, bad, message, on_error=_ON_ERROR)
 
 
 def runtime_message(exc: BaseException) -> str:

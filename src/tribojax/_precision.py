@@ -2,13 +2,17 @@
 
 tribojax works in float64 throughout: slips of a nanometre against stiffnesses of 1e8 N/m lose
 all their digits in float32. Importing `tribojax` therefore turns on `jax_enable_x64` (the one
-side effect of the import, documented in the README). If a user turns it off again, every model
+side effect of the import, documented in the README, with the compilation cache of
+`tribojax._cache`). If a user turns it off again, every model
 entry point refuses to run instead of silently computing in float32.
 """
 
 import jax
 
+from ._cache import enable_cache
+
 jax.config.update("jax_enable_x64", True)
+CACHE_DIR = enable_cache(jax.config)  # the persistent compilation cache (`tribojax._cache`)
 
 
 def ensure_x64() -> None:

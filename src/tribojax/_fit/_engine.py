@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
+from .._checks import failures_as_nan
 from .._precision import ensure_x64
 from .._results import RESULTS, result_name
 from ._noise import noise_consistent as _noise_test
@@ -217,16 +218,10 @@ def _singular_directions(sv, vt, names) -> tuple:
 @eqx.filter_jit
 def _solve(residual_fn, theta0, args, solver, max_steps, jac):
     # jitted here so that a module-level `residual_fn` (hashed by identity) is compiled once and
-    # a repeated fit with new data in `args` runs warm
-    sol = optx.least_squares(
-        residual_fn,
-        solver,
-        theta0,
-        args,
-        options=dict(jac=jac),
-        max_steps=max_steps,
-        throw=False,
-    )
+    # a repeated fit with new data in `args` runs warm; no host callback inside (cacheable)
+    with failures_as_nan():
+        sol = optx.least_squares(residual_fn, solver, theta0, args, options=dict(jac=jac),
+                                 max_steps=max_steps, throw=False)  # fmt: skip
     # a Gauss–Newton solver's state holds the residual and its linearisation at the returned
     # point: the statistics take them from there instead of evaluating the model again
     info = getattr(sol.state, "f_info", None)
@@ -245,7 +240,8 @@ def value_and_jacobian(residual_fn, theta, args):
         r = residual_fn(th, args)
         return r, r
 
-    J, r = jax.jacfwd(both, has_aux=True)(theta)
+    with failures_as_nan():
+        J, r = jax.jacfwd(both, has_aux=True)(theta)
     return r, J
 
 

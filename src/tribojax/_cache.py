@@ -1,0 +1,68 @@
+"""JAX's persistent compilation cache, on by default for tribojax's programs.
+
+A command pays tracing and XLA compilation in every new process; the persistent cache keeps the
+compiled programs on disk so that the second run of the same fit skips XLA compilation (tracing
+is still paid). Set when tribojax is first imported, and only if the user has not chosen a JAX
+cache themselves (`jax_compilation_cache_dir` or `JAX_COMPILATION_CACHE_DIR`):
+
+- `TRIBOJAX_CACHE=off` (or 0/no/false): leave JAX's cache settings alone;
+- `TRIBOJAX_CACHE_DIR=PATH`: keep the entries there; default the platform's user cache folder
+  (`$XDG_CACHE_HOME/tribojax/jax` or `~/.cache/tribojax/jax`, `~/Library/Caches/tribojax/jax`
+  on macOS, `%LOCALAPPDATA%/tribojax/cache/jax` on Windows).
+
+Besides the folder, programs that compile in `MIN_COMPILE_S` or more are kept (JAX's default 1 s
+would skip most of the small ones a fit uses). A program holding a host callback (an
+`equinox.error_if` that raises, `throw=True`) is never cached by jax 0.10: the fit engine traces
+its programs without one (`tribojax._checks.failures_as_nan`).
+
+Safety: an entry's key hashes the program, the JAX/XLA versions and the device, so a stale entry
+is never found; an entry that cannot be read (truncated by a killed process, or being written by
+another one) is reported by JAX as a warning and compiled again, never used.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+MIN_COMPILE_S = 0.2
+OFF = ("off", "0", "no", "false")
+
+
+def cache_dir() -> Path | None:
+    """The folder tribojax asks JAX to cache compiled programs in, or None when `TRIBOJAX_CACHE`
+    turns the cache off."""
+    if os.environ.get("TRIBOJAX_CACHE", "").strip().lower() in OFF:
+        return None
+    chosen = os.environ.get("TRIBOJAX_CACHE_DIR", "").strip()
+    if chosen:
+        return Path(chosen).expanduser()
+    home = Path.home()
+    if sys.platform == "darwin":
+        base = home / "Library" / "Caches" / "tribojax"
+    elif os.name == "nt":
+        base = Path(os.environ.get("LOCALAPPDATA", home / "AppData" / "Local")) / "tribojax" / "cache"
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME", "") or home / ".cache") / "tribojax"
+    return base / "jax"
+
+
+def enable_cache(config) -> Path | None:
+    """Point `config` (`jax.config`) at `cache_dir()` unless the user set a JAX cache folder or
+    turned ours off; returns the folder in use by tribojax's setting (None if not set here).
+    A folder that cannot be created leaves the cache off."""
+    if config.jax_compilation_cache_dir or os.environ.get("JAX_COMPILATION_CACHE_DIR"):
+        return None
+    folder = cache_dir()
+    if folder is None:
+        return None
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    if not os.access(folder, os.W_OK):
+        return None
+    config.update("jax_compilation_cache_dir", str(folder))
+    config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_S)
+    return folder
