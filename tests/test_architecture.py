@@ -14,6 +14,7 @@ Read from the source with `ast` (nothing is imported), so a violation names the 
 """
 
 import ast
+import subprocess
 import sys
 import tomllib
 from pathlib import Path
@@ -33,10 +34,11 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 # The layer order, lowest first: a module imports modules of its own layer and of the layers
 # below it, never of a layer above. Each unit is a subpackage or top-level module of tribojax
 # ("" is tribojax/__init__.py). Within a layer any direction goes (cycles are caught above).
-# - foundation: float64 switch, validation, result codes, the matplotlib guard, and the validating
-#   CSV reader with the bundled published tables (`_tables`), which physics and constants read;
-# - physics: contact, surfaces, friction elements, dynamics, and the papers' constants
-#   (`_presets` builds contact pairs; `_dynamics` takes masses from it): no records, no fits;
+# - foundation: float64 switch and the compilation cache, validation, result codes, the matplotlib
+#   guard, the validating CSV reader with the bundled published tables (`_tables`), the papers'
+#   constants (`_presets`) and the shared names and budgets (`_limits`; these two import nothing);
+# - physics: contact (with the papers' preset pairs and load laws), surfaces, friction elements,
+#   dynamics: no records, no fits;
 # - model chain: wang2022's one path parameters → contact → element → phase slips (`_chain`);
 # - model analyses: sweeps and sensitivities of the model, which need no records;
 # - records: user records and files (`_io`);
@@ -46,8 +48,9 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 # - discovery; the public re-exports (tribojax/__init__.py); the command line, which nothing
 #   else imports.
 LAYERS = (
-    ("foundation", {"_precision", "_checks", "_results", "_plot", "_tables"}),
-    ("physics", {"_contact", "_roughness", "_friction", "_dynamics", "_presets"}),
+    ("foundation", {"_precision", "_cache", "_checks", "_results", "_plot", "_tables", "_presets",
+                    "_limits"}),
+    ("physics", {"_contact", "_roughness", "_friction", "_dynamics"}),
     ("model chain", {"_chain"}),
     ("model analyses", {"_sweep", "_sensitivity"}),
     ("records", {"_io"}),
@@ -162,8 +165,31 @@ def test_no_import_cycles():
     assert not cycles, f"import cycles: {cycles}"
 
 
+# The command-line dispatcher imports a subcommand's module (and the library) only when it runs,
+# so that `tribojax --help` and argument errors start without JAX (issue 31); nothing else may.
+DEFERRED = ("tribojax/_cli/_main.py:",)
+
+
 def test_no_function_level_imports_of_tribojax():
-    assert not HIDDEN, f"imports of tribojax modules inside functions: {HIDDEN}"
+    hidden = [h for h in HIDDEN if not any(d in h.replace("\\", "/") for d in DEFERRED)]
+    assert not hidden, f"imports of tribojax modules inside functions: {hidden}"
+
+
+def test_the_command_line_parses_without_jax():
+    # `tribojax --help`, `--version` and argument errors: no JAX, no numpy (a fresh interpreter)
+    code = (
+        "import sys\n"
+        "from tribojax._cli._main import build_parser\n"
+        "p = build_parser()\n"
+        "for argv in (['fit', '--help'], ['contact'], ['--version'], ['frob']):\n"
+        "    try:\n"
+        "        p.parse_args(argv)\n"
+        "    except SystemExit:\n"
+        "        pass\n"
+        "print(sorted(m for m in ('jax', 'numpy', 'equinox', 'scipy') if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout[-500:]
 
 
 def test_no_private_names_across_subpackages():

@@ -133,7 +133,7 @@ def test_cli_writes_json_and_figure(tmp_path, capsys):
 def test_reproduce_reports_a_fit_that_does_not_converge(monkeypatch, capsys):
     # issue 5 point 6: a non-converged full-chain fit gives a clear message and False (the CLI
     # then exits 1); the fit itself is replaced by a stand-in so that this test is cheap
-    from tribojax._cli import _main as _cli
+    from tribojax._cli import _reproduce as _cli
     from tribojax._fit._engine import FitResult
     from tribojax._reproduce import _chain_fit as _fit_chain
 

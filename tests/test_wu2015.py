@@ -9,7 +9,7 @@ import pytest
 from scipy import integrate
 
 import tribojax as tj
-from tribojax._cli._main import _reproduce_wu2015
+from tribojax._cli._reproduce import _reproduce_wu2015
 
 
 @pytest.fixture(scope="module")

@@ -42,7 +42,8 @@ def cache_dir() -> Path | None:
     if sys.platform == "darwin":
         base = home / "Library" / "Caches" / "tribojax"
     elif os.name == "nt":
-        base = Path(os.environ.get("LOCALAPPDATA", home / "AppData" / "Local")) / "tribojax" / "cache"
+        local = Path(os.environ.get("LOCALAPPDATA", home / "AppData" / "Local"))
+        base = local / "tribojax" / "cache"
     else:
         base = Path(os.environ.get("XDG_CACHE_HOME", "") or home / ".cache") / "tribojax"
     return base / "jax"

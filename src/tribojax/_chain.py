@@ -26,6 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ._checks import as_f64
+from ._contact._presets import wang2022_table3_model
 from ._dynamics._profiles import TrapezoidProfile
 from ._dynamics._slip import slip_phase_averages
 from ._friction._lugre import PreSlipLuGre
@@ -34,7 +35,6 @@ from ._presets import (
     WANG2022_A_MAX,
     WANG2022_RETICLE_MASS_KG,
     WANG2022_TANGENTIAL_LOAD_N,
-    wang2022_table3_model,
 )
 from ._tables import wang2022_table
 

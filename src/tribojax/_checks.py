@@ -15,7 +15,6 @@ import numpy as np
 
 from ._precision import ensure_x64
 
-
 # How a traced check fails: "default" follows EQX_ON_ERROR (a host callback that raises);
 # "nan" makes the checked value NaN instead. The fit engine traces its programs with "nan" so
 # that they hold no host callback (JAX's persistent cache skips such programs, jax 0.10) and a

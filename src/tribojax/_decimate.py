@@ -35,13 +35,9 @@ import numpy as np
 
 from ._fit._noise import ALPHA, chi2_sf
 from ._io._record import AbstractRecord
+from ._limits import DECIMATION_MAX_SAMPLES as DECIMATION_MAX_SAMPLES
+from ._limits import DISCOVER_MAX_SAMPLES as DISCOVER_MAX_SAMPLES
 
-# The reduced record's default size: fits and discovery resolve wang2022's slip dynamics (ring-
-# downs near 1 kHz over a 2.3 s cycle) with 20,000 samples (blocks of 0.12 ms, hω < 1).
-DECIMATION_MAX_SAMPLES = 20_000
-# Discovery's cost grows with the record (measured under load on 10^6 slip samples: 220 s and
-# 4.6 GiB reduced to 19,608 samples, 184 s and 1.9 GiB at 4,975); its benchmark record has 5,001.
-DISCOVER_MAX_SAMPLES = 5_000
 # A loop keeps at least this many reduced samples per cycle: the steady-loop model takes the
 # amplitude from the extreme samples of u, which a coarser reduction cuts (measured on a Jenkins
 # loop of 2048 samples per cycle: the noiseless reduced loop's misfit grows from Σ(b/σ)² = 2 at

@@ -34,6 +34,7 @@ from ._chain import phase_slips
 from ._checks import check_range, fail_if
 from ._contact._contact import ContactParameters
 from ._contact._materials import ContactPair
+from ._contact._presets import wang2022_pair, wang2022_table3_model
 from ._dynamics._harmonic import harmonic_balance
 from ._friction._lugre import PreSlipLuGre
 from ._friction._rate_independent import Jenkins, Mindlin
@@ -48,8 +49,6 @@ from ._presets import (
     WANG2022_REFERENCE_LOAD_N,
     WANG2022_RETICLE_MASS_KG,
     WANG2022_TABLE1_D,
-    wang2022_pair,
-    wang2022_table3_model,
 )
 
 # The Table-3-calibrated point (tribojax._presets, M = 1) and wang2022's 4 kPa row.

@@ -21,9 +21,8 @@ from pathlib import Path
 import equinox as eqx
 
 from .._checks import runtime_message
-from .._decimate import DECIMATION_MAX_SAMPLES, decimate_record
+from .._decimate import decimate_record
 from .._io._files import sidecar_path, write_json_atomic
-from .._model._fit import MAX_STEPS
 
 __all__ = [
     "BAD_INPUT",
@@ -31,7 +30,6 @@ __all__ = [
     "INTERRUPTED",
     "CommandError",
     "Progress",
-    "add_decimation_arguments",
     "claim_outputs",
     "error",
     "progress",
@@ -45,7 +43,6 @@ __all__ = [
 BAD_INPUT = 2  # malformed input, a parameter out of range or a refused output
 FAILED = 1  # the computation failed (did not converge, the model could not be evaluated)
 INTERRUPTED = 130  # Ctrl-C (128 + SIGINT)
-ODE_FIT_STEPS = MAX_STEPS  # `tribojax fit` LM budget for slip-run and loop fits: the model's
 
 _PROG = ["tribojax"]  # "tribojax <cmd>" of the running subcommand, for messages
 
@@ -330,23 +327,6 @@ def progress(args, label: str, total: int | None = None, stream=None) -> Progres
     """The progress display of a subcommand: off with `--quiet` (`args.quiet`) or when stderr is
     not a terminal."""
     return Progress(label, total, quiet=bool(getattr(args, "quiet", False)), stream=stream)
-
-
-def add_decimation_arguments(parser, max_samples: int = DECIMATION_MAX_SAMPLES) -> None:
-    """`--decimate auto|off|N` and `--max-samples` of the commands that take a record."""
-    parser.add_argument(
-        "--decimate",
-        default="auto",
-        metavar="auto|off|N",
-        help="long records: fit blocks of N samples reduced by local quadratics (noise "
-        "scaled); auto (default) reduces a record to at most --max-samples samples",
-    )
-    parser.add_argument(
-        "--max-samples",
-        type=int,
-        default=max_samples,
-        help=f"the size 'auto' reduces to (default {max_samples})",
-    )
 
 
 def reduce_record(record, args, *, whole_cycles: bool = False):

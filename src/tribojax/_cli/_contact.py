@@ -19,40 +19,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _presets as P
 from .._contact._contact import FractalContact
+from .._contact._presets import wang2022_pair
 from .._contact._surface import FractalSurface
-from .._presets import wang2022_pair
 from .._roughness._estimate import METHODS, estimate_fractal
 from .._roughness._topography import read_topography
+from ._arguments import CONTACT_DEFAULTS as CONTACT_DEFAULTS
 from ._common import CommandError, claim_outputs, warn, write_json_atomic
-
-CONTACT_DEFAULTS = dict(
-    M=P.CALIBRATED_M,
-    gamma=P.WANG2022_GAMMA,
-    sigma_s=P.CALIBRATED_SIGMA_S,
-    mu_t=P.CALIBRATED_MU_T,
-    tangential_load=P.WANG2022_TANGENTIAL_LOAD_N,
-    mass=P.WANG2022_RETICLE_MASS_KG,
-)  # wang2022 pair, Table-3-calibrated constants (tribojax._presets)
-
-
-def add_arguments(con) -> None:
-    con.add_argument("--topography", help="profile/height map (.csv, .txt, .npy, instrument files)")
-    con.add_argument("--unit", default="m", help="length unit of a plain file (m, mm, um, nm)")
-    con.add_argument("--dx", type=float, help="sampling interval (in --unit) for .npy/matrices")
-    con.add_argument("--method", default="psd", choices=METHODS)
-    con.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"), help="fit band, m")
-    con.add_argument("--min-decades", type=float, default=1.0)
-    con.add_argument("--D", type=float, help="surface fractal dimension (2, 3)")
-    con.add_argument("--G", type=float, help="fractal roughness, m")
-    con.add_argument("--load", type=float, nargs="+", required=True, help="normal load(s), N")
-    for k, v in CONTACT_DEFAULTS.items():
-        con.add_argument("--" + k.replace("_", "-"), dest=k, type=float, default=v)
-    con.add_argument("--json", help="write the results to this JSON file (never an existing "
-                     "file or the --topography input, unless --force for an existing result)")
-    con.add_argument("--force", action="store_true", help="replace an existing --json file")
-
 
 _LOWER = {"gamma": 1.0}  # the frequency-density ratio γ > 1; the others > 0
 

@@ -21,8 +21,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .._decimate import DISCOVER_MAX_SAMPLES
-from .._io._records import RECORD_FORMATS, read_record
+from .._io._records import read_record
 from ..discovery import (
     curve_baseline,
     discover,
@@ -33,25 +32,12 @@ from ..discovery import (
 )
 from ._common import (
     CommandError,
-    add_decimation_arguments,
     claim_outputs,
     error,
     progress,
     reduce_record,
     write_json_atomic,
 )
-
-
-def add_arguments(parser) -> None:
-    parser.add_argument("file", help="record (slip run or loop CSV, brfd JSON, friction curve or a "
-                        "folder of EPOS steady-state exports)")
-    parser.add_argument("--out", default="discovery-out", help="output folder (default "
-                        "discovery-out)")  # fmt: skip
-    parser.add_argument("--force", action="store_true", help="replace an existing discovery.json")
-    parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
-                        help="the record's format (default: detected)")  # fmt: skip
-    parser.add_argument("--max-effects", type=int, default=3, help="greedy rounds (default 3)")
-    add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
 
 
 def _plot_series(report, record, path) -> bool:

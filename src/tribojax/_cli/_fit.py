@@ -23,14 +23,13 @@ from pathlib import Path
 import numpy as np
 
 from .._fit._measures import nrmse, rms
-from .._io._records import RECORD_FORMATS, read_record
+from .._io._records import read_record
+from .._limits import MAX_STEPS
 from .._model import evaluate, fit_loop, fit_slip_run, loop_residuals, slip_baseline
 from .._plot import pyplot, save_figure
 from ._common import (
     FAILED,
-    ODE_FIT_STEPS,
     CommandError,
-    add_decimation_arguments,
     claim_outputs,
     error,
     progress,
@@ -44,51 +43,6 @@ from ._fit_real import ELEMENT_MODELS, fit_curve_record, fit_history_record, fit
 _NOT_FITTED = {
     "friction_transient": "fit its steady curve first (tribojax.fit_transient in Python)",
 }
-
-
-def add_arguments(parser) -> None:
-    parser.add_argument(
-        "file",
-        help="CSV: a slip run (time_s,stage_accel_m_s2,slip_m) or a loop "
-        "(time_s,displacement_m,force_N), each with its <stem>.json sidecar; a brfd JSON; an "
-        "EPOS export or a folder of EPOS steady-state exports (one friction curve)",
-    )
-    parser.add_argument("--out", default=None, help="output folder (default tribojax-out/fit-STEM)")
-    parser.add_argument(
-        "--alpha",
-        default=None,
-        help="slip runs: 'free' (default) to fit the bristle exponent α, or a fixed value",
-    )
-    parser.add_argument(
-        "--start",
-        nargs="+",
-        default=None,
-        metavar="NAME=VALUE",
-        help="start values, SI units: slip runs F_s, K_tau, C_tau, alpha; loops mu_N, K_d",
-    )
-    parser.add_argument(
-        "--element",
-        choices=("jenkins", "mindlin"),
-        default="jenkins",
-        help="loops: the hysteresis element (default jenkins)",
-    )
-    parser.add_argument(
-        "--model",
-        choices=("steady", "history", *ELEMENT_MODELS, "best"),
-        default=None,
-        help="loops: 'history' (default for a periodic loop: the loop model that discover also "
-        "fits) or 'steady' (wu2015's steady-loop formula) fit --element; "
-        "jenkins|mindlin|lugre|bouc_wen drive that element (+ force offset) through the measured "
-        "history, best: all four, lowest BIC (default for a non-periodic history); friction "
-        "curves: lugre (the steady law, default) or best",
-    )
-    parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
-                        help="the record's format (default: detected)")  # fmt: skip
-    parser.add_argument("--max-steps", type=int, default=None,
-                        help=f"LM step budget (default {ODE_FIT_STEPS} for slip runs and loops; "
-                        "friction curves: the steady-law fit's own budget)")  # fmt: skip
-    parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
-    add_decimation_arguments(parser)
 
 
 def run_fit(args) -> int:
@@ -245,7 +199,7 @@ def _fit_slip(run, args, start, reduction, note=None):
         sigma, how = run.noise_std, _reduced_sigma_source(reduction, "sidecar noise_std_m")
     else:
         sigma, how = None, "estimated from the residuals"
-    steps = args.max_steps or ODE_FIT_STEPS
+    steps = args.max_steps or MAX_STEPS
     fit = fit_slip_run(run, alpha=alpha, max_steps=steps, start=start or None, progress=note)
     resid = fit.prediction - run.slip  # model − data, m
     if sigma is None:
@@ -262,7 +216,7 @@ def _fit_slip(run, args, start, reduction, note=None):
 def _fit_loop(loop, args, start, reduction, note=None):
     if len(loop.t) <= 2:
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
-    steps = args.max_steps or ODE_FIT_STEPS
+    steps = args.max_steps or MAX_STEPS
     model = args.model or "history"
     fit = fit_loop(loop, args.element, model=model, max_steps=steps, start=start or None)
     if fit.prediction is not None:  # the loop model: the samples from the first reversal on

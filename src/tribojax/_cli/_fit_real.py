@@ -17,9 +17,9 @@ from .._fit._curve import fit_steady_curve
 from .._fit._history import HISTORY_MODELS, fit_history, predict_history
 from .._fit._measures import bic, nrmse, rms
 from .._io._curve import FrictionCurve
-from ._common import ODE_FIT_STEPS, CommandError
-
-ELEMENT_MODELS = tuple(HISTORY_MODELS)  # jenkins, mindlin, lugre, bouc_wen
+from .._limits import ELEMENT_MODELS as ELEMENT_MODELS
+from .._limits import MAX_STEPS
+from ._common import CommandError
 
 
 def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:
@@ -47,12 +47,12 @@ def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:
 
 def fit_history_record(loop, model: str, max_steps: int | None, start: dict):
     """Fit `model` (or every element for "best") through the loop's displacement history, with
-    at most `max_steps` LM steps (None: `ODE_FIT_STEPS`) from the `start` values given."""
+    at most `max_steps` LM steps (None: `MAX_STEPS`) from the `start` values given."""
     names = ELEMENT_MODELS if model == "best" else (model,)
     fits = {}
     for name in names:
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
-        steps = max_steps or ODE_FIT_STEPS
+        steps = max_steps or MAX_STEPS
         fits[name] = fit_history(loop, name, start=given or None, max_steps=steps)
     pred = {k: predict_history(h, loop)[0] for k, h in fits.items()}
     n = len(loop.f)

@@ -73,11 +73,6 @@ NEEDS = {
 }
 
 
-def add_arguments(parser) -> None:
-    parser.add_argument("config", help="TOML file: structure, contacts, excitation, harmonics")
-    parser.add_argument("--out", default="tribojax-out/frf", help="output folder")
-
-
 def _contact(i: int, c: dict):
     kind = c["type"].lower()
     if kind not in NEEDS:

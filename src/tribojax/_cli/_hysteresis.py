@@ -30,42 +30,6 @@ from .._reproduce._wu2015 import wu2015_eq5_stiffness
 from ._common import claim_outputs, error, write_json_atomic
 
 
-def add_arguments(parser) -> None:
-    parser.add_argument("--element", choices=("jenkins", "mindlin", "lugre"), default="mindlin")
-    parser.add_argument("--mu", type=float, default=0.3, help="friction coefficient (default 0.3)")
-    parser.add_argument("--N", type=float, default=2.94, help="normal load, N (default 2.94)")
-    parser.add_argument(
-        "--K-d",
-        type=float,
-        default=None,
-        help="tangential contact stiffness, N/m (default: wu2015 Eq 5 at N, read as N/um)",
-    )
-    parser.add_argument(
-        "--omega", type=float, default=2 * math.pi * 22, help="rad/s (default 2*pi*22)"
-    )
-    parser.add_argument(
-        "--C-tau",
-        type=float,
-        default=0.0,
-        help="lugre only: bristle damping C_tau, N s/m (default 0); F_s = mu*N, K_tau = K_d",
-    )
-    rng = parser.add_mutually_exclusive_group()
-    rng.add_argument("--abar", type=float, nargs=2, metavar=("MIN", "MAX"), default=None)
-    rng.add_argument("--A", type=float, nargs=2, metavar=("MIN_m", "MAX_m"), default=None)
-    parser.add_argument("--n", type=int, default=100, help="number of amplitudes (default 100)")
-    parser.add_argument("--loop", default=None, help="CSV (t_s, u_m, f_N) to analyse and fit")
-    parser.add_argument(
-        "--fit-model",
-        choices=("steady", "history"),
-        default="steady",
-        help="fit the steady loop (default) or drive the element through the measured history",
-    )
-    parser.add_argument("--out", default="tribojax-out/hysteresis", help="output folder")
-    parser.add_argument("--force", action="store_true",
-                        help="replace an earlier result in --out (its files from an earlier run "
-                        "that this run does not write are removed)")  # fmt: skip
-
-
 def run_hysteresis(args) -> int:
     """Run `tribojax hysteresis`: 0 done, 1 the loop fit did not converge, 2 bad input.
 

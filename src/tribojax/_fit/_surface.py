@@ -11,6 +11,7 @@ import numpy as np
 
 from .._chain import mu_min as _mu_min
 from .._chain import to_physical, to_theta
+from .._contact._presets import wang2022_table3_model
 from .._model import fit_slip_run
 from .._presets import (
     CALIBRATED_G_M,
@@ -18,7 +19,6 @@ from .._presets import (
     CALIBRATED_MU_T,
     CALIBRATED_SIGMA_S,
     WANG2022_TABLE1_D,
-    wang2022_table3_model,
 )
 from ._engine import FitResult, least_squares_fit
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .._limits import RECORD_FORMATS as RECORD_FORMATS
 from .._tables import DataFileError, separator_hint
 from ._brfd import read_brfd
 from ._curve import (
@@ -20,7 +21,6 @@ from ._files import csv_header, data_line_number
 from ._loop import LOOP_COLUMNS, LOOP_FILE_COLUMNS, HysteresisLoop, read_loop
 from ._slip_run import SLIP_COLUMNS, SlipRun, read_slip_run
 
-RECORD_FORMATS = ("slip", "loop", "brfd", "epos_steady", "epos", "curve")
 _READERS = {
     "slip": read_slip_run,
     "loop": read_loop,

@@ -25,13 +25,13 @@ from .._fit._engine import (
 )
 from .._fit._noise import noise_estimate
 from .._fit._solver import LevenbergMarquardt
+from .._limits import MAX_STEPS as MAX_STEPS
 from .._precision import ensure_x64
 from .._results import RESULTS
 from ._base import K_MAX, AbstractBaseline
 
 GAIN_TOL = 1e-2  # converged: a Gauss–Newton step would lower the cost by < 0.01 residual variances
 NOISE_TOL = 1.0  # stationary: a rejected step promised < 1 residual variance (evaluation noise)
-MAX_STEPS = 128  # step budget of every record-model fit (accepted and rejected; one compile)
 SOLVER = LevenbergMarquardt.record(1e-8, 1e-10, gain_tol=GAIN_TOL, noise_tol=NOISE_TOL,
                                    max_rejections=12, padded=K_MAX)  # fmt: skip
 

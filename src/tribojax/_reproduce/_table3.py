@@ -29,16 +29,18 @@ import numpy as np
 
 from .._chain import mu_min, to_physical, to_theta
 from .._contact._asperity import REGIME_NAMES
+from .._contact._presets import (
+    vacuum_to_load,
+    wang2022_pair,
+    wang2022_surface,
+    wang2022_table3_model,
+)
 from .._fit._engine import FitResult, least_squares_fit
 from .._presets import (
     CALIBRATED_M,
     WANG2022_GAMMA,
     WANG2022_RETICLE_MASS_KG,
     WANG2022_TANGENTIAL_LOAD_N,
-    vacuum_to_load,
-    wang2022_pair,
-    wang2022_surface,
-    wang2022_table3_model,
 )
 from .._tables import wang2022_table
 

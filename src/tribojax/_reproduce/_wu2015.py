@@ -19,10 +19,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import check_range, fail_if
+from .._contact._presets import wu2015_eq5_stiffness as wu2015_eq5_stiffness  # noqa: F401 (re-export)
 from .._dynamics._harmonic import harmonic_balance
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._plot import pyplot
-from .._presets import wu2015_eq5_stiffness as wu2015_eq5_stiffness  # noqa: F401 (re-export)
 from .._tables import data_dir, read_table
 
 EQ7_COLUMNS = ("quantity", "A_bar_min", "A_bar_max", "slope", "intercept")

@@ -35,10 +35,11 @@ import numpy as np
 from jax.scipy.special import gammaln
 
 from .._checks import check_range
+from .._limits import ROUGHNESS_METHODS
 from ._synthesis import direction_factor
 from ._topography import Topography, validate
 
-METHODS = ("structure", "psd", "rms")
+METHODS = ROUGHNESS_METHODS
 
 
 def sf_constant(D):

@@ -31,10 +31,11 @@ import numpy as np
 import optimistix as optx
 
 from .._checks import check_range
+from .._contact._presets import wu2015_eq5_stiffness
 from .._fit._solver import LevenbergMarquardt
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._loop import HysteresisLoop, synthetic_loop
-from .._presets import WU2015_EQ5_EXPONENT, wu2015_eq5_stiffness
+from .._presets import WU2015_EQ5_EXPONENT
 from .._reproduce._wu2015 import eq7_curves
 
 LOOP_EFFECTS = ("microslip", "viscous_damping", "normal_load_variation")

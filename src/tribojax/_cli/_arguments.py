@@ -1,0 +1,167 @@
+"""The arguments of every `tribojax` subcommand, declared without importing the library.
+
+`tribojax --help`, a subcommand's `--help` and argument errors are answered from this module
+alone (standard library and `tribojax._limits`/`_presets` constants), without JAX; the subcommand's
+own module is imported only to run it.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .. import _presets as P
+from .._limits import (
+    DECIMATION_MAX_SAMPLES,
+    DISCOVER_MAX_SAMPLES,
+    ELEMENT_MODELS,
+    MAX_STEPS,
+    RECORD_FORMATS,
+    ROUGHNESS_METHODS,
+)
+
+CONTACT_DEFAULTS = dict(
+    M=P.CALIBRATED_M,
+    gamma=P.WANG2022_GAMMA,
+    sigma_s=P.CALIBRATED_SIGMA_S,
+    mu_t=P.CALIBRATED_MU_T,
+    tangential_load=P.WANG2022_TANGENTIAL_LOAD_N,
+    mass=P.WANG2022_RETICLE_MASS_KG,
+)  # wang2022 pair, Table-3-calibrated constants (tribojax._presets)
+
+
+def add_decimation_arguments(parser, max_samples: int = DECIMATION_MAX_SAMPLES) -> None:
+    """`--decimate auto|off|N` and `--max-samples` of the commands that take a record."""
+    parser.add_argument(
+        "--decimate",
+        default="auto",
+        metavar="auto|off|N",
+        help="long records: fit blocks of N samples reduced by local quadratics (noise "
+        "scaled); auto (default) reduces a record to at most --max-samples samples",
+    )
+    parser.add_argument(
+        "--max-samples",
+        type=int,
+        default=max_samples,
+        help=f"the size 'auto' reduces to (default {max_samples})",
+    )
+
+
+def reproduce_arguments(parser) -> None:
+    parser.add_argument(
+        "--out", default="tribojax-out", help="output folder (default tribojax-out)"
+    )
+
+
+def contact_arguments(con) -> None:
+    con.add_argument("--topography", help="profile/height map (.csv, .txt, .npy, instrument files)")
+    con.add_argument("--unit", default="m", help="length unit of a plain file (m, mm, um, nm)")
+    con.add_argument("--dx", type=float, help="sampling interval (in --unit) for .npy/matrices")
+    con.add_argument("--method", default="psd", choices=ROUGHNESS_METHODS)
+    con.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"), help="fit band, m")
+    con.add_argument("--min-decades", type=float, default=1.0)
+    con.add_argument("--D", type=float, help="surface fractal dimension (2, 3)")
+    con.add_argument("--G", type=float, help="fractal roughness, m")
+    con.add_argument("--load", type=float, nargs="+", required=True, help="normal load(s), N")
+    for k, v in CONTACT_DEFAULTS.items():
+        con.add_argument("--" + k.replace("_", "-"), dest=k, type=float, default=v)
+    con.add_argument("--json", help="write the results to this JSON file (never an existing "
+                     "file or the --topography input, unless --force for an existing result)")
+    con.add_argument("--force", action="store_true", help="replace an existing --json file")
+
+
+def hysteresis_arguments(parser) -> None:
+    parser.add_argument("--element", choices=("jenkins", "mindlin", "lugre"), default="mindlin")
+    parser.add_argument("--mu", type=float, default=0.3, help="friction coefficient (default 0.3)")
+    parser.add_argument("--N", type=float, default=2.94, help="normal load, N (default 2.94)")
+    parser.add_argument(
+        "--K-d",
+        type=float,
+        default=None,
+        help="tangential contact stiffness, N/m (default: wu2015 Eq 5 at N, read as N/um)",
+    )
+    parser.add_argument(
+        "--omega", type=float, default=2 * math.pi * 22, help="rad/s (default 2*pi*22)"
+    )
+    parser.add_argument(
+        "--C-tau",
+        type=float,
+        default=0.0,
+        help="lugre only: bristle damping C_tau, N s/m (default 0); F_s = mu*N, K_tau = K_d",
+    )
+    rng = parser.add_mutually_exclusive_group()
+    rng.add_argument("--abar", type=float, nargs=2, metavar=("MIN", "MAX"), default=None)
+    rng.add_argument("--A", type=float, nargs=2, metavar=("MIN_m", "MAX_m"), default=None)
+    parser.add_argument("--n", type=int, default=100, help="number of amplitudes (default 100)")
+    parser.add_argument("--loop", default=None, help="CSV (t_s, u_m, f_N) to analyse and fit")
+    parser.add_argument(
+        "--fit-model",
+        choices=("steady", "history"),
+        default="steady",
+        help="fit the steady loop (default) or drive the element through the measured history",
+    )
+    parser.add_argument("--out", default="tribojax-out/hysteresis", help="output folder")
+    parser.add_argument("--force", action="store_true",
+                        help="replace an earlier result in --out (its files from an earlier run "
+                        "that this run does not write are removed)")  # fmt: skip
+
+
+def fit_arguments(parser) -> None:
+    parser.add_argument(
+        "file",
+        help="CSV: a slip run (time_s,stage_accel_m_s2,slip_m) or a loop "
+        "(time_s,displacement_m,force_N), each with its <stem>.json sidecar; a brfd JSON; an "
+        "EPOS export or a folder of EPOS steady-state exports (one friction curve)",
+    )
+    parser.add_argument("--out", default=None, help="output folder (default tribojax-out/fit-STEM)")
+    parser.add_argument(
+        "--alpha",
+        default=None,
+        help="slip runs: 'free' (default) to fit the bristle exponent α, or a fixed value",
+    )
+    parser.add_argument(
+        "--start",
+        nargs="+",
+        default=None,
+        metavar="NAME=VALUE",
+        help="start values, SI units: slip runs F_s, K_tau, C_tau, alpha; loops mu_N, K_d",
+    )
+    parser.add_argument(
+        "--element",
+        choices=("jenkins", "mindlin"),
+        default="jenkins",
+        help="loops: the hysteresis element (default jenkins)",
+    )
+    parser.add_argument(
+        "--model",
+        choices=("steady", "history", *ELEMENT_MODELS, "best"),
+        default=None,
+        help="loops: 'history' (default for a periodic loop: the loop model that discover also "
+        "fits) or 'steady' (wu2015's steady-loop formula) fit --element; "
+        "jenkins|mindlin|lugre|bouc_wen drive that element (+ force offset) through the measured "
+        "history, best: all four, lowest BIC (default for a non-periodic history); friction "
+        "curves: lugre (the steady law, default) or best",
+    )
+    parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
+                        help="the record's format (default: detected)")  # fmt: skip
+    parser.add_argument("--max-steps", type=int, default=None,
+                        help=f"LM step budget (default {MAX_STEPS} for slip runs and loops; "
+                        "friction curves: the steady-law fit's own budget)")  # fmt: skip
+    parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
+    add_decimation_arguments(parser)
+
+
+def discover_arguments(parser) -> None:
+    parser.add_argument("file", help="record (slip run or loop CSV, brfd JSON, friction curve or a "
+                        "folder of EPOS steady-state exports)")
+    parser.add_argument("--out", default="discovery-out", help="output folder (default "
+                        "discovery-out)")  # fmt: skip
+    parser.add_argument("--force", action="store_true", help="replace an existing discovery.json")
+    parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
+                        help="the record's format (default: detected)")  # fmt: skip
+    parser.add_argument("--max-effects", type=int, default=3, help="greedy rounds (default 3)")
+    add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
+
+
+def frf_arguments(parser) -> None:
+    parser.add_argument("config", help="TOML file: structure, contacts, excitation, harmonics")
+    parser.add_argument("--out", default="tribojax-out/frf", help="output folder")

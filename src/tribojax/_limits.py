@@ -1,0 +1,24 @@
+"""Names and budgets shared by the library and the command line's argument parser.
+
+This module imports nothing, so `tribojax --help` and argument errors are answered without
+importing JAX; each name's one home is here, and the modules that use it import it from here.
+"""
+
+RECORD_FORMATS = ("slip", "loop", "brfd", "epos_steady", "epos", "curve")
+"""The record formats `tribojax.read_record` reads (`format=`; detected when None)."""
+
+ROUGHNESS_METHODS = ("structure", "psd", "rms")
+"""Estimators of D and G from a topography (`tribojax.estimate_fractal`)."""
+
+ELEMENT_MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen")
+"""Friction elements a displacement history is fitted with (`tribojax.fit_history`)."""
+
+MAX_STEPS = 128
+"""Step budget of every record-model fit (accepted and rejected steps; one compile)."""
+
+# The reduced record's default size: fits and discovery resolve wang2022's slip dynamics (ring-
+# downs near 1 kHz over a 2.3 s cycle) with 20,000 samples (blocks of 0.12 ms, hω < 1).
+DECIMATION_MAX_SAMPLES = 20_000
+# Discovery's cost grows with the record (measured under load on 10^6 slip samples: 220 s and
+# 4.6 GiB reduced to 19,608 samples, 184 s and 1.9 GiB at 4,975); its benchmark record has 5,001.
+DISCOVER_MAX_SAMPLES = 5_000
