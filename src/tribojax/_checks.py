@@ -22,19 +22,32 @@ from ._precision import ensure_x64
 _ON_ERROR = "default"
 
 
+# What `failures_as_nan` swaps in equinox 0.13's error module: the mode its checks read when they
+# are traced, and its jitted check (whose trace cache could hand back a check traced earlier in
+# "raise" mode) for the plain function.
+_EQX_SWAP = (("EQX_ON_ERROR", "nan"),
+             ("branched_error_if_impl_jit", getattr(_eqx_errors, "branched_error_if_impl", None)))
+
+
 @contextlib.contextmanager
 def failures_as_nan():
     """Within this block, checks traced under jit return NaN on failure instead of raising: the
     library's own (`on_error="nan"`, a distinct trace) and those inside diffrax and lineax
-    (equinox's `EQX_ON_ERROR`, read when a check is traced; equinox 0.13). For programs whose
-    caller turns a non-finite result into a `RESULTS` value."""
+    (through equinox's error module, `_EQX_SWAP`; with another equinox that lacks those names
+    nothing is swapped and the programs just are not cached). For programs whose caller turns a
+    non-finite result into a `RESULTS` value."""
     global _ON_ERROR
-    before = _ON_ERROR, _eqx_errors.EQX_ON_ERROR
-    _ON_ERROR = _eqx_errors.EQX_ON_ERROR = "nan"
+    swap = [(k, v) for k, v in _EQX_SWAP if v is not None and hasattr(_eqx_errors, k)]
+    before = _ON_ERROR, {k: getattr(_eqx_errors, k) for k, _ in swap}
+    _ON_ERROR = "nan"
+    for k, v in swap:
+        setattr(_eqx_errors, k, v)
     try:
         yield
     finally:
-        _ON_ERROR, _eqx_errors.EQX_ON_ERROR = before
+        _ON_ERROR = before[0]
+        for k, v in before[1].items():
+            setattr(_eqx_errors, k, v)
 
 
 def _is_concrete(*xs) -> bool:

@@ -215,13 +215,18 @@ def _singular_directions(sv, vt, names) -> tuple:
     return tuple(out)
 
 
-@eqx.filter_jit
 def _solve(residual_fn, theta0, args, solver, max_steps, jac):
-    # jitted here so that a module-level `residual_fn` (hashed by identity) is compiled once and
-    # a repeated fit with new data in `args` runs warm; no host callback inside (cacheable)
+    # traced, lowered and compiled with failures as NaN: no host callback (cacheable)
     with failures_as_nan():
-        sol = optx.least_squares(residual_fn, solver, theta0, args, options=dict(jac=jac),
-                                 max_steps=max_steps, throw=False)  # fmt: skip
+        return _solve_jit(residual_fn, theta0, args, solver, max_steps, jac)
+
+
+@eqx.filter_jit
+def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac):
+    # jitted here so that a module-level `residual_fn` (hashed by identity) is compiled once and
+    # a repeated fit with new data in `args` runs warm
+    sol = optx.least_squares(residual_fn, solver, theta0, args, options=dict(jac=jac),
+                             max_steps=max_steps, throw=False)  # fmt: skip
     # a Gauss–Newton solver's state holds the residual and its linearisation at the returned
     # point: the statistics take them from there instead of evaluating the model again
     info = getattr(sol.state, "f_info", None)
@@ -231,17 +236,21 @@ def _solve(residual_fn, theta0, args, solver, max_steps, jac):
     return sol, final
 
 
-@eqx.filter_jit
 def value_and_jacobian(residual_fn, theta, args):
     """Residual and Jacobian of `residual_fn(θ, args)` at θ from one forward pass (jitted once
-    per `residual_fn` object and argument shapes: `least_squares_fit`'s statistics reuse it)."""
+    per `residual_fn` object and argument shapes: `least_squares_fit`'s statistics reuse it;
+    compiled with failures as NaN, like the solve)."""
+    with failures_as_nan():
+        return _value_and_jacobian_jit(residual_fn, theta, args)
 
+
+@eqx.filter_jit
+def _value_and_jacobian_jit(residual_fn, theta, args):
     def both(th):
         r = residual_fn(th, args)
         return r, r
 
-    with failures_as_nan():
-        J, r = jax.jacfwd(both, has_aux=True)(theta)
+    J, r = jax.jacfwd(both, has_aux=True)(theta)
     return r, J
 
 
