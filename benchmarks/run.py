@@ -298,6 +298,8 @@ def run(quick=False):
 
 
 def fmt_s(s):
+    if s is None:
+        return "-"
     if s < 1e-3:
         return f"{s * 1e6:.1f} us"
     if s < 1:
@@ -311,7 +313,8 @@ def print_table(results, total_s):
         met = {None: "-", True: "yes", False: "NO"}[r["meets_target"]]  # None: no target set
         print(
             f"{r['name']:34s} {fmt_s(r['tribojax_s']):>11s} {fmt_s(r['baseline_s']):>11s} "
-            f"{r['ratio']:9.3g}  {met}   ({r['baseline']})"
+            f"{'-' if r['ratio'] is None else format(r['ratio'], '9.3g'):>9s}  {met}   "
+            f"({r['baseline'] or 'no baseline'})"
         )
     for r in results:
         if "baseline_note" in r:
@@ -352,6 +355,9 @@ def main(argv=None):
     import real_data  # benchmarks/real_data.py (issue 15: history fits of a measured record)
 
     results += real_data.run(quick=args.quick)
+    import cold_start  # benchmarks/cold_start.py (issue 31: fresh processes, the cache, SciPy)
+
+    results += cold_start.run(quick=args.quick)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(results, indent=2) + "\n")
