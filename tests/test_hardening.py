@@ -181,6 +181,24 @@ def test_fit_start_from_the_command_line(tmp_path, capsys):
     assert not (tmp_path / "p").exists()
 
 
+@pytest.mark.parametrize("start", [["mu_N=882"], ["K_d=1"]])
+def test_a_start_the_data_cannot_inform_is_exit_1(tmp_path, capsys, start):
+    # issue 33 items 1 and 6: a start above every measured force (the element never slips: zero
+    # gradient in mu_N) or a K_d so soft that the element slips at once (no gradient in K_d)
+    # used to end as "converged, identified" with mu_N = 882 +- inf, or with exit 2 "mu is
+    # outside the allowed range" when the optimiser stepped out; now the stepped-out trial is a
+    # rejected step (failures as NaN inside the compiled fit) and the flat end is exit 1
+    src = _loop(tmp_path)
+    out = tmp_path / "o"
+    assert main(["fit", str(src), "--out", str(out), "--element", "mindlin", "--quiet",
+                 "--start", *start]) == 1  # fmt: skip
+    line = _one_error_line(capsys.readouterr().err, "fit")
+    assert "do not determine" in line and "--start" in line
+    assert "outside the allowed range" not in line
+    res = json.loads((out / "fit.json").read_text())  # the record of what happened stays
+    assert res["identified"] is False and res["unidentifiable"]
+
+
 def test_alpha_is_refused_for_loops(tmp_path, capsys):
     src = _loop(tmp_path)
     assert main(["fit", str(src), "--out", str(tmp_path / "o"), "--alpha", "1"]) == 2
