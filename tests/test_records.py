@@ -95,6 +95,10 @@ def _rows(i, text):
         (["0,0,0"], r"at least 2 data rows, got 1"),
         ([], r"no data rows"),
         (_rows(1, "0.1,inf,1e-9"), r"line 4: column 'stage_accel_m_s2' is inf"),
+        # issue 33 item 6: a sample scaled by 1e300 (LAPACK lines and "SVD did not converge"
+        # before) is refused with file, line, column and the plausible range
+        (_rows(2, "0.2,1,1e300"), r"line 5: slip_m = 1e\+300 m is outside the plausible range"),
+        (_rows(1, "0.1,2e5,1e-9"), r"line 4: stage_accel_m_s2 = 200000 m/s² is outside"),
     ],
 )
 def test_malformed_slip_csv_is_refused_with_file_and_line(tmp_path, rows, pattern):
@@ -190,6 +194,21 @@ def test_loop_file_round_trip_new_and_legacy(tmp_path):
     fit = tj.fit_loop(tj.read_loop(path), "mindlin")
     assert fit.converged
     assert np.mean(fit.residuals**2) == pytest.approx(1.0, abs=0.15)
+
+
+def test_implausible_loop_samples_name_file_line_and_column(tmp_path):
+    loop = _loop()
+    path = tmp_path / "big.csv"
+    tj.write_loop(loop, path)
+    lines = path.read_text().splitlines()
+    t, u, f = lines[5].split(",")
+    lines[5] = f"{t},{float(u) * 1e300 or 1e300},{f}"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(tj.DataFileError, match=r"big.csv, line 6: displacement_m = .* m is "
+                       r"outside the plausible range \[-1000, 1000\] m"):  # fmt: skip
+        tj.read_record(path)
+    with pytest.raises(ValueError, match=r"f\[2\] = 1e\+12 N is outside the plausible range"):
+        tj.HysteresisLoop(loop.t[:4], loop.u[:4], np.array([0.0, 1.0, 1e12, 0.0]))
 
 
 def test_bad_loop_sidecars(tmp_path):

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._limits import SAMPLE_LIMITS
 from .._tables import DataFileError, read_text
 
 
@@ -244,3 +245,15 @@ def csv_header(path) -> tuple[str, ...]:
         if text and not text.startswith("#"):
             return tuple(f.strip() for f in text.split(","))
     raise DataFileError(f"{path}: no header line")
+
+
+def implausible(x, name: str) -> tuple[int, str] | None:
+    """(index, message) of the first sample of `x` beyond `SAMPLE_LIMITS[name]`, else None
+    (`name`: the record's field, "u", "f", "slip" or "accel")."""
+    limit, unit = SAMPLE_LIMITS[name]
+    big = np.flatnonzero(np.abs(np.asarray(x, dtype=float)) > limit)
+    if not big.size:
+        return None
+    i = int(big[0])
+    return i, (f"{x[i]:g} {unit} is outside the plausible range [-{limit:g}, {limit:g}] {unit} "
+               "(SI units: a unit or export error?)")

@@ -24,6 +24,7 @@ from .._tables import DataFileError, read_table
 from ._files import (
     csv_header,
     data_line_number,
+    implausible,
     positive_or_none,
     read_sidecar,
     sidecar_text,
@@ -72,6 +73,9 @@ class HysteresisLoop(AbstractRecord):
             bad = np.flatnonzero(~np.isfinite(x))
             if bad.size:
                 raise ValueError(f"{self.source}: {name}[{bad[0]}] is {x[bad[0]]}")
+            far = implausible(x, name) if name != "t" else None
+            if far:
+                raise ValueError(f"{self.source}: {name}[{far[0]}] = {far[1]}")
         if not (len(self.t) == len(self.u) == len(self.f)):
             raise ValueError(f"{self.source}: t, u and f must have the same length")
         for name, unit in (("normal_load", "N"), ("frequency", "Hz"), ("noise_std", "N")):
@@ -141,6 +145,11 @@ def read_loop(path) -> HysteresisLoop:
     cols = LOOP_FILE_COLUMNS if new else LOOP_COLUMNS
     table = read_table(path, columns=cols)
     t, u, f = (table[c] for c in cols)
+    for column, name, x in ((cols[1], "u", u), (cols[2], "f", f)):
+        far = implausible(x, name)
+        if far:
+            lineno = data_line_number(path, far[0])
+            raise DataFileError(f"{path}, line {lineno}: {column} = {far[1]}")
     steps = np.flatnonzero(np.diff(t) <= 0)
     if steps.size:
         lineno = data_line_number(path, steps[0] + 1)

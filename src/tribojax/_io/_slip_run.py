@@ -28,7 +28,13 @@ from .._dynamics._profiles import AbstractProfile, MeasuredProfile, TrapezoidPro
 from .._dynamics._slip import simulate_slip
 from .._presets import WANG2022_RETICLE_MASS_KG
 from .._tables import DataFileError, read_table
-from ._files import data_line_number, positive_or_none, read_sidecar, write_record_files
+from ._files import (
+    data_line_number,
+    implausible,
+    positive_or_none,
+    read_sidecar,
+    write_record_files,
+)
 from ._record import AbstractRecord
 
 SLIP_COLUMNS = ("time_s", "stage_accel_m_s2", "slip_m")
@@ -83,6 +89,9 @@ class SlipRun(AbstractRecord):
             bad = np.flatnonzero(~np.isfinite(x))
             if bad.size:
                 raise ValueError(f"{src}: {name}[{bad[0]}] is {x[bad[0]]} (must be finite)")
+            far = implausible(x, name) if name != "t" else None
+            if far:
+                raise ValueError(f"{src}: {name}[{far[0]}] = {far[1]}")
             x.setflags(write=False)
             object.__setattr__(self, name, x)
         if not (len(self.t) == len(self.accel) == len(self.slip)):
@@ -152,6 +161,11 @@ def read_slip_run(path) -> SlipRun:
     _check_time(path, t, "time_s")
     if len(t) < 2:
         raise DataFileError(f"{path}: a slip run needs at least 2 data rows, got {len(t)}")
+    for column, name in (("stage_accel_m_s2", "accel"), ("slip_m", "slip")):
+        far = implausible(table[column], name)
+        if far:
+            lineno = data_line_number(path, far[0])
+            raise DataFileError(f"{path}, line {lineno}: {column} = {far[1]}")
     units = {"mass_kg": "kg", "normal_load_N": "N", "noise_std_m": "m"}
     side = read_sidecar(path, _SLIP_SIDECAR, units)
     return SlipRun(
