@@ -38,8 +38,9 @@ def slip_runs(draw):
     t = np.cumsum(steps) - steps[0]  # t[0] = 0, strictly increasing
     if np.any(np.diff(t) <= 0):
         t = np.arange(n) * 1e-3
-    accel = np.array(draw(st.lists(finite, min_size=n, max_size=n)))
-    slip = np.array(draw(st.lists(finite, min_size=n, max_size=n)))
+    # any float64 within the plausible ranges (SAMPLE_LIMITS: beyond them a record is refused)
+    accel = np.array(draw(st.lists(st.floats(-1e4, 1e4), min_size=n, max_size=n)))
+    slip = np.array(draw(st.lists(st.floats(-1.0, 1.0), min_size=n, max_size=n)))
     mass = draw(st.floats(1e-6, 1e6))
     noise = draw(st.none() | st.floats(1e-15, 1.0))
     return tj.SlipRun(t, accel, slip, mass=mass, noise_std=noise)
@@ -250,6 +251,42 @@ def test_cli_contact_never_tracebacks(D, G, load):
         assert code == 2, args
         (line,) = lines
         assert line.startswith("tribojax contact: error: ") and result is None, args
+
+
+@settings(max_examples=12, deadline=None)
+@given(mu=_number | st.floats(0.01, 1.0).map(repr), N=_number | st.floats(0.1, 100.0).map(repr),
+       K_d=_number | st.floats(1e3, 1e9).map(repr), omega=_number | st.floats(1.0, 1e3).map(repr),
+       abar=st.sampled_from([None, ("0.1", "3"), ("3", "0.1"), ("0", "2"), ("1e-300", "1e300")]))
+def test_cli_hysteresis_never_tracebacks(mu, N, K_d, omega, abar):  # fmt: skip
+    """issue 33: exit 0 with finite K̄ in [0, 1] and C̄ >= 0 for every amplitude, or exit 1/2 with
+    one line and nothing written; never a traceback, never a NaN with exit 0."""
+    with tempfile.TemporaryDirectory() as tmp, _Capture() as cap:
+        out = Path(tmp) / "h"
+        argv = ["hysteresis", "--element", "jenkins", "--mu", mu, "--N", N, "--K-d", K_d,
+                "--omega", omega, "--n", "3", "--out", str(out)]  # fmt: skip
+        argv += ["--abar", *abar] if abar else []
+        try:
+            code = main(argv)
+        except SystemExit as exit_:  # argparse refuses a value that is not a float
+            code = ("argparse", exit_.code)
+        table = None
+        if (out / "hysteresis.csv").exists():  # a comment line, the header, the rows
+            rows = [ln for ln in (out / "hysteresis.csv").read_text().splitlines()
+                    if not ln.startswith("#")][1:]  # fmt: skip
+            table = np.array([[float(v) for v in ln.split(",")] for ln in rows])
+    args = (argv, code, cap.err)
+    if isinstance(code, tuple):
+        assert code[1] == 2 and "invalid float value" in cap.err and table is None, args
+        return
+    assert "Traceback" not in cap.err, args
+    if code == 0:
+        assert table is not None and np.all(np.isfinite(table)), args
+        K_bar, C_bar = table[:, 4], table[:, 5]
+        assert np.all((K_bar >= -1e-9) & (K_bar <= 1 + 1e-9)) and np.all(C_bar >= -1e-12), args
+    else:
+        assert code == 2 and table is None, args
+        (line,) = cap.err.strip().splitlines()
+        assert line.startswith("tribojax hysteresis: error: "), args
 
 
 def test_cli_contact_huge_load_is_not_a_success(tmp_path, capsys):

@@ -24,10 +24,13 @@ from .._friction._lugre import PreSlipLuGre
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._files import write_text_atomic
 from .._io._loop import read_loop
+from .._limits import SAMPLE_LIMITS
 from .._model import analyse_loop, fit_loop
 from .._plot import pyplot, save_figure
 from .._reproduce._wu2015 import wu2015_eq5_stiffness
 from ._common import claim_outputs, error, write_json_atomic
+
+A_MIN_M = 1e-15  # the smallest amplitude worth a harmonic balance (a femtometre)
 
 
 def run_hysteresis(args) -> int:
@@ -60,7 +63,13 @@ def run_hysteresis(args) -> int:
         A0 = float(element.A0)
     lo, hi = args.A if args.A is not None else [a * A0 for a in (args.abar or (0.05, 4.5))]
     if not 0 < lo < hi < math.inf:
-        raise ValueError(f"amplitude range ({lo:g}, {hi:g}) m must satisfy 0 < min < max < inf")
+        return error(f"amplitude range ({lo:g}, {hi:g}) m must satisfy 0 < min < max < inf")
+    if not (A_MIN_M <= lo and hi <= SAMPLE_LIMITS["u"][0]):  # femtometres to a kilometre
+        scale = "" if args.A is not None else (
+            f" (= --abar x A0, A0 = {A0:.3g} m from mu = {args.mu:g}, N = {args.N:g} N, "
+            f"K_d = {K_d:.3g} N/m)")  # fmt: skip
+        return error(f"amplitude range ({lo:.3g}, {hi:.3g}) m{scale} is outside the physical "
+                     f"range [{A_MIN_M:g}, {SAMPLE_LIMITS['u'][0]:g}] m")  # fmt: skip
     outputs = [out / "hysteresis.csv", out / "hysteresis.png", out / "loop_fit.json"]
     targets = outputs[:3] if loop_result is not None else outputs[:2]
     earlier = [p for p in outputs if p.exists()]
