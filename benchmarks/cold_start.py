@@ -179,21 +179,25 @@ def run(quick=False, workdir=None):
                                  str(record.with_suffix(".json"))], env, work)  # fmt: skip
     scipy = _last(scipy_out, "SCIPY")
     commands = [("fit", ["fit", str(record), "--alpha", "1", "--quiet", "--force",
-                         "--out", str(work / "fit")], 3.0, 10.0)]  # fmt: skip
+                         "--out", str(work / "fit-{state}")], 3.0, 10.0)]  # fmt: skip
     if not quick:
         commands += [
             ("discover", ["discover", str(record), "--quiet", "--force",
-                          "--out", str(work / "discover")], 6.0, None),  # fmt: skip
-            ("frf", ["frf", str(work / "frf.toml"), "--quiet", "--out", str(work / "frf")],
+                          "--out", str(work / "discover-{state}")], 6.0, None),  # fmt: skip
+            ("frf", ["frf", str(work / "frf.toml"), "--quiet", "--out", str(work / "frf-{state}")],
              8.0, None),
-            ("reproduce", ["reproduce", "--quiet", "--out", str(work / "reproduce")], 20.0,
+            ("reproduce", ["reproduce", "--quiet", "--out", str(work / "reproduce-{state}")], 20.0,
              None),
         ]
     for name, argv, warm_target, cold_target in commands:
         runs = {}
         for state in ("empty_cache", "warm_cache"):
-            wall, proc = _fresh([sys.executable, "-c", _PROBE, json.dumps(argv)], env, work)
+            argv_state = [a.replace("{state}", state) for a in argv]
+            wall, proc = _fresh([sys.executable, "-c", _PROBE, json.dumps(argv_state)], env, work)
             split = _last(proc, "SPLIT")
+            if split["exit"] != 0:
+                raise RuntimeError(f"tribojax {' '.join(argv_state)} exited {split['exit']}:\n"
+                                   f"{proc.stderr[-2000:]}")
             split["end_to_end_s"] = wall
             runs[state] = split
         cold, warm = runs["empty_cache"]["end_to_end_s"], runs["warm_cache"]["end_to_end_s"]
@@ -205,7 +209,7 @@ def run(quick=False, workdir=None):
             entry.update(baseline="scipy least_squares + solve_ivp LSODA (fresh process)",
                          baseline_s=scipy_s, ratio=scipy_s / warm,
                          ratio_first_run=scipy_s / cold, scipy=scipy)  # fmt: skip
-            fit = json.loads((work / "fit" / "fit.json").read_text())
+            fit = json.loads((work / "fit-warm_cache" / "fit.json").read_text())
             entry["tribojax_parameters"] = fit.get("parameters")
         out.append(entry)
     return out
