@@ -7,6 +7,7 @@ Every CLI error is one line `tribojax <cmd>: error: ...` with exit status 2 (bad
 import dataclasses
 import json
 import os
+import re
 import stat
 from pathlib import Path
 
@@ -197,6 +198,22 @@ def test_a_start_the_data_cannot_inform_is_exit_1(tmp_path, capsys, start):
     assert "outside the allowed range" not in line
     res = json.loads((out / "fit.json").read_text())  # the record of what happened stays
     assert res["identified"] is False and res["unidentifiable"]
+
+
+@pytest.mark.parametrize("option, pattern", [
+    (["--max-steps", "0"], r"--max-steps = 0 must be at least 1"),
+    (["--decimate", "0"], r"--decimate = 0 is outside the allowed range \[1, inf\)"),
+    (["--decimate", "x"], r"--decimate = 'x': expected auto, off or an integer"),
+    (["--max-samples", "3"], r"--max-samples = 3 is outside the allowed range \[4, inf\)"),
+    (["--start", "mu_N=nan"], r"mu_N"),
+])  # fmt: skip
+def test_fit_numeric_options_are_refused_before_the_fit(tmp_path, capsys, option, pattern):
+    # issue 33: every numeric option of `fit` out of range is exit 2 with one line, no output
+    src = _loop(tmp_path)
+    out = tmp_path / "o"
+    assert main(["fit", str(src), "--out", str(out), "--quiet", *option]) == 2
+    assert re.search(pattern, _one_error_line(capsys.readouterr().err, "fit"))
+    assert not out.exists() or not any(out.iterdir())
 
 
 def test_alpha_is_refused_for_loops(tmp_path, capsys):
