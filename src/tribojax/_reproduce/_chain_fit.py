@@ -38,6 +38,7 @@ that start converges to the same optimum as the others.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import sys
 import time
@@ -133,29 +134,30 @@ def _announce(phys):
     _PROGRESS["last"] = phys.tolist()  # the trial point, for messages if the chain raises
 
 
-def _residuals(theta, args, adjoint):
+def _residuals(theta, args, adjoint, shown=False):
     # (model − y)/σ·√w per cell (σ = y: model/y − 1, the default), or (ln|model| − ln|y|)/σ·√w
     # in log form; the robust fit passes its noise model's σ, form and IRLS weights w (one
     # compiled solve serves all)
     theta_full0, idx, mu_min_, y, sigma, sqrt_w, log_form, loads = args
     phys = to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_min_)
-    jax.debug.callback(_announce, jax.lax.stop_gradient(phys))
+    if shown:  # host callbacks: a program holding them is not kept in the compilation cache
+        jax.debug.callback(_announce, jax.lax.stop_gradient(phys))
     slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
     safe = jnp.where(slips == 0, 1.0, slips)  # double-where: ln|0| is not used
     d = jnp.where(log_form > 0.5, jnp.log(jnp.abs(safe)) - jnp.log(jnp.abs(y)), slips - y)
     r = jnp.where(ok[:, None], sqrt_w * d / sigma, FAILED_RESIDUAL).ravel()
-    jax.debug.callback(_report, jax.lax.stop_gradient(r @ r), jax.lax.stop_gradient(phys))
+    if shown:
+        jax.debug.callback(_report, jax.lax.stop_gradient(r @ r), jax.lax.stop_gradient(phys))
     return r
 
 
-def _residuals_fwd(theta, args):
-    """Relative residuals, forward-differentiable (diffrax ForwardMode)."""
-    return _residuals(theta, args, dfx.ForwardMode())
-
-
-def _residuals_bwd(theta, args):
-    """Relative residuals, reverse-differentiable (checkpointed adjoint)."""
-    return _residuals(theta, args, dfx.RecursiveCheckpointAdjoint())
+# The residual functions by (jac, progress shown): module-level objects, so each compiles once;
+# the quiet ones hold no host callback and are kept in the persistent compilation cache.
+_RESIDUALS = {
+    (jac, shown): functools.partial(_residuals, adjoint=adjoint, shown=shown)
+    for jac, adjoint in (("fwd", dfx.ForwardMode()), ("bwd", dfx.RecursiveCheckpointAdjoint()))
+    for shown in (False, True)
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -345,7 +347,7 @@ def fit_measured_slips(
     idx = jnp.array([PARAMETERS.index(n) for n in free])
     args = (theta_full0, idx, jnp.asarray(mu_lo), jnp.asarray(target), jnp.asarray(sigma),
             jnp.asarray(np.sqrt(weights)), jnp.asarray(float(log_residuals)), loads)  # fmt: skip
-    residuals = _residuals_fwd if jac == "fwd" else _residuals_bwd
+    residuals = _RESIDUALS[("fwd" if jac == "fwd" else "bwd", bool(progress))]
 
     def transform(theta):
         return to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo)[idx]
@@ -357,7 +359,8 @@ def fit_measured_slips(
         fit = least_squares_fit(
             residuals, theta_full0[idx], args, names=free, transform=transform, rtol=rtol,
             atol=atol, max_steps=max_steps, jac=jac,
-            solver=LevenbergMarquardt.noise_floor(float(rtol), float(atol)),
+            solver=LevenbergMarquardt.noise_floor(float(rtol), float(atol),
+                                                  report=bool(progress)),
             optimum_tol=GN_STEP_TOL,
         )  # fmt: skip
     except RuntimeError as err:  # equinox runtime errors inside the compiled fit
