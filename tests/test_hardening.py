@@ -182,7 +182,7 @@ def test_fit_start_from_the_command_line(tmp_path, capsys):
     assert not (tmp_path / "p").exists()
 
 
-@pytest.mark.parametrize("start", [["mu_N=882"], ["K_d=1"]])
+@pytest.mark.parametrize("start", [["mu_N=882"], ["K_d=1"], ["mu_N=1e300"]])
 def test_a_start_the_data_cannot_inform_is_exit_1(tmp_path, capsys, start):
     # issue 33 items 1 and 6: a start above every measured force (the element never slips: zero
     # gradient in mu_N) or a K_d so soft that the element slips at once (no gradient in K_d)
@@ -193,8 +193,10 @@ def test_a_start_the_data_cannot_inform_is_exit_1(tmp_path, capsys, start):
     out = tmp_path / "o"
     assert main(["fit", str(src), "--out", str(out), "--element", "mindlin", "--quiet",
                  "--start", *start]) == 1  # fmt: skip
-    line = _one_error_line(capsys.readouterr().err, "fit")
+    captured = capsys.readouterr()
+    line = _one_error_line(captured.err, "fit")
     assert "do not determine" in line and "--start" in line
+    assert "± inf" in captured.out  # the undetermined parameter is not printed as a result
     assert "outside the allowed range" not in line
     res = json.loads((out / "fit.json").read_text())  # the record of what happened stays
     assert res["identified"] is False and res["unidentifiable"]
@@ -206,6 +208,7 @@ def test_a_start_the_data_cannot_inform_is_exit_1(tmp_path, capsys, start):
     (["--decimate", "x"], r"--decimate = 'x': expected auto, off or an integer"),
     (["--max-samples", "3"], r"--max-samples = 3 is outside the allowed range \[4, inf\)"),
     (["--start", "mu_N=nan"], r"mu_N"),
+    (["--start", "K_d=inf"], r"--start 'K_d=inf': the value must be a finite number"),
 ])  # fmt: skip
 def test_fit_numeric_options_are_refused_before_the_fit(tmp_path, capsys, option, pattern):
     # issue 33: every numeric option of `fit` out of range is exit 2 with one line, no output

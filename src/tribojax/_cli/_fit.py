@@ -17,6 +17,7 @@ exists or would overwrite the input).
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
 
@@ -69,9 +70,11 @@ def run_fit(args) -> int:
         drew = _plot(curves, result, out / "fit.png")
     fit = result
     print(f"{result['kind']} {path}: {result['n_data']} samples, fitted {', '.join(fit['fitted'])}")
+    flat = {k for d in fit.get("unidentifiable", []) for k, c in d["direction"].items()
+            if abs(c) > 1e-3}  # fmt: skip
     for name in fit["fitted"]:
         v, s = fit["parameters"][name], fit["std_errors"][name]
-        print(f"  {name:6s} = {v:.6g} ± {s:.2g}")
+        print(f"  {name:6s} = {v:.6g} ± {math.inf if name in flat else s:.2g}")
     unit = result["residual_unit"]
     print(f"  rms residual {result['rms_residual']:.4g} {unit}; converged: {fit['converged']} "
           f"({fit['steps']} steps, {result['wall_time_s']:.1f} s)")  # fmt: skip
@@ -103,6 +106,8 @@ def _parse_start(items) -> dict:
             start[name.strip()] = float(value)
         except ValueError:
             sep = ""
+        if sep and not math.isfinite(start[name.strip()]):
+            raise CommandError(f"--start {item!r}: the value must be a finite number")
         if not sep or not name.strip():
             raise CommandError(f"--start {item!r}: expected NAME=VALUE with a number")
     return start

@@ -190,7 +190,8 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
                           "the model is not finite at the start values")
         # a failed trial point costs more than the start (100x)
         bad = max(FAILED_RESIDUAL, 10.0 * float(np.max(np.abs(r0))))
-        norms = np.linalg.norm(J0, axis=0)
+        with np.errstate(over="ignore"):  # an absurd start (a value of 1e300): inf, d = 0
+            norms = np.linalg.norm(J0, axis=0)
         d = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
         new = (jnp.asarray(bad, dtype=jnp.float64), jnp.asarray(d, dtype=jnp.float64))
         args = eqx.tree_at(lambda t: (t.bad, t.d), args, new)
