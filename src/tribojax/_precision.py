@@ -11,7 +11,8 @@ import jax
 
 from ._cache import enable_cache
 
-jax.config.update("jax_enable_x64", True)
+# x64 was switched on by `import tribojax` (tribojax/__init__.py); not again here, so that a user
+# who switched it off after that import is refused by `ensure_x64`, not silently overruled
 CACHE_DIR = enable_cache(jax.config)  # the persistent compilation cache (`tribojax._cache`)
 
 
