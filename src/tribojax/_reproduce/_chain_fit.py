@@ -172,7 +172,9 @@ class ChainFit:
         scaled_singular_values, scaled_right_vectors: SVD of the Jacobian of the residuals with
             respect to log p (elasticities); rows of the right vectors are parameter combinations,
             largest singular value first.
-        wall_s: wall time of the fit (s). evaluations: residual evaluations (incl. Jacobians).
+        wall_s: wall time of the fit (s). evaluations: residual evaluations (incl. Jacobians),
+            counted when progress is shown; else LM steps + 1 (one evaluation per trial point:
+            the count itself is a host callback, which would keep the fit out of the cache).
         start: the physical start.
         gauss_newton_step: the Gauss–Newton step left at the end, max |δp|/std error; the fit
             counts as converged only when LM stopped and this is below `GN_STEP_TOL`.
@@ -371,7 +373,7 @@ def fit_measured_slips(
             "(a runtime check inside the chain failed at this trial point; try another start)"
         ) from err
     wall = time.perf_counter() - t0
-    evaluations = _PROGRESS["n"]
+    evaluations = _PROGRESS["n"] if progress else fit.steps + 1
     _PROGRESS["on"] = False
     theta = jnp.asarray(fit.theta)
     phys = np.asarray(to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo))
