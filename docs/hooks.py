@@ -174,7 +174,10 @@ def notebooks() -> list[Path]:
 def reexports(init: Path) -> list[tuple[str, str]]:
     """(public name, home module relative to the package) of each `from .m import X as X`."""
     out = []
-    for node in ast.parse(init.read_text()).body:
+    body = []
+    for node in ast.parse(init.read_text()).body:  # top level and `if TYPE_CHECKING:` blocks
+        body += node.body if isinstance(node, ast.If) else [node]
+    for node in body:
         if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module:
             for alias in node.names:
                 name = alias.asname or alias.name

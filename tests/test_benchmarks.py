@@ -51,5 +51,6 @@ def test_cold_start_probe_splits_a_command(tmp_path):
     split = cold._last(out, "SPLIT")
     assert split["exit"] == 0, out.stderr[-2000:]
     parts = ("import_s", "trace_s", "lower_s", "compile_s")
-    assert all(split[k] >= 0 for k in parts) and split["programs"] > 0
-    assert sum(split[k] for k in parts) <= split["total_s"] + 1e-6
+    assert all(0 <= split[k] <= split["total_s"] for k in parts) and split["programs"] > 0
+    # start-up ends with the first traced program, so it overlaps the trace a little
+    assert split["import_s"] + split["lower_s"] + split["compile_s"] <= split["total_s"] + 1e-6

@@ -208,12 +208,12 @@ def test_fit_shares_one_compiled_solve_across_effects():
     base = _record("tone")
     y = np.asarray(base.y)
     st = fit_model(base, (), base.start(), y, 0.005)
-    size = _engine._solve._cached._cache_size()
+    size = _engine._solve_jit._cached._cache_size()
     for designs in ([Ramp().designs(base)[0]], [Bump().designs(base)[0], Tone().designs(base)[1]]):
         th = np.concatenate([st.theta, np.zeros(sum(d.k for d in designs))])
         fit = fit_model(base, tuple(designs), th, y, 0.005)
         assert fit.converged and fit.theta.size == 2 + sum(d.k for d in designs)
-    assert _engine._solve._cached._cache_size() == size
+    assert _engine._solve_jit._cached._cache_size() == size
 
 
 def test_undetermined_parameter_gives_infinite_not_nan_std_error():

@@ -15,39 +15,50 @@ import numpy as np
 
 from ._precision import ensure_x64
 
-# How a traced check fails: "default" follows EQX_ON_ERROR (a host callback that raises);
-# "nan" makes the checked value NaN instead. The fit engine traces its programs with "nan" so
-# that they hold no host callback (JAX's persistent cache skips such programs, jax 0.10) and a
-# parameter the optimiser steps out of range is a rejected step, not an exception.
-_ON_ERROR = "default"
+# Failures as values inside the fit engine's programs. A JAX trace-context state (part of every
+# jit cache key, so a program or inner jitted function traced in the mode is never reused outside
+# it, and thread-local): while it is on, checks traced under jit make the checked value NaN
+# instead of adding a host callback that raises. The fit engine compiles its programs in this
+# mode, so they hold no host callback (JAX 0.10's persistent cache skips those) and a parameter
+# the optimiser steps out of range is a rejected step. It reaches the checks inside diffrax and
+# lineax through equinox's jitted check (`_eqx_errors.branched_error_if_impl_jit`), wrapped once
+# here to pass `on_error="nan"` while the state is on. Internal APIs of jax 0.10 and equinox
+# 0.13: if either is missing, the mode is off (programs just are not cached).
+try:
+    from jax._src.config import bool_state as _bool_state
+
+    _NAN_MODE = _bool_state("tribojax_failures_as_nan", False,
+                            "tribojax: checks traced under jit give NaN instead of raising",
+                            include_in_jit_key=True, include_in_trace_context=True)  # fmt: skip
+    _EQX_JIT_CHECK = _eqx_errors.branched_error_if_impl_jit
+except (ImportError, AttributeError, TypeError):  # another jax or equinox: no NaN mode
+    _NAN_MODE = None
 
 
-# What `failures_as_nan` swaps in equinox 0.13's error module: the mode its checks read when they
-# are traced, and its jitted check (whose trace cache could hand back a check traced earlier in
-# "raise" mode) for the plain function.
-_EQX_SWAP = (("EQX_ON_ERROR", "nan"),
-             ("branched_error_if_impl_jit", getattr(_eqx_errors, "branched_error_if_impl", None)))
+if _NAN_MODE is not None:
+
+    def _eqx_check(x, pred, index, msgs, *, on_error):
+        if on_error == "default" and _NAN_MODE.value:
+            on_error = "nan"
+        return _EQX_JIT_CHECK(x, pred, index, msgs, on_error=on_error)
+
+    _eqx_errors.branched_error_if_impl_jit = _eqx_check
+
+
+def _on_error() -> str:
+    return "nan" if _NAN_MODE is not None and _NAN_MODE.value else "default"
 
 
 @contextlib.contextmanager
 def failures_as_nan():
-    """Within this block, checks traced under jit return NaN on failure instead of raising: the
-    library's own (`on_error="nan"`, a distinct trace) and those inside diffrax and lineax
-    (through equinox's error module, `_EQX_SWAP`; with another equinox that lacks those names
-    nothing is swapped and the programs just are not cached). For programs whose caller turns a
-    non-finite result into a `RESULTS` value."""
-    global _ON_ERROR
-    swap = [(k, v) for k, v in _EQX_SWAP if v is not None and hasattr(_eqx_errors, k)]
-    before = _ON_ERROR, {k: getattr(_eqx_errors, k) for k, _ in swap}
-    _ON_ERROR = "nan"
-    for k, v in swap:
-        setattr(_eqx_errors, k, v)
-    try:
+    """Within this block (this thread), checks traced under jit return NaN on failure instead of
+    raising: tribojax's own and those inside diffrax and lineax. For programs whose caller turns
+    a non-finite result into a `RESULTS` value (the fit engine)."""
+    if _NAN_MODE is None:
         yield
-    finally:
-        _ON_ERROR = before[0]
-        for k, v in before[1].items():
-            setattr(_eqx_errors, k, v)
+        return
+    with _NAN_MODE(True):
+        yield
 
 
 def _is_concrete(*xs) -> bool:
@@ -94,7 +105,7 @@ def check_range(x, name: str, lo=None, hi=None, *, lo_open=True, hi_open=True, u
             raise ValueError(f"{name} = {value:g}{unit_s} is outside the allowed range {rng}")
         return x
     message = f"{name} is outside the allowed range {rng}{unit_s} (or NaN)"
-    return eqx.error_if(x, bad, message, on_error=_ON_ERROR)
+    return eqx.error_if(x, bad, message, on_error=_on_error())
 
 
 def fail_if(x, bad, message: str):
@@ -106,7 +117,7 @@ def fail_if(x, bad, message: str):
         if np.asarray(bad).any():
             raise ValueError(message)
         return x
-    return eqx.error_if(x, bad, message, on_error=_ON_ERROR)
+    return eqx.error_if(x, bad, message, on_error=_on_error())
 
 
 def runtime_message(exc: BaseException) -> str:
