@@ -96,6 +96,11 @@ def _scan():
     for mod, path in MODULES.items():
         tree = ast.parse(path.read_text(), filename=str(path))
         top = {id(node) for node in tree.body}
+        # the imports of an `if TYPE_CHECKING:` block at module level are declarations (never
+        # run): tribojax/__init__.py's table of public names
+        for node in tree.body:
+            if isinstance(node, ast.If) and getattr(node.test, "id", None) == "TYPE_CHECKING":
+                top |= {id(child) for child in node.body}
         is_package = path.name == "__init__.py"
         for node in ast.walk(tree):
             if isinstance(node, ast.Import):
