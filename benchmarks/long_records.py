@@ -57,7 +57,9 @@ def run_cli(args: list[str], limit: float = TIME_LIMIT_S) -> dict:
     """Run `tribojax ARGS` in a fresh process: wall time, its peak RSS (GiB), exit status."""
     code = ("import atexit, resource, sys; atexit.register(lambda: print('PEAK_RSS_KB', "
             "resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)); "
-            "from tribojax._cli import main; sys.exit(main())")  # fmt: skip
+            "from importlib.metadata import entry_points; "
+            "(script,) = entry_points(group='console_scripts', name='tribojax'); "
+            "sys.exit(script.load()())")  # fmt: skip
     peak = float("nan")
     t0 = time.perf_counter()
     try:
