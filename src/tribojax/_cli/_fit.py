@@ -88,10 +88,9 @@ def run_fit(args) -> int:
         warn(text)
     if not fit["converged"]:
         return error(f"the fit did not converge: {fit['message']}", status=FAILED)
-    if fit.get("unidentifiable"):  # a flat direction: the value printed is not a result
-        names = sorted({k for d in fit["unidentifiable"] for k, v in d["direction"].items()
-                        if abs(v) > 1e-3})  # fmt: skip
-        return error(f"the fit stopped where the data do not determine {', '.join(names)} (the "
+    if flat:  # a flat direction: the value printed is not a result
+        which = ", ".join(sorted(flat))
+        return error(f"the fit stopped where the data do not determine {which} (the "
                      "model does not respond to it there, e.g. an element that never slips): "
                      "not a result; give another --start", status=FAILED)  # fmt: skip
     return 0
