@@ -79,9 +79,10 @@ API_PAGES = [
     (
         "fit",
         "Fitting and sensitivity",
-        ("_fit", "_model", "_sensitivity"),
+        ("_fit", "_model", "_predict", "_sensitivity"),
         "The one least-squares engine, the record models that fit, predict and discover share "
-        "(slip runs, loops), the fits built on them, and sensitivities.",
+        "(slip runs, loops), the fits built on them, fitted models saved, loaded and evaluated "
+        "on other records (`load_model`, `predict`), and sensitivities.",
     ),
     (
         "reproduce",

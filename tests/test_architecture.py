@@ -45,7 +45,8 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 # - fits: the one least-squares engine and the fits of records, record models (`_model`);
 # - record reduction (`_decimate`), which states its noise with the fit's noise model;
 # - paper studies: the reproduced tables and the fits of wang2022's measured slips (`_reproduce`);
-# - discovery; the public re-exports (tribojax/__init__.py); the command line, which nothing
+# - discovery; prediction with saved models (`_predict`: rebuilds a model with its discovered
+#   effects); the public re-exports (tribojax/__init__.py); the command line, which nothing
 #   else imports.
 LAYERS = (
     ("foundation", {"_precision", "_cache", "_checks", "_results", "_plot", "_tables", "_presets",
@@ -58,6 +59,7 @@ LAYERS = (
     ("record reduction", {"_decimate"}),
     ("paper studies", {"_reproduce"}),
     ("discovery", {"discovery"}),
+    ("prediction", {"_predict"}),
     ("public API", {""}),
     ("command line", {"_cli"}),
 )

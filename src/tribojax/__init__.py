@@ -138,12 +138,18 @@ if TYPE_CHECKING:
     from ._io._slip_run import simulate_run as simulate_run
     from ._io._slip_run import synthetic_slip_run as synthetic_slip_run
     from ._io._slip_run import write_slip_run as write_slip_run
+    from ._model import FittedModel as FittedModel
     from ._model import LoopAnalysis as LoopAnalysis
+    from ._model import SavedEffect as SavedEffect
     from ._model import analyse_loop as analyse_loop
     from ._model import fit_loop as fit_loop
     from ._model import fit_slip_run as fit_slip_run
     from ._model import loop_residuals as loop_residuals
     from ._model import slip_run_start as slip_run_start
+    from ._predict import Prediction as Prediction
+    from ._predict import fitted_model as fitted_model
+    from ._predict import load_model as load_model
+    from ._predict import predict as predict
     from ._presets import CHAIN_DEFAULTS as CHAIN_DEFAULTS
     from ._presets import WANG2022_A_MAX as WANG2022_A_MAX
     from ._presets import WANG2022_CALIBRATED as WANG2022_CALIBRATED

@@ -162,6 +162,18 @@ def discover_arguments(parser) -> None:
     add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
 
 
+def predict_arguments(parser) -> None:
+    parser.add_argument("model", help="fit.json or discovery.json (its fitted_model), or a saved "
+                        "model")  # fmt: skip
+    parser.add_argument("file", help="the record to predict (any format `fit` reads)")
+    parser.add_argument("--out", default=None,
+                        help="output folder (default tribojax-out/predict-STEM)")  # fmt: skip
+    parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
+                        help="the record's format (default: detected)")  # fmt: skip
+    parser.add_argument("--force", action="store_true",
+                        help="replace an existing DIR/prediction.json")  # fmt: skip
+
+
 def frf_arguments(parser) -> None:
     parser.add_argument("config", help="TOML file: structure, contacts, excitation, harmonics")
     parser.add_argument("--out", default="tribojax-out/frf", help="output folder")

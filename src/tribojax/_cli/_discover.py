@@ -6,7 +6,7 @@ to the loop baseline (`tribojax.discovery.loop_baseline`); a steady friction cur
 steady-state exports, or a curve CSV) to the Coulomb + viscous curve baseline
 (`tribojax.discovery.curve_baseline`); the format is detected, or named by `--format`. Writes
 DIR/discovery.json (keys: effect, verdict, effects, excess_rmse_before, excess_rmse_after, misfit,
-baseline_rmse, final_rmse, regions, candidates, ...)
+baseline_rmse, final_rmse, regions, candidates, fitted_model (what `tribojax predict` takes), ...)
 and DIR/discovery.png, and prints a summary. A long record is first reduced to at most
 `--max-samples` samples (default 5,000) by block local quadratics (`tribojax.decimate_record`;
 "decimation" in discovery.json says how, `--decimate off` keeps every sample); a loop of many
@@ -87,6 +87,8 @@ def run_discover(args, out=None, err=None) -> int:
             raise ValueError(f"{src}: {exc}") from exc
         data = report.as_dict()
         data["source"] = str(src)
+        if data["fitted_model"] is not None:
+            data["fitted_model"]["source"] = str(src)
         data["decimation"] = reduction.as_dict() if reduction else None
         write_json_atomic(target, data, exclusive=not args.force)
         drew = plot(report, record, figure)

@@ -9,7 +9,8 @@ The record type comes from the file (`tribojax.read_record`: CSV header, brfd JS
 or a folder of them) or `--format`; measured records are fitted by `_fit_real`. Writes DIR/fit.json
 (parameters, standard errors, correlation, converged, steps, rms residual, number of data, what was
 fitted, the source file; "decimation": how a long record was reduced before the fit;
-"full_record": the fitted model's residuals on every original sample) and DIR/fit.png (data and
+"full_record": the fitted model's residuals on every original sample; "fitted_model": the model
+as `tribojax predict` takes it) and DIR/fit.png (data and
 model, residuals). Exit status: 0 converged, 1 not converged (fit.json still written, with
 "converged": false), 2 bad input (malformed file, fewer data than parameters, an output that
 exists or would overwrite the input).
@@ -28,6 +29,7 @@ from .._io._records import read_record
 from .._limits import MAX_STEPS
 from .._model import evaluate, fit_loop, fit_slip_run, loop_residuals, slip_baseline
 from .._plot import pyplot, save_figure
+from .._predict import SAVED_KEY, fitted_model
 from ._common import (
     FAILED,
     CommandError,
@@ -218,6 +220,7 @@ def _fit_slip(run, args, start, reduction, note=None):
     d["model"] = "PreSlipLuGre (wang2022 Eq 27), slip at every sample"
     d["nrmse"] = nrmse(resid, run.slip)
     d["mass_kg"] = run.mass
+    d[SAVED_KEY] = fitted_model(fit, str(run.source)).as_dict() if fit.converged else None
     curves = dict(x=run.t, data=run.slip, model=run.slip + resid, xlabel="t (s)",
                   ylabel="slip Δx (m)", resid_x=run.t, resid=resid)  # fmt: skip
     return d, curves
@@ -248,6 +251,8 @@ def _fit_loop(loop, args, start, reduction, note=None):
     d["normal_load_N"], d["frequency_Hz"] = loop.normal_load, loop.frequency
     if loop.normal_load is not None:
         d["mu"] = float(fit.values[0] / loop.normal_load)
+    if fit.model is not None and fit.converged:  # the loop model (not the steady formula)
+        d[SAVED_KEY] = fitted_model(fit, str(loop.source)).as_dict()
     curves = dict(x=loop.u[-m:], data=loop.f[-m:], model=loop.f[-m:] + resid,
                   xlabel="displacement u (m)", ylabel="force f (N)", resid_x=loop.t[-m:],
                   resid=resid)  # fmt: skip

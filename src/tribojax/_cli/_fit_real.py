@@ -19,6 +19,7 @@ from .._fit._measures import bic, nrmse, rms
 from .._io._curve import FrictionCurve
 from .._limits import ELEMENT_MODELS as ELEMENT_MODELS
 from .._limits import MAX_STEPS
+from .._predict import SAVED_KEY, fitted_model
 from ._common import CommandError
 
 
@@ -65,6 +66,7 @@ def fit_history_record(loop, model: str, max_steps: int | None, start: dict):
     d = fit_summary(h.fit, loop, n, resid, "N", sigma, "estimated from the residuals")
     d.update(model=best, nrmse=h.nrmse, route="history", bic=scores[best],
              normal_load_N=loop.normal_load, frequency_Hz=loop.frequency)  # fmt: skip
+    d[SAVED_KEY] = fitted_model(h, str(loop.source)).as_dict() if h.fit.converged else None
     if model == "best":
         d["candidates"] = {k: {"nrmse": f.nrmse, "bic": scores[k], "converged": f.fit.converged,
                                "parameters": dict(zip(f.fit.names, f.fit.values.tolist()))}

@@ -7,6 +7,7 @@ tribojax contact (--topography FILE | --D D --G G) --load N [...]   surface → 
 tribojax hysteresis [...]        K̄, C̄ (and K_eq, C_eq) of a Jenkins/Mindlin/LuGre element
 tribojax fit FILE.csv [--out DIR] fit a user's slip run or hysteresis loop: JSON + plot
 tribojax discover FILE.csv        find the effect a record's model is missing
+tribojax predict MODEL RECORD     a fitted model (fit.json, discovery.json) on another record
 
 Errors: one line `tribojax <cmd>: error: <message>` and exit status 2 (bad input) or 1 (failed
 computation); `--debug` shows the traceback; Ctrl-C exits 130.
@@ -37,6 +38,8 @@ SUBCOMMANDS = [
      "_discover:run_discover"),
     ("fit", "fit a slip run or hysteresis loop CSV (+ sidecar JSON)", A.fit_arguments,
      "_fit:run_fit"),
+    ("predict", "a fitted model (fit.json, discovery.json) on another record",
+     A.predict_arguments, "_predict:run_predict"),
     ("frf", "forced response of a structure with friction contacts", A.frf_arguments,
      "_frf:run_frf"),
 ]  # fmt: skip

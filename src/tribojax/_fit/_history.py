@@ -202,17 +202,29 @@ def _nrmse(residuals, records) -> float:
     return nrmse(np.asarray(residuals) * scales, f)
 
 
+HISTORY_UNITS = {"mu_N": "N", "K_d": "N/m", "f0": "N", "sigma0": "N/m", "F_c": "N", "F_s": "N",
+                 "v_s": "m/s", "K": "N/m", "F_y": "N", "n": "1"}  # fmt: skip
+"""Units of the history models' parameters (`HISTORY_MODELS`)."""
+
+
 def predict_history(fit: HistoryFit, loop: HysteresisLoop, *, decimate=None):
     """(predicted force N, NRMSE) of a fitted model on another record, driven from rest.
 
     `decimate` defaults to the fit's. The NRMSE is rms(predicted − measured)/std(measured).
     """
     dec = fit.decimate if decimate is None else int(decimate)
-    records = _records([loop], dec)
-    spec = HISTORY_MODELS[fit.model]
-    scale = 1.0  # θ for f0 is rebuilt in physical units here
-    tr = _Transform(tuple(pos for _, pos in spec), scale)
-    theta = [np.log(v) if pos else v for v, (_, pos) in zip(fit.fit.values, spec)]
-    r = np.asarray(_HistoryResiduals(fit.model, tr)(jnp.asarray(theta), records))
+    return history_force(fit.model, fit.fit.values, loop, dec)
+
+
+def history_force(model: str, values, loop: HysteresisLoop, decimate: int = 1):
+    """(force N, NRMSE) of history model `model` at physical parameters `values` (the order of
+    `HISTORY_MODELS[model]`, f0 last) on every `decimate`-th sample of `loop`, driven from rest."""
+    if model not in HISTORY_MODELS:
+        raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
+    records = _records([loop], int(check_range(decimate, "decimate", 1, None, lo_open=False)))
+    spec = HISTORY_MODELS[model]
+    tr = _Transform(tuple(pos for _, pos in spec), 1.0)  # θ of f0 in physical units here
+    theta = [np.log(v) if pos else v for v, (_, pos) in zip(values, spec)]
+    r = np.asarray(_HistoryResiduals(model, tr)(jnp.asarray(theta), records))
     t, u, f, s = records[0]
     return np.asarray(f) + r * s, _nrmse(r, records)

@@ -31,6 +31,12 @@ from ._loop_force import loop_force as loop_force
 from ._loop_force import prepare_loop as prepare_loop
 from ._modes import golden_max as golden_max
 from ._modes import oscillator as oscillator
+from ._saved import KINDS as KINDS
+from ._saved import MODEL_FORMAT as MODEL_FORMAT
+from ._saved import FittedModel as FittedModel
+from ._saved import SavedEffect as SavedEffect
+from ._saved import effect_strengths as effect_strengths
+from ._saved import fitted_model as fitted_model
 from ._slip import KNOBS as KNOBS
 from ._slip import N_ODE_KNOBS as N_ODE_KNOBS
 from ._slip import VS_GRID as VS_GRID

@@ -129,6 +129,18 @@ class AbstractBaseline(eqx.Module):
     def physical(self, theta):
         """θ → physical parameters (JAX, differentiable)."""
 
+    def theta_of(self, values) -> np.ndarray:
+        """θ of physical parameter values (the order of `param_names`): the inverse of
+        `physical`, used to evaluate a saved model on a record (`tribojax.predict`). A baseline
+        that is to be saved and predicted with defines it."""
+        raise NotImplementedError(f"{type(self).__name__} does not define theta_of: it cannot "
+                                  "be rebuilt from saved parameters")
+
+    def options(self) -> dict:
+        """How the model is built on a record beyond the record itself (saved with a fitted
+        model, `tribojax.FittedModel.options`), e.g. a held bristle exponent; default none."""
+        return {}
+
     @abc.abstractmethod
     def predict(self, theta, knobs):
         """Model samples (output units), shape (n,), at θ and knob vector `knobs` (JAX).

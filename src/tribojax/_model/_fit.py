@@ -258,7 +258,22 @@ def _predict(baseline, theta, null):
     return baseline.predict_null(theta, null)
 
 
-def evaluate(baseline, theta) -> np.ndarray:
-    """The model's samples (output units) at θ with every effect at its null (compiled)."""
-    null = jnp.asarray(baseline.knob_null(), dtype=jnp.float64)
-    return np.asarray(_predict(baseline, jnp.asarray(theta, dtype=jnp.float64), null))
+@eqx.filter_jit
+def _predict_knobs(baseline, theta, knobs):
+    return baseline.predict(theta, knobs)
+
+
+def evaluate(baseline, theta, designs=(), strengths=()) -> np.ndarray:
+    """The model's samples (output units) at θ (compiled): with every effect at its null, or with
+    the effects' `designs` at their strengths s (one value per design strength, in the designs'
+    units per unit s): knobs = null ⊕ knob_set + gain·s, plus the additive columns basis·s."""
+    theta = jnp.asarray(theta, dtype=jnp.float64)
+    base, gain, basis = pack_designs(baseline, tuple(designs))
+    s = np.zeros(K_MAX)
+    s[: len(strengths)] = np.asarray(strengths, dtype=float)
+    knobs = base + gain @ s
+    if np.array_equal(knobs, np.asarray(baseline.knob_null(), dtype=float)):
+        out = _predict(baseline, theta, jnp.asarray(knobs))
+    else:
+        out = _predict_knobs(baseline, theta, jnp.asarray(knobs))
+    return np.asarray(out) + basis @ s

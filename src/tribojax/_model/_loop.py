@@ -71,6 +71,12 @@ class LoopBaseline(AbstractBaseline):
     def physical(self, theta):
         return jnp.exp(theta)
 
+    def theta_of(self, values):
+        return np.log(np.asarray(values, dtype=float))
+
+    def options(self):
+        return {"element": self.element}
+
     def predict(self, theta, knobs):
         spec = LoopSpec(
             jnp.exp(theta[0]),

@@ -144,6 +144,10 @@ class SlipBaseline(AbstractBaseline):
                              f"(0, {float(self.f_max):g})")
         return np.concatenate([[cap - np.log(np.expm1(cap - np.log(v[0])))], np.log(v[1:])])
 
+    def options(self):
+        """{"alpha": the held bristle exponent, or "free" when it is fitted}."""
+        return {"alpha": "free" if self.free_alpha else float(self.alpha)}
+
     def bristle_exponent(self, theta):
         """α: fitted (exp θ₃) or held."""
         return jnp.exp(theta[3]) if self.free_alpha else self.alpha

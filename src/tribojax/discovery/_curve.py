@@ -86,6 +86,10 @@ class CurveBaseline(AbstractBaseline):
     def physical(self, theta):
         return jnp.stack([self.f_ref * jnp.exp(theta[0]), theta[1] * self.f_ref / self.v_ref])
 
+    def theta_of(self, values):
+        F_c, sigma2 = (float(v) for v in values)
+        return np.array([np.log(F_c / float(self.f_ref)), sigma2 * float(self.v_ref / self.f_ref)])
+
     def friction(self, theta, knobs):
         """The model friction at the record's velocities (friction unit), before weighting."""
         F_c, sigma2 = self.physical(theta)

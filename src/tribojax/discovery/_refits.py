@@ -8,10 +8,9 @@ import numpy as np
 
 from .._fit._measures import bic, delta_bic, rms
 from .._fit._noise import ar1_inflation, residual_rho
-from .._model import MAX_STEPS, fit_model
+from .._model import MAX_STEPS, effect_strengths, fit_model
 from ._fitting import _columns, _delta_bic
 from ._parallel import in_parallel, speculatively
-from ._report import _strengths
 
 
 def _refit(baseline, state, design, name, y, scale, r, cache):
@@ -162,7 +161,7 @@ def refit_round(run, state, ranking, n_refit, threshold, by_name, base_ok) -> li
 
 
 def _strengths_of(run, fit, name):
-    return _strengths(run.baseline, fit)[name]["nuisance"]
+    return effect_strengths(fit)[name]["nuisance"]
 
 
 def choose(accepted, state, n):

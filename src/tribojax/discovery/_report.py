@@ -9,6 +9,7 @@ import numpy as np
 
 from .._fit._measures import rms
 from .._fit._noise import excess_rmse, noise_consistent
+from .._model import FittedModel, effect_strengths, fitted_model
 from ._verdict import correlations, flexible_correction, verdict
 
 
@@ -34,6 +35,9 @@ class DiscoveryReport:
         residuals, the final residual's flagged regions, its correlations with the measured
         signals and a flexible (linear-spline) correction in the best signal.
     x, y, baseline_y, final_y, segment, signals: arrays for plots (not in as_dict).
+    fitted: the final model (baseline + the effects added) as a `FittedModel`, saved under
+        "fitted_model" (None when the baseline fit failed); `tribojax.predict` evaluates it on
+        another record.
     """
 
     kind: str
@@ -61,6 +65,7 @@ class DiscoveryReport:
     final_y: np.ndarray = dataclasses.field(repr=False)
     segment: np.ndarray = dataclasses.field(repr=False)
     signals: dict = dataclasses.field(repr=False, default_factory=dict)  # measured, for plots
+    fitted: FittedModel | None = None  # the final model as a value (`tribojax.predict` takes it)
 
     @property
     def effect(self) -> str:
@@ -96,6 +101,7 @@ class DiscoveryReport:
             "rho": self.rho,
             "settings": self.settings,
             "labels": self.labels,
+            "fitted_model": None if self.fitted is None else self.fitted.as_dict(),
         }
 
     def summary(self) -> str:
@@ -152,30 +158,6 @@ def _fit_dict(baseline, state, scale: float) -> dict:
     }
 
 
-def _strengths(baseline, state) -> dict:
-    p = len(baseline.param_names)
-    out, j = {}, 0
-    for name, d in zip(state.effects, state.designs):
-        entry = {}
-        nuisance = {k: float(v) for k, v in d.nuisance.items()}
-        free = {i: (name, fn) for i, name, fn in d.free}
-        for i, (sn, su) in enumerate(zip(d.strength_names, d.strength_units)):
-            s = state.theta[p + j + i]
-            var = state.theta_covariance[p + j + i, p + j + i]
-            if i in free:  # a fitted nuisance value (the grid point seeded it)
-                nuisance[free[i][0]] = float(free[i][1](s * d.strength_scale[i]))
-                continue
-            entry[sn] = {
-                "value": float(s * d.strength_scale[i]),
-                "std_error": float(np.sqrt(max(var, 0.0)) * abs(d.strength_scale[i])),
-                "unit": su,
-            }
-        entry["nuisance"] = nuisance
-        out[name] = entry
-        j += d.k
-    return out
-
-
 def _misfit(run, rf, state):
     """Noise tests of the final residual `rf`, the verdict, the excess misfits and, where a
     misfit remains, its regions, signal correlations and flexible correction."""
@@ -213,7 +195,7 @@ def report(run, state, rounds: list, settings: dict) -> DiscoveryReport:
     return DiscoveryReport(
         kind=baseline.kind, effects=state.effects, baseline_rmse=rms(run.r0), final_rmse=rms(rf),
         regions=run.regions, candidates=rounds[0] if rounds else [], rounds=rounds,
-        strengths=_strengths(baseline, state),
+        strengths=effect_strengths(state),
         baseline_fit=_fit_dict(baseline, run.base_state, run.scale),
         final_fit=_fit_dict(baseline, state, run.scale), noise_std=run.noise.sigma,
         noise_estimated=not data.noise_std, rho=run.noise.rho, settings=settings, verdict=v,
@@ -222,4 +204,5 @@ def report(run, state, rounds: list, settings: dict) -> DiscoveryReport:
         y=y, baseline_y=run.base_state.prediction, final_y=state.prediction,
         segment=np.asarray(data.segment),
         signals={**baseline.signals(), "model": np.asarray(state.prediction)},
+        fitted=fitted_model(state) if state.converged else None,
     )  # fmt: skip

@@ -1,0 +1,69 @@
+"""`tribojax predict MODEL RECORD [--out DIR]`: a fitted model on a record it never saw.
+
+MODEL is a fit.json or discovery.json (its "fitted_model": the record model with the effects
+discovery added, or a history fit's element) or a saved model; RECORD any record of the model's
+kind (`tribojax.read_record`; `--format` to name it). Nothing is refitted. Writes
+DIR/prediction.json ("nrmse" = rms(predicted − measured)/std(measured), "model", "record",
+"rms_error", "unit", "n_data", "columns"), DIR/prediction.csv (the sample axis, measured and
+predicted: `time_s,measured_N,predicted_N` for a loop or history, `time_s,measured_m,predicted_m`
+for a slip run) and DIR/prediction.png. Exit status: 0 done, 1 the model is not finite on the
+record, 2 bad input (a model file of another version or without a model, a record of another
+kind, an output that exists).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .._io._files import write_text_atomic
+from .._io._records import read_record
+from .._plot import pyplot, save_figure
+from .._predict import load_model, predict
+from ._common import FAILED, CommandError, claim_outputs, error, refused_outputs, write_json_atomic
+
+
+def run_predict(args) -> int:
+    """Run `tribojax predict` with parsed `args`; the exit status (module docstring)."""
+    model_path, src = Path(args.model), Path(args.file)
+    out = Path(args.out) if args.out is not None else Path("tribojax-out") / f"predict-{src.stem}"
+    targets = [out / "prediction.json", out / "prediction.csv", out / "prediction.png"]
+    why = refused_outputs(model_path, targets, force=args.force)
+    if why:
+        raise CommandError(why)
+    model = load_model(model_path)
+    with claim_outputs(src, targets, force=args.force):
+        record = read_record(src, args.format)
+        pred = predict(model, record)
+        data = pred.as_dict()
+        data["model_file"] = str(model_path)
+        write_json_atomic(targets[0], data, exclusive=not args.force)
+        table = np.column_stack([pred.x, pred.measured, pred.predicted])
+        rows = "\n".join(",".join(f"{v:.17g}" for v in row) for row in table)
+        write_text_atomic(targets[1], ",".join(pred.columns()) + "\n" + rows + "\n")
+        drew = _plot(pred, targets[2])
+    print(f"{model.kind} model ({model_path}) on {src}: {pred.x.size} samples, "
+          f"NRMSE {pred.nrmse:.4g}, rms error {pred.rms_error:.4g} {pred.unit}")
+    print(f"wrote {targets[0]}, {targets[1].name}" + (f" and {targets[2].name}" if drew else ""))
+    if not np.all(np.isfinite(pred.predicted)):
+        return error("the model is not finite on this record", status=FAILED)
+    return 0
+
+
+def _plot(pred, path) -> bool:
+    plt = pyplot("figure")
+    if plt is None:
+        return False
+    fig, (ax, ar) = plt.subplots(2, 1, figsize=(7, 6), constrained_layout=True,
+                                 gridspec_kw=dict(height_ratios=[3, 1.3]))  # fmt: skip
+    ax.plot(pred.x, pred.measured, "k.", ms=2, label="measured")
+    ax.plot(pred.x, pred.predicted, "C3-", lw=1, label="predicted")
+    ax.set(xlabel=pred.x_name, ylabel=pred.unit,
+           title=f"{Path(pred.record).name}: {pred.model.kind} model, NRMSE {pred.nrmse:.3g}")
+    ax.legend()
+    ar.plot(pred.x, pred.predicted - pred.measured, "C0.", ms=2)
+    ar.axhline(0, color="k", lw=0.5)
+    ar.set(xlabel=pred.x_name, ylabel=f"predicted − measured ({pred.unit})")
+    save_figure(fig, path)
+    return True

@@ -1,0 +1,130 @@
+"""Predict a record with a fitted model: `load_model` (fit.json, discovery.json or a bare saved
+model), `predict(model, record)` → `Prediction` (prediction.json, prediction.csv)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .._fit._engine import FitResult
+from .._fit._history import HISTORY_MODELS, HISTORY_UNITS, HistoryFit, history_force
+from .._fit._measures import nrmse, rms
+from .._model import FittedModel, evaluate
+from .._model import fitted_model as record_model_of
+from ..discovery import DiscoveryReport
+from ._rebuild import RECORD_KINDS, rebuild
+
+SAVED_KEY = "fitted_model"
+"""The key of the saved model in fit.json and discovery.json."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Prediction:
+    """A fitted model evaluated on a record: the sample axis `x` (named `x_name`, e.g. time_s),
+    `measured` and `predicted` (output `unit`), their NRMSE = rms(predicted − measured) /
+    std(measured) and rms error, the `model` and the `record` (its source)."""
+
+    model: FittedModel
+    record: str
+    x_name: str
+    x: np.ndarray = dataclasses.field(repr=False)
+    measured: np.ndarray = dataclasses.field(repr=False)
+    predicted: np.ndarray = dataclasses.field(repr=False)
+    unit: str
+    nrmse: float
+    rms_error: float
+
+    def columns(self) -> tuple[str, str, str]:
+        """The CSV header: the axis, measured_<unit>, predicted_<unit>."""
+        u = self.unit.replace(" ", "_").replace("/", "_per_")
+        return (self.x_name, f"measured_{u}", f"predicted_{u}")
+
+    def as_dict(self) -> dict:
+        """The prediction.json contract: "nrmse", "model", "record" (plus extra keys)."""
+        return {"nrmse": self.nrmse, "model": self.model.as_dict(), "record": self.record,
+                "rms_error": self.rms_error, "unit": self.unit, "n_data": int(self.x.size),
+                "columns": list(self.columns()),
+                "what": "nrmse = rms(predicted - measured) / std(measured)"}  # fmt: skip
+
+
+def fitted_model(result, source: str = "") -> FittedModel:
+    """The `FittedModel` of a fit: a record-model `FitResult` (`fit_slip_run`, `fit_loop(model=
+    "history")`, `fit_record`), a `HistoryFit` (`fit_history`) or a `DiscoveryReport` (its final
+    model: the baseline and the effects discovery added)."""
+    if isinstance(result, DiscoveryReport):
+        if result.fitted is None:
+            raise ValueError("the discovery's baseline fit failed: it has no model to save")
+        return result.fitted
+    if isinstance(result, HistoryFit):
+        names = [n for n, _ in HISTORY_MODELS[result.model]]
+        params = dict(zip(names, np.asarray(result.fit.values, float).tolist()))
+        return FittedModel("history", params, {n: HISTORY_UNITS[n] for n in names},
+                           {"element": result.model, "decimate": result.decimate},
+                           source=source)  # fmt: skip
+    if isinstance(result, FitResult):
+        return record_model_of(result, source)
+    raise ValueError(f"fitted_model takes a FitResult, HistoryFit or DiscoveryReport, got "
+                     f"{type(result).__name__}")  # fmt: skip
+
+
+def load_model(path) -> FittedModel:
+    """The model saved in `path`: a fit.json or discovery.json (its "fitted_model") or a saved
+    model itself. ValueError naming the file and the field that is missing or wrong."""
+    path = Path(path)
+    try:
+        d = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path}: not a readable JSON file ({exc})") from None
+    if isinstance(d, dict) and "format" not in d:
+        if d.get(SAVED_KEY) is None:
+            raise ValueError(f"{path}: no field '{SAVED_KEY}' (a fit.json or discovery.json of a "
+                             "model that can predict: a slip run, a loop or a history fit; "
+                             "refitted with this version)")  # fmt: skip
+        return FittedModel.from_dict(d[SAVED_KEY], f"{path}: {SAVED_KEY}")
+    return FittedModel.from_dict(d, str(path))
+
+
+def predict(model: FittedModel, record) -> Prediction:
+    """Evaluate `model` on `record`, a record of its kind it may never have seen (a slip run for
+    a slip model, a loop or history for a loop or history model, a friction curve for a curve
+    model): the record's model rebuilt with the saved parameters and effects (`_rebuild`),
+    nothing refitted. A loop model is compared from the record's first reversal on (as it is
+    fitted); a history model from rest at the first sample (every `decimate`-th sample of the
+    fit). ValueError when the record is of another kind."""
+    if not isinstance(model, FittedModel):
+        raise ValueError(f"model must be a FittedModel (tribojax.load_model), got "
+                         f"{type(model).__name__}")  # fmt: skip
+    source = str(getattr(record, "source", ""))
+    need = "loop" if model.kind == "history" else RECORD_KINDS[model.kind].record_kind
+    kind = getattr(record, "kind", type(record).__name__)
+    if kind != need:
+        raise ValueError(f"{source or 'record'}: a {kind} record; the {model.kind} model "
+                         f"predicts {need} records")  # fmt: skip
+    if model.kind == "history":
+        x_name, unit, (x, measured, predicted) = "time_s", "N", _history(model, record)
+    else:
+        rk = RECORD_KINDS[model.kind]
+        baseline, theta, designs, s = rebuild(model, record)
+        x_name, x = rk.axis(baseline)
+        measured, unit = rk.measured(baseline), rk.unit(baseline)
+        predicted = rk.output(baseline, evaluate(baseline, theta, designs, s))
+    err = predicted - measured
+    return Prediction(model, source, x_name, np.asarray(x), measured, predicted, unit,
+                      nrmse(err, measured), rms(err))  # fmt: skip
+
+
+def _history(model, loop):
+    element = model.options.get("element")
+    if element not in HISTORY_MODELS:
+        raise ValueError(f"model: field 'options.element' is {element!r}; one of "
+                         f"{sorted(HISTORY_MODELS)} expected")  # fmt: skip
+    names = [n for n, _ in HISTORY_MODELS[element]]
+    missing = [n for n in names if n not in model.parameters]
+    if missing:
+        raise ValueError(f"model: field 'parameters' lacks {missing} of the {element} model")
+    dec = int(model.options.get("decimate", 1))
+    force, _ = history_force(element, [model.parameters[n] for n in names], loop, dec)
+    return np.asarray(loop.t[::dec]), np.asarray(loop.f[::dec]), force
