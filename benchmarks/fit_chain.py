@@ -22,15 +22,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from tribojax._reproduce import _chain_fit as fc
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import scipy_reference as ref  # noqa: E402
 import tribojax as tj  # noqa: E402
 from slip import scipy_phases  # noqa: E402
 
-FREE = fc.DEFAULT_FREE
+FREE = tj.CHAIN_DEFAULT_FREE
+DEFAULTS = dict(tj.CHAIN_DEFAULTS)
 TARGET_S = 10.0
 TARGET_RATIO = 20.0
 # reference_contact refuses D > 2.9 for the plastic integral down to a' = 0 (its quad in ln a'
@@ -52,7 +51,7 @@ ref.distribution_integral = _distribution_integral_cut  # this script only
 
 
 def _reference_inputs():
-    pair = tj.wang2022_pair(sigma_s=fc.DEFAULTS["sigma_s_Pa"])
+    pair = tj.wang2022_pair(sigma_s=DEFAULTS["sigma_s_Pa"])
     return dict(
         M=1.0,
         gamma=1.5,
@@ -60,7 +59,7 @@ def _reference_inputs():
         G_star=float(pair.G_star),
         H=float(pair.H),
         nu=float(pair.nu),
-        sigma_s=fc.DEFAULTS["sigma_s_Pa"],
+        sigma_s=DEFAULTS["sigma_s_Pa"],
         tangential_load=tj.WANG2022_TANGENTIAL_LOAD_N,
         mass=tj.WANG2022_RETICLE_MASS_KG,
     )
@@ -88,13 +87,15 @@ def scipy_fit(start, rtol, loads, measured, kw):
     Returns (OptimizeResult, chain evaluations, physical optimum)."""
     from scipy.optimize import least_squares
 
-    mu_min = fc._mu_min(loads)
-    full0 = fc._to_theta([start.get(k, fc.DEFAULTS[k]) for k in fc.PARAMETERS], mu_min)
+    mu_min = tj.chain_mu_min(loads)
+    full0 = tj.chain_theta([start.get(k, DEFAULTS[k]) for k in tj.CHAIN_PARAMETERS],
+                           tj.CHAIN_PARAMETERS, mu_min)
     n_free = len(FREE)
 
     def physical(th):
         full = np.concatenate([th, full0[n_free:]])
-        return np.asarray(fc._to_physical(jnp.asarray(full), mu_min))[:n_free]
+        phys = tj.chain_physical(jnp.asarray(full), tj.CHAIN_PARAMETERS, mu_min)
+        return np.asarray(phys)[:n_free]
 
     cache, count = {}, [0]
 
@@ -119,7 +120,7 @@ def scipy_fit(start, rtol, loads, measured, kw):
 
 def _matched_rtol(params, kw, loads):
     """Loosest Radau rtol within 5e-4 of a tight JAX solution at the lightest-damped load."""
-    tight, _ = fc.chain_phase_slips(
+    tight, _ = tj.chain_phase_slips(
         jnp.asarray(params), jnp.asarray(loads[-1:]), atol=1e-17, rtol=1e-9, max_steps=400_000
     )
     tight = np.asarray(tight)[0]
@@ -134,17 +135,17 @@ def _matched_rtol(params, kw, loads):
 
 
 def run(quick=False):
-    start = {k: fc.DEFAULTS[k] for k in FREE}
+    start = {k: DEFAULTS[k] for k in FREE}
     t0 = time.perf_counter()
-    fc.fit_measured_slips(start)  # compile
+    tj.fit_measured_slips(start)  # compile
     cold_s = time.perf_counter() - t0
-    fit = fc.fit_measured_slips(start)
+    fit = tj.fit_measured_slips(start)
     warm_s = fit.wall_s
     steps, p = fit.fit.steps, len(FREE)
-    loads = np.asarray(fc.wang2022_loads())
-    measured = fc.measured_slips()
+    loads = np.asarray(tj.wang2022_loads())
+    measured = tj.wang2022_measured_slips()
     kw = _reference_inputs()
-    params = np.array([fc.DEFAULTS[k] for k in fc.PARAMETERS])
+    params = np.array([DEFAULTS[k] for k in tj.CHAIN_PARAMETERS])
     rtol, scipy_err = _matched_rtol(params, kw, loads)
     if quick:
         x0 = np.array([start[k] for k in FREE])

@@ -37,7 +37,6 @@ import numpy as np
 from scipy import optimize
 
 import tribojax as tj
-from tribojax._presets import FRF_2DOF
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from timing import median_time  # noqa: E402
@@ -149,9 +148,9 @@ def run(quick: bool = False) -> list[dict]:
         max_rel_amplitude_diff=diff,
     ))  # fmt: skip
     # 2. the 2-DOF benchmark, eight curves
-    Fs = FRF_2DOF["F"]
+    Fs = tj.FRF_2DOF["F"]
     systems = [tj.frf_2dof_system(F) for F in Fs]
-    w0, w1 = FRF_2DOF["omega_range"]
+    w0, w1 = tj.FRF_2DOF["omega_range"]
 
     def eight():
         return [tj.frequency_response(s, w0, w1, ds_max=0.1, max_points=1000) for s in systems]

@@ -87,7 +87,7 @@ API_PAGES = [
     (
         "reproduce",
         "Reproduction and presets",
-        ("_reproduce", "_presets", "_results", "_sweep", "_chain"),
+        ("_reproduce", "_presets", "_limits", "_results", "_sweep", "_chain"),
         "The papers' constants, the reproduced tables, the fits of wang2022's measured slips, "
         "result codes and sweeps.",
     ),

@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 
 import tribojax as tj
-from tribojax._presets import FRF_2DOF
 
 
 def time_check(system, fr, n_points=3, periods=150, steps=1024):
@@ -46,8 +45,8 @@ def time_check(system, fr, n_points=3, periods=150, steps=1024):
     return rows
 
 
-def run(forces=FRF_2DOF["F"], n_check=3, ds_max=0.1) -> dict:
-    w0, w1 = FRF_2DOF["omega_range"]
+def run(forces=tj.FRF_2DOF["F"], n_check=3, ds_max=0.1) -> dict:
+    w0, w1 = tj.FRF_2DOF["omega_range"]
     out, timings = {}, {}
     for F in forces:
         system = tj.frf_2dof_system(F)
@@ -65,7 +64,7 @@ def run(forces=FRF_2DOF["F"], n_check=3, ds_max=0.1) -> dict:
             f"{int((~fr.stable).sum())}, max |MHB − time| / time "
             f"{max(r['rel_diff'] for r in entry['time_check']):.2e}, {timings[str(F)]:.2f} s"
         )
-    return {"curves": out, "timings_s": timings, "benchmark": {k: FRF_2DOF[k] for k in FRF_2DOF}}
+    return {"curves": out, "timings_s": timings, "benchmark": dict(tj.FRF_2DOF)}
 
 
 def main(argv=None) -> int:

@@ -30,7 +30,6 @@ import numpy as np
 import tribojax as tj
 from fitting.real_discovery_brfd import brfd_discovery
 from fitting.real_discovery_screw import screwdrive_discovery
-from tribojax._plot import pyplot, save_figure
 
 MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen")
 DECIMATE = 2
@@ -151,8 +150,13 @@ def _fmt(fit) -> str:
 
 
 def _figure(study, out: Path) -> None:
-    plt = pyplot("prediction figure")
-    if plt is None:
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("matplotlib is not installed: prediction figure skipped")
         return
     rows = study["prediction"]["earthquake"]["rows"]
     quakes = [n for n in dict.fromkeys(r["test"] for r in rows if r["role"] == "predicted")]
@@ -168,7 +172,9 @@ def _figure(study, out: Path) -> None:
                ylabel="force (kN)")  # fmt: skip
         ax.legend(fontsize=7, ncol=5)
     fig.tight_layout()
-    save_figure(fig, out / "real_data_prediction.png")
+    out.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out / "real_data_prediction.png", dpi=120)
+    plt.close(fig)
 
 
 def _clean(obj):

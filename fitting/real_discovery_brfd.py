@@ -25,8 +25,6 @@ from pathlib import Path
 import numpy as np
 
 import tribojax as tj
-from tribojax._decimate import DISCOVER_MAX_SAMPLES
-from tribojax._io._brfd import brfd_test
 from tribojax.discovery import discover, loop_baseline
 
 BUNDLED = Path(__file__).resolve().parents[1] / "data" / "real"
@@ -54,7 +52,7 @@ def brfd_files(src: Path) -> list[Path]:
 
 
 def _test_info(path: Path) -> dict:
-    test = brfd_test(path)  # from the file name (the bundled CSV keeps the JSON's stem)
+    test = tj.brfd_test(path)  # from the file name (the bundled CSV keeps the JSON's stem)
     if test is None:
         return {"drive": "earthquake history"}
     return {"drive": "sinusoidal", "frequency_Hz": test["frequency_Hz"],
@@ -86,7 +84,7 @@ def physical_sense(effects) -> str:
 
 
 def discover_brfd_test(
-    path: Path, *, record=None, factor=None, max_samples: int = DISCOVER_MAX_SAMPLES
+    path: Path, *, record=None, factor=None, max_samples: int = tj.DISCOVER_MAX_SAMPLES
 ) -> dict:
     """One row of the table: `tribojax discover`'s steps on one brfd file (or on `record`, e.g.
     an excerpt, named after `path`); `factor`: decimation blocks (None: automatic, as the CLI)."""

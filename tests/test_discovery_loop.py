@@ -312,3 +312,13 @@ def test_cli_discover_on_a_loop_file(tmp_path, capsys):
     assert result["noise_estimated"] is True
     assert all({"branch", "u_min", "u_max"} <= set(rg) for rg in result["regions"])
     assert "normal_load_variation" in capsys.readouterr().out
+    # its discovery.json predicts a loop at another amplitude (1.5x) and noise draw: the model
+    # with the effect misses by less than half what the baseline alone misses
+    held = tmp_path / "held.csv"
+    tj.write_loop(hidden_effect_loop("normal_load_variation", 0.01, 3.0, 9, give_noise=False), held)
+    pred_dir = tmp_path / "pred"
+    assert main(["predict", str(out / "discovery.json"), str(held), "--out", str(pred_dir)]) == 0
+    pred = json.loads((pred_dir / "prediction.json").read_text())
+    assert pred["model"]["effects"][0]["name"] == "normal_load_variation"
+    alone = tj.FittedModel("loop", result["baseline_fit"]["parameters"], {}, {"element": "jenkins"})
+    assert pred["rms_error"] < 0.5 * tj.predict(alone, tj.read_record(held)).rms_error

@@ -25,6 +25,9 @@ else:
     os.environ["JAX_ENABLE_X64"] = "1"
 
 if TYPE_CHECKING:
+    from ._chain import mu_min as chain_mu_min  # noqa: F401
+    from ._chain import to_physical as chain_physical  # noqa: F401
+    from ._chain import to_theta as chain_theta  # noqa: F401
     from ._contact._asperity import (
         REGIME_NAMES as REGIME_NAMES,
     )
@@ -116,6 +119,7 @@ if TYPE_CHECKING:
     from ._friction._rate_independent import IwanBank as IwanBank
     from ._friction._rate_independent import Jenkins as Jenkins
     from ._friction._rate_independent import Mindlin as Mindlin
+    from ._io._brfd import brfd_test as brfd_test
     from ._io._brfd import read_brfd as read_brfd
     from ._io._curve import FrictionCurve as FrictionCurve
     from ._io._curve import FrictionTransient as FrictionTransient
@@ -138,6 +142,7 @@ if TYPE_CHECKING:
     from ._io._slip_run import simulate_run as simulate_run
     from ._io._slip_run import synthetic_slip_run as synthetic_slip_run
     from ._io._slip_run import write_slip_run as write_slip_run
+    from ._limits import DISCOVER_MAX_SAMPLES as DISCOVER_MAX_SAMPLES
     from ._model import FittedModel as FittedModel
     from ._model import LoopAnalysis as LoopAnalysis
     from ._model import SavedEffect as SavedEffect
@@ -151,6 +156,7 @@ if TYPE_CHECKING:
     from ._predict import load_model as load_model
     from ._predict import predict as predict
     from ._presets import CHAIN_DEFAULTS as CHAIN_DEFAULTS
+    from ._presets import FRF_2DOF as FRF_2DOF
     from ._presets import WANG2022_A_MAX as WANG2022_A_MAX
     from ._presets import WANG2022_CALIBRATED as WANG2022_CALIBRATED
     from ._presets import WANG2022_RETICLE_MASS_KG as WANG2022_RETICLE_MASS_KG

@@ -22,6 +22,7 @@ DECIMATION_MAX_SAMPLES = 20_000
 # Discovery's cost grows with the record (measured under load on 10^6 slip samples: 220 s and
 # 4.6 GiB reduced to 19,608 samples, 184 s and 1.9 GiB at 4,975); its benchmark record has 5,001.
 DISCOVER_MAX_SAMPLES = 5_000
+"""Samples a record is reduced to before `tribojax discover` (the CLI default of --max-samples)."""
 
 # Plausible magnitudes of a record's samples, SI units: far beyond any rig (a displacement of 1 km,
 # a force of 1 GN, a slip of 1 m, a stage acceleration of 10^4 m/s²) and far below where a fit's

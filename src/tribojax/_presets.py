@@ -93,6 +93,9 @@ FRF_2DOF = MappingProxyType(
         "omega_range": (0.01, 6.0),  # rad/s
     }
 )
+"""The two-DOF elastic dry-friction benchmark (tmdsimpy's and NLvib's example, Krack & Gross
+2019): mass, stiffness and damping matrices, contact stiffnesses and μ, static and harmonic
+forcing, the forcing levels F (N), harmonics and frequency range (`tribojax.frf_2dof_system`)."""
 
 
 # Units of the measured rig data (exact definitions: 1 in = 25.4 mm, 1 lbf = 4.4482216152605 N)
