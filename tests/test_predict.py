@@ -156,3 +156,37 @@ def test_cli_fit_then_predict(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "old.json: fitted_model: field 'format'" in err
     assert not (tmp_path / "p2").exists()
+
+
+@pytest.mark.parametrize(("gap", "amplitude"), [(0.9e-3, 2.5e-3), (0.37e-3, 1.5e-3)])
+def test_refit_of_a_discovered_model_finds_another_gap(backlash_report, gap, amplitude):
+    """The discovered model (clearance 1.13 mm at 2 mm) refitted, effects included, on loops of
+    another clearance and amplitude from the independent generator finds their gap."""
+    fit = tj.refit(tj.fitted_model(backlash_report), _loop(amplitude, 21, gap=gap))
+    assert fit.converged, fit.message
+    saved = tj.fitted_model(fit)
+    assert saved.effects[0].name == "backlash"
+    assert saved.effects[0].nuisance["gap_m"] == pytest.approx(gap, rel=0.02)
+    assert saved.parameters["mu_N"] == pytest.approx(F_S, rel=0.01)
+    assert np.sqrt(np.mean((fit.residuals * fit.scale) ** 2)) < 1.1 * NOISE
+
+
+def test_cli_fit_from_a_discovery_json(backlash_report, tmp_path, capsys):
+    disc = tmp_path / "discovery.json"
+    disc.write_text(json.dumps(backlash_report.as_dict()))
+    held = tmp_path / "held.csv"
+    tj.write_loop(_loop(2.5e-3, 22, gap=0.9e-3), held)
+    out = tmp_path / "fit"
+    assert main(["fit", str(held), "--from", str(disc), "--out", str(out)]) == 0
+    res = json.loads((out / "fit.json").read_text())
+    assert res["fitted_model"]["effects"][0]["nuisance"]["gap_m"] == pytest.approx(0.9e-3, rel=0.02)
+    assert res["start_model"]["effects"][0]["nuisance"]["gap_m"] == pytest.approx(GAPS[1], rel=0.05)
+    assert res["rms_residual"] < 1.1 * NOISE and "backlash" in res["model"]
+    # the refitted model predicts: its fit.json is a model file
+    assert main(["predict", str(out / "fit.json"), str(held), "--out", str(tmp_path / "p")]) == 0
+    pred = json.loads((tmp_path / "p" / "prediction.json").read_text())
+    assert pred["rms_error"] == pytest.approx(res["rms_residual"], rel=1e-6)
+    capsys.readouterr()
+    assert main(["fit", str(held), "--from", str(disc), "--start", "mu_N=400",
+                 "--out", str(tmp_path / "f2")]) == 2  # fmt: skip
+    assert "--start and --alpha do not apply with --from" in capsys.readouterr().err

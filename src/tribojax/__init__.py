@@ -155,6 +155,7 @@ if TYPE_CHECKING:
     from ._predict import fitted_model as fitted_model
     from ._predict import load_model as load_model
     from ._predict import predict as predict
+    from ._predict import refit as refit
     from ._presets import CHAIN_DEFAULTS as CHAIN_DEFAULTS
     from ._presets import FRF_2DOF as FRF_2DOF
     from ._presets import WANG2022_A_MAX as WANG2022_A_MAX

@@ -141,6 +141,10 @@ def fit_arguments(parser) -> None:
         "history, best: all four, lowest BIC (default for a non-periodic history); friction "
         "curves: lugre (the steady law, default) or best",
     )
+    parser.add_argument("--from", dest="from_model", default=None, metavar="MODEL.json",
+                        help="fit the model saved in a fit.json or discovery.json (with the "
+                        "effects discovery added) to this record, from its saved "
+                        "values")  # fmt: skip
     parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
                         help="the record's format (default: detected)")  # fmt: skip
     parser.add_argument("--max-steps", type=int, default=None,

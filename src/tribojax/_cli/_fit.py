@@ -4,6 +4,7 @@
     tribojax fit loop.csv [--out DIR] [--element jenkins|mindlin]  # μN and K_d (loop model)
     tribojax fit RECORD --model jenkins|mindlin|lugre|bouc_wen|best  # through the history
     tribojax fit DRIVE/steady_state/0.096kg [--format epos_steady]   # LuGre steady law
+    tribojax fit RECORD --from DIR/discovery.json  # a saved model + its effects, refitted
 
 The record type comes from the file (`tribojax.read_record`: CSV header, brfd JSON, EPOS export
 or a folder of them) or `--format`; measured records are fitted by `_fit_real`. Writes DIR/fit.json
@@ -29,7 +30,7 @@ from .._io._records import read_record
 from .._limits import MAX_STEPS
 from .._model import evaluate, fit_loop, fit_slip_run, loop_residuals, slip_baseline
 from .._plot import pyplot, save_figure
-from .._predict import SAVED_KEY, fitted_model
+from .._predict import RECORD_KINDS, SAVED_KEY, fitted_model, load_model, refit
 from ._common import (
     FAILED,
     CommandError,
@@ -65,8 +66,9 @@ def run_fit(args) -> int:
         if args.alpha is not None and full.kind != "slip_run":
             return error(f"--alpha is for slip runs; {path} is {full.description}")
         t0 = time.perf_counter()
+        fits = _fit_from_model if args.from_model else _FITS[full.kind]
         with progress(args, "fit") as bar:
-            result, curves = _FITS[full.kind](full, args, start, bar.note)
+            result, curves = fits(full, args, start, bar.note)
         result["wall_time_s"] = time.perf_counter() - t0
         write_json_atomic(out / "fit.json", result, exclusive=not args.force)
         drew = _plot(curves, result, out / "fit.png")
@@ -153,6 +155,35 @@ def _fit_curve_record(curve, args, start, note):
 # the fit of each record kind (those in _NOT_FITTED excepted)
 _FITS = {"slip_run": _fit_slip_record, "loop": _fit_loop_record,
          "friction_curve": _fit_curve_record}  # fmt: skip
+
+
+def _fit_from_model(full, args, start, note):
+    """`--from MODEL.json`: the saved model with its effects fitted to the record (`refit`)."""
+    if start or args.alpha is not None:
+        raise CommandError("--start and --alpha do not apply with --from (the saved model is the "
+                           "start and says what is held)")  # fmt: skip
+    model = load_model(args.from_model)
+    if model.kind not in RECORD_KINDS:
+        raise CommandError(f"--from {args.from_model}: a {model.kind} model; --from takes a "
+                           "slip, loop or curve model (a history: --model ELEMENT)")  # fmt: skip
+    steps = args.max_steps or MAX_STEPS
+    fit = refit(model, full, max_steps=steps)
+    base = fit.model
+    x_name, x = RECORD_KINDS[model.kind].axis(base)
+    measured = np.asarray(base.data().y)
+    resid = fit.prediction - measured
+    unit = RECORD_KINDS[model.kind].unit(base)
+    sigma = base.data().noise_std or float(fit.scale)
+    how = "the record's noise sd" if base.data().noise_std else "first-difference estimate"
+    d = fit_summary(fit, full, len(measured), resid, unit, sigma, how)
+    saved = fitted_model(fit, str(full.source))
+    d.update(model=f"{model.kind} model from {args.from_model}"
+             + (f" with {', '.join(e.name for e in saved.effects)}" if saved.effects else ""),
+             nrmse=nrmse(resid, measured), start_model=model.as_dict(),
+             fitted_model=saved.as_dict() if fit.converged else None)  # fmt: skip
+    curves = dict(x=x, data=measured, model=fit.prediction, xlabel=x_name, ylabel=unit,
+                  resid_x=x, resid=resid)  # fmt: skip
+    return d, curves
 
 
 def _fit_reduced(full, args, start, note, fit, full_residuals):

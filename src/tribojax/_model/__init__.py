@@ -14,6 +14,7 @@ from ._fit import fit_record as fit_record
 from ._fit import pack_designs as pack_designs
 from ._fit import padded_args as padded_args
 from ._fit import padded_residual as padded_residual
+from ._fit import record_scale as record_scale
 from ._loop import LOOP_KNOBS as LOOP_KNOBS
 from ._loop import LoopBaseline as LoopBaseline
 from ._loop import cycle_noise as cycle_noise

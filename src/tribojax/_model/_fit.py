@@ -240,9 +240,7 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
     start succeeded (default: return the failed fit, `result` says why)."""
     data = baseline.data()
     y = np.asarray(data.y, dtype=float)
-    if scale is None:
-        scale0 = data.noise_std if data.noise_std else noise_estimate(y, data.segment)[0]
-        scale = float(scale0) if scale0 > 0 else float(np.std(y) or 1.0)
+    scale = record_scale(baseline) if scale is None else scale
     known = bool(data.noise_std) if sigma_known is None else sigma_known
     fits = []
     for th in baseline.starts() if starts is None else starts:
@@ -251,6 +249,15 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
         if fits[-1].converged:  # the next starts only when this one fails
             break
     return thrown(min(fits, key=lambda f: (not f.converged, f.rss)), throw)
+
+
+def record_scale(baseline) -> float:
+    """The residual unit of a record model's fits (output units): the record's noise sd, else the
+    first-difference estimate `noise_estimate` of its data, else their sd (else 1)."""
+    data = baseline.data()
+    y = np.asarray(data.y, dtype=float)
+    scale = data.noise_std if data.noise_std else noise_estimate(y, data.segment)[0]
+    return float(scale) if scale > 0 else float(np.std(y) or 1.0)
 
 
 @eqx.filter_jit

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .._fit._engine import FitResult
+from .._fit._engine import FitResult, thrown
 from .._fit._history import HISTORY_MODELS, HISTORY_UNITS, HistoryFit, history_force
 from .._fit._measures import nrmse, rms
-from .._model import FittedModel, evaluate
+from .._model import MAX_STEPS, FittedModel, evaluate, fit_model, record_scale
 from .._model import fitted_model as record_model_of
 from ..discovery import DiscoveryReport
 from ._rebuild import RECORD_KINDS, rebuild
@@ -114,6 +114,27 @@ def predict(model: FittedModel, record) -> Prediction:
     err = predicted - measured
     return Prediction(model, source, x_name, np.asarray(x), measured, predicted, unit,
                       nrmse(err, measured), rms(err))  # fmt: skip
+
+
+def refit(model: FittedModel, record, *, max_steps: int = MAX_STEPS, throw: bool = False):
+    """Fit a saved record model, effects included, to `record`, from its saved values: the model a
+    discovery found on one record refitted on another (its parameters, the effects' strengths and
+    their fitted nuisance values, e.g. a clearance's gap, all free). The residual unit and the
+    statistics are those of `fit_record` (the record's noise sd, else the first-difference
+    estimate). Returns the `FitResult` of `fit_model` (`fitted_model(result)` saves it);
+    `throw=True` raises `FitError` when it fails."""
+    if model.kind not in RECORD_KINDS:
+        raise ValueError(f"refit takes a record model (slip, loop, curve), not a {model.kind!r} "
+                         "model (a history fit: tribojax.fit_history)")  # fmt: skip
+    kind = getattr(record, "kind", type(record).__name__)
+    if kind != RECORD_KINDS[model.kind].record_kind:
+        raise ValueError(f"{getattr(record, 'source', 'record')}: a {kind} record; the "
+                         f"{model.kind} model fits {RECORD_KINDS[model.kind].record_kind} records")
+    baseline, theta, designs, s = rebuild(model, record)
+    fit = fit_model(baseline, designs, np.concatenate([theta, s]), None, record_scale(baseline),
+                    effects=tuple(e.name for e in model.effects), max_steps=max_steps,
+                    sigma_known=bool(baseline.data().noise_std))  # fmt: skip
+    return thrown(fit, throw)
 
 
 def _history(model, loop):
