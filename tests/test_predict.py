@@ -190,3 +190,23 @@ def test_cli_fit_from_a_discovery_json(backlash_report, tmp_path, capsys):
     assert main(["fit", str(held), "--from", str(disc), "--start", "mu_N=400",
                  "--out", str(tmp_path / "f2")]) == 2  # fmt: skip
     assert "--start and --alpha do not apply with --from" in capsys.readouterr().err
+
+
+def test_steady_law_fit_is_the_curve_model_with_two_effects(tmp_path):
+    """`fit_steady_curve` (both directions) saved as the curve model + `stribeck` + `asymmetry`:
+    the same law term by term, so the saved model reproduces the fitted curve (to round-off)."""
+    curve = _curve_record("stribeck+asymmetry")
+    fit = tj.fit_steady_curve(curve)
+    model = tj.fitted_model(fit, "<curve>")
+    assert [e.name for e in model.effects] == ["stribeck", "asymmetry"]
+    law = np.asarray(curve.friction) + np.asarray(fit.residuals) * np.asarray(curve.friction_error)
+    order = np.argsort(curve.velocity)
+    pred = tj.predict(tj.FittedModel.from_dict(model.as_dict()), curve)
+    np.testing.assert_allclose(pred.predicted, law[order], rtol=1e-12, atol=1e-12)
+    # and the CLI saves it: fit.json of a curve is a model file
+    path = tmp_path / "curve.csv"
+    tj.write_friction_curve(curve, path)
+    assert main(["fit", str(path), "--out", str(tmp_path / "f")]) == 0
+    saved = tj.load_model(tmp_path / "f" / "fit.json")
+    assert saved.kind == "curve" and saved.parameters["F_c"] == pytest.approx(
+        model.parameters["F_c"], rel=1e-9)

@@ -92,6 +92,7 @@ def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
     sides = {}
     for side, sign in (("positive", 1), ("negative", -1)):
         sides[side] = fit_steady_curve(curve, direction=sign, **steps).as_dict()
+    d[SAVED_KEY] = fitted_model(fit, str(curve.source)).as_dict() if fit.converged else None
     d.update(model="lugre", nrmse=nrmse(resid, curve.friction),
              route="steady law with direction asymmetry T0", units=curve.units,
              per_direction=sides)  # fmt: skip

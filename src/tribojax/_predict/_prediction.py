@@ -12,7 +12,7 @@ import numpy as np
 from .._fit._engine import FitResult, thrown
 from .._fit._history import HISTORY_MODELS, HISTORY_UNITS, HistoryFit, history_force
 from .._fit._measures import nrmse, rms
-from .._model import MAX_STEPS, FittedModel, evaluate, fit_model, record_scale
+from .._model import MAX_STEPS, FittedModel, SavedEffect, evaluate, fit_model, record_scale
 from .._model import fitted_model as record_model_of
 from ..discovery import DiscoveryReport
 from ._rebuild import RECORD_KINDS, rebuild
@@ -52,8 +52,9 @@ class Prediction:
 
 def fitted_model(result, source: str = "") -> FittedModel:
     """The `FittedModel` of a fit: a record-model `FitResult` (`fit_slip_run`, `fit_loop(model=
-    "history")`, `fit_record`), a `HistoryFit` (`fit_history`) or a `DiscoveryReport` (its final
-    model: the baseline and the effects discovery added)."""
+    "history")`, `fit_record`), a steady-law fit of both directions (`fit_steady_curve`: the
+    curve model with its `stribeck` and `asymmetry` effects), a `HistoryFit` (`fit_history`) or
+    a `DiscoveryReport` (its final model: the baseline and the effects discovery added)."""
     if isinstance(result, DiscoveryReport):
         if result.fitted is None:
             raise ValueError("the discovery's baseline fit failed: it has no model to save")
@@ -64,10 +65,27 @@ def fitted_model(result, source: str = "") -> FittedModel:
         return FittedModel("history", params, {n: HISTORY_UNITS[n] for n in names},
                            {"element": result.model, "decimate": result.decimate},
                            source=source)  # fmt: skip
+    if isinstance(result, FitResult) and result.fixed.get("direction") == "both":
+        return _steady_law(result, source)
     if isinstance(result, FitResult):
         return record_model_of(result, source)
     raise ValueError(f"fitted_model takes a FitResult, HistoryFit or DiscoveryReport, got "
                      f"{type(result).__name__}")  # fmt: skip
+
+
+def _steady_law(fit, source) -> FittedModel:
+    """The LuGre steady law with asymmetry (`fit_steady_curve`, both directions) as the curve
+    model: Coulomb + viscous (F_c, σ2) with the `stribeck` (F_s − F_c; v_s, β) and `asymmetry`
+    (T0) effects: the same law term by term (`discovery.curve_baseline`)."""
+    p = dict(zip(fit.names, np.asarray(fit.values, float).tolist()))
+    fu, vu = fit.fixed["friction_unit"], fit.fixed["velocity_unit"]
+    effects = (SavedEffect("stribeck", {"F_s_minus_F_c": p["F_s"] - p["F_c"]},
+                           {"v_s": p["v_s"], "beta": p["beta"]}),
+               SavedEffect("asymmetry", {"T0": p["T0"]}))  # fmt: skip
+    units = {"F_c": fu, "sigma2": f"{fu} per {vu}", "stribeck.F_s_minus_F_c": fu,
+             "asymmetry.T0": fu}  # fmt: skip
+    return FittedModel("curve", {"F_c": p["F_c"], "sigma2": p["sigma2"]}, units, {}, effects,
+                       source)  # fmt: skip
 
 
 def load_model(path) -> FittedModel:
