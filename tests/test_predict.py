@@ -210,3 +210,27 @@ def test_steady_law_fit_is_the_curve_model_with_two_effects(tmp_path):
     saved = tj.load_model(tmp_path / "f" / "fit.json")
     assert saved.kind == "curve" and saved.parameters["F_c"] == pytest.approx(
         model.parameters["F_c"], rel=1e-9)
+
+
+def test_discovery_continues_from_a_saved_model(backlash_report, tmp_path):
+    """`discover(..., start=model)`: the clearance found on one loop is refitted on another
+    (another gap and amplitude) and the search goes on from there; "before" stays the
+    baseline alone."""
+    held = _loop(2.5e-3, 23, gap=0.9e-3)
+    rep = discover(loop_baseline(held), start=tj.fitted_model(backlash_report))
+    assert rep.effects[0] == "backlash" and rep.verdict == "explained"
+    assert rep.strengths["backlash"]["nuisance"]["gap_m"] == pytest.approx(0.9e-3, rel=0.02)
+    assert rep.settings["start_model"]["effects"] == ["backlash"]
+    assert rep.baseline_fit["effects"] == [] and rep.excess_rmse_after < 0.5 * NOISE
+    assert rep.excess_rmse_before > 10 * NOISE
+    # the CLI: --from a discovery.json; a model of another kind is refused by name
+    disc, path = tmp_path / "discovery.json", tmp_path / "held.csv"
+    disc.write_text(json.dumps(backlash_report.as_dict()))
+    tj.write_loop(held, path)
+    assert main(["discover", str(path), "--from", str(disc), "--out", str(tmp_path / "d")]) == 0
+    out = json.loads((tmp_path / "d" / "discovery.json").read_text())
+    assert out["effects"][0] == "backlash"
+    assert out["settings"]["start_model"]["refit"] == "converged"
+    curve = tmp_path / "curve.csv"
+    tj.write_friction_curve(_curve_record("clean"), curve)
+    assert main(["discover", str(curve), "--from", str(disc), "--out", str(tmp_path / "d2")]) == 2

@@ -163,6 +163,9 @@ def discover_arguments(parser) -> None:
     parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
                         help="the record's format (default: detected)")  # fmt: skip
     parser.add_argument("--max-effects", type=int, default=3, help="greedy rounds (default 3)")
+    parser.add_argument("--from", dest="from_model", default=None, metavar="MODEL.json",
+                        help="start from the model saved in a discovery.json or fit.json (its "
+                        "effects refitted on this record), and look for more")  # fmt: skip
     add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
 
 

@@ -22,6 +22,7 @@ import sys
 from pathlib import Path
 
 from .._io._records import read_record
+from .._predict import load_model
 from ..discovery import (
     curve_baseline,
     discover,
@@ -71,6 +72,7 @@ def run_discover(args, out=None, err=None) -> int:
     src = Path(args.file)
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
+    start = load_model(args.from_model) if args.from_model else None
     with claim_outputs(src, [target, figure], force=args.force):
         record = read_record(src, args.format)
         make_baseline, plot = _discovery_of(record, src)
@@ -80,7 +82,7 @@ def run_discover(args, out=None, err=None) -> int:
         try:
             baseline = make_baseline(record)
             with progress(args, "discover"):
-                report = discover(baseline, max_effects=args.max_effects)
+                report = discover(baseline, max_effects=args.max_effects, start=start)
         except ValueError as exc:
             if str(src) in str(exc) or Path(str(record.source)).name in str(exc):
                 raise

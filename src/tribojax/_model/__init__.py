@@ -7,6 +7,13 @@ from ._base import N_WINDOWS as N_WINDOWS
 from ._base import AbstractBaseline as AbstractBaseline
 from ._base import DiscoveryData as DiscoveryData
 from ._base import EffectDesign as EffectDesign
+from ._curve import BETA_START as BETA_START
+from ._curve import CURVE_KNOBS as CURVE_KNOBS
+from ._curve import CurveBaseline as CurveBaseline
+from ._curve import curve_baseline as curve_baseline
+from ._effects import AbstractEffect as AbstractEffect
+from ._effects import default_effects as default_effects
+from ._effects import register_effect as register_effect
 from ._fit import MAX_STEPS as MAX_STEPS
 from ._fit import evaluate as evaluate
 from ._fit import fit_model as fit_model
@@ -32,6 +39,9 @@ from ._loop_force import loop_force as loop_force
 from ._loop_force import prepare_loop as prepare_loop
 from ._modes import golden_max as golden_max
 from ._modes import oscillator as oscillator
+from ._rebuild import RECORD_KINDS as RECORD_KINDS
+from ._rebuild import on_baseline as on_baseline
+from ._rebuild import rebuild as rebuild
 from ._saved import KINDS as KINDS
 from ._saved import MODEL_FORMAT as MODEL_FORMAT
 from ._saved import FittedModel as FittedModel

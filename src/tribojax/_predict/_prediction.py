@@ -12,10 +12,18 @@ import numpy as np
 from .._fit._engine import FitResult, thrown
 from .._fit._history import HISTORY_MODELS, HISTORY_UNITS, HistoryFit, history_force
 from .._fit._measures import nrmse, rms
-from .._model import MAX_STEPS, FittedModel, SavedEffect, evaluate, fit_model, record_scale
+from .._model import (
+    MAX_STEPS,
+    RECORD_KINDS,
+    FittedModel,
+    SavedEffect,
+    evaluate,
+    fit_model,
+    rebuild,
+    record_scale,
+)
 from .._model import fitted_model as record_model_of
 from ..discovery import DiscoveryReport
-from ._rebuild import RECORD_KINDS, rebuild
 
 SAVED_KEY = "fitted_model"
 """The key of the saved model in fit.json and discovery.json."""

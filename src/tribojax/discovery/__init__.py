@@ -80,10 +80,12 @@ from .._model import ALPHA as ALPHA
 from .._model import K_MAX as K_MAX
 from .._model import AbstractBaseline as AbstractBaseline
 from .._model import AugmentedPreSlip as AugmentedPreSlip
+from .._model import CurveBaseline as CurveBaseline
 from .._model import DiscoveryData as DiscoveryData
 from .._model import EffectDesign as EffectDesign
 from .._model import LoopBaseline as LoopBaseline
 from .._model import SlipBaseline as SlipBaseline
+from .._model import curve_baseline as curve_baseline
 from .._model import loop_baseline as loop_baseline
 from .._model import slip_baseline as slip_baseline
 from .._model import slip_start as slip_start
@@ -93,9 +95,7 @@ from ._core import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
 from ._core import AbstractEffect as AbstractEffect
 from ._core import default_effects as default_effects
 from ._core import register_effect as register_effect
-from ._curve import CurveBaseline as CurveBaseline  # registers the curve effects
-from ._curve import curve_baseline as curve_baseline
-from ._curve import discover_curve as discover_curve
+from ._curve import discover_curve as discover_curve  # registers the curve effects
 from ._curve import plot_curve_discovery as plot_curve_discovery
 from ._discover import DiscoveryReport as DiscoveryReport
 from ._discover import discover as discover

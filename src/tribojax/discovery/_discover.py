@@ -12,7 +12,15 @@ import dataclasses
 import numpy as np
 
 from .._fit._noise import find_regions, noise_consistent
-from .._model import ALPHA, AbstractBaseline, DiscoveryData, fit_record
+from .._model import (
+    ALPHA,
+    AbstractBaseline,
+    DiscoveryData,
+    FittedModel,
+    fit_model,
+    fit_record,
+    on_baseline,
+)
 from ._candidates import rank
 from ._core import DELTA_BIC_THRESHOLD, AbstractEffect, default_effects
 from ._refits import MAX_MOVES, _moved_optimum, choose, refit_round
@@ -78,6 +86,7 @@ def discover(
     alpha: float = ALPHA,
     n_windows: int = 32,
     theta0=None,
+    start: FittedModel | None = None,
 ) -> DiscoveryReport:
     """Find where `baseline` disagrees with its data, name the missing effects, add them.
 
@@ -114,6 +123,11 @@ def discover(
             `refit_starts`): the best grid point by score (refined), then the best ones a
             decade away in every nuisance value or of another form; the lowest BIC kept.
         theta0: one start θ for the baseline fit instead of `baseline.starts()`.
+        start: a saved model of this kind (`tribojax.load_model`, e.g. a discovery on another
+            record): its effects are refitted on this record from their saved values and the
+            search continues from that model (the report's effects begin with them; "before"
+            is still the baseline alone). When that refit fails, the search starts from the
+            baseline (settings["start_model"] says so).
     Returns:
         DiscoveryReport (check `.converged`: False when the baseline fit failed).
     """
@@ -124,6 +138,8 @@ def discover(
     run = _Run(baseline, data, np.asarray(data.y, dtype=float), state.scale, alpha, n_windows)
     run.rebase(state)
     base_ok = run.consistent(state)  # then the candidates are ranked, none is refitted or added
+    started = _started(run, state, start) if start is not None and state.converged else None
+    state = state if started is None or not started.converged else started
     moves, rounds = 0, []
     grids = {e.name: e.designs(baseline) for e in effects}
     while state.converged and len(state.effects) < max_effects and not (rounds and base_ok):
@@ -152,7 +168,20 @@ def discover(
                 "delta_bic_threshold": delta_bic_threshold, "alpha": alpha,
                 "max_effects": max_effects, "n_refit": n_refit, "n_windows": n_windows,
                 "candidates_offered": list(by_name)}  # fmt: skip
+    if start is not None:
+        settings["start_model"] = {
+            "source": start.source, "effects": [e.name for e in start.effects],
+            "refit": "none" if started is None else started.message or "converged"}  # fmt: skip
     return report(run, state, rounds, settings)
+
+
+def _started(run, state, start):
+    """The saved model `start` (its effects included) fitted on the run's record from its saved
+    values (measured: from the baseline fit's parameters instead, a clearance's refit stopped at
+    a depth of 0.05 with the misfit untouched; from the saved ones it reached the noise)."""
+    theta, designs, s = on_baseline(start, run.baseline)
+    names = tuple(e.name for e in start.effects)
+    return fit_model(run.baseline, designs, np.concatenate([theta, s]), run.y, run.scale, names)
 
 
 def _checked(baseline, effects, max_effects, alpha) -> list:

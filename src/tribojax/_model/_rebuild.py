@@ -1,7 +1,8 @@
 """A saved model rebuilt on a record: its record model (baseline), θ, and each effect's design
 at the saved nuisance values with the strengths that give the saved physical values.
 
-An effect is rebuilt by name from the registry (`tribojax.discovery.default_effects`), so a model
+An effect is rebuilt by name from the registry (`default_effects`; `tribojax.discovery` registers
+the library's effects on import), so a model
 saved with effects rebuilds without hand work on any record of the same kind. Among the effect's
 designs on the new record the one with the saved fixed nuisance values (e.g. a drift's degree)
 is taken, the nearest seed of each fitted nuisance value (a gap, a Stribeck velocity, a mode's
@@ -17,8 +18,11 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from .._model import FittedModel, loop_baseline, slip_baseline
-from ..discovery import curve_baseline, default_effects
+from ._curve import curve_baseline
+from ._effects import default_effects
+from ._loop import loop_baseline
+from ._saved import FittedModel
+from ._slip import slip_baseline
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,8 +60,14 @@ RECORD_KINDS = {
 
 def rebuild(model: FittedModel, record):
     """(baseline, θ, designs, strengths) of `model` on `record` (a record of its kind)."""
-    kind = RECORD_KINDS[model.kind]
-    baseline = kind.build(record, model.options)
+    baseline = RECORD_KINDS[model.kind].build(record, model.options)
+    return (baseline, *on_baseline(model, baseline))
+
+
+def on_baseline(model: FittedModel, baseline):
+    """(θ, designs, strengths) of `model` on a baseline of its kind (built on any record)."""
+    if baseline.kind != model.kind:
+        raise ValueError(f"model: a {model.kind} model, not a {baseline.kind} model")
     missing = [n for n in baseline.param_names if n not in model.parameters]
     if missing:
         raise ValueError(f"model: field 'parameters' lacks {missing} of the {model.kind} model")
@@ -71,7 +81,7 @@ def rebuild(model: FittedModel, record):
         d, s = _design(registry[saved.name], baseline, saved)
         designs.append(d)
         strengths.extend(s)
-    return baseline, theta, tuple(designs), np.asarray(strengths, dtype=float)
+    return theta, tuple(designs), np.asarray(strengths, dtype=float)
 
 
 def _distance(a: float, b: float) -> float:

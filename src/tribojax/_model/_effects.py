@@ -1,0 +1,61 @@
+"""The contract of an effect a record model can carry (`AbstractEffect`) and the registry of
+named effects per record kind (`register_effect`, `default_effects`): `discover` ranks and adds
+them, a saved model (`FittedModel`) names them and is rebuilt from them (`rebuild`)."""
+
+from __future__ import annotations
+
+import abc
+from typing import ClassVar
+
+import equinox as eqx
+
+from ._base import AbstractBaseline, EffectDesign
+
+
+class AbstractEffect(eqx.Module):
+    """A named candidate effect: how it augments a baseline of its `kind`, per nuisance setting."""
+
+    name: eqx.AbstractClassVar[str]
+    kind: eqx.AbstractClassVar[str]
+    description: ClassVar[str] = ""
+
+    @abc.abstractmethod
+    def designs(self, baseline: AbstractBaseline) -> list[EffectDesign]:
+        """One `EffectDesign` per nuisance grid point (a single one when there is no nuisance)."""
+
+    # refit starts: the best grid design by score, then the next best ones at least a factor 10
+    # away in every nuisance value
+    refit_starts: ClassVar[int] = 1
+    # False: refitted whatever its score p-value (an effect whose optimum the score at the null
+    # cannot see, e.g. one nearly confounded with a baseline parameter there); the ΔBIC of the
+    # refit alone then decides
+    score_gate: ClassVar[bool] = True
+
+    def refine(self, baseline: AbstractBaseline, design: EffectDesign, score) -> EffectDesign:
+        """Optionally improve the best grid design's nuisance values; `score(design) -> float` is
+        the Rao statistic at the current fit. Default: no refinement."""
+        return design
+
+    def reject(self, nuisance: dict) -> str | None:
+        """A reason why a refit with these fitted nuisance values is not this effect (it is
+        then not accepted), or None. Default: None."""
+        return None
+
+
+_REGISTRY: dict[str, dict[str, type]] = {}
+
+
+def register_effect(cls):
+    """Class decorator: make `cls` (an AbstractEffect with a no-argument constructor) part of
+    `default_effects(cls.kind)`. Registering a name twice replaces the earlier class."""
+    if not (isinstance(cls, type) and issubclass(cls, AbstractEffect)):
+        raise TypeError(f"register_effect expects an AbstractEffect subclass, got {cls!r}")
+    _REGISTRY.setdefault(cls.kind, {})[cls.name] = cls
+    return cls
+
+
+def default_effects(kind: str) -> list[AbstractEffect]:
+    """Instances of the registered effects of `kind` ("slip" or "loop"), in registration order."""
+    if kind not in _REGISTRY:
+        raise ValueError(f"kind = {kind!r}: no effects registered; known: {sorted(_REGISTRY)}")
+    return [cls() for cls in _REGISTRY[kind].values()]
