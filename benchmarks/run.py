@@ -355,6 +355,9 @@ def main(argv=None):
     import real_data  # benchmarks/real_data.py (issue 15: history fits of a measured record)
 
     results += real_data.run(quick=args.quick)
+    import predict  # benchmarks/predict.py (issues 29/30: a saved model on a 28 s history)
+
+    results += predict.run(quick=args.quick)
     import cold_start  # benchmarks/cold_start.py (issue 31: fresh processes, the cache, SciPy)
 
     results += cold_start.run(quick=args.quick)

@@ -83,6 +83,12 @@ class _HistoryResiduals(eqx.Module):
         return jnp.concatenate(out)
 
 
+@eqx.filter_jit
+def _residuals(fn, theta, records):
+    # one compiled program per record shape (cached across processes), not op-by-op dispatch
+    return fn(theta, records)
+
+
 def _records(loops, decimate: int):
     out = []
     for loop in loops:
@@ -225,6 +231,6 @@ def history_force(model: str, values, loop: HysteresisLoop, decimate: int = 1):
     spec = HISTORY_MODELS[model]
     tr = _Transform(tuple(pos for _, pos in spec), 1.0)  # θ of f0 in physical units here
     theta = [np.log(v) if pos else v for v, (_, pos) in zip(values, spec)]
-    r = np.asarray(_HistoryResiduals(model, tr)(jnp.asarray(theta), records))
+    r = np.asarray(_residuals(_HistoryResiduals(model, tr), jnp.asarray(theta), records))
     t, u, f, s = records[0]
     return np.asarray(f) + r * s, _nrmse(r, records)
