@@ -1,0 +1,119 @@
+"""Discovery on the blind generator's records (issue 32): `tribojax discover`'s answer on records
+written outside the project from a physical description only (benchmarks/blind/, frozen).
+
+    python benchmarks/blind/generate.py --out DIR           # the records and DIR/manifest.json
+    python benchmarks/blind_study.py DIR [--out OUT] [--resume] [--kind slip|loop]
+
+Each record is read as a user's file (`tribojax.read_record`: CSV + sidecar) and discovered with
+the defaults of `tribojax discover` (the record's baseline, `discover`, at most 3 effects).
+Scoring, from the manifest's hidden effects only (no setting is tuned on these records):
+- clean: the verdict is "none";
+- one hidden effect: it is named first and the excess misfit is at least halved;
+- two hidden effects: both are named (either order), no effect outside them is added before
+  the second one, and the excess is at least halved; "explained" counts only with both in.
+Writes OUT/blind_study.jsonl (a line per record, as it goes), OUT/blind_study.json (rows and
+summary) and OUT/blind_study.md (the table). Default OUT: DIR.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import time
+from pathlib import Path
+
+import tribojax as tj
+import tribojax.discovery as disc
+
+BASELINES = {"slip_run": disc.slip_baseline, "loop": disc.loop_baseline}
+
+
+def score(hidden: list, effects: list, verdict: str, e0: float, e1: float) -> bool:
+    """Success under the module docstring's rules."""
+    if not hidden:
+        return verdict == "none"
+    halved = e1 <= 0.5 * e0
+    if len(hidden) == 1:
+        return bool(effects) and effects[0] == hidden[0] and halved
+    first = effects[: len(hidden)]
+    return set(first) == set(hidden) and halved
+
+
+def run_one(entry: dict, folder: Path) -> dict:
+    record = tj.read_record(folder / entry["file"])
+    t0 = time.perf_counter()
+    rep = disc.discover(BASELINES[record.kind](record))
+    wall = time.perf_counter() - t0
+    sd = rep.noise_std
+    hidden = list(entry["hidden"])
+    row = {"label": entry["label"], "kind": entry["kind"], "hidden": hidden,
+           "drive": entry.get("drive"), "visibility_sd": entry.get("visibility_sd"),
+           "verdict": rep.verdict, "effects": list(rep.effects), "effect": rep.effect,
+           "excess_before_sd": rep.excess_rmse_before / sd,
+           "excess_after_sd": rep.excess_rmse_after / sd, "converged": rep.converged,
+           "noise_std": sd, "seconds": wall}  # fmt: skip
+    row["ok"] = score(hidden, row["effects"], rep.verdict, rep.excess_rmse_before,
+                      rep.excess_rmse_after)  # fmt: skip
+    return row
+
+
+def summarise(rows) -> tuple[dict, str]:
+    groups = collections.defaultdict(list)
+    for r in rows:
+        n = len(r["hidden"])
+        groups[f"{r['kind']}: " + ("clean" if n == 0 else "one effect" if n == 1 else
+                                   "two effects")].append(r)  # fmt: skip
+    summary = {k: {"n": len(v), "success": sum(r["ok"] for r in v)} for k, v in groups.items()}
+    lines = ["| record | hidden | named | verdict | excess before -> after (sd) | ok |",
+             "|---|---|---|---|---|---|"]  # fmt: skip
+    for r in rows:
+        lines.append(f"| {r['label']} | {' + '.join(r['hidden']) or 'none'} | "
+                     f"{', '.join(r['effects']) or '-'} | {r['verdict']} | "
+                     f"{r['excess_before_sd']:.2f} -> {r['excess_after_sd']:.2f} | "
+                     f"{'yes' if r['ok'] else 'NO'} |")  # fmt: skip
+    lines.append("")
+    for k, v in summary.items():
+        lines.append(f"- {k}: {v['success']}/{v['n']}")
+    return summary, "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("records", help="the folder generate.py wrote (with manifest.json)")
+    ap.add_argument("--out", default=None, help="output folder (default: the records' folder)")
+    ap.add_argument("--resume", action="store_true", help="keep the rows already in the log")
+    ap.add_argument("--kind", choices=("slip", "loop"), default=None, help="only this kind")
+    args = ap.parse_args(argv)
+    folder = Path(args.records)
+    out = Path(args.out) if args.out else folder
+    out.mkdir(parents=True, exist_ok=True)
+    manifest = json.loads((folder / "manifest.json").read_text())
+    entries = [e for e in manifest if args.kind in (None, e["kind"])]
+    log = out / "blind_study.jsonl"
+    done = {}
+    if args.resume and log.exists():
+        done = {json.loads(x)["label"]: json.loads(x) for x in log.read_text().splitlines()}
+    elif log.exists():
+        log.unlink()
+    rows = []
+    for entry in entries:
+        row = done.get(entry["label"]) or run_one(entry, folder)
+        if entry["label"] not in done:
+            with log.open("a") as fh:
+                fh.write(json.dumps(row) + "\n")
+        rows.append(row)
+        print(f"{row['label']:50s} {'+'.join(row['hidden']) or 'none':32s} {row['verdict']:17s} "
+              f"{','.join(row['effects']) or '-':30s} {row['excess_before_sd']:.2f}->"
+              f"{row['excess_after_sd']:.2f} {'ok' if row['ok'] else 'FAIL'} "
+              f"{row['seconds']:.0f}s", flush=True)  # fmt: skip
+    summary, table = summarise(rows)
+    (out / "blind_study.json").write_text(json.dumps({"summary": summary, "rows": rows},
+                                                     indent=1))  # fmt: skip
+    (out / "blind_study.md").write_text(table + "\n")
+    print(table)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
