@@ -9,8 +9,9 @@ the defaults of `tribojax discover` (the record's baseline, `discover`, at most 
 Scoring, from the manifest's hidden effects only (no setting is tuned on these records):
 - clean: the verdict is "none";
 - one hidden effect: it is named first and the excess misfit is at least halved;
-- two hidden effects: both are named (either order), no effect outside them is added before
-  the second one, and the excess is at least halved; "explained" counts only with both in.
+- two hidden effects: both are named (either order), no effect that is not there is added
+  beside them, and the excess is at least halved.
+Added effects that are not hidden are counted apart ("extra") for every record.
 Writes OUT/blind_study.jsonl (a line per record, as it goes), OUT/blind_study.json (rows and
 summary) and OUT/blind_study.md (the table). Default OUT: DIR.
 """
@@ -36,8 +37,7 @@ def score(hidden: list, effects: list, verdict: str, e0: float, e1: float) -> bo
     halved = e1 <= 0.5 * e0
     if len(hidden) == 1:
         return bool(effects) and effects[0] == hidden[0] and halved
-    first = effects[: len(hidden)]
-    return set(first) == set(hidden) and halved
+    return set(effects) == set(hidden) and len(effects) == len(hidden) and halved
 
 
 def run_one(entry: dict, folder: Path) -> dict:
@@ -52,7 +52,8 @@ def run_one(entry: dict, folder: Path) -> dict:
            "verdict": rep.verdict, "effects": list(rep.effects), "effect": rep.effect,
            "excess_before_sd": rep.excess_rmse_before / sd,
            "excess_after_sd": rep.excess_rmse_after / sd, "converged": rep.converged,
-           "noise_std": sd, "seconds": wall}  # fmt: skip
+           "noise_std": sd, "seconds": wall,
+           "extra": [e for e in rep.effects if e not in hidden]}  # fmt: skip
     row["ok"] = score(hidden, row["effects"], rep.verdict, rep.excess_rmse_before,
                       rep.excess_rmse_after)  # fmt: skip
     return row
@@ -64,7 +65,9 @@ def summarise(rows) -> tuple[dict, str]:
         n = len(r["hidden"])
         groups[f"{r['kind']}: " + ("clean" if n == 0 else "one effect" if n == 1 else
                                    "two effects")].append(r)  # fmt: skip
-    summary = {k: {"n": len(v), "success": sum(r["ok"] for r in v)} for k, v in groups.items()}
+    summary = {k: {"n": len(v), "success": sum(r["ok"] for r in v),
+                   "with_extra_effects": sum(bool(r.get("extra")) for r in v)}
+               for k, v in groups.items()}  # fmt: skip
     lines = ["| record | hidden | named | verdict | excess before -> after (sd) | ok |",
              "|---|---|---|---|---|---|"]  # fmt: skip
     for r in rows:
@@ -74,7 +77,8 @@ def summarise(rows) -> tuple[dict, str]:
                      f"{'yes' if r['ok'] else 'NO'} |")  # fmt: skip
     lines.append("")
     for k, v in summary.items():
-        lines.append(f"- {k}: {v['success']}/{v['n']}")
+        lines.append(f"- {k}: {v['success']}/{v['n']} (an effect not hidden added in "
+                     f"{v['with_extra_effects']})")  # fmt: skip
     return summary, "\n".join(lines)
 
 
