@@ -51,6 +51,14 @@ def test_fit_a_slip_run(slip_file, capsys):
     assert np.allclose(np.diag(res["correlation"]), 1.0)
     assert (out / "fit.png").stat().st_size > 1000
     assert slip_file.read_bytes() == before
+    # fit.json is a model file: `tribojax predict` on the same record gives the fit's own numbers
+    pred_out = slip_file.parent / "pred"
+    assert main(["predict", str(out / "fit.json"), str(slip_file), "--out", str(pred_out)]) == 0
+    pred = json.loads((pred_out / "prediction.json").read_text())
+    assert pred["model"]["kind"] == "slip" and pred["model"]["options"] == {"alpha": 1.0}
+    assert pred["nrmse"] == pytest.approx(res["nrmse"], rel=1e-6)
+    assert pred["rms_error"] == pytest.approx(res["rms_residual"], rel=1e-6)
+    assert (pred_out / "prediction.csv").read_text().startswith("time_s,measured_m,predicted_m\n")
     # earlier output is not overwritten
     stamp = (out / "fit.json").read_bytes()
     assert main(["fit", str(slip_file), "--out", str(out)]) == 2
