@@ -14,6 +14,10 @@ Scoring, from the manifest's hidden effects only (no setting is tuned on these r
 Added effects that are not hidden are counted apart ("extra") for every record.
 Writes OUT/blind_study.jsonl (a line per record, as it goes), OUT/blind_study.json (rows and
 summary) and OUT/blind_study.md (the table). Default OUT: DIR.
+
+benchmarks/blind_study_before.jsonl: the rows of the code before any issue-32 change (stop 31,
+24 of 45 records: all 16 loops, 8 slip runs; the run was stopped for time). To finish it, copy it
+to OUT/blind_study.jsonl and run with --resume at that code.
 """
 
 from __future__ import annotations
