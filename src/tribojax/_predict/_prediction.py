@@ -106,9 +106,9 @@ def load_model(path) -> FittedModel:
         raise ValueError(f"{path}: not a readable JSON file ({exc})") from None
     if isinstance(d, dict) and "format" not in d:
         if d.get(SAVED_KEY) is None:
-            raise ValueError(f"{path}: no field '{SAVED_KEY}' (a fit.json or discovery.json of a "
-                             "model that can predict: a slip run, a loop or a history fit; "
-                             "refitted with this version)")  # fmt: skip
+            raise ValueError(f"{path}: no field '{SAVED_KEY}' (written by `tribojax fit` or "
+                             "`discover` of this version for a slip run, loop, history or "
+                             "friction curve; wu2015's steady-loop fit saves none)")  # fmt: skip
         return FittedModel.from_dict(d[SAVED_KEY], f"{path}: {SAVED_KEY}")
     return FittedModel.from_dict(d, str(path))
 
