@@ -4,9 +4,10 @@ at the saved nuisance values with the strengths that give the saved physical val
 An effect is rebuilt by name from the registry (`default_effects`; `tribojax.discovery` registers
 the library's effects on import), so a model saved with effects rebuilds without hand work on
 any record of the same kind. Among the effect's designs on the new record the one with the saved
-fixed nuisance values (e.g. a drift's degree) is taken, the nearest seed of each fitted nuisance value (a gap, a Stribeck velocity, a mode's
-frequency) is moved to the saved value through the strength that shifts it, and every other
-strength is the saved physical value over the design's unit.
+fixed nuisance values (e.g. a drift's degree) is taken, the nearest seed of each fitted nuisance
+value (a gap, a Stribeck velocity, a mode's frequency) is moved to the saved value through the
+strength that shifts it, and every other strength is the saved physical value over the design's
+unit.
 """
 
 from __future__ import annotations
