@@ -11,6 +11,9 @@ Scoring, from the manifest's hidden effects only (no setting is tuned on these r
 - one hidden effect: it is named first and the excess misfit is at least halved;
 - two hidden effects: both are named (either order), no effect that is not there is added
   beside them, and the excess is at least halved.
+`ok_heldout` adds, for a record with hidden effects, that the held-out excess (discovery.json's
+"heldout_excess_before/after": each half of the record predicted by the model fitted on the
+other half) is at least halved too (issue 32's target).
 Added effects that are not hidden are counted apart ("extra") for every record.
 Writes OUT/blind_study.jsonl (a line per record, as it goes), OUT/blind_study.json (rows and
 summary) and OUT/blind_study.md (the table). Default OUT: DIR.
@@ -55,11 +58,24 @@ def run_one(entry: dict, folder: Path) -> dict:
            "verdict": rep.verdict, "effects": list(rep.effects), "effect": rep.effect,
            "excess_before_sd": rep.excess_rmse_before / sd,
            "excess_after_sd": rep.excess_rmse_after / sd, "converged": rep.converged,
+           "heldout_before_sd": _sd(rep.heldout_excess_before, sd),
+           "heldout_after_sd": _sd(rep.heldout_excess_after, sd),
            "noise_std": sd, "seconds": wall,
            "extra": [e for e in rep.effects if e not in hidden]}  # fmt: skip
     row["ok"] = score(hidden, row["effects"], rep.verdict, rep.excess_rmse_before,
                       rep.excess_rmse_after)  # fmt: skip
+    h0, h1 = row["heldout_before_sd"], row["heldout_after_sd"]
+    row["ok_heldout"] = row["ok"] and (not hidden or (h0 is not None and h1 is not None
+                                                       and h1 <= 0.5 * h0))  # fmt: skip
     return row
+
+
+def _sd(value, sd):
+    return None if value is None else value / sd
+
+
+def _pair(a, b):
+    return "-" if a is None else f"{a:.2f} -> " + ("failed" if b is None else f"{b:.2f}")
 
 
 def summarise(rows) -> tuple[dict, str]:
@@ -69,18 +85,22 @@ def summarise(rows) -> tuple[dict, str]:
         groups[f"{r['kind']}: " + ("clean" if n == 0 else "one effect" if n == 1 else
                                    "two effects")].append(r)  # fmt: skip
     summary = {k: {"n": len(v), "success": sum(r["ok"] for r in v),
+                   "success_heldout": sum(bool(r.get("ok_heldout")) for r in v),
                    "with_extra_effects": sum(bool(r.get("extra")) for r in v)}
                for k, v in groups.items()}  # fmt: skip
-    lines = ["| record | hidden | named | verdict | excess before -> after (sd) | ok |",
-             "|---|---|---|---|---|---|"]  # fmt: skip
+    lines = ["| record | hidden | named | verdict | excess before -> after (sd) | held out (sd) "
+             "| ok | ok held out |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for r in rows:
         lines.append(f"| {r['label']} | {' + '.join(r['hidden']) or 'none'} | "
                      f"{', '.join(r['effects']) or '-'} | {r['verdict']} | "
                      f"{r['excess_before_sd']:.2f} -> {r['excess_after_sd']:.2f} | "
-                     f"{'yes' if r['ok'] else 'NO'} |")  # fmt: skip
+                     f"{_pair(r.get('heldout_before_sd'), r.get('heldout_after_sd'))} | "
+                     f"{'yes' if r['ok'] else 'NO'} | "
+                     f"{'yes' if r.get('ok_heldout') else 'NO'} |")  # fmt: skip
     lines.append("")
     for k, v in summary.items():
-        lines.append(f"- {k}: {v['success']}/{v['n']} (an effect not hidden added in "
+        lines.append(f"- {k}: {v['success']}/{v['n']}, held out too {v['success_heldout']}"
+                     f"/{v['n']} (an effect not hidden added in "
                      f"{v['with_extra_effects']})")  # fmt: skip
     return summary, "\n".join(lines)
 

@@ -3,6 +3,7 @@ share, the contract of their effects, and the one fit of a model with its effect
 
 from ._base import ALPHA as ALPHA
 from ._base import K_MAX as K_MAX
+from ._base import N_FOLD_BLOCKS as N_FOLD_BLOCKS
 from ._base import N_WINDOWS as N_WINDOWS
 from ._base import AbstractBaseline as AbstractBaseline
 from ._base import DiscoveryData as DiscoveryData
@@ -14,10 +15,12 @@ from ._curve import curve_baseline as curve_baseline
 from ._effects import AbstractEffect as AbstractEffect
 from ._effects import default_effects as default_effects
 from ._effects import register_effect as register_effect
+from ._fit import FOLD_SHARE_MIN as FOLD_SHARE_MIN
 from ._fit import MAX_STEPS as MAX_STEPS
 from ._fit import evaluate as evaluate
 from ._fit import fit_model as fit_model
 from ._fit import fit_record as fit_record
+from ._fit import heldout_residual as heldout_residual
 from ._fit import pack_designs as pack_designs
 from ._fit import padded_args as padded_args
 from ._fit import padded_residual as padded_residual
@@ -40,6 +43,7 @@ from ._loop_force import prepare_loop as prepare_loop
 from ._modes import golden_max as golden_max
 from ._modes import oscillator as oscillator
 from ._rebuild import RECORD_KINDS as RECORD_KINDS
+from ._rebuild import fit_saved as fit_saved
 from ._rebuild import on_baseline as on_baseline
 from ._rebuild import rebuild as rebuild
 from ._saved import KINDS as KINDS

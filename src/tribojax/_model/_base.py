@@ -19,6 +19,7 @@ import numpy as np
 from .._fit._noise import ALPHA, noise_consistent, noise_estimate
 
 N_WINDOWS = 32  # windows of the noise test
+N_FOLD_BLOCKS = 16  # contiguous blocks of the default two-fold split, alternately assigned
 K_MAX = 12  # effect strengths in one fit, padded to this size (one compiled solve per record shape)
 """Most effect strengths in one model; fits are padded to this size so that one compiled solve
 serves every combination of effects on a record shape."""
@@ -197,6 +198,14 @@ class AbstractBaseline(eqx.Module):
         ok, p, _ = noise_consistent(r, sigma, rho, d.segment, d.x, n_params, alpha=alpha,
                                     n_windows=n_windows, estimated=estimated)  # fmt: skip
         return bool(ok), p, sigma, rho
+
+    def folds(self) -> np.ndarray:
+        """Two-fold split of the samples for held-out checks (0/1 per sample): each fold is
+        fitted alone and scored on the other. Default: the record cut into `N_FOLD_BLOCKS`
+        blocks of equal sample count, alternately labelled, so that both folds see every part
+        of the drive (a slip run's rest, ramps and cruise)."""
+        n = self.data().y.shape[0]
+        return (np.arange(n) * N_FOLD_BLOCKS // max(n, 1)) % 2
 
     def region_info(self, region: dict) -> dict:
         """Extra keys for a flagged region (e.g. a loop's branch and displacement range);

@@ -99,6 +99,12 @@ class CurveBaseline(AbstractBaseline):
     def noise_model(self, r):
         return float(self.sigma_bar), 0.0  # independent points of known standard error
 
+    def folds(self):
+        """Alternate points in order of velocity (independent points: each fold spans the
+        whole velocity range)."""
+        rank = np.argsort(np.argsort(np.asarray(self.v)))
+        return rank % 2
+
     def signals(self):
         vu = self.units[0]
         v = np.asarray(self.v)

@@ -31,6 +31,7 @@ from .._results import RESULTS
 from ._base import K_MAX, AbstractBaseline
 
 GAIN_TOL = 1e-2  # converged: a Gauss–Newton step would lower the cost by < 0.01 residual variances
+FOLD_SHARE_MIN = 1e-3  # least share of a parameter's Jacobian energy in each held-out fold
 NOISE_TOL = 1.0  # stationary: a rejected step promised < 1 residual variance (evaluation noise)
 SOLVER = LevenbergMarquardt.record(1e-8, 1e-10, gain_tol=GAIN_TOL, noise_tol=NOISE_TOL,
                                    max_rejections=12, padded=K_MAX)  # fmt: skip
@@ -46,6 +47,7 @@ class Padded(eqx.Module):
     basis: jax.Array  # additive columns (n, K_MAX), output units per unit s
     mask: jax.Array  # 1 for the active strengths (K_MAX,)
     y: jax.Array  # observed samples (n,)
+    w: jax.Array  # weight of each sample's residual (n,): 1, or 0 for a held-out sample
     scale: jax.Array  # residual unit (output units)
     bad: jax.Array  # residual of every row where the model is not finite
     d: jax.Array  # variable scaling: x = d·u (p + K_MAX,)
@@ -68,8 +70,8 @@ def _residual_and_jac(x, a: Padded):
     else:  # no knob moves: the null physics alone, differentiated over θ only
         value, jb = a.baseline.value_and_jacobian(x[:p], a.base)
         js = a.basis
-    r = (value + a.basis @ s - a.y) / a.scale
-    J = jnp.concatenate([jb, js * a.mask[None, :]], axis=1) / a.scale
+    r = a.w * (value + a.basis @ s - a.y) / a.scale
+    J = jnp.concatenate([jb, js * a.mask[None, :]], axis=1) * (a.w / a.scale)[:, None]
     ok = jnp.all(jnp.isfinite(r)) & jnp.all(jnp.isfinite(J))
     r = jnp.concatenate([jnp.where(ok, r, a.bad), hold * x[p:]])
     J_hold = jnp.concatenate([jnp.zeros((K_MAX, p)), jnp.diag(hold)], axis=1)
@@ -116,13 +118,16 @@ def pack_designs(baseline, designs):
     return base, gain, basis
 
 
-def padded_args(baseline, base, gain, basis, k, y, scale, bad=np.inf, d=None) -> Padded:
+def padded_args(baseline, base, gain, basis, k, y, scale, bad=np.inf, d=None,
+                weights=None) -> Padded:  # fmt: skip
     """The `Padded` arguments of `padded_residual` (float64 leaves). Where no knob leaves its
     null (no gain, no knob set), the residual evaluates the null physics alone
-    (`value_and_jacobian`: the fit of the model alone, or with additive effects only)."""
+    (`value_and_jacobian`: the fit of the model alone, or with additive effects only).
+    `weights`: per-sample residual weights (default 1)."""
     p = len(baseline.param_names)
     d = np.ones(p + K_MAX) if d is None else d
-    arrays = (base, gain, basis, np.arange(K_MAX) < k, y, scale, bad, d)
+    w = np.ones(np.shape(y)) if weights is None else weights
+    arrays = (base, gain, basis, np.arange(K_MAX) < k, y, w, scale, bad, d)
     knobs = bool(np.any(gain != 0) or np.any(base != baseline.knob_null()))
     return Padded(baseline, *(jnp.asarray(v, dtype=jnp.float64) for v in arrays), knobs=knobs)
 
@@ -135,7 +140,8 @@ def _names(baseline, designs):
 
 
 def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
-              max_steps=MAX_STEPS, sigma_known=False, noise_consistent=None):  # fmt: skip
+              max_steps=MAX_STEPS, sigma_known=False, noise_consistent=None,
+              weights=None):  # fmt: skip
     """Fit [θ_b, s] of `baseline` with the effects' `designs`, minimising ‖(model − y)/scale‖².
 
     Solver `LevenbergMarquardt.record`; the variables are scaled by the start Jacobian's column
@@ -151,6 +157,8 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
             (default the record's); scale: the residual unit (output units).
         sigma_known: `scale` is the noise sd (statistics in its units) rather than a unit.
         noise_consistent: the record's noise verdict for the statistics (see `fit_statistics`).
+        weights: 0/1 per sample: fit the samples of weight 1 only (a held-out check,
+            `heldout_residual`); `prediction` is then the model at every sample.
     Returns:
         `FitResult` with the fitted `model`, `prediction` (output units), `residuals` (in units of
         `scale`), `theta_covariance`, the `effects` and `designs`, and `result`: successful,
@@ -166,7 +174,7 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
     npar = p + k
     x0 = np.zeros(p + K_MAX)
     x0[:npar] = np.asarray(baseline.start() if theta0 is None else theta0, dtype=float)
-    args = padded_args(baseline, base, gain, basis, k, y, scale)
+    args = padded_args(baseline, base, gain, basis, k, y, scale, weights=weights)
     names = _names(baseline, designs)
     extra = dict(model=baseline, effects=tuple(effects), designs=designs, scale=float(scale))
 
@@ -221,12 +229,41 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
         message = f"stationary: no descent step (predicted gain {pred / s2:.3g} s²)"
     elif res.converged:
         message = ""
+    prediction = y + scale * r
+    if weights is not None:  # the samples left out are predicted, not fitted
+        prediction = evaluate(baseline, x[:p], designs, x[p:])
+        noise_consistent = False if noise_consistent is None else noise_consistent
     if noise_consistent is None and baseline.noise_gate:
         noise_consistent = baseline.noise_test(scale * r, npar)[0]
     return fit_statistics(x, r, J, names=names, transform=transform, sigma_known=sigma_known,
                           result=result, steps=res.steps, message=message,
-                          noise_consistent=noise_consistent, prediction=y + scale * r,
+                          noise_consistent=noise_consistent, prediction=prediction,
                           **extra)  # fmt: skip
+
+
+def heldout_residual(baseline, designs, x0, y=None, scale=1.0, effects=(),
+                     max_steps=MAX_STEPS):  # fmt: skip
+    """Two-fold held-out residual (output units): the samples of each fold of `baseline.folds()`
+    minus the model (with the effects' `designs`, their nuisance values fixed) fitted from
+    x0 = [θ_b, s] on the other fold alone. Every sample is predicted once by a fit that did not
+    see it. None when a fold's fit fails, or when a parameter has less than `FOLD_SHARE_MIN` of
+    its Jacobian energy (Σ (∂r/∂x)²) in either fold: that fold cannot determine it, so its fit
+    keeps the start value, which saw the held-out samples."""
+    y = np.asarray(baseline.data().y if y is None else y, dtype=float)
+    folds = np.asarray(baseline.folds())
+    out, energy = np.empty_like(y), []
+    for k in (0, 1):
+        f = fit_model(baseline, designs, x0, y, scale, effects, max_steps=max_steps,
+                      weights=(folds != k).astype(float))  # fmt: skip
+        if not f.converged or not np.all(np.isfinite(f.prediction)):
+            return None
+        out[folds == k] = (y - f.prediction)[folds == k]
+        energy.append(np.sum(f.jacobian**2, axis=0))
+    # a parameter one fold hardly sees keeps the start value (fitted on all samples) in that
+    # fold's fit: its held-out prediction would not be one
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.minimum(*energy) / (energy[0] + energy[1])
+    return None if np.any(~(share >= FOLD_SHARE_MIN)) else out
 
 
 def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_known=None,

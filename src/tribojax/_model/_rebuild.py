@@ -20,6 +20,7 @@ from scipy.optimize import brentq
 
 from ._curve import curve_baseline
 from ._effects import default_effects
+from ._fit import MAX_STEPS, fit_model, record_scale
 from ._loop import loop_baseline
 from ._saved import FittedModel
 from ._slip import slip_baseline
@@ -82,6 +83,20 @@ def on_baseline(model: FittedModel, baseline):
         designs.append(d)
         strengths.extend(s)
     return theta, tuple(designs), np.asarray(strengths, dtype=float)
+
+
+def fit_saved(model: FittedModel, baseline, *, max_steps=MAX_STEPS, sigma_known=None):
+    """Fit `model` (its effects included, every parameter, strength and fitted nuisance free) on
+    `baseline`'s record from the saved values, in the residual unit of `fit_record`
+    (`record_scale`). `sigma_known`: default the record states its noise. Returns the
+    `FitResult` of `fit_model` (measured: from the baseline fit's parameters instead of the
+    saved ones, a clearance's refit stopped at a depth of 0.05 with the misfit untouched; from
+    the saved ones it reached the noise)."""
+    theta, designs, s = on_baseline(model, baseline)
+    known = bool(baseline.data().noise_std) if sigma_known is None else sigma_known
+    return fit_model(baseline, designs, np.concatenate([theta, s]), None, record_scale(baseline),
+                     effects=tuple(e.name for e in model.effects), max_steps=max_steps,
+                     sigma_known=known)  # fmt: skip
 
 
 def _distance(a: float, b: float) -> float:

@@ -18,9 +18,8 @@ from .._model import (
     FittedModel,
     SavedEffect,
     evaluate,
-    fit_model,
+    fit_saved,
     rebuild,
-    record_scale,
 )
 from .._model import fitted_model as record_model_of
 from ..discovery import DiscoveryReport
@@ -125,10 +124,7 @@ def predict(model: FittedModel, record) -> Prediction:
                          f"{type(model).__name__}")  # fmt: skip
     source = str(getattr(record, "source", ""))
     need = "loop" if model.kind == "history" else RECORD_KINDS[model.kind].record_kind
-    kind = getattr(record, "kind", type(record).__name__)
-    if kind != need:
-        raise ValueError(f"{source or 'record'}: a {kind} record; the {model.kind} model "
-                         f"predicts {need} records")  # fmt: skip
+    _check_kind(model, record, need, "predicts")
     if model.kind == "history":
         x_name, unit, (x, measured, predicted) = "time_s", "N", _history(model, record)
     else:
@@ -152,15 +148,16 @@ def refit(model: FittedModel, record, *, max_steps: int = MAX_STEPS, throw: bool
     if model.kind not in RECORD_KINDS:
         raise ValueError(f"refit takes a record model (slip, loop, curve), not a {model.kind!r} "
                          "model (a history fit: tribojax.fit_history)")  # fmt: skip
+    _check_kind(model, record, RECORD_KINDS[model.kind].record_kind, "fits")
+    baseline = RECORD_KINDS[model.kind].build(record, model.options)
+    return thrown(fit_saved(model, baseline, max_steps=max_steps), throw)
+
+
+def _check_kind(model, record, need, verb):
     kind = getattr(record, "kind", type(record).__name__)
-    if kind != RECORD_KINDS[model.kind].record_kind:
-        raise ValueError(f"{getattr(record, 'source', 'record')}: a {kind} record; the "
-                         f"{model.kind} model fits {RECORD_KINDS[model.kind].record_kind} records")
-    baseline, theta, designs, s = rebuild(model, record)
-    fit = fit_model(baseline, designs, np.concatenate([theta, s]), None, record_scale(baseline),
-                    effects=tuple(e.name for e in model.effects), max_steps=max_steps,
-                    sigma_known=bool(baseline.data().noise_std))  # fmt: skip
-    return thrown(fit, throw)
+    if kind != need:
+        raise ValueError(f"{getattr(record, 'source', '') or 'record'}: a {kind} record; the "
+                         f"{model.kind} model {verb} {need} records")  # fmt: skip
 
 
 def _history(model, loop):

@@ -20,7 +20,8 @@ class Candidate:
     score: Rao (LM) statistic of `design`'s columns (χ²_dof under the null); p_value: its
     p-value Bonferroni-corrected over the effect's `grid_points`; seeds: further designs the
     refit starts from; gate: the effect's `score_gate`. Filled by the refit step: delta_bic
-    (None: not refitted), rmse_after (output units), delta_bic_common, refit_message.
+    (None: not refitted), rmse_after (output units), delta_bic_common, refit_message,
+    heldout_excess (the refit's held-out excess, output units, when its ΔBIC qualified).
     """
 
     name: str
@@ -35,6 +36,7 @@ class Candidate:
     rmse_after: float | None = None
     delta_bic_common: float | None = None
     refit_message: str | None = None
+    heldout_excess: float | None = None
 
     def public(self) -> dict:
         """The candidate as discovery.json lists it."""
@@ -42,7 +44,7 @@ class Candidate:
                "p_value": self.p_value, "grid_points": self.grid_points,
                "nuisance": {k: float(v) for k, v in self.design.nuisance.items()},
                "delta_bic": self.delta_bic}  # fmt: skip
-        for key in ("rmse_after", "delta_bic_common", "refit_message"):
+        for key in ("rmse_after", "delta_bic_common", "refit_message", "heldout_excess"):
             if getattr(self, key) is not None:
                 out[key] = getattr(self, key)
         return out

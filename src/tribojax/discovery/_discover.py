@@ -11,15 +11,15 @@ import dataclasses
 
 import numpy as np
 
-from .._fit._noise import find_regions, noise_consistent
+from .._fit._noise import excess_rmse, find_regions, noise_consistent
 from .._model import (
     ALPHA,
     AbstractBaseline,
     DiscoveryData,
     FittedModel,
-    fit_model,
     fit_record,
-    on_baseline,
+    fit_saved,
+    heldout_residual,
 )
 from ._candidates import rank
 from ._core import DELTA_BIC_THRESHOLD, AbstractEffect, default_effects
@@ -48,6 +48,7 @@ class _Run:
     regions: list = None
     base_test: tuple = None
     noise: NoiseModel = None
+    _heldout: dict = dataclasses.field(default_factory=dict)
 
     def rebase(self, state):
         """Make `state` the baseline fit: its residual, noise model, regions and noise test."""
@@ -62,6 +63,17 @@ class _Run:
             g.update(b.region_info(g))
         self.base_state, self.r0, self.base_test = state, r, (ok, p)
         return state
+
+    def heldout(self, state) -> float | None:
+        """The held-out excess of `state`'s model (output units, against the current noise sd):
+        `heldout_residual` with its effects' nuisance values fixed, from its fitted values;
+        None when a fold's fit fails. Each model's held-out residual is computed once."""
+        key = id(state)
+        if key not in self._heldout:
+            self._heldout[key] = (state, heldout_residual(
+                self.baseline, state.designs, state.theta, self.y, self.scale, state.effects))
+        r = self._heldout[key][1]
+        return None if r is None else excess_rmse(r, self.noise.sigma)
 
     def consistent(self, state) -> bool:
         """The noise test that decides "none" and "explained" (a refit's residual sharpens the
@@ -106,14 +118,15 @@ def discover(
     4. Refit the `n_refit` best candidates with p-value below alpha/(number of candidates), and
        those of effects with `score_gate` False, from one Gauss–Newton step (from zero new
        strengths when that fails, then from the design's `starts`); a candidate qualifies if
-       ΔBIC < `delta_bic_threshold` (AR(1)-inflated, nuisance counted); add the one with the
-       lowest ΔBIC at a common inflation (`_refits.refit_round`, `choose`). A refit whose gain
+       ΔBIC < `delta_bic_threshold` (AR(1)-inflated, nuisance counted) and, fitted on one
+       half of the record (`folds()`), it lowers the current model's misfit on the other half
+       (`_Run.heldout`, both ways); add the one with the lowest ΔBIC at a common inflation (`_refits.refit_round`, `choose`). A refit whose gain
        came from moving the current model's own optimum replaces the current model instead
        (at most `MAX_MOVES` times). Repeat until none qualifies, `max_effects` are in, or the
        model is consistent with the noise ("explained"). When the baseline itself is
        consistent with the noise the candidates are ranked, not refitted (verdict "none").
-    5. Report (`_report.report`): the verdict, the excess misfit before and after, and where a
-       misfit remains its regions, signal correlations and a flexible correction.
+    5. Report (`_report.report`): the verdict, the excess misfit before and after, in-sample
+       and held out ("explained" needs both), and where a misfit remains its regions, signal correlations and a flexible correction.
 
     Args:
         baseline: a concrete baseline holding the record (e.g. `slip_baseline(run)`).
@@ -138,7 +151,8 @@ def discover(
     run = _Run(baseline, data, np.asarray(data.y, dtype=float), state.scale, alpha, n_windows)
     run.rebase(state)
     base_ok = run.consistent(state)  # then the candidates are ranked, none is refitted or added
-    started = _started(run, state, start) if start is not None and state.converged else None
+    started = fit_saved(start, baseline, sigma_known=False) \
+        if start is not None and state.converged else None
     state = state if started is None or not started.converged else started
     moves, rounds = 0, []
     grids = {e.name: e.designs(baseline) for e in effects}
@@ -164,7 +178,8 @@ def discover(
         if run.consistent(state):  # explained: nothing is left to name
             break
     settings = {"criterion": "Rao score (chi2, Bonferroni over grid and candidates) then "
-                "Delta BIC (AR(1)-inflated) below threshold",
+                "Delta BIC (AR(1)-inflated) below threshold and a lower held-out "
+                "excess (two-fold)",
                 "delta_bic_threshold": delta_bic_threshold, "alpha": alpha,
                 "max_effects": max_effects, "n_refit": n_refit, "n_windows": n_windows,
                 "candidates_offered": list(by_name)}  # fmt: skip
@@ -173,15 +188,6 @@ def discover(
             "source": start.source, "effects": [e.name for e in start.effects],
             "refit": "none" if started is None else started.message or "converged"}  # fmt: skip
     return report(run, state, rounds, settings)
-
-
-def _started(run, state, start):
-    """The saved model `start` (its effects included) fitted on the run's record from its saved
-    values (measured: from the baseline fit's parameters instead, a clearance's refit stopped at
-    a depth of 0.05 with the misfit untouched; from the saved ones it reached the noise)."""
-    theta, designs, s = on_baseline(start, run.baseline)
-    names = tuple(e.name for e in start.effects)
-    return fit_model(run.baseline, designs, np.concatenate([theta, s]), run.y, run.scale, names)
 
 
 def _checked(baseline, effects, max_effects, alpha) -> list:

@@ -155,9 +155,26 @@ def refit_round(run, state, ranking, n_refit, threshold, by_name, base_ok) -> li
         rho1 = residual_rho(y - new.prediction)
         c.delta_bic = _delta_bic(new.rss, state.rss, n, d.k + d.n_nuisance, rho1)
         c.rmse_after = rms(y - new.prediction)
-        if c.delta_bic < threshold:
+        if c.delta_bic < threshold and _generalises(run, state, new, c):
             accepted.append((c, new, d.k + d.n_nuisance, ar1_inflation(rho1)))
     return accepted
+
+
+def _generalises(run, state, new, c) -> bool:
+    """Does the refit `new` lower the held-out excess of the current model `state` (issue 32:
+    an effect counts only if, fitted on one half of the record, it also lowers the misfit on
+    the other)? True when the current model's held-out residual is unavailable."""
+    before, after = run.heldout(state), run.heldout(new)
+    c.heldout_excess = after
+    if before is None or (after is not None and after < before):
+        return True
+    c.refit_message = (f"not added: held-out excess {_g(after)} not below the current "
+                       f"model's {_g(before)} (fitted on one half, scored on the other)")
+    return False
+
+
+def _g(x):
+    return "(fit failed)" if x is None else f"{x:.3g}"
 
 
 def _strengths_of(run, fit, name):

@@ -31,6 +31,11 @@ class DiscoveryReport:
     verdict: "none", "explained", "partly_explained" or "unexplained" (see `_verdict`).
     excess_rmse_before / excess_rmse_after: RMS misfit beyond the noise of the baseline and the
         final model, sqrt(max(rmse² − σ², 0)) (output units).
+    heldout_excess_before / heldout_excess_after: the same excess of the two-fold held-out
+        residual (each fold predicted by the model fitted on the other alone; the final model's
+        nuisance values fixed), output units; None when the baseline passes the noise test
+        (nothing to hold out) or a fold's fit failed. The verdict
+        "explained" needs the held-out excess at least halved.
     misfit: where a remaining misfit lives: noise-test p-values of the baseline and final
         residuals, the final residual's flagged regions, its correlations with the measured
         signals and a flexible (linear-spline) correction in the best signal.
@@ -58,6 +63,8 @@ class DiscoveryReport:
     verdict: str
     excess_rmse_before: float
     excess_rmse_after: float
+    heldout_excess_before: float | None
+    heldout_excess_after: float | None
     misfit: dict
     x: np.ndarray = dataclasses.field(repr=False)
     y: np.ndarray = dataclasses.field(repr=False)
@@ -84,6 +91,8 @@ class DiscoveryReport:
             "verdict": self.verdict,
             "excess_rmse_before": self.excess_rmse_before,
             "excess_rmse_after": self.excess_rmse_after,
+            "heldout_excess_before": self.heldout_excess_before,
+            "heldout_excess_after": self.heldout_excess_after,
             "misfit": self.misfit,
             "effects": list(self.effects),
             "baseline_rmse": self.baseline_rmse,
@@ -113,7 +122,7 @@ class DiscoveryReport:
             f"rmse: baseline {self.baseline_rmse:.4g} {unit} -> final {self.final_rmse:.4g} {unit}"
             f" (noise sd {self.noise_std:.3g}{' estimated' if self.noise_estimated else ''})",
             f"excess misfit beyond the noise: {self.excess_rmse_before:.3g} -> "
-            f"{self.excess_rmse_after:.3g} {unit}",
+            f"{self.excess_rmse_after:.3g} {unit}" + _heldout_line(self, unit),
             f"flagged regions: {len(self.regions)}",
         ]
         for rg in self.regions[:6]:
@@ -168,7 +177,9 @@ def _misfit(run, rf, state):
                                                n_final, alpha=run.alpha, n_windows=run.n_windows,
                                                estimated=not data.noise_std)  # fmt: skip
     e0, e1 = excess_rmse(run.r0, nz.sigma), excess_rmse(rf, nz.sigma)
-    v = verdict(len(state.effects), base_ok, final_ok, e0, e1)
+    held = (None, None) if base_ok else (run.heldout(run.base_state), run.heldout(state))
+    v = verdict(len(state.effects), base_ok, final_ok, e0, e1,
+                None if held[0] is None else held)  # fmt: skip
     if not baseline.noise_gate:  # no noise test: the ΔBIC selection alone decides
         v = "explained" if state.effects else "none"
     misfit = {"baseline_noise_p_value": p0, "final_noise_p_value": p1,
@@ -180,7 +191,14 @@ def _misfit(run, rf, state):
         misfit["regions"] = remaining
         misfit["correlations"] = correlations(rf, signals)
         misfit["correction"] = flexible_correction(rf, signals, nz.sigma)
-    return misfit, v, e0, e1
+    return misfit, v, e0, e1, held
+
+
+def _heldout_line(rep, unit):
+    if rep.heldout_excess_before is None:
+        return ""
+    after = "failed" if rep.heldout_excess_after is None else f"{rep.heldout_excess_after:.3g}"
+    return f"; held out: {rep.heldout_excess_before:.3g} -> {after} {unit}"
 
 
 def report(run, state, rounds: list, settings: dict) -> DiscoveryReport:
@@ -190,7 +208,7 @@ def report(run, state, rounds: list, settings: dict) -> DiscoveryReport:
     for rg in run.regions:
         rg["rmse_before"] = rms(run.r0[rg["i0"] : rg["i1"]])
         rg["rmse_after"] = rms(rf[rg["i0"] : rg["i1"]])
-    misfit, v, e0, e1 = _misfit(run, rf, state)
+    misfit, v, e0, e1, held = _misfit(run, rf, state)
     unit = data.y_label.split("(")[-1].rstrip(")") if "(" in data.y_label else ""
     return DiscoveryReport(
         kind=baseline.kind, effects=state.effects, baseline_rmse=rms(run.r0), final_rmse=rms(rf),
@@ -199,7 +217,8 @@ def report(run, state, rounds: list, settings: dict) -> DiscoveryReport:
         baseline_fit=_fit_dict(baseline, run.base_state, run.scale),
         final_fit=_fit_dict(baseline, state, run.scale), noise_std=run.noise.sigma,
         noise_estimated=not data.noise_std, rho=run.noise.rho, settings=settings, verdict=v,
-        excess_rmse_before=e0, excess_rmse_after=e1, misfit=misfit,
+        excess_rmse_before=e0, excess_rmse_after=e1, heldout_excess_before=held[0],
+        heldout_excess_after=held[1], misfit=misfit,
         labels={"x": data.x_label, "y": data.y_label, "y_unit": unit}, x=np.asarray(data.x),
         y=y, baseline_y=run.base_state.prediction, final_y=state.prediction,
         segment=np.asarray(data.segment),

@@ -19,9 +19,16 @@ low).
 
 Excess misfit (beyond the noise): e = sqrt(max(mean(r²) − σ², 0)), output units.
 
-Verdict (issue 14): "none" when the baseline passes (nothing is added then); "explained" when
-the added effects make the final residual pass; "partly_explained" when they at least halve
-e; "unexplained" otherwise.
+Held-out excess (issue 32): the same excess of the two-fold held-out residual
+(`tribojax._model.heldout_residual`: each fold of `folds()` predicted by the model fitted on the
+other fold alone), of the baseline (h₀) and of the final model with its effects' nuisance values
+fixed (h₁).
+
+Verdict (issues 14, 32): "none" when the baseline passes (nothing is added then); "explained"
+when the added effects make the final residual pass and at least halve the held-out excess
+(h₁ ≤ h₀/2); "partly_explained" when they at least halve e and lower the held-out excess;
+"unexplained" otherwise. Where no held-out residual could be computed (a fold's fit failed) the
+in-sample tests decide alone.
 
 Flexible correction: the remaining residual fitted by a linear spline (hat functions on knots at
 quantiles) in one measured signal; the share of e² it removes is an upper bound on what a missing
@@ -68,15 +75,20 @@ class NoiseModel:
 
 
 
-def verdict(n_effects, base_ok, final_ok, excess_before, excess_after) -> str:
-    """The issue-14 verdict from the consistency tests and the excess misfits."""
+def verdict(n_effects, base_ok, final_ok, excess_before, excess_after, heldout=None) -> str:
+    """The verdict (module docstring) from the consistency tests, the excess misfits and
+    `heldout` = (h₀, h₁), the held-out excesses (None: not available; h₁ None: the final
+    model's held-out fit failed)."""
     if base_ok:
         return "none"
     if n_effects == 0:
         return "unexplained"
-    if final_ok:
+    h0, h1 = (None, None) if heldout is None else heldout
+    halved = heldout is None or (h1 is not None and h1 <= 0.5 * h0 and h0 > 0)
+    lowered = heldout is None or (h1 is not None and h1 < h0)
+    if final_ok and halved:
         return "explained"
-    if excess_before > 0 and excess_after <= 0.5 * excess_before:
+    if excess_before > 0 and excess_after <= 0.5 * excess_before and lowered:
         return "partly_explained"
     return "unexplained"
 
