@@ -9,10 +9,10 @@ from typing import ClassVar
 
 import numpy as np
 import pytest
-from test_discovery_framework import Tone, _record
 
 import tribojax as tj
 import tribojax.discovery as disc
+from test_discovery_framework import Tone, _record
 from tribojax._model import FOLD_SHARE_MIN, N_FOLD_BLOCKS, heldout_residual, record_scale
 from tribojax.discovery import AbstractEffect, EffectDesign
 from tribojax.discovery._verdict import verdict

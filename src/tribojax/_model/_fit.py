@@ -71,7 +71,7 @@ def _residual_and_jac(x, a: Padded):
         value, jb = a.baseline.value_and_jacobian(x[:p], a.base)
         js = a.basis
     r = a.w * (value + a.basis @ s - a.y) / a.scale
-    J = jnp.concatenate([jb, js * a.mask[None, :]], axis=1) * (a.w / a.scale)[:, None]
+    J = jnp.concatenate([jb, js * a.mask[None, :]], axis=1) / a.scale * a.w[:, None]
     ok = jnp.all(jnp.isfinite(r)) & jnp.all(jnp.isfinite(J))
     r = jnp.concatenate([jnp.where(ok, r, a.bad), hold * x[p:]])
     J_hold = jnp.concatenate([jnp.zeros((K_MAX, p)), jnp.diag(hold)], axis=1)
@@ -247,8 +247,8 @@ def heldout_residual(baseline, designs, x0, y=None, scale=1.0, effects=(),
     minus the model (with the effects' `designs`, their nuisance values fixed) fitted from
     x0 = [θ_b, s] on the other fold alone. Every sample is predicted once by a fit that did not
     see it. None when a fold's fit fails, or when a parameter has less than `FOLD_SHARE_MIN` of
-    its Jacobian energy (Σ (∂r/∂x)²) in either fold: that fold cannot determine it, so its fit
-    keeps the start value, which saw the held-out samples."""
+    its Jacobian energy (Σ (∂r/∂x)², where it has any) in either fold: that fold cannot
+    determine it, so its fit keeps the start value, which saw the held-out samples."""
     y = np.asarray(baseline.data().y if y is None else y, dtype=float)
     folds = np.asarray(baseline.folds())
     out, energy = np.empty_like(y), []
@@ -260,10 +260,10 @@ def heldout_residual(baseline, designs, x0, y=None, scale=1.0, effects=(),
         out[folds == k] = (y - f.prediction)[folds == k]
         energy.append(np.sum(f.jacobian**2, axis=0))
     # a parameter one fold hardly sees keeps the start value (fitted on all samples) in that
-    # fold's fit: its held-out prediction would not be one
-    with np.errstate(invalid="ignore", divide="ignore"):
-        share = np.minimum(*energy) / (energy[0] + energy[1])
-    return None if np.any(~(share >= FOLD_SHARE_MIN)) else out
+    # fold's fit: its held-out prediction would not be one (one no sample sees moves nothing)
+    total = energy[0] + energy[1]
+    share = np.minimum(*energy)[total > 0] / total[total > 0]
+    return None if np.any(share < FOLD_SHARE_MIN) or not np.all(np.isfinite(total)) else out
 
 
 def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_known=None,

@@ -23,7 +23,7 @@ from .._model import (
 )
 from ._candidates import rank
 from ._core import DELTA_BIC_THRESHOLD, AbstractEffect, default_effects
-from ._refits import MAX_MOVES, _moved_optimum, choose, refit_round
+from ._refits import MAX_MOVES, pick, refit_round
 from ._report import DiscoveryReport, report
 from ._verdict import NoiseModel
 
@@ -118,15 +118,17 @@ def discover(
     4. Refit the `n_refit` best candidates with p-value below alpha/(number of candidates), and
        those of effects with `score_gate` False, from one Gauss–Newton step (from zero new
        strengths when that fails, then from the design's `starts`); a candidate qualifies if
-       ΔBIC < `delta_bic_threshold` (AR(1)-inflated, nuisance counted) and, fitted on one
-       half of the record (`folds()`), it lowers the current model's misfit on the other half
-       (`_Run.heldout`, both ways); add the one with the lowest ΔBIC at a common inflation (`_refits.refit_round`, `choose`). A refit whose gain
-       came from moving the current model's own optimum replaces the current model instead
-       (at most `MAX_MOVES` times). Repeat until none qualifies, `max_effects` are in, or the
-       model is consistent with the noise ("explained"). When the baseline itself is
-       consistent with the noise the candidates are ranked, not refitted (verdict "none").
+       ΔBIC < `delta_bic_threshold` (AR(1)-inflated, nuisance counted). Of those, by the
+       lowest ΔBIC at a common inflation (`_refits.refit_round`, `choose`, `pick`): a refit
+       whose gain came from moving the current model's own optimum replaces the current model
+       instead (at most `MAX_MOVES` times); else the first one that, fitted on one half of
+       the record (`folds()`), lowers the current model's misfit on the other half
+       (`_Run.heldout`, both ways) is added. Repeat until none qualifies, `max_effects` are
+       in, or the model is consistent with the noise ("explained"). When the baseline itself
+       is consistent with the noise the candidates are ranked, not refitted (verdict "none").
     5. Report (`_report.report`): the verdict, the excess misfit before and after, in-sample
-       and held out ("explained" needs both), and where a misfit remains its regions, signal correlations and a flexible correction.
+       and held out ("explained" needs both), and where a misfit remains its regions, signal
+       correlations and a flexible correction.
 
     Args:
         baseline: a concrete baseline holding the record (e.g. `slip_baseline(run)`).
@@ -162,13 +164,14 @@ def discover(
             break
         accepted = refit_round(run, state, ranking, n_refit, delta_bic_threshold, by_name,
                                base_ok)  # fmt: skip
-        if accepted:
-            best_c, best = choose(accepted, state, run.y.size)
-            moved = _moved_optimum(baseline, state, best, run.y, run.scale, delta_bic_threshold)
-            if moved is not None and moves < MAX_MOVES:  # a better optimum of the current model
+        picked = pick(run, state, accepted, delta_bic_threshold, moves < MAX_MOVES) \
+            if accepted else None  # fmt: skip
+        if picked is not None:
+            best_c, best, moved = picked
+            if moved is not None:  # a better optimum of the current model
                 moves, best_c.refit_message, best = moves + 1, _MOVED, moved
         rounds.append([c.public() for c in ranking.candidates])
-        if not accepted:
+        if picked is None:
             break
         if best is not moved or state is not run.base_state:
             state = best

@@ -155,9 +155,26 @@ def refit_round(run, state, ranking, n_refit, threshold, by_name, base_ok) -> li
         rho1 = residual_rho(y - new.prediction)
         c.delta_bic = _delta_bic(new.rss, state.rss, n, d.k + d.n_nuisance, rho1)
         c.rmse_after = rms(y - new.prediction)
-        if c.delta_bic < threshold and _generalises(run, state, new, c):
+        if c.delta_bic < threshold:
             accepted.append((c, new, d.k + d.n_nuisance, ar1_inflation(rho1)))
     return accepted
+
+
+def pick(run, state, accepted, threshold, may_move):
+    """The accepted candidate to add, (candidate, refit, moved) — `moved` the current model
+    refitted from the refit's optimum when the gain was its own (`_moved_optimum`, only while
+    `may_move`), else None — or None when no accepted candidate generalises: by `choose`'s
+    order, the first whose refit lowers the held-out excess (`_generalises`); a moved optimum
+    needs no such check (it adds nothing). Held-out fits run for chosen candidates only."""
+    accepted = list(accepted)
+    while accepted:
+        best_c, best = choose(accepted, state, run.y.size)
+        moved = _moved_optimum(run.baseline, state, best, run.y, run.scale, threshold) \
+            if may_move else None  # fmt: skip
+        if moved is not None or _generalises(run, state, best, best_c):
+            return best_c, best, moved
+        accepted = [a for a in accepted if a[0] is not best_c]
+    return None
 
 
 def _generalises(run, state, new, c) -> bool:
