@@ -5,7 +5,8 @@ slip_m) goes to the pre-slip LuGre baseline; a hysteresis loop (time_s, displace
 to the loop baseline (`tribojax.discovery.loop_baseline`); a steady friction curve (a folder of EPOS
 steady-state exports, or a curve CSV) to the Coulomb + viscous curve baseline
 (`tribojax.discovery.curve_baseline`); the format is detected, or named by `--format`. Writes
-DIR/discovery.json (keys: effect, verdict, effects, excess_rmse_before, excess_rmse_after, misfit,
+DIR/discovery.json (keys: effect, verdict, effects, excess_rmse_before, excess_rmse_after,
+heldout_excess_before, heldout_excess_after (the two-fold held-out excess), misfit,
 baseline_rmse, final_rmse, regions, candidates, fitted_model (what `tribojax predict` takes), ...)
 and DIR/discovery.png, and prints a summary. A long record is first reduced to at most
 `--max-samples` samples (default 5,000) by block local quadratics (`tribojax.decimate_record`;
