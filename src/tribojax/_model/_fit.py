@@ -10,6 +10,8 @@ the statistics are `fit_statistics` (the one delta method) on the active columns
 
 from __future__ import annotations
 
+import dataclasses
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -141,7 +143,7 @@ def _names(baseline, designs):
 
 def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
               max_steps=MAX_STEPS, sigma_known=False, noise_consistent=None,
-              weights=None):  # fmt: skip
+              weights=None, restarts=3, _last=np.inf):  # fmt: skip
     """Fit [θ_b, s] of `baseline` with the effects' `designs`, minimising ‖(model − y)/scale‖².
 
     Solver `LevenbergMarquardt.record`; the variables are scaled by the start Jacobian's column
@@ -150,7 +152,13 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
     residual variances (s² = cost/(n − p), at least 1), or, as "stationary" (successful, with a
     message), when no trial step lowered the cost (a local minimum of the cost as evaluated: ODE
     evaluation noise, or a kink where contacts start sliding). A trial point where the model is
-    not finite counts as a rejected step.
+    not finite counts as a rejected step. A stationary stop whose Gauss–Newton step still
+    promises at least `NOISE_TOL` residual variances goes on from where it stopped with the
+    variables rescaled there (up to `restarts` times, while each lowers the cost by more than
+    `NOISE_TOL` residual variances; kept when it lowers the cost). Measured on a record with a
+    40 Hz mode's dynamic part (20 kPa, 5 noise sd, made here with SciPy): the vibration refit
+    stopped at RSS 88,711 with 4,340 variances promised; the restarts reached the noise (4,586
+    for 4,601 samples) and the mode was named (before: "unexplained").
 
     Args:
         theta0: start [θ_b, s] (default `baseline.start()` and zero strengths); y: the data
@@ -229,6 +237,15 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
         message = f"stationary: no descent step (predicted gain {pred / s2:.3g} s²)"
     elif res.converged:
         message = ""
+    if res.converged and pred >= NOISE_TOL * s2 and restarts > 0 \
+            and cost < _last - NOISE_TOL * s2:  # fmt: skip
+        # stopped by rejections far from a minimum: the variables were scaled at the start,
+        # where a nuisance shift's column is zero while its amplitude is; go on rescaled here
+        # (again while each restart lowers the cost by more than the evaluation noise)
+        again = fit_model(baseline, designs, x, y, scale, effects, max_steps, sigma_known,
+                          noise_consistent, weights, restarts - 1, cost)  # fmt: skip
+        if again.converged and again.rss < cost:
+            return dataclasses.replace(again, steps=again.steps + res.steps)
     prediction = y + scale * r
     if weights is not None:  # the samples left out are predicted, not fitted
         prediction = evaluate(baseline, x[:p], designs, x[p:])
