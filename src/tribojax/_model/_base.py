@@ -203,7 +203,8 @@ class AbstractBaseline(eqx.Module):
         """Two-fold split of the samples for held-out checks (0/1 per sample): each fold is
         fitted alone and scored on the other. Default: the record cut into `N_FOLD_BLOCKS`
         blocks of equal sample count, alternately labelled, so that both folds see every part
-        of the drive (a slip run's rest, ramps and cruise)."""
+        of the drive (a slip run's rest, ramps and cruise). None: the model has no held-out
+        check (discovery then judges on the whole record alone)."""
         n = self.data().y.shape[0]
         return (np.arange(n) * N_FOLD_BLOCKS // max(n, 1)) % 2
 

@@ -69,6 +69,11 @@ class Wang2022TableBaseline(AbstractBaseline):
     param_units: ClassVar[tuple] = ()
     knob_names: ClassVar[tuple] = TABLE_KNOBS
     noise_gate: ClassVar[bool] = False  # 24 cells, no noise level: σ from the residual itself
+
+    def folds(self):
+        """None: no held-out check (24 published cells; an effect may sit in one cell, such as
+        a reading step in one phase of one run, which no other cell can confirm)."""
+        return None
     F_s: Array  # (6,) N
     K_tau: Array  # (6,) N/m
     C_tau: Array  # (6,) N s/m

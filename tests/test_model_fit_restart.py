@@ -1,0 +1,57 @@
+"""The record-model fit goes on from a stationary stop that still promises a gain (issue 32 item
+3): a lightly damped mode's dynamic part, refitted from zero amplitude.
+
+The record is made here, not by the candidate code: the clean slip run by SciPy
+(benchmarks/discovery_records.py) on a 0.5 ms grid at 20 kPa, plus a 40 Hz mode (ζ 0.02) forced
+by the stage acceleration and integrated by SciPy, read as its dynamic part q + a/ω², at 5 noise
+sd of the slip reading."""
+
+import numpy as np
+import pytest
+from benchmarks import discovery_records as dr
+from scipy.integrate import solve_ivp
+
+import tribojax as tj
+import tribojax.discovery as disc
+from tribojax._model import effect_strengths, fit_model, fit_record
+
+F_MODE, ZETA, SIGMA, VISIBILITY, N = 40.0, 0.02, 0.05e-9, 5.0, 4601
+
+
+def _record(seed=1):
+    F_s, _, _ = dr.table3(20.0)
+    tk, ak = dr.drive_knots("paper", F_s)
+    t = np.linspace(0.0, dr.T_END, N)
+    spec = dr.RecordSpec("clean", "-", 20.0, "paper", "low", True, seed)
+    slip = dr._simulate(spec, np.random.default_rng(seed), tk, ak, t)[0]
+    a = np.interp(t, tk, ak)
+    w = 2 * np.pi * F_MODE
+    def mode(tt, q):
+        return [q[1], -np.interp(tt, tk, ak) - 2 * ZETA * w * q[1] - w * w * q[0]]
+
+    sol = solve_ivp(mode, (0.0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-16,
+                    max_step=2e-4)  # fmt: skip
+    ringing = sol.y[0] + a / w**2
+    ringing /= np.sqrt(np.mean(ringing**2))
+    rng = np.random.default_rng(seed)
+    y = slip + VISIBILITY * SIGMA * ringing + SIGMA * rng.normal(size=N)
+    return tj.SlipRun(t, a, y, dr.MASS, noise_std=SIGMA)
+
+
+def test_mode_refit_reaches_the_noise_only_with_the_restarts():
+    base = disc.slip_baseline(_record())
+    state = fit_record(base)
+    assert state.converged
+    (vib,) = [e for e in disc.default_effects("slip") if e.name == "vibration"]
+    design = vib.design(base, F_MODE, ZETA, 0.0)  # the dynamic part, at the true mode
+    x0 = np.concatenate([state.theta, np.zeros(design.k)])
+    y = np.asarray(base.data().y)
+    stalled = fit_model(base, (design,), x0, y, state.scale, ("vibration",), restarts=0)
+    fit = fit_model(base, (design,), x0, y, state.scale, ("vibration",))
+    assert fit.converged and fit.steps > stalled.steps
+    # RSS in noise variances: the stalled fit leaves > 10 per sample, the restarted one the noise
+    assert stalled.rss > 10 * N
+    assert fit.rss == pytest.approx(N, rel=0.05)
+    nuisance = effect_strengths(fit)["vibration"]["nuisance"]
+    assert nuisance["f_Hz"] == pytest.approx(F_MODE, rel=0.01)
+    assert nuisance["zeta"] == pytest.approx(ZETA, rel=0.2)
