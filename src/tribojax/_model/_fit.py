@@ -263,9 +263,10 @@ def heldout_residual(baseline, designs, x0, y=None, scale=1.0, effects=(),
     """Two-fold held-out residual (output units): the samples of each fold of `baseline.folds()`
     minus the model (with the effects' `designs`, their nuisance values fixed) fitted from
     x0 = [θ_b, s] on the other fold alone. Every sample is predicted once by a fit that did not
-    see it. None when the model has no folds, a fold's fit fails, or when a parameter has less than `FOLD_SHARE_MIN` of
-    its Jacobian energy (Σ (∂r/∂x)², where it has any) in either fold: that fold cannot
-    determine it, so its fit keeps the start value, which saw the held-out samples."""
+    see it. None when the model has no folds, a fold's fit fails, or a parameter has less than
+    `FOLD_SHARE_MIN` of its Jacobian energy (Σ (∂r/∂x)², where it has any) in either fold: that
+    fold cannot determine it, so its fit keeps the start value, which saw the held-out
+    samples."""
     y = np.asarray(baseline.data().y if y is None else y, dtype=float)
     folds = baseline.folds()
     if folds is None:  # no held-out check for this model
