@@ -101,6 +101,6 @@ def _score(r, J_cur, cols):
 
 def _delta_bic(rss1, rss0, n, dk, rho):
     """ΔBIC of the augmented vs the current model, Gaussian errors with unknown variance and an
-    AR(1) variance inflation c = (1+ρ)/(1−ρ) of the log-likelihood ratio (ρ: the caller's, in
-    a refit round the augmented model's residual ρ̂, at most the noise model's)."""
+    AR(1) variance inflation c = (1+ρ)/(1−ρ) of the log-likelihood ratio (ρ from the
+    augmented model's residuals)."""
     return delta_bic(rss1, rss0, n, dk, ar1_inflation(rho))
