@@ -20,6 +20,9 @@ summary) and OUT/blind_study.md (the table). Default OUT: DIR.
 
 benchmarks/blind_study_before.jsonl: the rows of the code before any issue-32 change (stop 31,
 all 45 records; 4,019 s of discovery on this 2-core machine, partly under load).
+benchmarks/blind_study_after.jsonl: the rows of the code after this stop's issue-32 changes, for
+the records that run finished (two processes side by side beside the test suite: its times are
+not comparable with the before column's); notebooks/05_discovery.ipynb tabulates both.
 """
 
 from __future__ import annotations
@@ -62,11 +65,11 @@ def run_one(entry: dict, folder: Path) -> dict:
            "heldout_after_sd": _sd(rep.heldout_excess_after, sd),
            "noise_std": sd, "seconds": wall,
            "extra": [e for e in rep.effects if e not in hidden]}  # fmt: skip
-    row["ok"] = score(hidden, row["effects"], rep.verdict, rep.excess_rmse_before,
-                      rep.excess_rmse_after)  # fmt: skip
+    row["ok"] = bool(score(hidden, row["effects"], rep.verdict, rep.excess_rmse_before,
+                           rep.excess_rmse_after))  # fmt: skip
     h0, h1 = row["heldout_before_sd"], row["heldout_after_sd"]
-    row["ok_heldout"] = row["ok"] and (not hidden or (h0 is not None and h1 is not None
-                                                       and h1 <= 0.5 * h0))  # fmt: skip
+    row["ok_heldout"] = bool(row["ok"] and (not hidden or (h0 is not None and h1 is not None
+                                                            and h1 <= 0.5 * h0)))  # fmt: skip
     return row
 
 
