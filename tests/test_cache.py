@@ -1,7 +1,8 @@
 """Start-up and the persistent compilation cache (issue 31), each in a fresh interpreter.
 
-- the fit engine's programs hold no host callback, so JAX caches them: a second process finds
-  them on disk and gives the same numbers to the last digit;
+- the fit engine's programs hold no host callback, so their traces are stored (`jax.export`) and
+  JAX caches their compilation: a second process reads both from disk and gives the same numbers
+  to the last digit; a corrupt stored trace is traced again, never used;
 - `TRIBOJAX_CACHE=off`, `TRIBOJAX_CACHE_DIR` and a user's own JAX cache folder are respected;
 - an entry that cannot be read (truncated) is compiled again, never used;
 - `import tribojax` does not import JAX until a name is used, and still gives float64 arrays;
@@ -34,11 +35,15 @@ h = H(); h.setLevel(logging.DEBUG)
 log = logging.getLogger("jax._src.compiler"); log.addHandler(h); log.setLevel(logging.DEBUG)
 import tribojax as tj
 import jax
+import tribojax._export as E
+found = []
+_read = E._read
+E._read = lambda path: found.append(_read(path) is not None) or _read(path)
 el = tj.PreSlipLuGre(F_s=1.1, K_tau=2.0e7, C_tau=150.0)
 run = tj.synthetic_slip_run(el, n=461, noise=0.3e-9, seed=3)
 fit = tj.fit_slip_run(run, alpha=1.0)
 print(json.dumps({"values": [float(v) for v in fit.values], "converged": bool(fit.converged),
-                  "programs": sorted(set(hits)),
+                  "programs": sorted(set(hits)), "read": sum(found), "missed": found.count(False),
                   "cache_dir": jax.config.jax_compilation_cache_dir}))
 """
 
@@ -61,19 +66,30 @@ def test_fit_programs_are_cached_and_give_the_same_numbers(tmp_path):
     env = {"TRIBOJAX_CACHE_DIR": str(tmp_path / "cache")}
     first = _fit(env, tmp_path)
     assert first["cache_dir"] == str(tmp_path / "cache")
-    assert first["converged"]
-    # the engine's two programs (the record generator's simulation, throw=True, has callbacks)
-    engine = ("jit__solve_jit", "jit__value_and_jacobian_jit")
-    assert not [p for p in first["programs"] if p.startswith(engine)], first["programs"]
-    entries = [p for p in (tmp_path / "cache").iterdir() if p.name.startswith(engine)]
-    assert len(entries) >= 2, sorted(p.name for p in (tmp_path / "cache").iterdir())
-    # a truncated entry (a killed writer) is compiled again, with a warning, never used
-    bad = next(p for p in entries if p.name.startswith(engine[1]))
-    bad.write_bytes(bad.read_bytes()[: bad.stat().st_size // 2])
+    assert first["converged"] and first["read"] == 0 and first["missed"] >= 2, first
+    # the engine's two programs (solve, value and Jacobian) are stored as traces and, compiled
+    # from them (`jit_call`), in JAX's cache; no program of theirs holds a host callback
+    stored = sorted((tmp_path / "export").glob("*.jaxexp"))
+    assert len(stored) == first["missed"], stored
+    assert not [p for p in first["programs"] if p.startswith("jit_call ") and "callback" in p]
     second = _fit(env, tmp_path)
-    assert f"{engine[0]} hit" in second["programs"], second
-    assert f"{engine[1]} hit" not in second["programs"], second
-    assert second["values"] == first["values"]  # bit for bit: the cached program is the same
+    assert second["read"] == len(stored) and second["missed"] == 0, second
+    assert "jit_call hit" in second["programs"], second
+    assert second["values"] == first["values"]  # bit for bit: the stored program is the same
+    # a corrupt stored trace (a flipped byte) fails its checksum: traced again, never used
+    blob = bytearray(stored[0].read_bytes())
+    blob[-10] ^= 0xFF
+    stored[0].write_bytes(bytes(blob))
+    third = _fit(env, tmp_path)
+    assert third["missed"] == 1 and third["read"] == len(stored) - 1, third
+    assert third["values"] == first["values"]
+    assert stored[0].read_bytes() != bytes(blob)  # written again
+    # a truncated compiled entry (a killed writer) is compiled again, with a warning, never used
+    compiled = [p for p in (tmp_path / "cache").iterdir() if p.name.startswith("jit_call")]
+    for p in compiled:
+        p.write_bytes(p.read_bytes()[: p.stat().st_size // 2])
+    fourth = _fit(env, tmp_path)
+    assert "jit_call hit" not in fourth["programs"] and fourth["values"] == first["values"]
 
 
 def test_cache_settings_are_respected(tmp_path):
@@ -116,3 +132,35 @@ def test_dependency_floors_are_met():
         have = tuple(int(x) for x in re.findall(r"\d+", version(name))[:3])
         need = tuple(int(x) for x in floor.split("."))
         assert have >= need, f"{name} {version(name)} is below the floor {floor}"
+
+
+def _scaled(x, k, fn):  # a module-level function for the keys below
+    return fn(x) * k
+
+
+def test_stored_trace_key_names_everything_the_trace_depends_on():
+    import jax
+    import jax.numpy as jnp
+
+    import tribojax._export as E
+
+    def key(*args):
+        dyn, static = E.eqx.partition(args, E.eqx.is_array)
+        leaves, treedef = jax.tree_util.tree_flatten(dyn)
+        return E._key(_scaled, treedef, static, leaves)
+
+    x = jnp.ones(3)
+    base = key(x, 2.0, jnp.sin)
+    assert base == key(jnp.zeros(3), 2.0, jnp.sin)  # new data, same program
+    others = [key(x, 3.0, jnp.sin), key(x, 2, jnp.sin), key(x, 2.0, jnp.cos),
+              key(jnp.ones(4), 2.0, jnp.sin), key(jnp.ones(3, dtype=jnp.int32), 2.0, jnp.sin)]
+    assert len({base, *others}) == 6 and None not in others
+    k = 2.0
+    assert key(x, 2.0, lambda v: v * k) is None  # a closure: its captured value is not in its name
+    with jax.numpy_rank_promotion("allow"), jax.numpy_rank_promotion("raise"):
+        assert key(x, 2.0, jnp.sin) == base
+    with jax.numpy_rank_promotion("allow"):
+        assert key(x, 2.0, jnp.sin) != base  # a trace-relevant setting is in the key
+
+    fn = E.cached_jit(_scaled)
+    assert float(fn(x, 2.0, jnp.sin)[0]) == float(jnp.sin(1.0) * 2.0)

@@ -20,6 +20,7 @@ import numpy as np
 import optimistix as optx
 
 from .._checks import failures_as_nan
+from .._export import cached_jit
 from .._precision import ensure_x64
 from .._results import RESULTS, result_name
 from ._noise import noise_consistent as _noise_test
@@ -216,15 +217,20 @@ def _singular_directions(sv, vt, names) -> tuple:
 
 
 def _solve(residual_fn, theta0, args, solver, max_steps, jac):
-    # traced, lowered and compiled with failures as NaN: no host callback (cacheable)
+    """The least-squares solve: (θ, optimistix result, steps, (r, J) or None). Traced, lowered
+    and compiled with failures as NaN (no host callback), and its trace stored (`cached_jit`)."""
     with failures_as_nan():
-        return _solve_jit(residual_fn, theta0, args, solver, max_steps, jac)
+        value, code, steps, final = _solve_jit(residual_fn, theta0, args, solver, max_steps, jac)
+    return value, jax.tree_util.tree_unflatten(_RESULT_TREE, [code]), steps, final
 
 
-@eqx.filter_jit
+_RESULT_TREE = jax.tree_util.tree_structure(optx.RESULTS.successful)
+
+
+@cached_jit
 def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac):
-    # jitted here so that a module-level `residual_fn` (hashed by identity) is compiled once and
-    # a repeated fit with new data in `args` runs warm
+    # module-level and keyed by `residual_fn`'s identity, so a repeated fit with new data in
+    # `args` runs warm; outputs are plain arrays so the trace can be stored
     sol = optx.least_squares(residual_fn, solver, theta0, args, options=dict(jac=jac),
                              max_steps=max_steps, throw=False)  # fmt: skip
     # a Gauss–Newton solver's state holds the residual and its linearisation at the returned
@@ -233,7 +239,8 @@ def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac):
     final = None
     if jac == "fwd" and isinstance(info, optx.FunctionInfo.ResidualJac):
         final = (info.residual, info.jac.as_matrix())
-    return sol, final
+    code = jax.tree_util.tree_leaves(sol.result)[0]
+    return sol.value, code, sol.stats["num_steps"], final
 
 
 def value_and_jacobian(residual_fn, theta, args):
@@ -244,7 +251,7 @@ def value_and_jacobian(residual_fn, theta, args):
         return _value_and_jacobian_jit(residual_fn, theta, args)
 
 
-@eqx.filter_jit
+@cached_jit
 def _value_and_jacobian_jit(residual_fn, theta, args):
     def both(th):
         r = residual_fn(th, args)
@@ -308,14 +315,14 @@ def least_squares_fit(
     if progress is not None:
         _PROGRESS.append((progress, time.perf_counter()))
     try:
-        sol, final = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
+        theta, code, steps, final = _solve(residual_fn, theta0, args, solver, int(max_steps),
+                                           jac)
     finally:
         if progress is not None:
             _PROGRESS.pop()
-    theta = sol.value
     r, J = final if final is not None else value_and_jacobian(residual_fn, theta, args)
     r, J = np.asarray(r), np.asarray(J)
-    result, message = RESULTS.promote(sol.result), None
+    result, message = RESULTS.promote(code), None
     if np.any(r == FAILED_RESIDUAL) or not (np.all(np.isfinite(r)) and np.all(np.isfinite(J))):
         moved = not np.array_equal(np.asarray(theta), np.asarray(theta0))
         result = RESULTS.model_failed if moved else RESULTS.model_failed_at_start
@@ -327,7 +334,7 @@ def least_squares_fit(
             result = RESULTS.short_of_optimum
             message = (f"{RESULTS[result]} The step left is {gn:.3g} standard errors "
                        f"(tolerance {optimum_tol:g}).")  # fmt: skip
-    steps = int(sol.stats["num_steps"])
+    steps = int(steps)
     return thrown(fit_statistics(theta, r, J, names=names, transform=transform,
                                  sigma_known=sigma_known, result=result, steps=steps,
                                  message=message), throw)  # fmt: skip

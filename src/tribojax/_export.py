@@ -1,0 +1,210 @@
+"""Traced programs kept on disk (issue 31): `cached_jit`, `eqx.filter_jit` whose trace survives
+the process.
+
+JAX's persistent cache skips XLA compilation in a new process but not tracing and lowering,
+which are most of a fit's start-up (the forward-mode Jacobian of a diffrax solve). `cached_jit`
+exports the lowered program (`jax.export`, StableHLO) the first time a signature is met and
+stores it beside the compilation cache (`<cache folder>/../export`, `_cache.cache_dir`); a new
+process reads it back and only compiles it (a persistent-cache hit when warm).
+
+A stored program is used only under the same key: the function's module and name, the hash of
+every tribojax source file, the versions of jax, jaxlib, equinox, lineax, optimistix and diffrax,
+the backend, JAX's trace-relevant configuration (float64, `failures_as_nan`), the structure and
+static values of the arguments, and each array's shape and dtype. A signature that cannot be
+keyed stably (a closure, an object without a value repr), a program that cannot be exported (a
+host callback) or a call under a trace runs through `eqx.filter_jit` as before. Each file holds
+its payload's sha256: a truncated or corrupt file is ignored and written again; files are
+written to a temporary name and renamed, so concurrent processes never read half a file.
+The function's outputs must be arrays in tuples, lists or dicts.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import sys
+import tempfile
+from importlib import metadata
+from pathlib import Path
+
+import equinox as eqx
+import jax
+import numpy as np
+
+from ._cache import cache_dir
+
+MAGIC = b"tribojax-export-1\n"
+_PACKAGES = ("jax", "jaxlib", "equinox", "lineax", "optimistix", "diffrax")
+_ATOMS = (int, float, bool, str, bytes, complex, type(None), np.dtype, np.generic)
+
+
+class _Unkeyable(Exception):
+    pass
+
+
+@functools.cache
+def _environment() -> str:
+    root = Path(__file__).parent
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        h.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes())
+    versions = []
+    for name in _PACKAGES:
+        try:
+            versions.append(f"{name}={metadata.version(name)}")
+        except metadata.PackageNotFoundError:
+            versions.append(f"{name}=?")
+    return f"{h.hexdigest()}|{'|'.join(versions)}|{jax.default_backend()}"
+
+
+def _atom(x) -> str:
+    if isinstance(x, _ATOMS):
+        return f"{type(x).__name__}:{x!r}"
+    if isinstance(x, type):
+        return f"type:{x.__module__}.{x.__qualname__}"
+    named = _module_level(x)
+    if named is not None:
+        return named
+    if isinstance(x, (tuple, list)):
+        return f"{type(x).__name__}({','.join(_atom(v) for v in x)})"
+    if isinstance(x, dict):
+        return "dict(" + ",".join(f"{_atom(k)}={_atom(v)}" for k, v in x.items()) + ")"
+    if type(x).__qualname__ == "_Missing" or isinstance(x, jax.ShapeDtypeStruct):  # equinox's
+        return repr(x)
+    raise _Unkeyable(type(x).__qualname__)
+
+
+def _module_level(x) -> str | None:
+    """'module.name' of a function or callable object bound at module level (so that its identity
+    is its source): under its own name, or (an equinox wrapper that keeps no name) under a name
+    in a tribojax module; None otherwise (a lambda, a closure, a built object)."""
+    mod, name = getattr(x, "__module__", None), getattr(x, "__qualname__", None)
+    if isinstance(mod, str) and isinstance(name, str) and "<" not in name:
+        found = sys.modules.get(mod)
+        for part in name.split("."):
+            found = getattr(found, part, None)
+        if found is x:
+            return f"obj:{mod}.{name}"
+    if not callable(x):
+        return None
+    if id(x) not in _BOUND:
+        where = next((f"obj:{m}.{k}" for m, module in list(sys.modules.items())
+                      if m.startswith("tribojax.") for k, v in vars(module).items() if v is x),
+                     None)  # fmt: skip
+        _BOUND[id(x)] = (x, where)  # the object is kept alive, so its id is not reused
+    return _BOUND[id(x)][1]
+
+
+_BOUND: dict = {}
+
+
+def _structure(treedef) -> str:
+    data = treedef.node_data()
+    children = ",".join(_structure(c) for c in treedef.children())
+    if data is None:
+        return "*" if treedef.num_leaves == 1 and not children else f"[{children}]"
+    kind, aux = data
+    return f"{_atom(kind)}<{_atom(aux)}>({children})"
+
+
+def _trace_context() -> str:
+    from jax._src import config
+
+    parts = []
+    for v in config.trace_context():
+        try:
+            parts.append(_atom(v))
+        except _Unkeyable:
+            parts.append(type(v).__qualname__)  # the axis environment: empty outside a trace
+    return ";".join(parts)
+
+
+def _key(fn, treedef, static, leaves) -> str | None:
+    try:
+        s_leaves, s_tree = jax.tree_util.tree_flatten(static)
+        text = "\n".join([
+            f"{fn.__module__}.{fn.__qualname__}", _environment(), _trace_context(),
+            _structure(treedef), _structure(s_tree), _atom(tuple(s_leaves)),
+            ";".join(f"{x.dtype}{list(x.shape)}{getattr(x, 'weak_type', False)}" for x in leaves),
+        ])  # fmt: skip
+    except _Unkeyable:
+        return None
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def export_dir() -> Path | None:
+    """The folder of stored programs (beside the compilation cache), or None when off."""
+    folder = cache_dir()
+    return None if folder is None else folder.parent / "export"
+
+
+def _read(path: Path):
+    try:
+        blob = path.read_bytes()
+    except OSError:
+        return None
+    head = len(MAGIC) + 32
+    if not blob.startswith(MAGIC) or len(blob) <= head:
+        return None
+    payload = blob[head:]
+    if hashlib.sha256(payload).digest() != blob[len(MAGIC) : head]:
+        return None
+    try:
+        return jax.export.deserialize(bytearray(payload))
+    except Exception:  # noqa: BLE001 - an unreadable entry is a miss
+        return None
+
+
+def _write(path: Path, exported) -> None:
+    try:
+        payload = bytes(exported.serialize())
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
+        with os.fdopen(fd, "wb") as f:
+            f.write(MAGIC + hashlib.sha256(payload).digest() + payload)
+        os.replace(tmp, path)
+    except (OSError, ImportError):  # `flatbuffers` missing, or a read-only cache folder:
+        pass
+
+
+def _export(fn, treedef, static, leaves):
+    def flat(*xs):
+        return fn(*eqx.combine(jax.tree_util.tree_unflatten(treedef, xs), static))
+
+    specs = [jax.ShapeDtypeStruct(x.shape, x.dtype, weak_type=getattr(x, "weak_type", False))
+             for x in leaves]  # fmt: skip
+    try:
+        return jax.export.export(jax.jit(flat))(*specs)
+    except Exception:  # noqa: BLE001 - not exportable (a host callback): trace as before
+        return None
+
+
+def cached_jit(fn):
+    """`eqx.filter_jit(fn)` whose traced program is also stored on disk (see the module doc);
+    `fn` must be a module-level function returning arrays in tuples, lists or dicts."""
+    jitted = eqx.filter_jit(fn)
+    programs: dict = {}
+
+    @functools.wraps(fn)
+    def call(*args):
+        folder = export_dir()
+        dyn, static = eqx.partition(args, eqx.is_array)
+        leaves, treedef = jax.tree_util.tree_flatten(dyn)
+        if folder is None or any(isinstance(x, jax.core.Tracer) for x in leaves):
+            return jitted(*args)
+        key = _key(fn, treedef, static, leaves)
+        if key is None:
+            return jitted(*args)
+        if key not in programs:
+            path = folder / f"{key}.jaxexp"
+            exported = _read(path)
+            if exported is None:
+                exported = _export(fn, treedef, static, leaves)
+                if exported is not None:
+                    _write(path, exported)
+            programs[key] = None if exported is None else jax.jit(exported.call)
+        program = programs[key]
+        return jitted(*args) if program is None else program(*leaves)
+
+    return call
