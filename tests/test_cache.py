@@ -49,8 +49,11 @@ print(json.dumps({"values": [float(v) for v in fit.values], "converged": bool(fi
 
 
 def _python(code, env_extra, tmp_path):
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("TRIBOJAX_CACHE", "TRIBOJAX_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR")}
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("TRIBOJAX_CACHE", "TRIBOJAX_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR")
+    }
     env.update(env_extra)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                          cwd=tmp_path, timeout=600)  # fmt: skip
@@ -93,8 +96,9 @@ def test_fit_programs_are_cached_and_give_the_same_numbers(tmp_path):
 
 
 def test_cache_settings_are_respected(tmp_path):
-    code = ("import tribojax as tj, jax; tj.FractalSurface; "
-            "print(jax.config.jax_compilation_cache_dir)")
+    code = (
+        "import tribojax as tj, jax; tj.FractalSurface; print(jax.config.jax_compilation_cache_dir)"
+    )
     off = _python(code, {"TRIBOJAX_CACHE": "off"}, tmp_path).stdout.split()[-1]
     assert off == "None"
     users = _python(code, {"JAX_COMPILATION_CACHE_DIR": str(tmp_path / "mine")}, tmp_path)
@@ -152,8 +156,13 @@ def test_stored_trace_key_names_everything_the_trace_depends_on():
     x = jnp.ones(3)
     base = key(x, 2.0, jnp.sin)
     assert base == key(jnp.zeros(3), 2.0, jnp.sin)  # new data, same program
-    others = [key(x, 3.0, jnp.sin), key(x, 2, jnp.sin), key(x, 2.0, jnp.cos),
-              key(jnp.ones(4), 2.0, jnp.sin), key(jnp.ones(3, dtype=jnp.int32), 2.0, jnp.sin)]
+    others = [
+        key(x, 3.0, jnp.sin),
+        key(x, 2, jnp.sin),
+        key(x, 2.0, jnp.cos),
+        key(jnp.ones(4), 2.0, jnp.sin),
+        key(jnp.ones(3, dtype=jnp.int32), 2.0, jnp.sin),
+    ]
     assert len({base, *others}) == 6 and None not in others
     k = 2.0
     assert key(x, 2.0, lambda v: v * k) is None  # a closure: its captured value is not in its name

@@ -13,7 +13,6 @@ from __future__ import annotations
 import dataclasses
 import time
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -29,8 +28,6 @@ from ._solver import _PROGRESS, FAILED_RESIDUAL, LevenbergMarquardt, gauss_newto
 # A direction of θ whose singular value is below this fraction of the largest is reported as not
 # identifiable (the Jacobian is numerically rank-deficient at the square root of float64's eps).
 IDENTIFIABLE_RTOL = 1e-8
-
-
 
 
 class FitError(RuntimeError):
@@ -153,8 +150,20 @@ class FitResult:
         }
 
 
-def fit_statistics(theta, r, J, *, names, transform, sigma_known, result, steps, message=None,
-                   noise_consistent=None, **extra):
+def fit_statistics(
+    theta,
+    r,
+    J,
+    *,
+    names,
+    transform,
+    sigma_known,
+    result,
+    steps,
+    message=None,
+    noise_consistent=None,
+    **extra,
+):
     """A FitResult from the optimum θ, its residuals r and Jacobian J = ∂r/∂θ.
 
     Covariance of θ: s²(JᵀJ)⁻¹ through the SVD of J (s² = RSS/(n − p), or 1 if `sigma_known`);
@@ -315,8 +324,7 @@ def least_squares_fit(
     if progress is not None:
         _PROGRESS.append((progress, time.perf_counter()))
     try:
-        theta, code, steps, final = _solve(residual_fn, theta0, args, solver, int(max_steps),
-                                           jac)
+        theta, code, steps, final = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
     finally:
         if progress is not None:
             _PROGRESS.pop()
