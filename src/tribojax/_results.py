@@ -9,6 +9,7 @@ same way, so a code returned by `optimistix.least_squares` is promoted unchanged
 
 from __future__ import annotations
 
+import jax
 import optimistix as optx
 
 
@@ -60,3 +61,14 @@ def result_name(result) -> str:
         if bool(item == result):
             return name
     raise ValueError(f"{result!r} is not a concrete RESULTS member")
+
+
+def result_code(result):
+    """The integer array inside a `RESULTS` member (traceable): what a stored program returns."""
+    result = result if isinstance(result, RESULTS) else RESULTS.promote(result)
+    return jax.tree_util.tree_leaves(result)[0]
+
+
+def result_from_code(code) -> RESULTS:
+    """The `RESULTS` member of an integer code from `result_code`."""
+    return jax.tree_util.tree_unflatten(jax.tree_util.tree_structure(RESULTS.successful), [code])

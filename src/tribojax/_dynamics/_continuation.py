@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
+from .._export import cached_jit
 from .._precision import ensure_x64
 from .._results import RESULTS, result_name
 from ._mhb import FrictionSystem, floquet_exponents, solve_hbm
@@ -36,7 +37,7 @@ def _tangent(full, z, prev, args):
     return t / jnp.linalg.norm(t)
 
 
-@eqx.filter_jit
+@cached_jit
 def _arclength(fn, y0, lam0, lam_end, args, ds, ds_min, ds_max, max_points, max_newton, tol):
     """Continue R(y, λ) = fn(y, λ, args) from the solution (y0, λ0) towards λ_end (scaled y)."""
     lam_scale = jnp.abs(lam_end - lam0)
@@ -154,7 +155,7 @@ def _checked_range(start, end, name):
     return start, end
 
 
-@eqx.filter_jit
+@cached_jit
 def _jacobians(res, Y, lam, args):
     return jax.vmap(lambda y, p: jax.jacfwd(res)(y, p, args))(Y, lam)
 

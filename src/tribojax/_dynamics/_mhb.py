@@ -31,7 +31,8 @@ import optimistix as optx
 from jaxtyping import Array
 
 from .._precision import ensure_x64
-from .._results import RESULTS
+from .._export import cached_jit
+from .._results import RESULTS, result_code, result_from_code
 from ._structure import Excitation, Structure, check_contacts
 
 
@@ -228,8 +229,13 @@ def _scaled_residual(y, args):
     return system.residual(y * x_ref, omega) / f_ref
 
 
-@eqx.filter_jit
 def _solve(system, omega, X0, solver, max_steps):
+    X, code, steps = _solve_arrays(system, omega, X0, solver, max_steps)
+    return HBMSolution(X=X, omega=omega, result=result_from_code(code), steps=steps)
+
+
+@cached_jit
+def _solve_arrays(system, omega, X0, solver, max_steps):
     f_ref, x_ref = system.scales(omega)
     y0 = (system.linear_solution(omega) if X0 is None else jnp.asarray(X0)) / x_ref
     # jac="bwd": the (square) Jacobian is materialised once per step by reverse mode, so the
@@ -240,7 +246,7 @@ def _solve(system, omega, X0, solver, max_steps):
     result = RESULTS.promote(sol.result)
     X = jnp.where(jnp.isfinite(sol.value), sol.value, 0.0) * x_ref
     result = RESULTS.where(jnp.all(jnp.isfinite(sol.value)), result, RESULTS.nonlinear_divergence)
-    return HBMSolution(X=X, omega=omega, result=result, steps=sol.stats["num_steps"])
+    return X, result_code(result), sol.stats["num_steps"]
 
 
 def hill_matrices(system: FrictionSystem, X, omega, J=None):

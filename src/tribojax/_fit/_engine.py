@@ -21,7 +21,7 @@ import optimistix as optx
 from .._checks import failures_as_nan
 from .._export import cached_jit
 from .._precision import ensure_x64
-from .._results import RESULTS, result_name
+from .._results import RESULTS, result_code, result_from_code, result_name
 from ._noise import noise_consistent as _noise_test
 from ._solver import _PROGRESS, FAILED_RESIDUAL, LevenbergMarquardt, gauss_newton_step
 
@@ -230,10 +230,7 @@ def _solve(residual_fn, theta0, args, solver, max_steps, jac):
     and compiled with failures as NaN (no host callback), and its trace stored (`cached_jit`)."""
     with failures_as_nan():
         value, code, steps, final = _solve_jit(residual_fn, theta0, args, solver, max_steps, jac)
-    return value, jax.tree_util.tree_unflatten(_RESULT_TREE, [code]), steps, final
-
-
-_RESULT_TREE = jax.tree_util.tree_structure(optx.RESULTS.successful)
+    return value, result_from_code(code), steps, final
 
 
 @cached_jit
@@ -248,8 +245,7 @@ def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac):
     final = None
     if jac == "fwd" and isinstance(info, optx.FunctionInfo.ResidualJac):
         final = (info.residual, info.jac.as_matrix())
-    code = jax.tree_util.tree_leaves(sol.result)[0]
-    return sol.value, code, sol.stats["num_steps"], final
+    return sol.value, result_code(sol.result), sol.stats["num_steps"], final
 
 
 def value_and_jacobian(residual_fn, theta, args):
@@ -324,13 +320,13 @@ def least_squares_fit(
     if progress is not None:
         _PROGRESS.append((progress, time.perf_counter()))
     try:
-        theta, code, steps, final = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
+        theta, result, steps, final = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
     finally:
         if progress is not None:
             _PROGRESS.pop()
     r, J = final if final is not None else value_and_jacobian(residual_fn, theta, args)
     r, J = np.asarray(r), np.asarray(J)
-    result, message = RESULTS.promote(code), None
+    message = None
     if np.any(r == FAILED_RESIDUAL) or not (np.all(np.isfinite(r)) and np.all(np.isfinite(J))):
         moved = not np.array_equal(np.asarray(theta), np.asarray(theta0))
         result = RESULTS.model_failed if moved else RESULTS.model_failed_at_start
