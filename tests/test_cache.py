@@ -138,38 +138,46 @@ def test_dependency_floors_are_met():
         assert have >= need, f"{name} {version(name)} is below the floor {floor}"
 
 
-def _scaled(x, k, fn):  # a module-level function for the keys below
+def _scaled(x, k, fn):  # a user's function: its source is not versioned by the key
     return fn(x) * k
 
 
 def test_stored_trace_key_names_everything_the_trace_depends_on():
+    import functools
+
+    import equinox as eqx
     import jax
     import jax.numpy as jnp
 
     import tribojax._export as E
 
-    def key(*args):
-        dyn, static = E.eqx.partition(args, E.eqx.is_array)
+    def key(*args, fn=E._read):  # any tribojax function names the program (it is not traced)
+        dyn, static = eqx.partition(args, eqx.is_array)
         leaves, treedef = jax.tree_util.tree_flatten(dyn)
-        return E._key(_scaled, treedef, static, leaves)
+        return E._key(fn, treedef, static, leaves)
 
     x = jnp.ones(3)
     base = key(x, 2.0, jnp.sin)
-    assert base == key(jnp.zeros(3), 2.0, jnp.sin)  # new data, same program
-    others = [
-        key(x, 3.0, jnp.sin),
-        key(x, 2, jnp.sin),
-        key(x, 2.0, jnp.cos),
-        key(jnp.ones(4), 2.0, jnp.sin),
-        key(jnp.ones(3, dtype=jnp.int32), 2.0, jnp.sin),
-    ]
-    assert len({base, *others}) == 6 and None not in others
-    k = 2.0
-    assert key(x, 2.0, lambda v: v * k) is None  # a closure: its captured value is not in its name
+    assert base is not None and base == key(jnp.zeros(3), 2.0, jnp.sin)  # new data, same program
+    others = [key(x, 3.0, jnp.sin), key(x, 2, jnp.sin), key(x, 2.0, jnp.cos),
+              key(jnp.ones(4), 2.0, jnp.sin), key(jnp.ones(3, dtype=jnp.int32), 2.0, jnp.sin),
+              key(x, 2.0, jnp.sin, fn=E._write)]  # fmt: skip
+    assert len({base, *others}) == 7 and None not in others
+    partial = [key(x, 2.0, functools.partial(jnp.clip, min=m)) for m in (0.0, 0.5, 0.0)]
+    assert partial[0] == partial[2] != partial[1] and None not in partial
     with jax.numpy_rank_promotion("allow"), jax.numpy_rank_promotion("raise"):
         assert key(x, 2.0, jnp.sin) == base
     with jax.numpy_rank_promotion("allow"):
         assert key(x, 2.0, jnp.sin) != base  # a trace-relevant setting is in the key
+    # not keyed (traced as before): a closure, whose captured value is not in its name; a user's
+    # function or Module class, whose source may change between runs without a version change
+    k = 2.0
+    assert key(x, 2.0, lambda v: v * k) is None
+    assert key(x, 2.0, _scaled) is None and key(x, 2.0, jnp.sin, fn=_scaled) is None
 
-    fn = E.cached_jit(_scaled)
+    class UserModel(eqx.Module):
+        w: jax.Array
+
+    assert key(UserModel(x), 2.0, jnp.sin) is None
+    fn = E.cached_jit(_scaled)  # falls back to equinox.filter_jit
     assert float(fn(x, 2.0, jnp.sin)[0]) == float(jnp.sin(1.0) * 2.0)

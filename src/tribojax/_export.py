@@ -12,9 +12,11 @@ every tribojax source file, the versions of jax, jaxlib, equinox, lineax, optimi
 the backend, JAX's trace-relevant configuration (float64, `failures_as_nan`), the structure and
 static values of the arguments, and each array's shape and dtype. A signature that cannot be
 keyed stably (a closure, an object without a value repr), a program that cannot be exported (a
-host callback) or a call under a trace runs through `eqx.filter_jit` as before. Each file holds
-its payload's sha256: a truncated or corrupt file is ignored and written again; files are
-written to a temporary name and renamed, so concurrent processes never read half a file.
+host callback) or a call under a trace runs through `eqx.filter_jit` as before (a program found
+not exportable leaves an empty `.refused` marker: later processes trace it once, not twice).
+Each file holds its payload's sha256: a truncated or corrupt file is ignored and written again;
+files are written to a temporary name and renamed, so concurrent processes never read half a
+file.
 The function's outputs must be arrays in tuples, lists or dicts.
 """
 
@@ -35,7 +37,10 @@ import numpy as np
 from ._cache import cache_dir
 
 MAGIC = b"tribojax-export-1\n"
-_PACKAGES = ("jax", "jaxlib", "equinox", "lineax", "optimistix", "diffrax")
+_PACKAGES = ("jax", "jaxlib", "equinox", "lineax", "optimistix", "diffrax", "numpy", "jaxtyping")
+# code named in a key must be code the key versions: tribojax's (its source is hashed) or these
+# packages' (their versions); a user's own function or class is not keyed (its source may change)
+_VERSIONED = frozenset(("tribojax", "builtins", *_PACKAGES))
 _ATOMS = (int, float, bool, str, bytes, complex, type(None), np.dtype, np.generic)
 
 
@@ -62,7 +67,14 @@ def _atom(x) -> str:
     if isinstance(x, _ATOMS):
         return f"{type(x).__name__}:{x!r}"
     if isinstance(x, type):
+        if not _versioned(x.__module__):
+            raise _Unkeyable(x.__qualname__)
         return f"type:{x.__module__}.{x.__qualname__}"
+    if isinstance(x, functools.partial):
+        return f"partial({_atom(x.func)},{_atom(x.args)},{_atom(x.keywords)})"
+    if isinstance(x, eqx.Module):  # a module of static values only (e.g. a diffrax adjoint)
+        leaves, tree = jax.tree_util.tree_flatten(x)
+        return f"{_structure(tree)}{_atom(tuple(leaves))}"
     named = _module_level(x)
     if named is not None:
         return named
@@ -75,6 +87,10 @@ def _atom(x) -> str:
     raise _Unkeyable(type(x).__qualname__)
 
 
+def _versioned(module) -> bool:
+    return isinstance(module, str) and module.split(".")[0] in _VERSIONED
+
+
 def _module_level(x) -> str | None:
     """'module.name' of a function or callable object bound at module level (so that its identity
     is its source): under its own name, or (an equinox wrapper that keeps no name) under a name
@@ -84,7 +100,7 @@ def _module_level(x) -> str | None:
         found = sys.modules.get(mod)
         for part in name.split("."):
             found = getattr(found, part, None)
-        if found is x:
+        if found is x and _versioned(mod):
             return f"obj:{mod}.{name}"
     if not callable(x):
         return None
@@ -121,6 +137,8 @@ def _trace_context() -> str:
 
 
 def _key(fn, treedef, static, leaves) -> str | None:
+    if not _versioned(fn.__module__):
+        return None
     try:
         s_leaves, s_tree = jax.tree_util.tree_flatten(static)
         text = "\n".join([
@@ -157,15 +175,31 @@ def _read(path: Path):
 
 
 def _write(path: Path, exported) -> None:
+    """Store `exported` at `path`, or (None) an empty marker: this program cannot be exported, so
+    the next process traces it once instead of twice."""
     try:
-        payload = bytes(exported.serialize())
+        payload = b"" if exported is None else bytes(exported.serialize())
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
         with os.fdopen(fd, "wb") as f:
-            f.write(MAGIC + hashlib.sha256(payload).digest() + payload)
+            f.write(MAGIC + hashlib.sha256(payload).digest() + payload if payload else b"")
         os.replace(tmp, path)
     except (OSError, ImportError):  # `flatbuffers` missing, or a read-only cache folder:
-        pass
+        pass  # the program is still used in this process
+
+
+@functools.cache
+def _lapack_calls() -> tuple:
+    """The CPU LAPACK calls of this jaxlib, allowed in a stored program: jax.export refuses custom
+    calls it does not guarantee across versions, but a stored program is only read back by the
+    same jaxlib (its version is in the key). Host callbacks stay refused."""
+    try:
+        from jaxlib.cpu import _lapack
+
+        names = sorted(_lapack.registrations()) if jax.default_backend() == "cpu" else []
+    except (ImportError, AttributeError):
+        names = []
+    return tuple(jax.export.DisabledSafetyCheck.custom_call(n) for n in names)
 
 
 def _export(fn, treedef, static, leaves):
@@ -175,7 +209,7 @@ def _export(fn, treedef, static, leaves):
     specs = [jax.ShapeDtypeStruct(x.shape, x.dtype, weak_type=getattr(x, "weak_type", False))
              for x in leaves]  # fmt: skip
     try:
-        return jax.export.export(jax.jit(flat))(*specs)
+        return jax.export.export(jax.jit(flat), disabled_checks=_lapack_calls())(*specs)
     except Exception:  # noqa: BLE001 - not exportable (a host callback): trace as before
         return None
 
@@ -197,12 +231,11 @@ def cached_jit(fn):
         if key is None:
             return jitted(*args)
         if key not in programs:
-            path = folder / f"{key}.jaxexp"
-            exported = _read(path)
-            if exported is None:
+            path, refused = folder / f"{key}.jaxexp", folder / f"{key}.refused"
+            exported = None if refused.exists() else _read(path)
+            if exported is None and not refused.exists():
                 exported = _export(fn, treedef, static, leaves)
-                if exported is not None:
-                    _write(path, exported)
+                _write(path if exported is not None else refused, exported)
             programs[key] = None if exported is None else jax.jit(exported.call)
         program = programs[key]
         return jitted(*args) if program is None else program(*leaves)

@@ -30,8 +30,8 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array
 
-from .._precision import ensure_x64
 from .._export import cached_jit
+from .._precision import ensure_x64
 from .._results import RESULTS, result_code, result_from_code
 from ._structure import Excitation, Structure, check_contacts
 

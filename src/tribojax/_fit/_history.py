@@ -18,6 +18,7 @@ import numpy as np
 
 from .._checks import check_range
 from .._dynamics._harmonic import drive
+from .._export import cached_jit
 from .._friction._bouc_wen import BoucWen
 from .._friction._lugre import LuGre
 from .._friction._rate_independent import Jenkins, Mindlin
@@ -83,7 +84,7 @@ class _HistoryResiduals(eqx.Module):
         return jnp.concatenate(out)
 
 
-@eqx.filter_jit
+@cached_jit
 def _residuals(fn, theta, records):
     # one compiled program per record shape (cached across processes), not op-by-op dispatch
     return fn(theta, records)

@@ -18,6 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import runtime_message
+from .._export import cached_jit
 from .._fit._engine import (
     FAILED_RESIDUAL,
     fit_statistics,
@@ -353,12 +354,12 @@ def record_scale(baseline) -> float:
     return float(scale) if scale > 0 else float(np.std(y) or 1.0)
 
 
-@eqx.filter_jit
+@cached_jit
 def _predict(baseline, theta, null):
     return baseline.predict_null(theta, null)
 
 
-@eqx.filter_jit
+@cached_jit
 def _predict_knobs(baseline, theta, knobs):
     return baseline.predict(theta, knobs)
 

@@ -28,6 +28,7 @@ import numpy as np
 from jaxtyping import Array
 
 from .._checks import check_range
+from .._export import cached_jit
 from .._fit._engine import FitResult, least_squares_fit, thrown
 from .._fit._noise import RHO_MAX, lag1, noise_estimate
 from .._io._loop import HysteresisLoop
@@ -291,6 +292,6 @@ def loop_residuals(loop: HysteresisLoop, element: str, mu_N, K_d, *, model="stea
     return np.asarray(_evaluate(_SteadyResiduals(_ELEMENTS[element]), jnp.asarray(theta), args))
 
 
-@eqx.filter_jit
+@cached_jit
 def _evaluate(fn, theta, args):
     return fn(theta, args)
