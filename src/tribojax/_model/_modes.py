@@ -9,6 +9,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax.scipy.linalg import expm
 
+from .._export import cached_jit
+
 
 def _transition(M, h):
     """exp(M·h) for every step length h (one matrix exponential when the sampling is uniform)."""
@@ -17,7 +19,7 @@ def _transition(M, h):
                         lambda: jax.vmap(lambda hh: expm(M * hh))(h))  # fmt: skip
 
 
-@jax.jit
+@cached_jit  # its trace is stored (tribojax._export): discovery's mode refits call it often
 @functools.partial(jax.vmap, in_axes=(None, None, 0, 0))
 def oscillator(t, a, omega, zeta):
     """q, q̇ of q̈ + 2ζωq̇ + ω²q = −a(t), a linear between samples (exact discretisation), for
