@@ -27,6 +27,7 @@ import hashlib
 import os
 import sys
 import tempfile
+import threading
 from importlib import metadata
 from pathlib import Path
 
@@ -214,11 +215,24 @@ def _export(fn, treedef, static, leaves):
         return None
 
 
+def _program(fn, treedef, static, leaves, stem: Path):
+    """The stored program at `stem` (read, or exported and written), jitted; None if refused."""
+    path, refused = stem.with_suffix(".jaxexp"), stem.with_suffix(".refused")
+    if refused.exists():
+        return None
+    exported = _read(path)
+    if exported is None:
+        exported = _export(fn, treedef, static, leaves)
+        _write(path if exported is not None else refused, exported)
+    return None if exported is None else jax.jit(exported.call)
+
+
 def cached_jit(fn):
     """`eqx.filter_jit(fn)` whose traced program is also stored on disk (see the module doc);
     `fn` must be a module-level function returning arrays in tuples, lists or dicts."""
     jitted = eqx.filter_jit(fn)
     programs: dict = {}
+    locks: dict = {}
 
     @functools.wraps(fn)
     def call(*args):
@@ -231,12 +245,13 @@ def cached_jit(fn):
         if key is None:
             return jitted(*args)
         if key not in programs:
-            path, refused = folder / f"{key}.jaxexp", folder / f"{key}.refused"
-            exported = None if refused.exists() else _read(path)
-            if exported is None and not refused.exists():
-                exported = _export(fn, treedef, static, leaves)
-                _write(path if exported is not None else refused, exported)
-            programs[key] = None if exported is None else jax.jit(exported.call)
+            # threads meeting a new program wait for one export and compile
+            with locks.setdefault(key, threading.Lock()):
+                if key not in programs:
+                    program = _program(fn, treedef, static, leaves, folder / key)
+                    out = jitted(*args) if program is None else program(*leaves)
+                    programs[key] = program
+                    return out
         program = programs[key]
         return jitted(*args) if program is None else program(*leaves)
 
