@@ -201,19 +201,27 @@ def test_chi2_logsf_where_the_p_value_underflows():
 
 
 def test_fit_shares_one_compiled_solve_across_effects():
-    # strengths padded to K_MAX: adding effects to the model reuses the baseline fit's solve
+    # strengths padded to K_MAX: every combination of effects reuses one solve per value of the
+    # static `Padded.knobs` (an effect moves a physics knob, here `Bump`, or none does)
     from tribojax._fit import _engine
     from tribojax._model import fit_model
+
+    def size():  # stored programs and programs traced in this process
+        solve = _engine._solve_jit
+        return len(solve.programs), solve.jitted._cached._cache_size()
 
     base = _record("tone")
     y = np.asarray(base.y)
     st = fit_model(base, (), base.start(), y, 0.005)
-    size = _engine._solve_jit._cached._cache_size()
-    for designs in ([Ramp().designs(base)[0]], [Bump().designs(base)[0], Tone().designs(base)[1]]):
+    before, sizes = size(), []
+    for designs in ([Ramp().designs(base)[0]], [Bump().designs(base)[0], Tone().designs(base)[1]],
+                    [Tone().designs(base)[0]], [Ramp().designs(base)[0], Bump().designs(base)[0]]):
         th = np.concatenate([st.theta, np.zeros(sum(d.k for d in designs))])
         fit = fit_model(base, tuple(designs), th, y, 0.005)
         assert fit.converged and fit.theta.size == 2 + sum(d.k for d in designs)
-    assert _engine._solve_jit._cached._cache_size() == size
+        sizes.append(size())
+    assert sizes[0] == before and sizes[2:] == sizes[1:2] * 2, (before, sizes)
+    assert sum(sizes[-1]) - sum(before) <= 1, (before, sizes)
 
 
 def test_undetermined_parameter_gives_infinite_not_nan_std_error():

@@ -16,7 +16,6 @@ import dataclasses
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ._curve import curve_baseline
 from ._effects import default_effects
@@ -143,5 +142,7 @@ def _shift(fn, target: float, name: str) -> float:
         with np.errstate(over="ignore"):
             glo, ghi = g(lo), g(hi)
         if np.isfinite(glo) and np.isfinite(ghi) and glo * ghi <= 0:
+            from scipy.optimize import brentq  # here: SciPy's import is a second of start-up
+
             return float(brentq(g, lo, hi, xtol=1e-15, rtol=1e-15))
     raise ValueError(f"model: nuisance {name} = {target:g} cannot be reached by this effect")
