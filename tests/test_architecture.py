@@ -34,7 +34,7 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 # The layer order, lowest first: a module imports modules of its own layer and of the layers
 # below it, never of a layer above. Each unit is a subpackage or top-level module of tribojax
 # ("" is tribojax/__init__.py). Within a layer any direction goes (cycles are caught above).
-# - foundation: float64 switch and the compilation cache, validation, result codes, the matplotlib
+# - foundation: float64 switch, the compilation cache and stored traces (`_export`), validation, result codes, the matplotlib
 #   guard, the validating CSV reader with the bundled published tables (`_tables`), the papers'
 #   constants (`_presets`) and the shared names and budgets (`_limits`; these two import nothing);
 # - physics: contact (with the papers' preset pairs and load laws), surfaces, friction elements,
@@ -49,8 +49,8 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 #   effects); the public re-exports (tribojax/__init__.py); the command line, which nothing
 #   else imports.
 LAYERS = (
-    ("foundation", {"_precision", "_cache", "_checks", "_results", "_plot", "_tables", "_presets",
-                    "_limits"}),
+    ("foundation", {"_precision", "_cache", "_export", "_checks", "_results", "_plot", "_tables",
+                    "_presets", "_limits"}),
     ("physics", {"_contact", "_roughness", "_friction", "_dynamics"}),
     ("model chain", {"_chain"}),
     ("model analyses", {"_sweep", "_sensitivity"}),
