@@ -34,9 +34,10 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 # The layer order, lowest first: a module imports modules of its own layer and of the layers
 # below it, never of a layer above. Each unit is a subpackage or top-level module of tribojax
 # ("" is tribojax/__init__.py). Within a layer any direction goes (cycles are caught above).
-# - foundation: float64 switch, the compilation cache and stored traces (`_export`), validation, result codes, the matplotlib
-#   guard, the validating CSV reader with the bundled published tables (`_tables`), the papers'
-#   constants (`_presets`) and the shared names and budgets (`_limits`; these two import nothing);
+# - foundation: float64 switch, the compilation cache and stored traces (`_export`), validation,
+#   result codes, the matplotlib guard, the validating CSV reader with the bundled published
+#   tables (`_tables`), the papers' constants (`_presets`) and the shared names and budgets
+#   (`_limits`; these two import nothing);
 # - physics: contact (with the papers' preset pairs and load laws), surfaces, friction elements,
 #   dynamics: no records, no fits;
 # - model chain: wang2022's one path parameters → contact → element → phase slips (`_chain`);
