@@ -8,10 +8,11 @@ stores it beside the compilation cache (`<cache folder>/../export`, `_cache.cach
 process reads it back and only compiles it (a persistent-cache hit when warm).
 
 A stored program is used only under the same key: the function's module and name, the hash of
-every tribojax source file, the versions of jax, jaxlib, equinox, lineax, optimistix and diffrax,
-the backend, JAX's trace-relevant configuration (float64, `failures_as_nan`), the structure and
+every tribojax source file, the versions of the packages in `_PACKAGES`, the backend, JAX's
+trace-relevant configuration (float64, rank promotion, `failures_as_nan`), the structure and
 static values of the arguments, and each array's shape and dtype. A signature that cannot be
-keyed stably (a closure, an object without a value repr), a program that cannot be exported (a
+keyed stably (a closure, an object without a value, a user's own function or class, whose source
+is in no version), a program that cannot be exported (a
 host callback) or a call under a trace runs through `eqx.filter_jit` as before (a program found
 not exportable leaves an empty `.refused` marker: later processes trace it once, not twice).
 Each file holds its payload's sha256: a truncated or corrupt file is ignored and written again;
@@ -103,13 +104,15 @@ def _module_level(x) -> str | None:
             found = getattr(found, part, None)
         if found is x and _versioned(mod):
             return f"obj:{mod}.{name}"
-    if not callable(x):
+    if not callable(x) or isinstance(name, str):  # named, but not bound under that name
         return None
     if id(x) not in _BOUND:
         where = next((f"obj:{m}.{k}" for m, module in list(sys.modules.items())
                       if m.startswith("tribojax.") for k, v in vars(module).items() if v is x),
                      None)  # fmt: skip
-        _BOUND[id(x)] = (x, where)  # the object is kept alive, so its id is not reused
+        if where is None:
+            return None
+        _BOUND[id(x)] = (x, where)  # module-level, so alive anyway: its id is not reused
     return _BOUND[id(x)][1]
 
 
