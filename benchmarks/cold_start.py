@@ -78,7 +78,8 @@ argv = json.loads(sys.argv[1])
 from importlib.metadata import entry_points
 (script,) = entry_points(group="console_scripts", name="tribojax")
 sys.argv = ["tribojax", *argv]
-main = script.load()
+entry = script.load()  # the console script: main(), then an exit without the teardown
+main = sys.modules[entry.__module__].main
 first = []
 class First(logging.Handler):
     def emit(self, rec):
@@ -95,7 +96,10 @@ split["total_s"] = time.perf_counter() - t0
 split["work_s"] = split["total_s"] - split["import_s"] - split["trace_s"] - split["lower_s"] \
     - split["compile_s"]
 split["exit"] = code
-print("SPLIT " + json.dumps(split))
+print("SPLIT " + json.dumps(split), flush=True)
+import os
+sys.stderr.flush()
+os._exit(code or 0)  # as the console script does
 """
 
 # The fit a user would write with SciPy: read the CSV, LSODA in nm, least_squares on log-params.

@@ -133,3 +133,25 @@ def test_runtime_message_is_the_check_text_alone(model):
     msg = runtime_message(info.value)
     assert msg.startswith("load is outside the allowed range") and "\n" not in msg
     assert runtime_message(RuntimeError("first line\nsecond")) == "first line"
+
+
+def test_a_failure_carried_as_nan_is_raised_at_the_boundary():
+    # a program compiled with failures as NaN (no host callback) returns NaN where a traced check
+    # fails; the boundary turns that into an error naming what was computed
+    from tribojax._checks import check_range, failures_as_nan, finite_or_raise
+
+    @jax.jit
+    def f(x):
+        return check_range(x, "alpha", 0.0) * 2.0
+
+    with failures_as_nan():
+        bad = f(jnp.asarray(-1.0))
+    assert jnp.isnan(bad)
+    with pytest.raises(RuntimeError, match="Tables 4-7 at alpha = -1: the result is not finite"):
+        finite_or_raise(bad, "Tables 4-7 at alpha = -1")
+    assert float(finite_or_raise(f(jnp.asarray(3.0)), "x")) == 6.0
+    # a reproduction entry point checks its input where it enters
+    from tribojax._reproduce._tables4to7 import table3_phase_slips
+
+    with pytest.raises(ValueError, match=r"alpha = -0.5 is outside the allowed range \(0, inf\)"):
+        table3_phase_slips(-0.5)

@@ -128,6 +128,14 @@ def test_cli_writes_json_and_figure(tmp_path, capsys):
     )
     assert fm["rms_relative_residual_unflagged"] < fm["plain_rms_relative_residual_unflagged"]
     assert (out / "fit_measured.png").stat().st_size > 10_000
+    # issue 31: the reproduction's own programs hold no host callback, so their traces are stored
+    from tribojax._export import export_dir
+    from tribojax._reproduce import _tables4to7, _wu2015
+
+    if export_dir() is not None:
+        for fn in (_tables4to7._table3_phase_slips, _tables4to7._figure10, _wu2015._curves_jit,
+                   _wu2015._newton_peak):  # fmt: skip
+            assert fn.programs and None not in fn.programs.values(), fn.__name__
 
 
 def test_reproduce_reports_a_fit_that_does_not_converge(monkeypatch, capsys):

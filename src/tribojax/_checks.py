@@ -129,3 +129,16 @@ def runtime_message(exc: BaseException) -> str:
     if key in text:
         return text[text.rindex(key) + len(key) :].split("\n\n")[0].strip()
     return (text.strip().splitlines() or [type(exc).__name__])[0].strip()
+
+
+def finite_or_raise(x, what: str):
+    """`x` as a NumPy array, or `RuntimeError` naming `what` if any value is NaN or infinite: the
+    boundary check of a program compiled with failures as NaN (`failures_as_nan`, `throw=False`
+    inside). A traced `x` is returned unchanged (the caller's own boundary checks it)."""
+    if not _is_concrete(x):
+        return x
+    arr = np.asarray(x)
+    if not np.all(np.isfinite(arr)):
+        raise RuntimeError(f"{what}: the result is not finite (a solver did not finish, or an "
+                           "input is outside the model's range)")  # fmt: skip
+    return arr

@@ -23,7 +23,8 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array, Bool, Float
 
-from .._checks import check_range, fail_if
+from .._checks import check_range, fail_if, failures_as_nan
+from .._export import cached_jit
 from .._precision import ensure_x64
 from ._asperity import (
     EP1,
@@ -90,6 +91,16 @@ _SCALARS = (
 def _packed(name: str) -> property:
     i = _SCALARS.index(name)
     return property(lambda self: self.values[..., i], doc=f"{name} (see ContactParameters)")
+
+
+_NOT_CONVERGED = (
+    "load balance for a'_l (wang2022 Eqs 8-15) did not converge: check D, G, M and the load for "
+    "extreme values, or raise max_steps"
+)
+_ALL_PLASTIC = (
+    "every asperity is fully plastic (a'_l <= a'_pc), so the fractal model carries no tangential "
+    "load: check G (too large?), M and the units of the load"
+)
 
 
 class ContactParameters(eqx.Module):
@@ -258,7 +269,15 @@ class FractalContact(eqx.Module):
                 )
         psi = self.tangential_load / (self.mu_t * load)
         fail_if(psi, psi >= 1.0, self._psi_message(load))
-        out = _evaluate(self, load)
+        if any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((self, load))):
+            out = _evaluate(self, load)  # inlined in the caller's trace, checks included
+        else:  # a stored program without host callbacks; its failures raised here
+            with failures_as_nan():
+                out = ContactParameters(*_evaluate_quiet(self, load))
+            if self.throw and not bool(out.converged):
+                raise eqx.EquinoxRuntimeError(_NOT_CONVERGED)
+            if self.throw and bool(out.all_plastic):
+                raise eqx.EquinoxRuntimeError(_ALL_PLASTIC)
         if self.throw and not isinstance(out.values, jax.core.Tracer):
             static_zero = np.asarray(out.no_static_friction)
             if static_zero.any():
@@ -281,20 +300,15 @@ class FractalContact(eqx.Module):
         ratio = jnp.max(self.tangential_load / load)
         return msg + f": T/P = {float(ratio):g}, mu_t = {float(jnp.min(self.mu_t)):g}"
 
-    def _evaluate(self, load) -> ContactParameters:
+    def _evaluate(self, load, throw=True) -> ContactParameters:
         s, pair = self.surface, self.pair
         D = s.D
         psi = self.tangential_load / (self.mu_t * load)
         psi = eqx.error_if(psi, psi >= 1.0, self._psi_message(load))
 
         log_al, ok = self.solve_load_balance(load)
-        if self.throw:
-            log_al = eqx.error_if(
-                log_al,
-                ~ok,
-                "load balance for a'_l (wang2022 Eqs 8-15) did not converge: check D, G, M and "
-                "the load for extreme values, or raise max_steps",
-            )
+        if throw:
+            log_al = eqx.error_if(log_al, ~ok, _NOT_CONVERGED)
         log_ec, log_epc, log_pc = log_bounds = log_critical_areas(s, pair)
         bounds = _regime_bounds(*log_bounds)
         loads = load_laws(s, pair, log_ec)
@@ -328,13 +342,8 @@ class FractalContact(eqx.Module):
         W_d = 0.9 * mu2_g * phi_d * jnp.sum(e_parts[EP1:])  # Eq 21
         W_s = 3.0 / 16.0 * mu2_g * phi_s * jnp.sum(e_parts)  # Eq 23
         all_plastic = log_al <= log_pc
-        if self.throw:
-            K_tau = eqx.error_if(
-                K_tau,
-                all_plastic,
-                "every asperity is fully plastic (a'_l <= a'_pc), so the fractal model carries no "
-                "tangential load: check G (too large?), M and the units of the load",
-            )
+        if throw:
+            K_tau = eqx.error_if(K_tau, all_plastic, _ALL_PLASTIC)
         # double-where: an all-plastic contact has K = W_s = 0; return zeros, not 0/0.
         safe_k = jnp.where(all_plastic, 1.0, K_tau)
         safe_ws = jnp.where(all_plastic, 1.0, W_s)
@@ -362,7 +371,13 @@ class FractalContact(eqx.Module):
 
 @eqx.filter_jit
 def _evaluate(model: FractalContact, load) -> ContactParameters:
-    return model._evaluate(load)
+    return model._evaluate(load, model.throw)
+
+
+@cached_jit  # eager calls: no host callback, so the trace is stored and the compile cached
+def _evaluate_quiet(model: FractalContact, load):
+    out = model._evaluate(load, throw=False)
+    return out.values, out.flags
 
 
 def contact_parameters(

@@ -199,17 +199,25 @@ def fit_statistics(
         cov[np.ix_(free, free)] = np.inf
         return cov
 
-    cov = delta(np.asarray(jax.jacfwd(transform)(jnp.asarray(theta))))
+    values, T = _value_and_jacfwd(transform, theta)
+    cov = delta(T)
     with np.errstate(invalid="ignore"):
         std = np.sqrt(np.diag(cov))
         corr = cov / np.outer(std, std)
     return FitResult(
-        names=tuple(names), values=np.asarray(transform(jnp.asarray(theta))), std_errors=std,
+        names=tuple(names), values=values, std_errors=std,
         covariance=cov, correlation=corr, theta=theta, residuals=r, singular_values=sv,
         steps=int(steps), message=message, jacobian=J, result=result, reduced_chi2=chi2,
         noise_consistent=consistent, unidentifiable=_singular_directions(sv, vt, names),
         theta_covariance=delta(np.eye(p)), **extra,
     )  # fmt: skip
+
+
+def _value_and_jacfwd(transform, theta):
+    """transform(θ) and ∂transform/∂θ as NumPy arrays from one compiled program (a new trace per
+    call, but one program instead of dozens of eager operations, each compiled at start-up)."""
+    both = jax.jit(lambda th: (transform(th), jax.jacfwd(transform)(th)))
+    return tuple(np.asarray(v) for v in both(jnp.asarray(theta, dtype=jnp.float64)))
 
 
 def _singular_directions(sv, vt, names) -> tuple:

@@ -18,9 +18,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._checks import check_range, fail_if
+from .._checks import check_range, fail_if, failures_as_nan, finite_or_raise
 from .._contact._presets import wu2015_eq5_stiffness as wu2015_eq5_stiffness  # noqa: F401 (re-export)
 from .._dynamics._harmonic import harmonic_balance
+from .._export import cached_jit
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._plot import pyplot
 from .._tables import data_dir, read_table
@@ -62,10 +63,17 @@ def unit_element(name: str):
     return cls(1.0, 1.0, 1.0)
 
 
-@jax.jit
-def _curves(element, A_bar):
+@cached_jit
+def _curves_jit(element, A_bar):
     out = jax.vmap(lambda a: harmonic_balance(element, a))(A_bar)
     return out.K_bar, out.C_bar
+
+
+def _curves(element, A_bar):
+    with failures_as_nan():
+        K, C = _curves_jit(element, A_bar)
+    what = f"K_bar, C_bar of {type(element).__name__}"
+    return jnp.asarray(finite_or_raise(K, what)), jnp.asarray(finite_or_raise(C, what))
 
 
 def dimensionless_curves(name: str, A_bar):
@@ -78,7 +86,7 @@ def _cbar(element, a):
     return harmonic_balance(element, a).C_bar
 
 
-@jax.jit
+@cached_jit
 def _newton_peak(element, a):
     """Newton iterations on dC̄/dĀ = 0 from a (unit element: A = Ā)."""
     d1 = jax.grad(_cbar, argnums=1)
@@ -99,7 +107,9 @@ def cbar_peak(name: str) -> tuple[float, float]:
     element = unit_element(name)
     grid = jnp.linspace(1.05, 6.0, 100)
     _, C = _curves(element, grid)
-    a, c = _newton_peak(element, grid[int(jnp.argmax(C))])
+    with failures_as_nan():
+        a, c = _newton_peak(element, grid[int(jnp.argmax(C))])
+    a, c = finite_or_raise(jnp.stack([a, c]), f"the C_bar peak of {name}")
     return float(a), float(c)
 
 
