@@ -236,6 +236,7 @@ def cached_jit(fn):
     jitted = eqx.filter_jit(fn)
     programs: dict = {}
     locks: dict = {}
+    keys: dict = {}  # signature -> key: the key's hashing once per signature, not per call
 
     @functools.wraps(fn)
     def call(*args):
@@ -244,7 +245,16 @@ def cached_jit(fn):
         leaves, treedef = jax.tree_util.tree_flatten(dyn)
         if folder is None or any(isinstance(x, jax.core.Tracer) for x in leaves):
             return jitted(*args)
-        key = _key(fn, treedef, static, leaves)
+        # the signature as equinox's own jit cache compares it (structures and static values by
+        # equality, arrays by shape and dtype); the folder, since the key depends on the setup
+        s_leaves, s_tree = jax.tree_util.tree_flatten(static)
+        sig = (folder, treedef, s_tree, *((type(v), v) for v in s_leaves),
+               *((x.shape, x.dtype, getattr(x, "weak_type", False)) for x in leaves))  # fmt: skip
+        try:
+            key = keys[sig] if sig in keys else keys.setdefault(
+                sig, _key(fn, treedef, static, leaves))  # fmt: skip
+        except TypeError:  # a static value that cannot be hashed: keyed every call
+            key = _key(fn, treedef, static, leaves)
         if key is None:
             return jitted(*args)
         if key not in programs:

@@ -273,14 +273,14 @@ class FractalContact(eqx.Module):
             out = _evaluate(self, load)  # inlined in the caller's trace, checks included
         else:  # a stored program without host callbacks; its failures raised here
             with failures_as_nan():
-                out = ContactParameters(*_evaluate_quiet(self, load))
-            if self.throw and not bool(out.converged):
+                values, flags = _evaluate_quiet(self, load)
+            out = ContactParameters(values, flags)
+            (converged, all_plastic), F_s = np.asarray(flags), np.asarray(values)[1]
+            if self.throw and not converged:
                 raise eqx.EquinoxRuntimeError(_NOT_CONVERGED)
-            if self.throw and bool(out.all_plastic):
+            if self.throw and all_plastic:
                 raise eqx.EquinoxRuntimeError(_ALL_PLASTIC)
-        if self.throw and not isinstance(out.values, jax.core.Tracer):
-            static_zero = np.asarray(out.no_static_friction)
-            if static_zero.any():
+            if self.throw and F_s == 0.0:  # `no_static_friction`, in NumPy (a JAX op: 1 ms)
                 warnings.warn(
                     "no asperity is elastic or first elastic-plastic (a'_l <= a'_epc), so F_s and "
                     "z_max are 0 (wang2022 Eqs 14, 16) while K_tau is not: D is close to 3 or G "
