@@ -169,6 +169,17 @@ def test_stored_trace_key_names_everything_the_trace_depends_on():
         assert key(x, 2.0, jnp.sin) == base
     with jax.numpy_rank_promotion("allow"):
         assert key(x, 2.0, jnp.sin) != base  # a trace-relevant setting is in the key
+    # a call hashes its signature's key once; a new trace-relevant setting is a new signature
+    from tribojax._fit._noise import _gammaincc
+
+    if E.export_dir() is not None:
+        a, z = jnp.asarray(1.5), jnp.asarray(2.0)
+        q = float(_gammaincc(a, z))
+        n = len(_gammaincc.programs)
+        assert float(_gammaincc(a, z + 1.0)) < q and len(_gammaincc.programs) == n
+        other = "raise" if jax.config.jax_numpy_rank_promotion == "allow" else "allow"
+        with jax.numpy_rank_promotion(other):
+            assert float(_gammaincc(a, z)) == q and len(_gammaincc.programs) == n + 1
     # not keyed (traced as before): a closure, whose captured value is not in its name; a user's
     # function or Module class, whose source may change between runs without a version change
     k = 2.0

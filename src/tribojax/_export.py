@@ -35,6 +35,7 @@ from pathlib import Path
 import equinox as eqx
 import jax
 import numpy as np
+from jax._src import config as _jax_config
 
 from ._cache import cache_dir
 
@@ -129,10 +130,8 @@ def _structure(treedef) -> str:
 
 
 def _trace_context() -> str:
-    from jax._src import config
-
     parts = []
-    for v in config.trace_context():
+    for v in _jax_config.trace_context():
         try:
             parts.append(_atom(v))
         except _Unkeyable:
@@ -245,10 +244,11 @@ def cached_jit(fn):
         leaves, treedef = jax.tree_util.tree_flatten(dyn)
         if folder is None or any(isinstance(x, jax.core.Tracer) for x in leaves):
             return jitted(*args)
-        # the signature as equinox's own jit cache compares it (structures and static values by
-        # equality, arrays by shape and dtype); the folder, since the key depends on the setup
+        # the signature as JAX's and equinox's own jit caches compare it (trace context,
+        # structures and static values by equality, arrays by shape and dtype), and the folder
         s_leaves, s_tree = jax.tree_util.tree_flatten(static)
-        sig = (folder, treedef, s_tree, *((type(v), v) for v in s_leaves),
+        sig = (folder, _jax_config.trace_context(), treedef, s_tree,
+               *((type(v), v) for v in s_leaves),
                *((x.shape, x.dtype, getattr(x, "weak_type", False)) for x in leaves))  # fmt: skip
         try:
             key = keys[sig] if sig in keys else keys.setdefault(
