@@ -31,29 +31,6 @@ def _si_units() -> dict:
     return {"velocity_unit": "m/s", "friction_unit": "N"}
 
 
-def _set_checked(record, names):
-    """Replace the fields `names` of a frozen record by their checked float64 arrays."""
-    for name, x in _checked(record.source, **{c: getattr(record, c) for c in names}).items():
-        object.__setattr__(record, name, x)
-
-
-def _checked(source, **arrays):
-    out = {}
-    n = None
-    for name, x in arrays.items():
-        x = np.asarray(x, dtype=np.float64)
-        if x.ndim != 1:
-            raise ValueError(f"{source}: {name} must be 1-D, got shape {x.shape}")
-        bad = np.flatnonzero(~np.isfinite(x))
-        if bad.size:
-            raise ValueError(f"{source}: {name}[{bad[0]}] is {x[bad[0]]}")
-        if n is not None and len(x) != n:
-            raise ValueError(f"{source}: {name} has {len(x)} entries, expected {n}")
-        n = len(x)
-        out[name] = x
-    return out
-
-
 @final
 @dataclasses.dataclass(frozen=True)
 class FrictionCurve(AbstractRecord):
@@ -80,7 +57,7 @@ class FrictionCurve(AbstractRecord):
     description: ClassVar[str] = "a friction curve"
 
     def __post_init__(self):
-        _set_checked(self, CURVE_COLUMNS)
+        self._set_series(CURVE_COLUMNS)
         if len(self.velocity) < 2:
             raise ValueError(f"{self.source}: a friction curve needs at least two points")
         if np.any(self.friction_scatter <= 0) or np.any(self.velocity_scatter < 0):
@@ -120,10 +97,7 @@ class FrictionTransient(AbstractRecord):
     description: ClassVar[str] = "a friction transient"
 
     def __post_init__(self):
-        _set_checked(self, ("t", "velocity", "friction"))
-        steps = np.flatnonzero(np.diff(self.t) <= 0)
-        if steps.size:
-            raise ValueError(f"{self.source}: time is not increasing at sample {steps[0] + 1}")
+        self._set_series(("t", "velocity", "friction"), time="t")
 
     def __len__(self) -> int:
         return len(self.t)

@@ -65,28 +65,10 @@ class HysteresisLoop(AbstractRecord):
     response_unit: ClassVar[str] = "N"
 
     def __post_init__(self):
-        arrays = [np.asarray(x, dtype=np.float64) for x in (self.t, self.u, self.f)]
-        for name, x in zip(("t", "u", "f"), arrays):
-            object.__setattr__(self, name, x)
-            if x.ndim != 1:
-                raise ValueError(f"{self.source}: {name} must be 1-D, got shape {x.shape}")
-            bad = np.flatnonzero(~np.isfinite(x))
-            if bad.size:
-                raise ValueError(f"{self.source}: {name}[{bad[0]}] is {x[bad[0]]}")
-            far = implausible(x, name) if name != "t" else None
-            if far:
-                raise ValueError(f"{self.source}: {name}[{far[0]}] = {far[1]}")
-        if not (len(self.t) == len(self.u) == len(self.f)):
-            raise ValueError(f"{self.source}: t, u and f must have the same length")
+        self._set_series(("t", "u", "f"), time="t")
         for name, unit in (("normal_load", "N"), ("frequency", "Hz"), ("noise_std", "N")):
             value = positive_or_none(getattr(self, name), name, self.source, unit)
             object.__setattr__(self, name, value)
-        steps = np.flatnonzero(np.diff(self.t) <= 0)
-        if steps.size:
-            i = steps[0] + 1
-            raise ValueError(
-                f"{self.source}: time is not increasing at sample {i} (t = {self.t[i]})"
-            )
         object.__setattr__(self, "periodic", bool(self.periodic))
         if self.periodic and len(cycle_starts(self.t, self.u)) < 2:
             raise ValueError(

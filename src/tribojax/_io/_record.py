@@ -20,6 +20,9 @@ from typing import ClassVar
 
 import numpy as np
 
+from .._limits import SAMPLE_LIMITS
+from ._files import implausible
+
 
 class AbstractRecord(abc.ABC):
     """A user record: a measured (or synthetic) data set with the file it came from.
@@ -51,6 +54,36 @@ class AbstractRecord(abc.ABC):
             if issubclass(base, AbstractRecord) and "kind" in vars(base):
                 raise TypeError(f"{base.__name__} is a final record class and cannot be "
                                 f"subclassed (subclass AbstractRecord for a new kind)")  # fmt: skip
+
+    def _set_series(self, names, *, time: str | None = None) -> None:
+        """Replace the fields `names` of this frozen record by read-only float64 copies, checked:
+        1-D, finite, of one length, within `SAMPLE_LIMITS` where the name has one, and `time`
+        (one of them) strictly increasing. ValueError names the source, the field and the sample.
+        """
+        arrays = {}
+        for name in names:
+            x = np.array(getattr(self, name), dtype=np.float64)  # a copy: the caller's is kept
+            if x.ndim != 1:
+                raise ValueError(f"{self.source}: {name} must be 1-D, got shape {x.shape}")
+            bad = np.flatnonzero(~np.isfinite(x))
+            if bad.size:
+                raise ValueError(f"{self.source}: {name}[{bad[0]}] is {x[bad[0]]} (must be finite)")
+            far = implausible(x, name) if name in SAMPLE_LIMITS else None
+            if far:
+                raise ValueError(f"{self.source}: {name}[{far[0]}] = {far[1]}")
+            x.setflags(write=False)
+            arrays[name] = x
+        if len({len(x) for x in arrays.values()}) > 1:
+            raise ValueError(f"{self.source}: {', '.join(names)} must have the same length, got "
+                             f"{', '.join(str(len(x)) for x in arrays.values())}")  # fmt: skip
+        for name, x in arrays.items():
+            object.__setattr__(self, name, x)
+        t = arrays.get(time)
+        steps = np.flatnonzero(np.diff(t) <= 0) if t is not None else ()
+        if len(steps):
+            i = steps[0] + 1
+            raise ValueError(f"{self.source}: time is not strictly increasing at sample {i} "
+                             f"(t = {t[i]:g} s after {t[i - 1]:g} s)")  # fmt: skip
 
     @abc.abstractmethod
     def __len__(self) -> int:

@@ -82,34 +82,11 @@ class SlipRun(AbstractRecord):
         src = self.source
         if self.drive is not None and not isinstance(self.drive, AbstractProfile):
             raise ValueError(f"{src}: drive must be an acceleration profile, got {self.drive!r}")
-        arrays = [np.array(x, dtype=np.float64) for x in (self.t, self.accel, self.slip)]
-        for name, x in zip(("t", "accel", "slip"), arrays):
-            if x.ndim != 1:
-                raise ValueError(f"{src}: {name} must be 1-D, got shape {x.shape}")
-            bad = np.flatnonzero(~np.isfinite(x))
-            if bad.size:
-                raise ValueError(f"{src}: {name}[{bad[0]}] is {x[bad[0]]} (must be finite)")
-            far = implausible(x, name) if name != "t" else None
-            if far:
-                raise ValueError(f"{src}: {name}[{far[0]}] = {far[1]}")
-            x.setflags(write=False)
-            object.__setattr__(self, name, x)
-        if not (len(self.t) == len(self.accel) == len(self.slip)):
-            raise ValueError(
-                f"{src}: t, accel and slip must have the same length, got "
-                f"{len(self.t)}, {len(self.accel)}, {len(self.slip)}"
-            )
+        self._set_series(("t", "accel", "slip"), time="t")
         if len(self.t) < 2:
             raise ValueError(f"{src}: a slip run needs at least 2 samples, got {len(self.t)}")
         if self.t[0] < 0:
             raise ValueError(f"{src}: t[0] = {self.t[0]:g} s must be >= 0 (the run starts at rest)")
-        steps = np.flatnonzero(np.diff(self.t) <= 0)
-        if steps.size:
-            i = steps[0] + 1
-            raise ValueError(
-                f"{src}: time is not strictly increasing at sample {i} "
-                f"(t = {self.t[i]:g} s after {self.t[i - 1]:g} s)"
-            )
         mass = positive_or_none(self.mass, "mass", src, "kg", required=True)
         object.__setattr__(self, "mass", mass)
         for name, unit in (("normal_load", "N"), ("noise_std", "m")):
