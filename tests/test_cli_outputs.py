@@ -89,6 +89,23 @@ def test_a_killed_run_exits_130_and_leaves_no_lock_or_output(tmp_path, sig):
     assert not out.exists()  # output, lock and the folder made for them removed
 
 
+def test_the_console_script_exits_with_the_status_and_its_output_written(tmp_path):
+    # `entry` ends the process without the interpreter's teardown: what it printed and wrote
+    # must be complete, and the status the command's
+    code = "import sys; from tribojax._cli import entry; sys.argv[0] = 'tribojax'; entry()"
+
+    def run(*args):
+        return subprocess.run([sys.executable, "-c", code, *args], capture_output=True,
+                              text=True, timeout=300)  # fmt: skip
+
+    ok = run(*CONTACT, "--json", str(tmp_path / "r.json"))
+    assert ok.returncode == 0, ok.stderr[-2000:]
+    rows = json.loads((tmp_path / "r.json").read_text())["contact"]
+    assert rows and ok.stdout.rstrip().endswith(str(tmp_path / "r.json")), ok.stdout[-500:]
+    bad = run(*CONTACT, "--mass", "0")
+    assert bad.returncode == 2 and bad.stderr.startswith("tribojax contact: error: --mass = ")
+
+
 def test_contact_numbers_outside_their_physical_range_are_not_a_result(tmp_path, capsys):
     # issue 33 probe: C_tau = 7.82, 0.139, -0.287, -852, 3.3e5 N s/m at these loads, exit 0
     out = tmp_path / "c.json"
