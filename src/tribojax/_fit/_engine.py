@@ -168,7 +168,9 @@ def fit_statistics(
 
     Covariance of θ: s²(JᵀJ)⁻¹ through the SVD of J (s² = RSS/(n − p), or 1 if `sigma_known`);
     directions with singular values ≤ 1e-14 of the largest get infinite variance. Mapped to the
-    physical parameters `transform(θ)` by the delta method, T·cov·Tᵀ with T = ∂transform/∂θ.
+    physical parameters `transform(θ)` by the delta method, T·cov·Tᵀ with T = ∂transform/∂θ
+    (`transform`: a callable, None for the identity, or an object whose `value_and_jacobian(θ)`
+    gives both, as the record models' fits pass: one compiled program instead of eager steps).
     With `sigma_known` and a χ² that `noise_consistent` rejects (or `noise_consistent` given
     False: a record model's full test) the stated noise is contradicted by the misfit:
     `noise_consistent` is False and s² = RSS/(n − p) is used instead of 1. Directions of θ
@@ -199,7 +201,13 @@ def fit_statistics(
         cov[np.ix_(free, free)] = np.inf
         return cov
 
-    values, T = _value_and_jacfwd(transform, theta)
+    if callable(getattr(transform, "value_and_jacobian", None)):  # one compiled program
+        values, T = (np.asarray(v, dtype=np.float64) for v in transform.value_and_jacobian(theta))
+    elif transform is None:  # the identity: no JAX operation
+        values, T = theta.copy(), np.eye(theta.size)
+    else:
+        values = np.asarray(transform(jnp.asarray(theta)))
+        T = np.asarray(jax.jacfwd(transform)(jnp.asarray(theta)))
     cov = delta(T)
     with np.errstate(invalid="ignore"):
         std = np.sqrt(np.diag(cov))
@@ -211,13 +219,6 @@ def fit_statistics(
         noise_consistent=consistent, unidentifiable=_singular_directions(sv, vt, names),
         theta_covariance=delta(np.eye(p)), **extra,
     )  # fmt: skip
-
-
-def _value_and_jacfwd(transform, theta):
-    """transform(θ) and ∂transform/∂θ as NumPy arrays from one compiled program (a new trace per
-    call, but one program instead of dozens of eager operations, each compiled at start-up)."""
-    both = jax.jit(lambda th: (transform(th), jax.jacfwd(transform)(th)))
-    return tuple(np.asarray(v) for v in both(jnp.asarray(theta, dtype=jnp.float64)))
 
 
 def _singular_directions(sv, vt, names) -> tuple:
@@ -280,7 +281,7 @@ def least_squares_fit(
     args=None,
     *,
     names,
-    transform=lambda theta: theta,
+    transform=None,
     sigma_known: bool = False,
     rtol: float = 1e-10,
     atol: float = 1e-12,
@@ -298,7 +299,7 @@ def least_squares_fit(
             `FAILED_RESIDUAL` marks a row where the model could not be evaluated.
         theta0: start, 1-D.
         names: parameter names for the physical vector `transform(θ)`.
-        transform: θ -> physical parameter vector (differentiable).
+        transform: θ -> physical parameter vector (differentiable); None is the identity.
         sigma_known: residuals are in units of their standard deviation (else s² is estimated).
         rtol, atol, max_steps: the default solver's Cauchy tolerances and the step budget.
         jac: how the solver differentiates the residuals, "bwd" or "fwd" (optimistix option).

@@ -211,10 +211,8 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
     names = _names(baseline, designs)
     extra = dict(model=baseline, effects=tuple(effects), designs=designs, scale=float(scale))
 
-    def transform(x):
-        strengths = [jnp.asarray(d.strength_scale, dtype=jnp.float64) for d in designs]
-        return jnp.concatenate([baseline.physical(x[:p]), x[p:] * jnp.concatenate(
-            [jnp.zeros(0), *strengths])])  # fmt: skip
+    scales = [np.asarray(d.strength_scale, dtype=np.float64) for d in designs]
+    transform = _Physical(baseline, np.concatenate([np.zeros(0), *scales]))
 
     def failed(result, message, steps=0):
         return fit_statistics(x0[:npar], np.full(n, np.nan), np.full((n, npar), np.nan),
@@ -352,6 +350,29 @@ def record_scale(baseline) -> float:
     y = np.asarray(data.y, dtype=float)
     scale = data.noise_std if data.noise_std else noise_estimate(y, data.segment)[0]
     return float(scale) if scale > 0 else float(np.std(y) or 1.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Physical:
+    """[θ_b, s] → [baseline.physical(θ_b), s·strength scale], the physical values of a record
+    model's fit, with its Jacobian from one stored program (`fit_statistics`' delta method)."""
+
+    baseline: AbstractBaseline
+    scales: np.ndarray
+
+    def value_and_jacobian(self, x):
+        return _physical_and_jacobian(self.baseline, jnp.asarray(self.scales, dtype=jnp.float64),
+                                      jnp.asarray(x, dtype=jnp.float64))  # fmt: skip
+
+
+@cached_jit
+def _physical_and_jacobian(baseline, scales, x):
+    p = len(baseline.param_names)
+
+    def transform(x):
+        return jnp.concatenate([baseline.physical(x[:p]), x[p:] * scales])
+
+    return transform(x), jax.jacfwd(transform)(x)
 
 
 @cached_jit
