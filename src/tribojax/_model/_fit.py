@@ -361,17 +361,14 @@ class _Physical:
     scales: np.ndarray
 
     def value_and_jacobian(self, x):
-        return _physical_and_jacobian(self.baseline, jnp.asarray(self.scales, dtype=jnp.float64),
-                                      jnp.asarray(x, dtype=jnp.float64))  # fmt: skip
+        return _physical_and_jacobian(self.baseline, *(jnp.asarray(v, dtype=jnp.float64)
+                                                       for v in (self.scales, x)))  # fmt: skip
 
 
 @cached_jit
 def _physical_and_jacobian(baseline, scales, x):
     p = len(baseline.param_names)
-
-    def transform(x):
-        return jnp.concatenate([baseline.physical(x[:p]), x[p:] * scales])
-
+    transform = lambda x: jnp.concatenate([baseline.physical(x[:p]), x[p:] * scales])  # noqa: E731
     return transform(x), jax.jacfwd(transform)(x)
 
 
