@@ -133,7 +133,7 @@ def test_cli_writes_json_and_figure(tmp_path, capsys):
     from tribojax._reproduce import _tables4to7, _wu2015
 
     if export_dir() is not None:
-        for fn in (_tables4to7._table3_phase_slips, _tables4to7._figure10, _wu2015._curves_jit,
+        for fn in (_tables4to7._table3_phase_slips, _tables4to7._figure10, _wu2015._curves,
                    _wu2015._newton_peak):  # fmt: skip
             assert fn.programs and None not in fn.programs.values(), fn.__name__
 

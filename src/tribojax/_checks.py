@@ -142,3 +142,12 @@ def finite_or_raise(x, what: str):
         raise RuntimeError(f"{what}: the result is not finite (a solver did not finish, or an "
                            "input is outside the model's range)")  # fmt: skip
     return arr
+
+
+def finite_result(fn, *args, what: str):
+    """`fn(*args)` run with failures as NaN (`failures_as_nan`: a program without host callbacks,
+    which can be stored and cached) and checked at this boundary: its array outputs as NumPy
+    arrays, or `RuntimeError` naming `what` if one is not finite (`finite_or_raise`)."""
+    with failures_as_nan():
+        out = fn(*args)
+    return jax.tree_util.tree_map(lambda x: finite_or_raise(x, what), out)

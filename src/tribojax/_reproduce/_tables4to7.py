@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._chain import lugre_phase_slips_nm, table3_contact
-from .._checks import check_range, failures_as_nan, finite_or_raise
+from .._checks import check_range, finite_result
 from .._dynamics._slip import simulate_slip
 from .._export import cached_jit
 from .._fit._engine import FitResult, least_squares_fit
@@ -40,9 +40,8 @@ def table3_phase_slips(alpha, adjoint=dfx.RecursiveCheckpointAdjoint()):
     not finish raises `RuntimeError` here, or gives NaN under a trace.
     """
     alpha = check_range(alpha, "alpha", 0.0)
-    with failures_as_nan():
-        slips = _table3_phase_slips(alpha, adjoint)
-    return finite_or_raise(slips, f"wang2022 Tables 4-7 slips at alpha = {alpha}")
+    return finite_result(_table3_phase_slips, alpha, adjoint,
+                         what=f"wang2022 Tables 4-7 slips at alpha = {alpha}")  # fmt: skip
 
 
 @cached_jit
@@ -134,10 +133,8 @@ def figure10_curves(alpha=1.0, n_points=1151):
     """
     ts = jnp.linspace(0.0, 2.3, n_points)
     alpha = check_range(alpha, "alpha", 0.0)
-    with failures_as_nan():
-        slip, z = _figure10(alpha, ts)
-    what = f"wang2022 Figure 10 slips at alpha = {alpha}"
-    return np.asarray(ts), finite_or_raise(slip, what), finite_or_raise(z, what)
+    slip, z = finite_result(_figure10, alpha, ts, what=f"wang2022 Figure 10 at alpha = {alpha}")
+    return np.asarray(ts), slip, z
 
 
 @cached_jit

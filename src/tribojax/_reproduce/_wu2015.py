@@ -18,7 +18,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._checks import check_range, fail_if, failures_as_nan, finite_or_raise
+from .._checks import check_range, fail_if, finite_result
 from .._contact._presets import wu2015_eq5_stiffness as wu2015_eq5_stiffness  # noqa: F401 (re-export)
 from .._dynamics._harmonic import harmonic_balance
 from .._export import cached_jit
@@ -64,22 +64,17 @@ def unit_element(name: str):
 
 
 @cached_jit
-def _curves_jit(element, A_bar):
+def _curves(element, A_bar):
     out = jax.vmap(lambda a: harmonic_balance(element, a))(A_bar)
     return out.K_bar, out.C_bar
-
-
-def _curves(element, A_bar):
-    with failures_as_nan():
-        K, C = _curves_jit(element, A_bar)
-    what = f"K_bar, C_bar of {type(element).__name__}"
-    return jnp.asarray(finite_or_raise(K, what)), jnp.asarray(finite_or_raise(C, what))
 
 
 def dimensionless_curves(name: str, A_bar):
     """K̄(Ā), C̄(Ā) (dimensionless) of the named element ("jenkins" or "mindlin"), Ā > 0."""
     A_bar = check_range(A_bar, "A_bar", 0.0)
-    return _curves(unit_element(name), jnp.atleast_1d(A_bar))
+    K, C = finite_result(_curves, unit_element(name), jnp.atleast_1d(A_bar),
+                         what=f"K_bar, C_bar of {name}")  # fmt: skip
+    return jnp.asarray(K), jnp.asarray(C)
 
 
 def _cbar(element, a):
@@ -106,10 +101,9 @@ def cbar_peak(name: str) -> tuple[float, float]:
     """
     element = unit_element(name)
     grid = jnp.linspace(1.05, 6.0, 100)
-    _, C = _curves(element, grid)
-    with failures_as_nan():
-        a, c = _newton_peak(element, grid[int(jnp.argmax(C))])
-    a, c = finite_or_raise(jnp.stack([a, c]), f"the C_bar peak of {name}")
+    _, C = finite_result(_curves, element, grid, what=f"K_bar, C_bar of {name}")
+    a, c = finite_result(_newton_peak, element, grid[int(np.argmax(C))],
+                         what=f"the C_bar peak of {name}")  # fmt: skip
     return float(a), float(c)
 
 
