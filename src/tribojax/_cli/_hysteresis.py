@@ -90,6 +90,11 @@ def run_hysteresis(args) -> int:
         cols = ("A", "A_bar", "K_eq", "C_eq", "K_bar", "C_bar", "W")
         header = "A_m,A_bar,K_eq_N_per_m,C_eq_Ns_per_m,K_bar,C_bar,W_J"
         table = np.stack([np.asarray(getattr(hb, c)) for c in cols], axis=1)
+        bad = [c for c, col in zip(cols, table.T) if not np.all(np.isfinite(col))]
+        if bad:  # inputs beyond float64 (omega = 1e-300 rad/s: C_eq = W/(pi omega A^2) overflows)
+            return error(f"{', '.join(bad)} not finite at some amplitude: the inputs (omega = "
+                         f"{args.omega:g} rad/s, mu = {args.mu:g}, N = {args.N:g} N, K_d = "
+                         f"{K_d:g} N/m) are outside float64's range")  # fmt: skip
         comment = (
             f"# tribojax hysteresis: {args.element}, mu = {args.mu:g}, N = {args.N:g} N, "
             f"K_d = {K_d:.6g} N/m, A0 = {A0:.6g} m, omega = {args.omega:.6g} rad/s"
