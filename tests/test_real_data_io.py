@@ -125,7 +125,12 @@ def test_epos_folder_is_one_curve_in_si(tmp_path):
         (EPOS_COLS + "0.000;1;2.0\n51.200;1;2", None),  # a short last line is still 3 numbers
         (EPOS_COLS + "0.000;1;2.0\n51.200;1\n", r"line 7: '51.200;1' is not three numbers"),
         (EPOS_COLS + "0.000;1;2.0\n0.000;1;2.5\n", r"line 7: time does not increase"),
-        (";a;b\nms;rad;%\n0;1;2\n", r"line 6: no units line ms;rpm;%"),
+        (
+            ";a;b\nms;rad;%\n0;1;2\n",
+            r"line 6: a sample before the units line ms;rpm;%; line 5 "
+            r"should be it but reads 'ms;rad;%'",
+        ),
+        (";a;b\nms;rpm\n", r"line 5: no units line ms;rpm;%"),
     ],
 )
 def test_epos_bad_files_name_file_and_line(tmp_path, body, match):
@@ -206,3 +211,39 @@ def test_effective_samples_of_a_correlated_series():
     white = np.array([tj.effective_samples(xi) for xi in rng.normal(size=(50, n))])
     assert np.all(white <= n) and np.median(white) > 0.6 * n
     assert tj.effective_samples(np.arange(10.0)) == 10  # too short for batches: the count
+
+
+def test_epos_resaved_by_a_spreadsheet_is_read_and_edits_are_flagged(tmp_path):
+    # trailing empty fields on every line (the units line too), quotes, a note in a spare
+    # column, a torque typed with two decimals in a one-decimal column, a time off the grid
+    body = ["0.000;10;31.0", "51.200;10;30.5", "102.400;11;31.2", "153.600;10;30.9",
+            "204.800;10;31.1;checked by hand", "256.000;10;30.75", "307.100;10;31.0",
+            "358.400;10;-31"]  # fmt: skip
+    text = EPOS_HEAD.replace(";4", ";8") + EPOS_COLS + "\n".join(body) + "\n"
+    clean = tmp_path / "clean.csv"
+    clean.write_text(EPOS_HEAD.replace(";4", ";8") + EPOS_COLS + "\n".join(
+        ";".join(line.split(";")[:3]).replace("307.100", "307.200").replace("30.75", "30.7")
+        for line in body) + "\n")  # fmt: skip
+    resaved = tmp_path / "resaved.csv"
+    resaved.write_text("\n".join(
+        ";".join(f'"{f}"' if f.endswith(":") else f for f in line.split(";")) + ";;,,"
+        for line in text.splitlines()) + "\n")  # fmt: skip
+    assert tj.detect_format(resaved) == "epos"
+    with pytest.warns(tj.DataFileWarning) as caught:
+        got = tj.read_record(resaved)
+    message = str(caught[0].message)
+    assert "resaved.csv: 3 line(s) look edited" in message
+    assert "line 10: extra field 'checked by hand' ignored" in message
+    assert "line 11: % value '30.75' has 2 decimals, the column 1" in message
+    assert "line 12: time 307.100 ms is off the 51.2 ms sampling grid" in message
+    assert "line 13" not in message  # '-31' is -31.0 with its trailing zeros dropped
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the clean export reads without a warning
+        ref = tj.read_record(clean)
+    keep = np.arange(8) != 5
+    np.testing.assert_allclose(got.friction[keep], ref.friction[keep], rtol=0)
+    assert got.friction[5] == pytest.approx(0.3075 * 9.84e-3, rel=1e-12)
+    np.testing.assert_allclose(got.velocity, ref.velocity, rtol=0)
+    assert got.t[6] == pytest.approx(0.3071) and ref.t[6] == pytest.approx(0.3072)

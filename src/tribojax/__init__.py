@@ -208,6 +208,7 @@ if TYPE_CHECKING:
     from ._sweep import product_grid as product_grid
     from ._sweep import sweep as sweep
     from ._tables import DataFileError as DataFileError
+    from ._tables import DataFileWarning as DataFileWarning
     from ._tables import read_table as read_table
     from ._tables import wang2022_table as wang2022_table
     from ._tables import wu2015_table as wu2015_table

@@ -21,6 +21,11 @@ class DataFileError(ValueError):
     """A data file that cannot be used; the message names the file, the line and the reason."""
 
 
+class DataFileWarning(UserWarning):
+    """A data file read in full, with lines that look edited (by hand or by a spreadsheet); the
+    message names the file and the lines."""
+
+
 def read_text(path) -> str:
     """The text of a UTF-8 file (a leading byte-order mark is dropped); DataFileError naming the
     file, and the line of the first byte that is not UTF-8, when it cannot be read."""
