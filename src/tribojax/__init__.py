@@ -119,6 +119,7 @@ if TYPE_CHECKING:
     from ._friction._rate_independent import IwanBank as IwanBank
     from ._friction._rate_independent import Jenkins as Jenkins
     from ._friction._rate_independent import Mindlin as Mindlin
+    from ._io._brfd import brfd_band_tension as brfd_band_tension
     from ._io._brfd import brfd_test as brfd_test
     from ._io._brfd import read_brfd as read_brfd
     from ._io._curve import FrictionCurve as FrictionCurve

@@ -7,6 +7,7 @@ own module is imported only to run it.
 
 from __future__ import annotations
 
+import argparse
 import math
 
 from .. import _presets as P
@@ -105,6 +106,28 @@ def hysteresis_arguments(parser) -> None:
                         "that this run does not write are removed)")  # fmt: skip
 
 
+def band_tension(text: str) -> float:
+    """A band tension for `--band-tension`: N, or lbf with an `lb` suffix (`30lb`)."""
+    raw = text.strip().lower()
+    lbf = raw.endswith(("lbf", "lb"))
+    number = raw.removesuffix("lbf").removesuffix("lb").strip() if lbf else raw.removesuffix("n")
+    try:
+        value = float(number) * (P.LBF_N if lbf else 1.0)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"--band-tension = {text!r} is outside the allowed range: "
+                                         "a tension > 0 in N, or in lbf as '30lb'")  # fmt: skip
+    return value
+
+
+def _band_tension_argument(parser) -> None:
+    parser.add_argument("--band-tension", type=band_tension, default=None, metavar="T",
+                        help="loops and histories of a band brake: the band's set tension, N (or "
+                        "'30lb'); default: from a brfd file name (<f>Hz<T>lbtension... or "
+                        "earthquake_<name>_<T>lb)")  # fmt: skip
+
+
 def fit_arguments(parser) -> None:
     parser.add_argument(
         "file",
@@ -151,6 +174,7 @@ def fit_arguments(parser) -> None:
                         help=f"LM step budget (default {MAX_STEPS} for slip runs and loops; "
                         "friction curves: the steady-law fit's own budget)")  # fmt: skip
     parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
+    _band_tension_argument(parser)
     add_decimation_arguments(parser)
 
 
@@ -179,6 +203,7 @@ def predict_arguments(parser) -> None:
                         help="the record's format (default: detected)")  # fmt: skip
     parser.add_argument("--force", action="store_true",
                         help="replace an existing DIR/prediction.json")  # fmt: skip
+    _band_tension_argument(parser)
 
 
 def frf_arguments(parser) -> None:

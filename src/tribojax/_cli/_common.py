@@ -10,6 +10,7 @@ computation that failed, 130 for Ctrl-C. `run_command` turns any exception into 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import shutil
 import signal
@@ -37,6 +38,7 @@ __all__ = [
     "refused_outputs",
     "run_command",
     "warn",
+    "with_band_tension",
     "write_json_atomic",
 ]
 
@@ -327,6 +329,17 @@ def progress(args, label: str, total: int | None = None, stream=None) -> Progres
     """The progress display of a subcommand: off with `--quiet` (`args.quiet`) or when stderr is
     not a terminal."""
     return Progress(label, total, quiet=bool(getattr(args, "quiet", False)), stream=stream)
+
+
+def with_band_tension(record, value, path):
+    """`record` with the `--band-tension` value (N) set; CommandError unless it is a loop or
+    history (None: unchanged)."""
+    if value is None:
+        return record
+    if record.kind != "loop":
+        raise CommandError(f"--band-tension is for loops and histories; {path} is "
+                           f"{record.description}")  # fmt: skip
+    return dataclasses.replace(record, band_tension=value)
 
 
 def reduce_record(record, args, *, whole_cycles: bool = False):

@@ -39,6 +39,7 @@ from ._common import (
     progress,
     reduce_record,
     warn,
+    with_band_tension,
     write_json_atomic,
 )
 from ._fit_real import ELEMENT_MODELS, fit_curve_record, fit_history_record, fit_summary
@@ -60,7 +61,7 @@ def run_fit(args) -> int:
         return error(f"--max-steps = {args.max_steps} must be at least 1")
     start = _parse_start(args.start)
     with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force):
-        full = read_record(path, args.format)
+        full = with_band_tension(read_record(path, args.format), args.band_tension, path)
         if full.kind in _NOT_FITTED:
             return error(f"{path} is {full.description}: {_NOT_FITTED[full.kind]}")
         if args.alpha is not None and full.kind != "slip_run":

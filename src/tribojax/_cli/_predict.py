@@ -21,7 +21,15 @@ from .._io._files import write_text_atomic
 from .._io._records import read_record
 from .._plot import pyplot, save_figure
 from .._predict import load_model, predict
-from ._common import FAILED, CommandError, claim_outputs, error, refused_outputs, write_json_atomic
+from ._common import (
+    FAILED,
+    CommandError,
+    claim_outputs,
+    error,
+    refused_outputs,
+    with_band_tension,
+    write_json_atomic,
+)
 
 
 def run_predict(args) -> int:
@@ -34,10 +42,14 @@ def run_predict(args) -> int:
         raise CommandError(why)
     model = load_model(model_path)
     with claim_outputs(src, targets, force=args.force):
-        record = read_record(src, args.format)
+        record = with_band_tension(read_record(src, args.format), args.band_tension, src)
         pred = predict(model, record)
         data = pred.as_dict()
         data["model_file"] = str(model_path)
+        scaled = model.options.get("band_tension_N") is not None
+        if scaled:  # the slip forces scale from the model's tension to the record's
+            data["band_tension_N"] = record.band_tension
+            data["model_band_tension_N"] = model.options["band_tension_N"]
         write_json_atomic(targets[0], data, exclusive=not args.force)
         table = np.column_stack([pred.x, pred.measured, pred.predicted])
         rows = "\n".join(",".join(f"{v:.17g}" for v in row) for row in table)
@@ -45,6 +57,9 @@ def run_predict(args) -> int:
         drew = _plot(pred, targets[2])
     print(f"{model.kind} model ({model_path}) on {src}: {pred.x.size} samples, "
           f"NRMSE {pred.nrmse:.4g}, rms error {pred.rms_error:.4g} {pred.unit}")
+    if scaled:
+        print(f"slip forces scaled by the band tension: {data['model_band_tension_N']:.4g} N "
+              f"(fit) -> {record.band_tension:.4g} N (record)")
     print(f"wrote {targets[0]}, {targets[1].name}" + (f" and {targets[2].name}" if drew else ""))
     if not np.all(np.isfinite(pred.predicted)):
         return error("the model is not finite on this record", status=FAILED)

@@ -6,6 +6,15 @@ for LuGre and Bouc–Wen) and its force, plus a constant force offset f0 (the lo
 any mean asymmetry), is compared with the measured force. One parameter set may be fitted to
 several records at once and predicts others (`predict_history`). The figure of merit is the
 normalised RMS error NRMSE = rms(model − measured) / std(measured).
+
+Band tension (a band brake's load knob, `HysteresisLoop.band_tension`): by the capstan
+(Euler–Eytelwein) equation a band wrapped by an angle φ on a sliding drum carries
+T_tight = T_slack·e^{μφ}; with one end held at the set tension T₀ the friction force is
+T₀(e^{μφ} − 1) (or T₀(1 − e^{−μφ}) the other way), proportional to T₀ at fixed μ and φ.
+So a model's slip forces (`TENSION_SCALED`) are those at the fit's reference tension and scale
+with T/T_ref on a record at tension T; stiffnesses, the rate parameter v_s, the sharpness n and
+the offset f0 do not (assumed: the band's and the rig's elastic compliance and the clearance do
+not depend on the pretension, μ not on the pressure).
 """
 
 from __future__ import annotations
@@ -35,6 +44,8 @@ HISTORY_MODELS = {
     "lugre": (("sigma0", True), ("F_c", True), ("F_s", True), ("v_s", True), ("f0", False)),
     "bouc_wen": (("K", True), ("F_y", True), ("n", True), ("f0", False)),
 }
+TENSION_SCALED = ("mu_N", "F_c", "F_s", "F_y")
+"""Slip-force parameters, proportional to the band tension (capstan law, module docstring)."""
 MINDLIN_IWAN = 64  # Iwan elements of the Mindlin rate form in the history fits
 BOUC_WEN_STARTS = (0.5, 2.0, 10.0)
 """Starts of the Bouc–Wen sharpness n for a thorough history fit: its optima fall in separate
@@ -66,16 +77,18 @@ class _Transform(eqx.Module):
 
 
 class _HistoryResiduals(eqx.Module):
-    """(model + f0 − measured)/std(measured) over every record in args (a tuple of records)."""
+    """(model + f0 − measured)/std(measured) over every record in args (a tuple of records
+    (t, u, f, scale, tension ratio): the slip forces scale with the ratio)."""
 
     model: str = eqx.field(static=True)
     transform: _Transform
 
     def __call__(self, theta, args):
         p = self.transform(theta)
-        el = history_element(self.model, p)
+        scaled = jnp.asarray([n in TENSION_SCALED for n, _ in HISTORY_MODELS[self.model]])
         out = []
-        for t, u, f, scale in args:
+        for t, u, f, scale, ratio in args:
+            el = history_element(self.model, jnp.where(scaled, p * ratio, p))
             if self.model in ("jenkins", "mindlin"):
                 force = drive(el, u)
             else:  # RK4, one step per sample interval (h·rate ≪ 1 at 1 kHz for these rigs)
@@ -90,14 +103,30 @@ def _residuals(fn, theta, records):
     return fn(theta, records)
 
 
-def _records(loops, decimate: int):
-    out = []
+def _records(loops, decimate: int, band_tension=None):
+    """(t, u, f, std f, T/T_ref) of every `decimate`-th sample of each loop; T_ref is
+    `band_tension` (N), else the first loop's. A loop without a tension among loops with one
+    (or against a given reference) is refused, naming it and the field."""
+    loops = list(loops)
     for loop in loops:
         if not isinstance(loop, HysteresisLoop):
             raise ValueError(f"fit_history needs HysteresisLoop records, got {type(loop).__name__}")
+    ref = band_tension if band_tension is not None else loops[0].band_tension
+    with_tension = [lp.band_tension is not None for lp in loops]
+    if (ref is not None or any(with_tension)) and not all(with_tension):
+        lp = loops[with_tension.index(False)]
+        raise ValueError(
+            f"{lp.source}: field 'band_tension' is missing, while the model scales its slip "
+            "forces with the band tension; name the file <f>Hz<T>lbtension<A>amplitude.json or "
+            "earthquake_<name>_<T>lb.json, or give it (band_tension=..., N; --band-tension)"
+        )
+    out = []
+    for loop in loops:
         sl = slice(None, None, decimate)
         f = jnp.asarray(loop.f[sl])
-        out.append((jnp.asarray(loop.t[sl]), jnp.asarray(loop.u[sl]), f, float(jnp.std(f))))
+        ratio = 1.0 if ref is None else loop.band_tension / ref
+        out.append((jnp.asarray(loop.t[sl]), jnp.asarray(loop.u[sl]), f, float(jnp.std(f)),
+                    ratio))  # fmt: skip
     return tuple(out)
 
 
@@ -118,16 +147,18 @@ def _default_start(model: str, records) -> dict:
 @dataclasses.dataclass(frozen=True)
 class HistoryFit:
     """A history fit: the model name, the `FitResult` (parameters with standard errors), the
-    NRMSE over the fitted records and the decimation used."""
+    NRMSE over the fitted records, the decimation used and `band_tension` (N), the reference
+    tension its slip forces belong to (None: the records gave none)."""
 
     model: str
     fit: FitResult
     nrmse: float
     decimate: int
+    band_tension: float | None = None
 
     def as_dict(self) -> dict:
         return {"model": self.model, "nrmse": self.nrmse, "decimate": self.decimate,
-                **self.fit.as_dict()}  # fmt: skip
+                "band_tension_N": self.band_tension, **self.fit.as_dict()}  # fmt: skip
 
 
 def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
@@ -149,6 +180,9 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
             lowest residual is kept (default one start, n = 2; `BOUC_WEN_STARTS` = (0.5, 2, 10)
             for a thorough fit, three times the work).
         decimate: keep every `decimate`-th sample (1: all).
+            Records with a `band_tension` (all or none): the slip forces fitted are those at
+            the first record's tension and scale with each record's (capstan law, module
+            docstring), so records at several tensions share one parameter set.
         max_steps, rtol: the Levenberg–Marquardt budget and relative tolerance (atol 1e-3 rtol);
             `LevenbergMarquardt.noise_floor` also stops when the step left is below 0.05
             standard errors.
@@ -199,7 +233,8 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         fit = min(fits, key=lambda f: float(np.sum(f.residuals**2)))
     else:
         fit = solve(init)
-    return HistoryFit(model, thrown(fit, throw), _nrmse(fit.residuals, records), decimate)
+    return HistoryFit(model, thrown(fit, throw), _nrmse(fit.residuals, records), decimate,
+                      loops[0].band_tension)  # fmt: skip
 
 
 def _nrmse(residuals, records) -> float:
@@ -218,20 +253,25 @@ def predict_history(fit: HistoryFit, loop: HysteresisLoop, *, decimate=None):
     """(predicted force N, NRMSE) of a fitted model on another record, driven from rest.
 
     `decimate` defaults to the fit's. The NRMSE is rms(predicted − measured)/std(measured).
+    A fit with a band tension predicts a record at another tension with its slip forces scaled
+    by the ratio (capstan law, module docstring); the record must have one.
     """
     dec = fit.decimate if decimate is None else int(decimate)
-    return history_force(fit.model, fit.fit.values, loop, dec)
+    return history_force(fit.model, fit.fit.values, loop, dec, fit.band_tension)
 
 
-def history_force(model: str, values, loop: HysteresisLoop, decimate: int = 1):
+def history_force(model: str, values, loop: HysteresisLoop, decimate: int = 1,
+                  band_tension=None):  # fmt: skip
     """(force N, NRMSE) of history model `model` at physical parameters `values` (the order of
-    `HISTORY_MODELS[model]`, f0 last) on every `decimate`-th sample of `loop`, driven from rest."""
+    `HISTORY_MODELS[model]`, f0 last) on every `decimate`-th sample of `loop`, driven from rest;
+    `band_tension` (N): the tension the slip forces in `values` belong to (None: unscaled)."""
     if model not in HISTORY_MODELS:
         raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
-    records = _records([loop], int(check_range(decimate, "decimate", 1, None, lo_open=False)))
+    dec = int(check_range(decimate, "decimate", 1, None, lo_open=False))
+    records = _records([loop], dec, band_tension)
     spec = HISTORY_MODELS[model]
     tr = _Transform(tuple(pos for _, pos in spec), 1.0)  # θ of f0 in physical units here
     theta = [np.log(v) if pos else v for v, (_, pos) in zip(values, spec)]
     r = np.asarray(_residuals(_HistoryResiduals(model, tr), jnp.asarray(theta), records))
-    t, u, f, s = records[0]
+    t, u, f, s, _ = records[0]
     return np.asarray(f) + r * s, _nrmse(r, records)

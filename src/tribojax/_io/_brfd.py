@@ -3,8 +3,9 @@
 The files (ARTS-Laboratory, "Dataset-Friction-Damper-with-Backlash", CC BY-SA 4.0) hold a JSON
 object whose key `data` is a matrix of rows `[time s, displacement in, friction force kip,
 velocity in/s, actuator force 1 lbf, actuator force 2 lbf]` sampled at 1024 Hz; the other keys
-name the units. A file `<f>Hz30lbtension<A>amplitude.json` is a (ramped) sinusoidal test at f Hz
-and amplitude A in; any other name (`earthquake_*.json`) is an arbitrary displacement history.
+name the units. A file `<f>Hz<T>lbtension<A>amplitude.json` is a (ramped) sinusoidal test at f Hz
+and amplitude A in, band tension T lbf; any other name (`earthquake_<name>_<T>lb.json`) is an
+arbitrary displacement history.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._presets import INCH_M, KIP_N
+from .._presets import INCH_M, KIP_N, LBF_N
 from .._tables import DataFileError, read_text
 from ._loop import HysteresisLoop
 
@@ -26,6 +27,15 @@ BRFD_UNITS = {
 }
 BRFD_COLUMNS = 6  # time, displacement, friction force, velocity, two actuator forces
 _SINE_NAME = re.compile(r"^(?P<f>[0-9.]+)Hz(?P<tension>[0-9.]+)lbtension(?P<A>[0-9.]+)amplitude$")
+_HISTORY_NAME = re.compile(r"^earthquake_.+_(?P<tension>[0-9.]+)lb$")
+
+
+def brfd_band_tension(path) -> float | None:
+    """The band tension (N) in a brfd file name, `<f>Hz<T>lbtension<A>amplitude.json` or
+    `earthquake_<name>_<T>lb.json` (T in lbf); None when the name gives none."""
+    stem = Path(path).stem
+    m = _SINE_NAME.match(stem) or _HISTORY_NAME.match(stem)
+    return None if m is None else float(m["tension"]) * LBF_N
 
 
 def brfd_test(path) -> dict | None:
@@ -58,13 +68,14 @@ def _line_of_row(text: str, row: int) -> int:
     return text.count("\n") + 1
 
 
-def read_brfd(path) -> HysteresisLoop:
+def read_brfd(path, band_tension=None) -> HysteresisLoop:
     """Load one brfd test as a `HysteresisLoop` in SI units (s, m, N).
 
     Displacement in → m (× 0.0254), friction force kip → N (× 4448.2216); the velocity and the
     actuator forces are not kept. A sinusoidal test gets its nominal `frequency` (Hz) from the
-    file name and `periodic=True`; an earthquake history `periodic=False`. The band tension is
-    not a normal load, so `normal_load` stays None. The rig's artefacts (force quantisation of
+    file name and `periodic=True`; an earthquake history `periodic=False`. `band_tension` (N):
+    the band's set tension, read from either file-name pattern (`brfd_band_tension`) unless
+    given; None when neither gives it. The rig's artefacts (force quantisation of
     3.56 N, actuator start-up, a displacement offset) are left in the data.
 
     Raises DataFileError naming the file and the line for invalid or truncated JSON, missing
@@ -110,6 +121,7 @@ def read_brfd(path) -> HysteresisLoop:
         return HysteresisLoop(
             t, u, f, source=str(path), frequency=None if test is None else test["frequency_Hz"],
             periodic=test is not None,
+            band_tension=brfd_band_tension(path) if band_tension is None else band_tension,
         )  # fmt: skip
     except ValueError as err:
         raise DataFileError(str(err)) from None

@@ -43,11 +43,13 @@ class HysteresisLoop(AbstractRecord):
 
     Optional metadata (keyword-only): `normal_load` (N) of the contact, the drive `frequency`
     (Hz) and `noise_std` (N), the standard deviation of the force noise (`fit_loop` uses it as
-    the residual scale when given). Construction checks lengths, finiteness, increasing time,
-    positive metadata and that at least one whole cycle of u is present (ValueError). `source`
-    names the file it came from, if any. `periodic=False` marks an arbitrary displacement
-    history (an earthquake record, a ramped sine): no whole cycle is required, and only the
-    history (time-domain) route applies to it (`fit_loop(model="history")`, `fit_history`).
+    the residual scale when given), and `band_tension` (N), the set tension of a band brake (the
+    friction damper's load knob: `fit_history` scales the slip forces with it). Construction
+    checks lengths, finiteness, increasing time, positive metadata and that at least one whole
+    cycle of u is present (ValueError). `source` names the file it came from, if any.
+    `periodic=False` marks an arbitrary displacement history (an earthquake record, a ramped
+    sine): no whole cycle is required, and only the history (time-domain) route applies to it
+    (`fit_loop(model="history")`, `fit_history`).
     """
 
     t: np.ndarray
@@ -58,6 +60,7 @@ class HysteresisLoop(AbstractRecord):
     frequency: float | None = dataclasses.field(default=None, kw_only=True)
     noise_std: float | None = dataclasses.field(default=None, kw_only=True)
     periodic: bool = dataclasses.field(default=True, kw_only=True)
+    band_tension: float | None = dataclasses.field(default=None, kw_only=True)
 
     kind: ClassVar[str] = "loop"
     description: ClassVar[str] = "a hysteresis loop"
@@ -66,7 +69,8 @@ class HysteresisLoop(AbstractRecord):
 
     def __post_init__(self):
         self._set_series(("t", "u", "f"), time="t")
-        for name, unit in (("normal_load", "N"), ("frequency", "Hz"), ("noise_std", "N")):
+        for name, unit in (("normal_load", "N"), ("frequency", "Hz"), ("noise_std", "N"),
+                           ("band_tension", "N")):  # fmt: skip
             value = positive_or_none(getattr(self, name), name, self.source, unit)
             object.__setattr__(self, name, value)
         object.__setattr__(self, "periodic", bool(self.periodic))
@@ -100,21 +104,24 @@ class HysteresisLoop(AbstractRecord):
         return cycle_starts(self.t, self.u) if self.periodic else None
 
 
-_LOOP_SIDECAR = {"normal_load_N": False, "frequency_Hz": True, "noise_std_N": False}
+_LOOP_SIDECAR = {"normal_load_N": False, "frequency_Hz": True, "noise_std_N": False,
+                 "band_tension_N": False}  # fmt: skip
 # an arbitrary history ("drive": "history" in the sidecar) needs neither key
-_HISTORY_SIDECAR = {"normal_load_N": False, "frequency_Hz": False, "noise_std_N": False}
+_HISTORY_SIDECAR = {**_LOOP_SIDECAR, "frequency_Hz": False}
 LOOP_DRIVES = ("harmonic", "history")
-_LOOP_UNITS = {"normal_load_N": "N", "frequency_Hz": "Hz", "noise_std_N": "N"}
+_LOOP_UNITS = {"normal_load_N": "N", "frequency_Hz": "Hz", "noise_std_N": "N",
+               "band_tension_N": "N"}  # fmt: skip
 FREQUENCY_TOLERANCE = 0.1  # relative mismatch allowed between the sidecar and the record
 
 
 def read_loop(path) -> HysteresisLoop:
     """Load a loop: CSV `time_s,displacement_m,force_N` plus sidecar `<stem>.json`, or legacy.
 
-    The issue's format needs the sidecar {"frequency_Hz" (required, > 0), "normal_load_N" and
-    "noise_std_N" (optional, > 0)}; the legacy columns `t_s,u_m,f_N` take the same sidecar if
-    present. SI units, `#` comment lines allowed. The sidecar's frequency must agree with the
-    record's cycle spacing within 10 % (catches rad/s given as Hz). A sidecar with
+    The issue's format needs the sidecar {"frequency_Hz" (required, > 0), "normal_load_N",
+    "noise_std_N" and "band_tension_N" (optional, > 0)}; the legacy columns `t_s,u_m,f_N`
+    take the same sidecar if present. SI units, `#` comment lines allowed. The sidecar's
+    frequency must agree with the record's cycle spacing within 10 % (catches rad/s given as
+    Hz). A sidecar with
     `"drive": "history"` marks an arbitrary displacement history (`periodic=False`): then
     "normal_load_N" and "frequency_Hz" are optional.
 
@@ -151,6 +158,7 @@ def read_loop(path) -> HysteresisLoop:
             frequency=side.get("frequency_Hz"),
             noise_std=side.get("noise_std_N"),
             periodic=drive == "harmonic",
+            band_tension=side.get("band_tension_N"),
         )
     except ValueError as err:
         raise DataFileError(str(err)) from None
@@ -185,7 +193,8 @@ def write_loop(
     if not legacy:
         side = {} if loop.periodic else {"drive": "history"}
         for key, value in (("normal_load_N", loop.normal_load), ("frequency_Hz", loop.frequency),
-                           ("noise_std_N", loop.noise_std)):  # fmt: skip
+                           ("noise_std_N", loop.noise_std),
+                           ("band_tension_N", loop.band_tension)):  # fmt: skip
             if value is not None:
                 side[key] = value
     header = LOOP_COLUMNS if legacy else LOOP_FILE_COLUMNS

@@ -70,7 +70,9 @@ def fitted_model(result, source: str = "") -> FittedModel:
         names = [n for n, _ in HISTORY_MODELS[result.model]]
         params = dict(zip(names, np.asarray(result.fit.values, float).tolist()))
         return FittedModel("history", params, {n: HISTORY_UNITS[n] for n in names},
-                           {"element": result.model, "decimate": result.decimate},
+                           {"element": result.model, "decimate": result.decimate,
+                            **({} if result.band_tension is None
+                               else {"band_tension_N": result.band_tension})},
                            source=source)  # fmt: skip
     if isinstance(result, FitResult) and result.fixed.get("direction") == "both":
         return _steady_law(result, source)
@@ -170,5 +172,10 @@ def _history(model, loop):
     if missing:
         raise ValueError(f"model: field 'parameters' lacks {missing} of the {element} model")
     dec = int(model.options.get("decimate", 1))
-    force, _ = history_force(element, [model.parameters[n] for n in names], loop, dec)
+    tension = model.options.get("band_tension_N")
+    if tension is not None and not (isinstance(tension, int | float) and tension > 0):
+        raise ValueError(f"model: field 'options.band_tension_N' is {tension!r}; a tension > 0 "
+                         "(N) expected")  # fmt: skip
+    values = [model.parameters[n] for n in names]
+    force, _ = history_force(element, values, loop, dec, tension)
     return np.asarray(loop.t[::dec]), np.asarray(loop.f[::dec]), force

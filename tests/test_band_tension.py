@@ -1,0 +1,120 @@
+"""The band tension of a band-brake friction damper (issue 30): read from both brfd file-name
+patterns or given, and the load knob of the history fits — slip forces proportional to it
+(capstan law), so a model fitted at 30 lb predicts a record at 36 lb without a refit.
+
+The records come from a stop operator written here in NumPy (an elastic spring k in series with
+a Coulomb slider whose slip force is c·T), which shares no code with tribojax's elements."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tribojax as tj
+from tribojax._cli._main import main
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "brfd"
+LBF = 4.4482216152605  # N
+C_SLIP, K = 20.0, 4.0e5  # slip force per unit tension (capstan e^{μφ} − 1), stiffness N/m
+F_HZ, FS = 1.0, 200.0
+
+
+def _stop(u, k, f_slip):
+    """Force of a spring k in series with a slider of slip force f_slip, from rest at u[0]."""
+    out = np.zeros_like(u)
+    for i in range(1, u.size):
+        out[i] = np.clip(out[i - 1] + k * (u[i] - u[i - 1]), -f_slip, f_slip)
+    return out
+
+
+def _record(tension_lbf, amplitude, seed, tension_known=True, cycles=2.25):
+    t = np.arange(int(cycles * FS / F_HZ) + 1) / FS
+    u = amplitude * np.sin(2 * np.pi * F_HZ * t)
+    noise = np.random.default_rng(seed).normal(0.0, 2.0, t.size)
+    f = _stop(u, K, C_SLIP * tension_lbf * LBF) + 5.0 + noise
+    return tj.HysteresisLoop(t, u, f, frequency=F_HZ, source=f"<{tension_lbf} lb, seed {seed}>",
+                             band_tension=tension_lbf * LBF if tension_known else None)  # fmt: skip
+
+
+def test_tension_from_both_file_name_patterns():
+    assert tj.brfd_band_tension("0.5Hz30lbtension1amplitude.json") == pytest.approx(30 * LBF)
+    assert tj.brfd_band_tension("a/earthquake_KocaeliDBE_36lb.json") == pytest.approx(36 * LBF)
+    assert tj.brfd_band_tension("earthquake_Kocaeli.json") is None
+    assert tj.brfd_band_tension("run.json") is None
+
+
+@pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/data/real/brfd is absent")
+def test_shared_records_carry_their_tension():
+    sine = tj.read_record(SHARED / "1Hz30lbtension1amplitude.json")
+    quake = tj.read_brfd(SHARED / "earthquake_KocaeliDBE_30lb.json")
+    assert sine.band_tension == quake.band_tension == pytest.approx(133.4466, rel=1e-6)
+    given = tj.read_brfd(SHARED / "earthquake_KocaeliDBE_30lb.json", band_tension=160.0)
+    assert given.band_tension == 160.0
+
+
+def test_independent_generator_is_a_stop_operator():
+    # the generator itself: force bounded by the slip force, slope k while sticking
+    u = 1e-3 * np.sin(np.linspace(0, 4 * np.pi, 801))
+    f = _stop(u, K, 100.0)
+    assert np.max(np.abs(f)) == pytest.approx(100.0) and f[0] == 0.0
+    assert (f[1] - f[0]) / (u[1] - u[0]) == pytest.approx(K)
+
+
+@pytest.fixture(scope="module")
+def fit30():
+    records = [_record(30, 15e-3, 1), _record(30, 25e-3, 2)]
+    return tj.fit_history(records, "jenkins")
+
+
+def test_fit_at_30_lb_predicts_36_lb_by_the_capstan_law(fit30):
+    assert fit30.band_tension == pytest.approx(30 * LBF)
+    mu_N, K_d, f0 = fit30.fit.values
+    assert mu_N == pytest.approx(C_SLIP * 30 * LBF, rel=0.01)  # slip force at the reference
+    assert K_d == pytest.approx(K, rel=0.05) and f0 == pytest.approx(5.0, abs=1.0)
+    held = _record(36, 20e-3, 3)
+    force, nrmse = tj.predict_history(fit30, held)
+    assert nrmse < 0.01  # the noise is 2 N of a ±2.9 kN force
+    assert np.max(np.abs(force - 5.0)) == pytest.approx(C_SLIP * 36 * LBF, rel=0.01)
+    # the same parameters without the knob predict the 30 lb slip force: 6 times the error
+    unscaled = tj.HysteresisLoop(held.t, held.u, held.f, frequency=F_HZ)
+    _, nrmse_unscaled = tj.predict_history(
+        tj.fit_history([_record(30, 15e-3, 1, False), _record(30, 25e-3, 2, False)], "jenkins"),
+        unscaled,
+    )
+    assert nrmse_unscaled > 6 * nrmse
+
+
+def test_records_at_two_tensions_share_one_parameter_set():
+    fit = tj.fit_history([_record(36, 20e-3, 4), _record(30, 20e-3, 5)], "jenkins")
+    assert fit.band_tension == pytest.approx(36 * LBF)  # the first record's: the reference
+    assert fit.fit.values[0] == pytest.approx(C_SLIP * 36 * LBF, rel=0.01)
+    assert fit.nrmse < 0.01
+
+
+def test_a_missing_tension_is_refused_naming_the_record_and_field(fit30):
+    with pytest.raises(ValueError, match=r"<30 lb, seed 7>: field 'band_tension' is missing"):
+        tj.fit_history([_record(30, 4e-3, 1), _record(30, 4e-3, 7, False)], "jenkins")
+    with pytest.raises(ValueError, match=r"<36 lb, seed 8>: field 'band_tension' is missing"):
+        tj.predict_history(fit30, _record(36, 4e-3, 8, False))
+
+
+def test_saved_model_keeps_the_reference_and_the_cli_takes_a_tension(fit30, tmp_path):
+    model = tj.fitted_model(fit30)
+    assert model.options["band_tension_N"] == pytest.approx(30 * LBF)
+    back = tj.FittedModel.from_dict(json.loads(json.dumps(model.as_dict())))
+    held = _record(36, 20e-3, 3)
+    pred = tj.predict(back, held)
+    assert pred.nrmse == pytest.approx(tj.predict_history(fit30, held)[1], rel=1e-9)
+    # the CLI: a loop CSV without a tension is refused until --band-tension gives it
+    (tmp_path / "model.json").write_text(json.dumps(model.as_dict()))
+    bare = tj.HysteresisLoop(held.t, held.u, held.f, frequency=F_HZ)
+    tj.write_loop(bare, tmp_path / "held.csv")
+    args = ["predict", str(tmp_path / "model.json"), str(tmp_path / "held.csv")]
+    assert main([*args, "--out", str(tmp_path / "a")]) == 2
+    assert not (tmp_path / "a" / "prediction.json").exists()
+    assert main([*args, "--out", str(tmp_path / "b"), "--band-tension", "36lb"]) == 0
+    out = json.loads((tmp_path / "b" / "prediction.json").read_text())
+    assert out["nrmse"] == pytest.approx(pred.nrmse, rel=1e-9)
+    assert out["band_tension_N"] == pytest.approx(36 * LBF)
+    assert out["model_band_tension_N"] == pytest.approx(30 * LBF)
