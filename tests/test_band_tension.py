@@ -118,3 +118,27 @@ def test_saved_model_keeps_the_reference_and_the_cli_takes_a_tension(fit30, tmp_
     assert out["nrmse"] == pytest.approx(pred.nrmse, rel=1e-9)
     assert out["band_tension_N"] == pytest.approx(36 * LBF)
     assert out["model_band_tension_N"] == pytest.approx(30 * LBF)
+
+
+def test_cli_fits_several_records_together(tmp_path):
+    for name, rec in (("a", _record(30, 15e-3, 1)), ("b", _record(30, 25e-3, 2)),
+                      ("held", _record(36, 20e-3, 3))):  # fmt: skip
+        tj.write_loop(rec, tmp_path / f"{name}.csv")
+    out = tmp_path / "fit"
+    files = [str(tmp_path / "a.csv"), str(tmp_path / "b.csv")]
+    assert main(["fit", *files, "--model", "jenkins", "--out", str(out)]) == 0
+    fit = json.loads((out / "fit.json").read_text())
+    assert [r["source"] for r in fit["records"]] == files and fit["n_data"] == 2 * 451
+    assert all(r["nrmse"] < 0.01 for r in fit["records"])
+    assert fit["band_tension_N"] == pytest.approx(30 * LBF)
+    assert fit["parameters"]["mu_N"] == pytest.approx(C_SLIP * 30 * LBF, rel=0.01)
+    args = ["predict", str(out / "fit.json"), str(tmp_path / "held.csv"), "--out"]
+    assert main([*args, str(tmp_path / "p")]) == 0
+    assert json.loads((tmp_path / "p" / "prediction.json").read_text())["nrmse"] < 0.01
+    # what cannot be fitted together is refused before any fit, nothing written
+    run = tj.synthetic_slip_run(tj.PreSlipLuGre(F_s=1.1, K_tau=2.0e7, C_tau=150.0), n=101)
+    tj.write_slip_run(run, tmp_path / "slip.csv")
+    bad = tmp_path / "bad"
+    assert main(["fit", files[0], str(tmp_path / "slip.csv"), "--out", str(bad)]) == 2
+    assert main(["fit", *files, "--model", "steady", "--out", str(bad)]) == 2
+    assert not bad.exists() or not (bad / "fit.json").exists()

@@ -37,7 +37,8 @@ def add_decimation_arguments(parser, max_samples: int = DECIMATION_MAX_SAMPLES) 
         default="auto",
         metavar="auto|off|N",
         help="long records: fit blocks of N samples reduced by local quadratics (noise "
-        "scaled); auto (default) reduces a record to at most --max-samples samples",
+        "scaled); auto (default) reduces a record to at most --max-samples samples; a "
+        "history fit (--model an element or best) keeps every N-th sample (auto, off: all)",
     )
     parser.add_argument(
         "--max-samples",
@@ -131,9 +132,11 @@ def _band_tension_argument(parser) -> None:
 def fit_arguments(parser) -> None:
     parser.add_argument(
         "file",
+        nargs="+",
         help="CSV: a slip run (time_s,stage_accel_m_s2,slip_m) or a loop "
         "(time_s,displacement_m,force_N), each with its <stem>.json sidecar; a brfd JSON; an "
-        "EPOS export or a folder of EPOS steady-state exports (one friction curve)",
+        "EPOS export or a folder of EPOS steady-state exports (one friction curve); several "
+        "loops or histories: one parameter set fitted to all (--model an element or best)",
     )
     parser.add_argument("--out", default=None, help="output folder (default tribojax-out/fit-STEM)")
     parser.add_argument(

@@ -55,26 +55,35 @@ def run_fit(args) -> int:
 
     The destination is checked (and reserved against a concurrent run) before the fit.
     """
-    path = Path(args.file)
+    paths = [Path(f) for f in args.file]
+    path = paths[0]
     out = Path(args.out) if args.out is not None else Path("tribojax-out") / f"fit-{path.stem}"
     if args.max_steps is not None and args.max_steps < 1:
         return error(f"--max-steps = {args.max_steps} must be at least 1")
     start = _parse_start(args.start)
     with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force):
-        full = with_band_tension(read_record(path, args.format), args.band_tension, path)
+        records = [with_band_tension(read_record(p, args.format), args.band_tension, p)
+                   for p in paths]  # fmt: skip
+        full = records[0]
         if full.kind in _NOT_FITTED:
             return error(f"{path} is {full.description}: {_NOT_FITTED[full.kind]}")
         if args.alpha is not None and full.kind != "slip_run":
             return error(f"--alpha is for slip runs; {path} is {full.description}")
+        if len(records) > 1:
+            _check_joint(records, paths, args)
         t0 = time.perf_counter()
         fits = _fit_from_model if args.from_model else _FITS[full.kind]
         with progress(args, "fit") as bar:
-            result, curves = fits(full, args, start, bar.note)
+            if len(records) > 1:
+                result, curves = _fit_joint(records, args, start)
+            else:
+                result, curves = fits(full, args, start, bar.note)
         result["wall_time_s"] = time.perf_counter() - t0
         write_json_atomic(out / "fit.json", result, exclusive=not args.force)
         drew = _plot(curves, result, out / "fit.png")
     fit = result
-    print(f"{result['kind']} {path}: {result['n_data']} samples, fitted {', '.join(fit['fitted'])}")
+    what = path if len(paths) == 1 else f"{len(paths)} records ({path.name}, ...)"
+    print(f"{result['kind']} {what}: {result['n_data']} samples, fitted {', '.join(fit['fitted'])}")
     flat = {k for d in fit.get("unidentifiable", []) for k, c in d["direction"].items()
             if abs(c) > 1e-3}  # fmt: skip
     for name in fit["fitted"]:
@@ -139,12 +148,43 @@ def _fit_slip_record(run, args, start, note):
     return _fit_reduced(run, args, start, note, _fit_slip, _slip_full_residuals)
 
 
+def _check_joint(records, paths, args) -> None:
+    """Several records are fitted together only as loops or histories, through an element."""
+    for rec, p in zip(records, paths):
+        if rec.kind != "loop":
+            raise CommandError(f"{p} is {rec.description}: several records are fitted together "
+                               "only as loops or displacement histories")  # fmt: skip
+    if args.from_model is not None:
+        raise CommandError("--from takes one record")
+    if args.model not in (None, *ELEMENT_MODELS, "best"):
+        raise CommandError(f"--model {args.model}: several records are fitted through their "
+                           f"histories; use {', '.join(ELEMENT_MODELS)} or best")  # fmt: skip
+
+
+def _history_decimate(args) -> int:
+    """`--decimate N` of a history fit: every N-th sample (auto, off: all)."""
+    text = str(args.decimate).strip().lower()
+    if text in ("auto", "off"):
+        return 1
+    if not text.isdigit() or int(text) < 1:
+        raise CommandError(f"--decimate = {args.decimate!r}: expected auto, off or an integer "
+                           ">= 1")  # fmt: skip
+    return int(text)
+
+
+def _fit_joint(loops, args, start):
+    """Loops or histories fitted together: one element's parameters (+ f0) for all of them."""
+    return fit_history_record(loops, args.model or "best", args.max_steps, start,
+                              _history_decimate(args))  # fmt: skip
+
+
 def _fit_loop_record(loop, args, start, note):
     """A loop: through its history (`--model` an element or best; default for a non-periodic
     history), else reduced as `--decimate` asks and fitted with the loop model of --element."""
     model = args.model
     if model in (*ELEMENT_MODELS, "best") or (model is None and not loop.periodic):
-        return fit_history_record(loop, model or "best", args.max_steps, start)
+        return fit_history_record(loop, model or "best", args.max_steps, start,
+                                  _history_decimate(args))  # fmt: skip
     return _fit_reduced(loop, args, start, note, _fit_loop, _loop_full_residuals)
 
 

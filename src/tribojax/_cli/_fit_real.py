@@ -46,33 +46,53 @@ def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:
     return d
 
 
-def fit_history_record(loop, model: str, max_steps: int | None, start: dict):
-    """Fit `model` (or every element for "best") through the loop's displacement history, with
-    at most `max_steps` LM steps (None: `MAX_STEPS`) from the `start` values given."""
+def fit_history_record(loops, model: str, max_steps: int | None, start: dict,
+                       decimate: int = 1):  # fmt: skip
+    """Fit `model` (or every element for "best", chosen by the lowest BIC) through the
+    displacement history of a loop or of several loops together (one parameter set), on every
+    `decimate`-th sample, with at most `max_steps` LM steps (None: `MAX_STEPS`) from the
+    `start` values given."""
+    loops = list(loops) if isinstance(loops, list | tuple) else [loops]
     names = ELEMENT_MODELS if model == "best" else (model,)
     fits = {}
     for name in names:
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
         steps = max_steps or MAX_STEPS
-        fits[name] = fit_history(loop, name, start=given or None, max_steps=steps)
-    pred = {k: predict_history(h, loop)[0] for k, h in fits.items()}
-    n = len(loop.f)
-    scores = {k: bic(float(np.sum((pred[k] - loop.f) ** 2)), n, len(h.fit.names))
+        fits[name] = fit_history(loops, name, start=given or None, max_steps=steps,
+                                 decimate=decimate)  # fmt: skip
+    each = {k: [predict_history(h, lp) for lp in loops] for k, h in fits.items()}
+    pred = {k: np.concatenate([force for force, _ in v]) for k, v in each.items()}
+    f = np.concatenate([lp.f[::decimate] for lp in loops])
+    n = f.size
+    scores = {k: bic(float(np.sum((pred[k] - f) ** 2)), n, len(h.fit.names))
               for k, h in fits.items()}  # fmt: skip
     best = min(scores, key=scores.get)
     h = fits[best]
-    resid = pred[best] - loop.f
+    resid = pred[best] - f
     sigma = float(np.sqrt(np.sum(resid**2) / max(n - len(h.fit.names), 1)))
-    d = fit_summary(h.fit, loop, n, resid, "N", sigma, "estimated from the residuals")
-    d.update(model=best, nrmse=h.nrmse, route="history", bic=scores[best],
-             normal_load_N=loop.normal_load, frequency_Hz=loop.frequency)  # fmt: skip
-    d[SAVED_KEY] = fitted_model(h, str(loop.source)).as_dict() if h.fit.converged else None
+    d = fit_summary(h.fit, loops[0], n, resid, "N", sigma, "estimated from the residuals")
+    source = "; ".join(str(lp.source) for lp in loops)
+    d.update(model=best, nrmse=h.nrmse, route="history", bic=scores[best], decimate=decimate,
+             normal_load_N=loops[0].normal_load, frequency_Hz=loops[0].frequency,
+             band_tension_N=h.band_tension)  # fmt: skip
+    if len(loops) > 1:
+        d.update(source=source, records=[
+            {"source": str(lp.source), "n_data": int(lp.f[::decimate].size),
+             "nrmse": float(e), "band_tension_N": lp.band_tension}
+            for lp, (_, e) in zip(loops, each[best])])  # fmt: skip
+    d[SAVED_KEY] = fitted_model(h, source).as_dict() if h.fit.converged else None
     if model == "best":
+        d["selected_by"] = "bic"
         d["candidates"] = {k: {"nrmse": f.nrmse, "bic": scores[k], "converged": f.fit.converged,
                                "parameters": dict(zip(f.fit.names, f.fit.values.tolist()))}
                            for k, f in fits.items()}  # fmt: skip
-    curves = dict(x=loop.u, data=loop.f, model=pred[best], xlabel="displacement u (m)",
-                  ylabel="force f (N)", resid_x=loop.t, resid=resid)  # fmt: skip
+    t, offset = [], 0.0
+    for lp in loops:  # records one after another on the plot's time axis
+        t.append(lp.t[::decimate] - lp.t[0] + offset)
+        offset = t[-1][-1] + (lp.t[1] - lp.t[0])
+    u = np.concatenate([lp.u[::decimate] for lp in loops])
+    curves = dict(x=u, data=f, model=pred[best], xlabel="displacement u (m)",
+                  ylabel="force f (N)", resid_x=np.concatenate(t), resid=resid)  # fmt: skip
     return d, curves
 
 
