@@ -9,7 +9,10 @@ Data (../shared/data/real by default; see data/README.md for sources and licence
   (`tribojax.fit_history`, + a force offset f0), at 512 Hz (every 2nd sample). Then
   (a) fit on the 0.25 and 1 Hz tests, predict the 0.5 and 2 Hz tests; (b) fit on the 0.5 and
   1.5 in tests, predict the 1 in tests; (c) fit on all ten sinusoidal tests, predict the two
-  earthquake histories. NRMSE = rms(model − measured)/std(measured) per test and model.
+  earthquake histories. NRMSE = rms(model − measured)/std(measured) per test and model; on the
+  histories also on the windows the dataset's authors score (`SCORING_WINDOWS`), next to their
+  own LuGre's NRMSE there, computed from their stored predictions (../shared/data/real/
+  brfd_reference, when present).
 * screwdrive — steady friction curves of two lead-screw drives: the LuGre steady law per
   direction and jointly with a direction asymmetry (`tribojax.fit_steady_curve`), then the LuGre
   dynamic parameters from the start–stop transients with the steady law fixed
@@ -33,6 +36,10 @@ from fitting.real_discovery_screw import screwdrive_discovery
 
 MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen")
 DECIMATE = 2
+SCORING_WINDOWS = {"earthquake_ImperialValleyDBE_30lb": (3072, 7680),
+                   "earthquake_KocaeliDBE_30lb": (6144, 14336)}  # fmt: skip
+"""Samples [start, stop) of the 1024 Hz histories the dataset's authors score their models on
+(ARTS-Laboratory PIML repository, `training reproduction/analyze_validation.py`)."""
 SPLITS = {
     "frequency": (lambda f, a: f in (0.25, 1.0), "fit 0.25 and 1 Hz, predict 0.5 and 2 Hz"),
     "amplitude": (lambda f, a: a in (0.5, 1.5), "fit 0.5 and 1.5 in, predict 1 in"),
@@ -94,10 +101,41 @@ def brfd_study(src: Path, short: bool, log) -> dict:
         rows = _predict(sines, train, [n for n in sines if n not in train], log)
         prediction[key] = {"description": text, "train": train, "rows": rows}
     rows = _predict({**sines, **quakes}, list(sines), list(quakes), log)
+    for r in rows:
+        if r["test"] in SCORING_WINDOWS:
+            r["window_nrmse"] = _window_nrmse(quakes[r["test"]], r["_force"], r["test"])
+            log(f"{r['model']:9s} {r['test']}: scored window NRMSE {r['window_nrmse']:.3f}")
     prediction["earthquake"] = {"description": "fit all sinusoidal tests, predict the earthquake "
-                                "histories", "train": list(sines), "rows": rows}  # fmt: skip
+                                "histories", "train": list(sines), "rows": rows,
+                                "windows": {k: list(v) for k, v in SCORING_WINDOWS.items()},
+                                "authors_lugre_window_nrmse":
+                                    _authors_lugre(src, quakes)}  # fmt: skip
     return {"brfd_fits": fits, "slip_force_vs_test": trend, "prediction": prediction,
             "_records": {**sines, **quakes}}  # fmt: skip
+
+
+def _window_nrmse(record, force, name) -> float:
+    """NRMSE of a prediction (every `DECIMATE`-th sample) on the scored window of `name`."""
+    a, b = SCORING_WINDOWS[name]
+    sl = slice(-(-a // DECIMATE), -(-b // DECIMATE))  # decimated samples inside [a, b)
+    f = record.f[::DECIMATE][sl]
+    return float(np.sqrt(np.mean((np.asarray(force)[sl] - f) ** 2)) / np.std(f))
+
+
+def _authors_lugre(src: Path, quakes) -> dict:
+    """The dataset authors' LuGre NRMSE on each scored window, from their stored predictions
+    (`brfd_reference/lugre_prediction_<record>.csv`: sample_index, predicted_force_N)."""
+    out = {}
+    for name, (a, b) in SCORING_WINDOWS.items():
+        path = src / "brfd_reference" / f"lugre_prediction_{name.split('_')[1]}.csv"
+        if name not in quakes or not path.is_file():
+            continue
+        idx, pred = np.loadtxt(path, delimiter=",", comments="#", skiprows=2, unpack=True)
+        f = quakes[name].f[idx.astype(int)]
+        if idx[0] != a or idx[-1] != b - 1:
+            raise ValueError(f"{path}: samples {idx[0]:.0f}..{idx[-1]:.0f}, not {a}..{b - 1}")
+        out[name] = float(np.sqrt(np.mean((pred - f) ** 2)) / np.std(f))
+    return out
 
 
 def _starts(model) -> dict:
@@ -168,6 +206,9 @@ def _figure(study, out: Path) -> None:
         for r in rows:
             if r["test"] == name:
                 ax.plot(t, r["_force"] / 1e3, lw=0.6, label=f"{r['model']} ({r['nrmse']:.2f})")
+        if name in SCORING_WINDOWS:
+            a, b = SCORING_WINDOWS[name]
+            ax.axvspan(rec.t[a], rec.t[b - 1], color="0.9", zorder=0, label="scored window")
         ax.set(title=f"{name}: predicted from the sinusoidal tests", xlabel="t (s)",
                ylabel="force (kN)")  # fmt: skip
         ax.legend(fontsize=7, ncol=5)

@@ -247,3 +247,22 @@ def test_epos_resaved_by_a_spreadsheet_is_read_and_edits_are_flagged(tmp_path):
     assert got.friction[5] == pytest.approx(0.3075 * 9.84e-3, rel=1e-12)
     np.testing.assert_allclose(got.velocity, ref.velocity, rtol=0)
     assert got.t[6] == pytest.approx(0.3071) and ref.t[6] == pytest.approx(0.3072)
+
+
+@needs_shared
+def test_scored_windows_reproduce_the_authors_lugre_figures():
+    # fitting/real_data.py scores the earthquake predictions on the dataset authors' windows;
+    # their stored LuGre predictions give their published NRMSE there (brfd_reference/README.md)
+    from fitting import real_data as rd
+
+    quakes = {n: tj.read_brfd(SHARED / "brfd" / f"{n}.json") for n in rd.SCORING_WINDOWS}
+    got = rd._authors_lugre(SHARED, quakes)
+    assert got == {"earthquake_ImperialValleyDBE_30lb": pytest.approx(0.440, abs=5e-4),
+                   "earthquake_KocaeliDBE_30lb": pytest.approx(0.794, abs=5e-4)}  # fmt: skip
+    name = "earthquake_KocaeliDBE_30lb"
+    rec = quakes[name]
+    f = rec.f[:: rd.DECIMATE]
+    assert rd._window_nrmse(rec, f, name) == 0.0
+    a, b = rd.SCORING_WINDOWS[name]
+    mean = np.full_like(f, rec.f[a:b:2].mean())
+    assert rd._window_nrmse(rec, mean, name) == pytest.approx(1.0, rel=1e-12)
