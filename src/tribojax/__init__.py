@@ -110,6 +110,7 @@ if TYPE_CHECKING:
     from ._fit._history import fit_history as fit_history
     from ._fit._history import predict_history as predict_history
     from ._fit._surface import fit_surface_from_runs as fit_surface_from_runs
+    from ._friction._band_brake import BandBrake as BandBrake
     from ._friction._bouc_wen import BoucWen as BoucWen
     from ._friction._elastic2d import ElasticDryFriction2D as ElasticDryFriction2D
     from ._friction._element import AbstractFrictionElement as AbstractFrictionElement

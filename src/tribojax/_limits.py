@@ -11,7 +11,10 @@ ROUGHNESS_METHODS = ("structure", "psd", "rms")
 """Estimators of D and G from a topography (`tribojax.estimate_fractal`)."""
 
 ELEMENT_MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen")
-"""Friction elements a displacement history is fitted with (`tribojax.fit_history`)."""
+"""Friction elements a displacement history is fitted with (`tribojax.fit_history`); `best`
+chooses among these."""
+DEVICE_MODELS = ("band_brake",)
+"""Device models a history is also fitted with when named (`--model band_brake`)."""
 
 MAX_STEPS = 128
 """Step budget of every record-model fit (accepted and rejected steps; one compile)."""

@@ -13,6 +13,7 @@ import math
 from .. import _presets as P
 from .._limits import (
     DECIMATION_MAX_SAMPLES,
+    DEVICE_MODELS,
     DISCOVER_MAX_SAMPLES,
     ELEMENT_MODELS,
     MAX_STEPS,
@@ -159,12 +160,13 @@ def fit_arguments(parser) -> None:
     )
     parser.add_argument(
         "--model",
-        choices=("steady", "history", *ELEMENT_MODELS, "best"),
+        choices=("steady", "history", *ELEMENT_MODELS, *DEVICE_MODELS, "best"),
         default=None,
         help="loops: 'history' (default for a periodic loop: the loop model that discover also "
         "fits) or 'steady' (wu2015's steady-loop formula) fit --element; "
-        "jenkins|mindlin|lugre|bouc_wen drive that element (+ force offset) through the measured "
-        "history, best: all four, lowest BIC (default for a non-periodic history); friction "
+        "jenkins|mindlin|lugre|bouc_wen|band_brake drive that element (+ force offset) through "
+        "the measured history, best: the first four, lowest BIC (default for a non-periodic "
+        "history); friction "
         "curves: lugre (the steady law, default) or best",
     )
     parser.add_argument("--from", dest="from_model", default=None, metavar="MODEL.json",

@@ -42,7 +42,7 @@ from ._common import (
     with_band_tension,
     write_json_atomic,
 )
-from ._fit_real import ELEMENT_MODELS, fit_curve_record, fit_history_record, fit_summary
+from ._fit_real import HISTORY_CHOICES, fit_curve_record, fit_history_record, fit_summary
 
 # record kinds `tribojax fit` does not fit, and what to do instead
 _NOT_FITTED = {
@@ -156,9 +156,9 @@ def _check_joint(records, paths, args) -> None:
                                "only as loops or displacement histories")  # fmt: skip
     if args.from_model is not None:
         raise CommandError("--from takes one record")
-    if args.model not in (None, *ELEMENT_MODELS, "best"):
+    if args.model not in (None, *HISTORY_CHOICES, "best"):
         raise CommandError(f"--model {args.model}: several records are fitted through their "
-                           f"histories; use {', '.join(ELEMENT_MODELS)} or best")  # fmt: skip
+                           f"histories; use {', '.join(HISTORY_CHOICES)} or best")  # fmt: skip
 
 
 def _history_decimate(args) -> int:
@@ -182,7 +182,7 @@ def _fit_loop_record(loop, args, start, note):
     """A loop: through its history (`--model` an element or best; default for a non-periodic
     history), else reduced as `--decimate` asks and fitted with the loop model of --element."""
     model = args.model
-    if model in (*ELEMENT_MODELS, "best") or (model is None and not loop.periodic):
+    if model in (*HISTORY_CHOICES, "best") or (model is None and not loop.periodic):
         return fit_history_record(loop, model or "best", args.max_steps, start,
                                   _history_decimate(args))  # fmt: skip
     return _fit_reduced(loop, args, start, note, _fit_loop, _loop_full_residuals)

@@ -17,10 +17,13 @@ from .._fit._curve import fit_steady_curve
 from .._fit._history import HISTORY_MODELS, fit_history, predict_history
 from .._fit._measures import bic, nrmse, rms
 from .._io._curve import FrictionCurve
+from .._limits import DEVICE_MODELS, MAX_STEPS
 from .._limits import ELEMENT_MODELS as ELEMENT_MODELS
-from .._limits import MAX_STEPS
 from .._predict import SAVED_KEY, fitted_model
 from ._common import CommandError
+
+HISTORY_CHOICES = (*ELEMENT_MODELS, *DEVICE_MODELS)
+"""`--model` values fitted through a history (`best` chooses among `ELEMENT_MODELS`)."""
 
 
 def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:

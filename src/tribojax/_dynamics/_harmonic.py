@@ -31,7 +31,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._checks import check_range
-from .._friction._element import AbstractFrictionElement
+from .._friction._element import AbstractFrictionElement, AbstractIncrementalElement
 from .._friction._rate_independent import AbstractHysteresisElement
 from .._precision import ensure_x64
 
@@ -126,16 +126,17 @@ def harmonic_balance(
 def drive(element: AbstractFrictionElement, u, t=None, *, state0=None, substeps: int = 4):
     """Force history (N) of a friction element driven through displacement samples u (m).
 
-    Rate-independent elements (`Jenkins`, `Mindlin`) update exactly with `increment`; `t` is then
-    not needed. Other elements are integrated with classical RK4 (`substeps` per sample interval,
-    static) with the displacement interpolated linearly between samples (t in s, increasing).
-    The element starts in `state0` (default: its unloaded state) at the first sample.
+    Rate-independent elements (`Jenkins`, `Mindlin`, `BandBrake`: `AbstractIncrementalElement`)
+    update exactly with `increment`; `t` is then not needed. Other elements are integrated with
+    classical RK4 (`substeps` per sample interval, static) with the displacement interpolated
+    linearly between samples (t in s, increasing). The element starts in `state0` (default: its
+    unloaded state) at the first sample.
     """
     ensure_x64()
     u = jnp.asarray(u, dtype=jnp.float64)
     state0 = element.initial_state() if state0 is None else state0
     du = jnp.diff(u)
-    if isinstance(element, AbstractHysteresisElement):
+    if isinstance(element, AbstractIncrementalElement):
 
         def step(state, d):
             new = element.increment(state, d)

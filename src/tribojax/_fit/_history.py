@@ -28,6 +28,7 @@ import numpy as np
 from .._checks import check_range
 from .._dynamics._harmonic import drive
 from .._export import cached_jit
+from .._friction._band_brake import BandBrake
 from .._friction._bouc_wen import BoucWen
 from .._friction._lugre import LuGre
 from .._friction._rate_independent import Jenkins, Mindlin
@@ -43,8 +44,11 @@ HISTORY_MODELS = {
     "mindlin": (("mu_N", True), ("K_d", True), ("f0", False)),
     "lugre": (("sigma0", True), ("F_c", True), ("F_s", True), ("v_s", True), ("f0", False)),
     "bouc_wen": (("K", True), ("F_y", True), ("n", True), ("f0", False)),
+    "band_brake": (("F_pos", True), ("F_neg", True), ("gap_pos", True), ("gap_neg", True),
+                   ("k_gap", True), ("A_pos", True), ("A_neg", True), ("beta_pos", True),
+                   ("beta_neg", True), ("f0", False)),
 }
-TENSION_SCALED = ("mu_N", "F_c", "F_s", "F_y")
+TENSION_SCALED = ("mu_N", "F_c", "F_s", "F_y", "F_pos", "F_neg", "A_pos", "A_neg")
 """Slip-force parameters, proportional to the band tension (capstan law, module docstring)."""
 MINDLIN_IWAN = 64  # Iwan elements of the Mindlin rate form in the history fits
 BOUC_WEN_STARTS = (0.5, 2.0, 10.0)
@@ -62,6 +66,8 @@ def history_element(model: str, p):
         return LuGre(p[0], 0.0, 0.0, p[1], p[2], p[3], 1.0, 2.0)
     if model == "bouc_wen":
         return BoucWen(p[0], p[1], p[2], 0.5)
+    if model == "band_brake":
+        return BandBrake(*(p[i] for i in range(9)))
     raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
 
 
@@ -89,7 +95,7 @@ class _HistoryResiduals(eqx.Module):
         out = []
         for t, u, f, scale, ratio in args:
             el = history_element(self.model, jnp.where(scaled, p * ratio, p))
-            if self.model in ("jenkins", "mindlin"):
+            if self.model in ("jenkins", "mindlin", "band_brake"):
                 force = drive(el, u)
             else:  # RK4, one step per sample interval (h·rate ≪ 1 at 1 kHz for these rigs)
                 force = drive(el, u, t, substeps=1)
@@ -140,8 +146,21 @@ def _default_start(model: str, records) -> dict:
     ]
     v = max(float(max(speeds)), 1e-9)
     base = {"mu_N": F, "K_d": K, "K": K, "F_y": F, "n": 2.0, "sigma0": K, "F_c": 0.9 * F,
-            "F_s": 1.1 * F, "v_s": 0.1 * v, "f0": 0.5 * (hi + lo)}  # fmt: skip
+            "F_s": 1.1 * F, "v_s": 0.1 * v, "f0": 0.5 * (hi + lo),
+            **_band_brake_start({"mu_N": F, "K_d": K}, records)}  # fmt: skip
     return {name: base[name] for name, _ in HISTORY_MODELS[model]}
+
+
+def _band_brake_start(jen: dict, records) -> dict:
+    """Band-brake start from a Jenkins fit: the slip force both ways, clearances of 3 % of the
+    displacement range, a drag of 6 % of the slip force across them, and the exponential rise
+    reaching the slip force over half the Jenkins element's elastic travel μN/K_d."""
+    F = jen["mu_N"]
+    gap = 0.03 * max(float(np.ptp(np.asarray(r[1]))) for r in records)
+    k_gap, A = 0.06 * F / gap, 0.15 * F
+    beta = float(np.log1p((F - k_gap * gap) / A)) / (0.5 * F / jen["K_d"])
+    return {"F_pos": F, "F_neg": F, "gap_pos": gap, "gap_neg": gap, "k_gap": k_gap,
+            "A_pos": A, "A_neg": A, "beta_pos": beta, "beta_neg": beta}  # fmt: skip
 
 
 @dataclasses.dataclass(frozen=True)
@@ -171,7 +190,9 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
             displacement history (periodic or not). Each is driven from rest at its first sample.
         model: "jenkins" (μN N, K_d N/m), "mindlin" (μN, K_d; Iwan form with 64 elements),
             "lugre" (σ0 N/m, F_c N, F_s N, v_s m/s; σ1 = σ2 = 0, α = 1, β = 2) or
-            "bouc_wen" (K N/m, F_y N, n; b = 1/2); each with f0.
+            "bouc_wen" (K N/m, F_y N, n; b = 1/2) or "band_brake" (`BandBrake`: slip forces
+            F_pos, F_neg N, clearances gap_pos, gap_neg m, drag k_gap N/m, engagement A_pos,
+            A_neg N and beta_pos, beta_neg 1/m); each with f0.
         start: dict of start values (missing keys: from a Jenkins fit to the same records, which
             starts at the force's 2–98 % half range as the slip force and a stiffness 40 times
             its ratio to the displacement range).
@@ -205,7 +226,7 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         jen = dict(zip(("mu_N", "K_d", "f0"), pre))
         shared = {"mu_N": jen["mu_N"], "K_d": jen["K_d"], "K": jen["K_d"], "F_y": jen["mu_N"],
                   "sigma0": jen["K_d"], "F_c": 0.9 * jen["mu_N"], "F_s": 1.1 * jen["mu_N"],
-                  "f0": jen["f0"]}  # fmt: skip
+                  "f0": jen["f0"], **_band_brake_start(jen, records)}  # fmt: skip
         init.update({k: v for k, v in shared.items() if k in init})
     init.update(start or {})
     unknown = set(init) - {n for n, _ in spec}
@@ -245,7 +266,9 @@ def _nrmse(residuals, records) -> float:
 
 
 HISTORY_UNITS = {"mu_N": "N", "K_d": "N/m", "f0": "N", "sigma0": "N/m", "F_c": "N", "F_s": "N",
-                 "v_s": "m/s", "K": "N/m", "F_y": "N", "n": "1"}  # fmt: skip
+                 "v_s": "m/s", "K": "N/m", "F_y": "N", "n": "1", "F_pos": "N", "F_neg": "N",
+                 "gap_pos": "m", "gap_neg": "m", "k_gap": "N/m", "A_pos": "N", "A_neg": "N",
+                 "beta_pos": "1/m", "beta_neg": "1/m"}  # fmt: skip
 """Units of the history models' parameters (`HISTORY_MODELS`)."""
 
 

@@ -41,3 +41,12 @@ class AbstractFrictionElement(eqx.Module):
     @abc.abstractmethod
     def force(self, state: PyTree[Array], velocity: ArrayLike) -> Array:
         """Tangential force transmitted (N) in `state` at relative velocity `velocity` (m/s)."""
+
+
+class AbstractIncrementalElement(AbstractFrictionElement):
+    """A rate-independent element with an exact state update for a displacement step, which
+    `tribojax.drive` uses instead of an ODE solver (Jenkins, Mindlin, the band brake)."""
+
+    @abc.abstractmethod
+    def increment(self, state: PyTree[Array], du: ArrayLike) -> PyTree[Array]:
+        """State after a displacement step `du` (m) with no reversal inside the step."""

@@ -25,12 +25,12 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import check_range
-from ._element import AbstractFrictionElement
+from ._element import AbstractIncrementalElement
 
 Scalar = Float[Array, "..."]
 
 
-class AbstractHysteresisElement(AbstractFrictionElement):
+class AbstractHysteresisElement(AbstractIncrementalElement):
     """A rate-independent friction element with a closed steady loop under harmonic displacement.
 
     Contract used by `harmonic_balance`: the falling branch reaches −μN at u = A − slip_span()
@@ -62,10 +62,6 @@ class AbstractHysteresisElement(AbstractFrictionElement):
     @abc.abstractmethod
     def falling_branch(self, u, A) -> Array:
         """Force (N) on the falling branch of the steady loop of amplitude A (m) at u ∈ [−A, A]."""
-
-    @abc.abstractmethod
-    def increment(self, state, du):
-        """State after a displacement step `du` (m) with no reversal inside the step."""
 
     def branch_angle(self, A) -> Array:
         """θ* (rad): where the falling branch enters gross slip; π if it never does.
