@@ -1,11 +1,13 @@
 """Study: friction models fitted to measured rig data and asked to predict what was not fitted.
 
     python -m fitting.real_data --out DIR [--src PATH/TO/real] [--short]
+        [--models M ...] [--prediction-only]
 
 Data (../shared/data/real by default; see data/README.md for sources and licences):
 * brfd — a banded rotary friction damper (30 lbf band tension) driven by ramped sines (0.5–1.5 in,
   0.25–2 Hz) and two earthquake displacement histories. Every sinusoidal test is fitted with
-  Jenkins, Mindlin (Iwan form), LuGre and Bouc–Wen through the measured displacement history
+  Jenkins, Mindlin (Iwan form), LuGre, Bouc–Wen and the band brake (`tribojax.BandBrake`:
+  clearance + capstan rise + slip force per direction) through the measured displacement history
   (`tribojax.fit_history`, + a force offset f0), at 512 Hz (every 2nd sample). Then
   (a) fit on the 0.25 and 1 Hz tests, predict the 0.5 and 2 Hz tests; (b) fit on the 0.5 and
   1.5 in tests, predict the 1 in tests; (c) fit on all ten sinusoidal tests, predict the two
@@ -34,7 +36,7 @@ import tribojax as tj
 from fitting.real_discovery_brfd import brfd_discovery
 from fitting.real_discovery_screw import screwdrive_discovery
 
-MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen")
+MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen", "band_brake")
 DECIMATE = 2
 SCORING_WINDOWS = {"earthquake_ImperialValleyDBE_30lb": (3072, 7680),
                    "earthquake_KocaeliDBE_30lb": (6144, 14336)}  # fmt: skip
@@ -66,20 +68,22 @@ def _summary(h) -> dict:
             "std_errors": dict(zip(d.names, d.std_errors.tolist())), "steps": d.steps}  # fmt: skip
 
 
-def brfd_study(src: Path, short: bool, log) -> dict:
+def brfd_study(src: Path, short: bool, log, models=MODELS, prediction_only=False) -> dict:
     sines, quakes = _load_brfd(src)
     if short:
         sines = {k: v for k, v in sines.items() if _test_key(k)[0] >= 1.0}
     fits, trend = {}, []
-    for name, loop in sines.items():
+    for name, loop in ({} if prediction_only else sines).items():
         f_hz, a_in = _test_key(name)
         fits[name] = {}
-        for model in MODELS:
+        for model in models:
             t0 = time.perf_counter()
             h = tj.fit_history(loop, model, decimate=DECIMATE, **_starts(model))
             fits[name][model] = {**_summary(h), "seconds": time.perf_counter() - t0}
             log(f"{name:34s} {model:9s} NRMSE {h.nrmse:.3f} {h.fit.message[:40]}")
-        p = {m: fits[name][m]["parameters"] for m in MODELS}
+        p = {m: fits[name][m]["parameters"] for m in models}
+        if not set(MODELS[:4]) <= set(p):
+            continue
         trend.append({"test": name, "frequency_Hz": f_hz, "amplitude_in": a_in,
                       "amplitude_m": a_in * 0.0254,
                       "jenkins_slip_force_N": p["jenkins"]["mu_N"],
@@ -98,9 +102,9 @@ def brfd_study(src: Path, short: bool, log) -> dict:
         splits = {}
     for key, (train_of, text) in splits.items():
         train = [n for n in sines if train_of(*_test_key(n))]
-        rows = _predict(sines, train, [n for n in sines if n not in train], log)
+        rows = _predict(sines, train, [n for n in sines if n not in train], log, models)
         prediction[key] = {"description": text, "train": train, "rows": rows}
-    rows = _predict({**sines, **quakes}, list(sines), list(quakes), log)
+    rows = _predict({**sines, **quakes}, list(sines), list(quakes), log, models)
     for r in rows:
         if r["test"] in SCORING_WINDOWS:
             r["window_nrmse"] = _window_nrmse(quakes[r["test"]], r["_force"], r["test"])
@@ -143,9 +147,9 @@ def _starts(model) -> dict:
     return {"n_starts": tj.BOUC_WEN_STARTS} if model == "bouc_wen" else {}
 
 
-def _predict(records, train, test, log) -> list:
+def _predict(records, train, test, log, models=MODELS) -> list:
     rows = []
-    for model in MODELS:
+    for model in models:
         t0 = time.perf_counter()
         h = tj.fit_history([records[n] for n in train], model, decimate=DECIMATE, **_starts(model))
         seconds = time.perf_counter() - t0
@@ -198,20 +202,25 @@ def _figure(study, out: Path) -> None:
         return
     rows = study["prediction"]["earthquake"]["rows"]
     quakes = [n for n in dict.fromkeys(r["test"] for r in rows if r["role"] == "predicted")]
-    fig, axes = plt.subplots(len(quakes), 1, figsize=(11, 3.2 * len(quakes)), squeeze=False)
-    for ax, name in zip(axes[:, 0], quakes):
+    fig, axes = plt.subplots(2 * len(quakes), 1, figsize=(11, 5.4 * len(quakes)), squeeze=False,
+                             gridspec_kw=dict(height_ratios=[2, 1] * len(quakes)))  # fmt: skip
+    for k, name in enumerate(quakes):
+        ax, ar = axes[2 * k, 0], axes[2 * k + 1, 0]
         rec = study["_records"][name]
-        t, f = rec.t[::DECIMATE], rec.f[::DECIMATE]
-        ax.plot(t, f / 1e3, "k", lw=0.6, label="measured")
+        a, b = SCORING_WINDOWS.get(name, (0, rec.t.size))
+        sl = slice(-(-a // DECIMATE), -(-b // DECIMATE))
+        t, f = rec.t[::DECIMATE][sl], rec.f[::DECIMATE][sl]
+        ax.plot(t, f / 1e3, "k", lw=0.8, label="measured")
         for r in rows:
             if r["test"] == name:
-                ax.plot(t, r["_force"] / 1e3, lw=0.6, label=f"{r['model']} ({r['nrmse']:.2f})")
-        if name in SCORING_WINDOWS:
-            a, b = SCORING_WINDOWS[name]
-            ax.axvspan(rec.t[a], rec.t[b - 1], color="0.9", zorder=0, label="scored window")
-        ax.set(title=f"{name}: predicted from the sinusoidal tests", xlabel="t (s)",
+                score = r.get("window_nrmse", r["nrmse"])
+                ax.plot(t, r["_force"][sl] / 1e3, lw=0.7, label=f"{r['model']} ({score:.2f})")
+                ar.plot(t, (r["_force"][sl] - f) / 1e3, lw=0.6, label=r["model"])
+        ax.set(title=f"{name}: predicted from the sinusoidal tests (scored window, NRMSE)",
                ylabel="force (kN)")  # fmt: skip
-        ax.legend(fontsize=7, ncol=5)
+        ax.legend(fontsize=7, ncol=6)
+        ar.axhline(0.0, color="k", lw=0.5)
+        ar.set(xlabel="t (s)", ylabel="predicted − measured (kN)")
     fig.tight_layout()
     out.mkdir(parents=True, exist_ok=True)
     fig.savefig(out / "real_data_prediction.png", dpi=120)
@@ -233,6 +242,10 @@ def main(argv=None) -> None:
     parser.add_argument("--src", type=Path, default=shared)
     parser.add_argument("--short", action="store_true", help="1 and 2 Hz tests only, no splits")
     parser.add_argument("--skip-brfd", action="store_true")
+    parser.add_argument("--models", nargs="+", choices=MODELS, default=list(MODELS))
+    parser.add_argument("--prediction-only", action="store_true",
+                        help="brfd: the joint fits and predictions only (no per-test fits, "
+                        "screw drives or discovery)")  # fmt: skip
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -240,13 +253,15 @@ def main(argv=None) -> None:
     def log(msg):
         print(f"[{time.perf_counter() - t0:7.1f} s] {msg}", flush=True)
 
-    study = {} if args.skip_brfd else brfd_study(args.src, args.short, log)
-    study["screwdrive"] = screwdrive_study(args.src, log)
+    study = {} if args.skip_brfd else brfd_study(args.src, args.short, log, tuple(args.models),
+                                                    args.prediction_only)  # fmt: skip
     study["decimate"] = DECIMATE
-    study["discovery"] = {  # issue 15 point 5: every brfd test and both screw drives
-        "brfd": brfd_discovery(args.src, args.short, log),
-        "screwdrive": screwdrive_discovery(args.src, log, args.out),
-    }
+    if not args.prediction_only:
+        study["screwdrive"] = screwdrive_study(args.src, log)
+        study["discovery"] = {  # issue 15 point 5: every brfd test and both screw drives
+            "brfd": brfd_discovery(args.src, args.short, log),
+            "screwdrive": screwdrive_discovery(args.src, log, args.out),
+        }
     study["seconds"] = time.perf_counter() - t0
     if "prediction" in study:
         _figure(study, args.out)
