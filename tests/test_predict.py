@@ -111,6 +111,11 @@ def test_saved_model_errors_name_the_field(tmp_path):
                           ({"effects": [{"strengths": {}}]}, r"'effects\[0\]'")):  # fmt: skip
         with pytest.raises(ValueError, match=field):
             tj.FittedModel.from_dict({**d, **change})
+    history = {**d, "kind": "history", "options": {"element": "jenkins"},
+               "parameters": {"mu_N": 500.0, "f0": 0.0}}  # fmt: skip
+    (tmp_path / "h.json").write_text(json.dumps({"fitted_model": history}))
+    with pytest.raises(ValueError, match=r"h.json: fitted_model: field 'parameters' lacks \['K_d'"):
+        tj.load_model(tmp_path / "h.json")
     bare = tmp_path / "fit.json"
     bare.write_text(json.dumps({"parameters": {"mu_N": 1.0}}))
     with pytest.raises(ValueError, match="fit.json: no field 'fitted_model'"):

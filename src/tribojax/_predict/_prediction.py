@@ -110,8 +110,14 @@ def load_model(path) -> FittedModel:
             raise ValueError(f"{path}: no field '{SAVED_KEY}' (written by `tribojax fit` or "
                              "`discover` of this version for a slip run, loop, history or "
                              "friction curve; wu2015's steady-loop fit saves none)")  # fmt: skip
-        return FittedModel.from_dict(d[SAVED_KEY], f"{path}: {SAVED_KEY}")
-    return FittedModel.from_dict(d, str(path))
+        where = f"{path}: {SAVED_KEY}"
+        model = FittedModel.from_dict(d[SAVED_KEY], where)
+    else:
+        where = str(path)
+        model = FittedModel.from_dict(d, where)
+    if model.kind == "history":
+        _check_history(model, where)
+    return model
 
 
 def predict(model: FittedModel, record) -> Prediction:
@@ -162,20 +168,28 @@ def _check_kind(model, record, need, verb):
                          f"{model.kind} model {verb} {need} records")  # fmt: skip
 
 
-def _history(model, loop):
+def _check_history(model, where) -> list:
+    """The parameter names of a saved history model; ValueError naming `where` and the field
+    (the element, a missing parameter, a band tension that is not > 0)."""
     element = model.options.get("element")
     if element not in HISTORY_MODELS:
-        raise ValueError(f"model: field 'options.element' is {element!r}; one of "
+        raise ValueError(f"{where}: field 'options.element' is {element!r}; one of "
                          f"{sorted(HISTORY_MODELS)} expected")  # fmt: skip
     names = [n for n, _ in HISTORY_MODELS[element]]
     missing = [n for n in names if n not in model.parameters]
     if missing:
-        raise ValueError(f"model: field 'parameters' lacks {missing} of the {element} model")
-    dec = int(model.options.get("decimate", 1))
+        raise ValueError(f"{where}: field 'parameters' lacks {missing} of the {element} model")
     tension = model.options.get("band_tension_N")
     if tension is not None and not (isinstance(tension, int | float) and tension > 0):
-        raise ValueError(f"model: field 'options.band_tension_N' is {tension!r}; a tension > 0 "
+        raise ValueError(f"{where}: field 'options.band_tension_N' is {tension!r}; a tension > 0 "
                          "(N) expected")  # fmt: skip
+    return names
+
+
+def _history(model, loop):
+    names = _check_history(model, "model")
+    dec = int(model.options.get("decimate", 1))
     values = [model.parameters[n] for n in names]
-    force, _ = history_force(element, values, loop, dec, tension)
+    tension = model.options.get("band_tension_N")
+    force, _ = history_force(model.options["element"], values, loop, dec, tension)
     return np.asarray(loop.t[::dec]), np.asarray(loop.f[::dec]), force
