@@ -156,7 +156,7 @@ def _band_brake_start(jen: dict, records) -> dict:
     displacement range, a drag of 6 % of the slip force across them, and the exponential rise
     reaching the slip force over half the Jenkins element's elastic travel μN/K_d."""
     F = jen["mu_N"]
-    gap = 0.03 * max(float(np.ptp(np.asarray(r[1]))) for r in records)
+    gap = max(0.03 * max(float(np.ptp(np.asarray(r[1]))) for r in records), 1e-12)
     k_gap, A = 0.06 * F / gap, 0.15 * F
     beta = float(np.log1p((F - k_gap * gap) / A)) / (0.5 * F / jen["K_d"])
     return {"F_pos": F, "F_neg": F, "gap_pos": gap, "gap_neg": gap, "k_gap": k_gap,
