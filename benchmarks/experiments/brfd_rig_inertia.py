@@ -83,8 +83,10 @@ def main():
     t0 = time.perf_counter()
     sol = least_squares(res, x0, jac=J, max_nfev=40, x_scale="jac")
     kr, m, cr = np.exp(sol.x[10:])
-    print(f"with the rig: fit NRMSE {np.sqrt(np.mean(sol.fun**2)):.3f} ({sol.nfev} evaluations, "
-          f"{time.perf_counter() - t0:.0f} s); k_r {kr:.3g} N/m, m {m:.3g} kg, c_r {cr:.3g} N s/m")
+    print(
+        f"with the rig: fit NRMSE {np.sqrt(np.mean(sol.fun**2)):.3f} ({sol.nfev} evaluations, "
+        f"{time.perf_counter() - t0:.0f} s); k_r {kr:.3g} N/m, m {m:.3g} kg, c_r {cr:.3g} N s/m"
+    )
     for name, (a, b) in WINDOWS.items():
         t, u, f = _load(SRC / f"earthquake_{name}_30lb.json")
         pred = np.asarray(force(sol.x, u, t[1] - t[0]))
