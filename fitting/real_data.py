@@ -14,7 +14,10 @@ Data (../shared/data/real by default; see data/README.md for sources and licence
   earthquake histories. NRMSE = rms(model − measured)/std(measured) per test and model; on the
   histories also on the windows the dataset's authors score (`SCORING_WINDOWS`), next to their
   own LuGre's NRMSE there, computed from their stored predictions (../shared/data/real/
-  brfd_reference, when present); (d) the same with `KEPT_OUT` left out of the fit and predicted.
+  brfd_reference, when present), each prediction from rest and, for Jenkins and the band
+  brake, also from the state that carries the record's first measured force (a device left
+  loaded by the test before; `initial="measured"`); (d) the same with `KEPT_OUT` left out of
+  the fit and predicted.
 * screwdrive — steady friction curves of two lead-screw drives: the LuGre steady law per
   direction and jointly with a direction asymmetry (`tribojax.fit_steady_curve`), then the LuGre
   dynamic parameters from the start–stop transients with the steady law fixed
@@ -126,12 +129,28 @@ def brfd_study(src: Path, short: bool, log, models=MODELS, prediction_only=False
             "_records": {**sines, **quakes}}  # fmt: skip
 
 
+def _measured_start(h, record) -> dict:
+    """The prediction started in the state that carries the record's first measured force
+    (`initial="measured"`; {} for a model that cannot start there)."""
+    try:
+        force, nrmse = tj.predict_history(h, record, initial="measured")
+    except ValueError:
+        return {}
+    return {"nrmse_measured_start": nrmse, "_force_measured_start": force}
+
+
 def _score_windows(rows, quakes, log) -> None:
-    """Add each earthquake row's NRMSE on its scored window ("window_nrmse")."""
+    """Add each earthquake row's NRMSE on its scored window ("window_nrmse"; and
+    "window_nrmse_measured_start" from the first measured force's state)."""
     for r in rows:
         if r["test"] in SCORING_WINDOWS:
             r["window_nrmse"] = _window_nrmse(quakes[r["test"]], r["_force"], r["test"])
-            log(f"{r['model']:9s} {r['test']}: scored window NRMSE {r['window_nrmse']:.3f}")
+            text = f"{r['model']:9s} {r['test']}: scored window NRMSE {r['window_nrmse']:.3f}"
+            if "_force_measured_start" in r:
+                r["window_nrmse_measured_start"] = _window_nrmse(
+                    quakes[r["test"]], r["_force_measured_start"], r["test"])  # fmt: skip
+                text += f", {r['window_nrmse_measured_start']:.3f} from the measured start"
+            log(text)
 
 
 def _window_nrmse(record, force, name) -> float:
@@ -174,6 +193,8 @@ def _predict(records, train, test, log, models=MODELS) -> list:
             rows.append({"model": model, "test": name, "role": "fit" if name in train else
                          "predicted", "nrmse": nrmse, "joint_fit": _summary(h),
                          "fit_seconds": seconds, "_force": force})  # fmt: skip
+            if name in test:
+                rows[-1].update(_measured_start(h, records[name]))
         log(f"joint {model:9s} on {len(train)} tests: NRMSE {h.nrmse:.3f}; predicted " + ", ".join(
             f"{r['test'][:12]} {r['nrmse']:.3f}" for r in rows[-len(test):]))  # fmt: skip
     return rows
@@ -232,6 +253,11 @@ def _figure(study, out: Path) -> None:
                 score = r.get("window_nrmse", r["nrmse"])
                 ax.plot(t, r["_force"][sl] / 1e3, lw=0.7, label=f"{r['model']} ({score:.2f})")
                 ar.plot(t, (r["_force"][sl] - f) / 1e3, lw=0.6, label=r["model"])
+                if "window_nrmse_measured_start" in r and r["model"] == "band_brake":
+                    late = r["_force_measured_start"][sl]
+                    label = f"band_brake, measured start ({r['window_nrmse_measured_start']:.2f})"
+                    ax.plot(t, late / 1e3, lw=0.7, label=label)
+                    ar.plot(t, (late - f) / 1e3, lw=0.6, label=label)
         ax.set(title=f"{name}: predicted from the sinusoidal tests (scored window, NRMSE)",
                ylabel="force (kN)")  # fmt: skip
         ax.legend(fontsize=7, ncol=6)

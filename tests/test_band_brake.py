@@ -117,3 +117,31 @@ def test_fit_history_identifies_it_and_predicts_another_drive():
     assert nrmse < 0.02  # the noise, 60 N, is 0.01 of the force's sd
     jenkins = tj.fit_history(recs, "jenkins")
     assert tj.predict_history(jenkins, held)[1] > 5 * nrmse
+
+
+def test_a_record_that_starts_loaded_is_predicted_from_its_first_force():
+    el = tj.BandBrake(**P)
+    for F in (-8e3, -1e3, 0.0, 150.0, 5e3, 11.9e3):  # inverse of the force law
+        assert float(el.force(el.state_for_force(F))) == pytest.approx(F, abs=1e-6)
+    assert float(el.state_for_force(20e3)) == pytest.approx(float(el.limits()[1]))
+    jen = tj.Jenkins(0.3, 100.0, 1e6)
+    assert float(jen.force(jen.state_for_force(-12.0), 0.0)) == pytest.approx(-12.0)
+    # the NumPy reference started in the state of a 6 kN force (a band left loaded), + f0
+    t, u = _drive(seed=6, amplitude=3e-3)
+    lo, hi = el.limits()
+    e0 = float(el.state_for_force(6e3))
+    assert float(lo) < e0 < float(hi)
+    f = _reference(np.r_[u[0] - e0, u], P)[1:]  # one step from rest to e0, then the drive
+    held = tj.HysteresisLoop(t, u, f + 40.0, periodic=False)
+    t2, u2 = _drive(seed=2, amplitude=8e-3)
+    fitted = tj.HysteresisLoop(t2, u2, _reference(u2, P) + 40.0, periodic=False)
+    fit = tj.fit_history(fitted, "band_brake")
+    rest = tj.predict_history(fit, held)[1]
+    measured = tj.predict_history(fit, held, initial="measured")[1]
+    assert measured < 0.02 and rest > 5 * measured
+    saved = tj.fitted_model(fit)
+    assert tj.predict(saved, held, initial="measured").nrmse == pytest.approx(measured, rel=1e-9)
+    lugre = tj.FittedModel("history", {"sigma0": 1e6, "F_c": 1e4, "F_s": 1e4, "v_s": 0.01,
+                                       "f0": 0.0}, {}, {"element": "lugre"})  # fmt: skip
+    with pytest.raises(ValueError, match=r"initial = 'measured' is not one of \['rest'\]"):
+        tj.predict(lugre, held, initial="measured")

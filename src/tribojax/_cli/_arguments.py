@@ -208,6 +208,10 @@ def predict_arguments(parser) -> None:
                         help="the record's format (default: detected)")  # fmt: skip
     parser.add_argument("--force", action="store_true",
                         help="replace an existing DIR/prediction.json")  # fmt: skip
+    parser.add_argument("--initial", choices=("rest", "measured"), default="rest",
+                        help="history models: start from rest (default) or in the state that "
+                        "carries the record's first measured force (jenkins, "
+                        "band_brake)")  # fmt: skip
     _band_tension_argument(parser)
 
 

@@ -43,9 +43,10 @@ def run_predict(args) -> int:
     model = load_model(model_path)
     with claim_outputs(src, targets, force=args.force):
         record = with_band_tension(read_record(src, args.format), args.band_tension, src)
-        pred = predict(model, record)
+        pred = predict(model, record, initial=args.initial)
         data = pred.as_dict()
         data["model_file"] = str(model_path)
+        data["initial"] = args.initial
         scaled = model.options.get("band_tension_N") is not None
         if scaled:  # the slip forces scale from the model's tension to the record's
             data["band_tension_N"] = record.band_tension

@@ -88,6 +88,7 @@ class _HistoryResiduals(eqx.Module):
 
     model: str = eqx.field(static=True)
     transform: _Transform
+    initial: str = eqx.field(static=True, default="rest")
 
     def __call__(self, theta, args):
         p = self.transform(theta)
@@ -95,7 +96,9 @@ class _HistoryResiduals(eqx.Module):
         out = []
         for t, u, f, scale, ratio in args:
             el = history_element(self.model, jnp.where(scaled, p * ratio, p))
-            if self.model in ("jenkins", "mindlin", "band_brake"):
+            if self.initial == "measured":  # the state that carries the first measured force
+                force = drive(el, u, state0=el.state_for_force(f[0] - p[-1]))
+            elif self.model in ("jenkins", "mindlin", "band_brake"):
                 force = drive(el, u)
             else:  # RK4, one step per sample interval (h·rate ≪ 1 at 1 kHz for these rigs)
                 force = drive(el, u, t, substeps=1)
@@ -272,29 +275,43 @@ HISTORY_UNITS = {"mu_N": "N", "K_d": "N/m", "f0": "N", "sigma0": "N/m", "F_c": "
 """Units of the history models' parameters (`HISTORY_MODELS`)."""
 
 
-def predict_history(fit: HistoryFit, loop: HysteresisLoop, *, decimate=None):
+INITIAL_STATES = ("rest", "measured")
+"""How a history prediction starts: from rest, or in the state that carries the record's first
+measured force (a device left loaded by an earlier test; `MEASURED_START` models only)."""
+MEASURED_START = ("jenkins", "band_brake")
+
+
+def predict_history(fit: HistoryFit, loop: HysteresisLoop, *, decimate=None, initial="rest"):
     """(predicted force N, NRMSE) of a fitted model on another record, driven from rest.
 
     `decimate` defaults to the fit's. The NRMSE is rms(predicted − measured)/std(measured).
     A fit with a band tension predicts a record at another tension with its slip forces scaled
-    by the ratio (capstan law, module docstring); the record must have one.
+    by the ratio (capstan law, module docstring); the record must have one. `initial`: "rest"
+    (default) or "measured" (`INITIAL_STATES`).
     """
     dec = fit.decimate if decimate is None else int(decimate)
-    return history_force(fit.model, fit.fit.values, loop, dec, fit.band_tension)
+    return history_force(fit.model, fit.fit.values, loop, dec, fit.band_tension, initial)
 
 
 def history_force(model: str, values, loop: HysteresisLoop, decimate: int = 1,
-                  band_tension=None):  # fmt: skip
+                  band_tension=None, initial: str = "rest"):  # fmt: skip
     """(force N, NRMSE) of history model `model` at physical parameters `values` (the order of
-    `HISTORY_MODELS[model]`, f0 last) on every `decimate`-th sample of `loop`, driven from rest;
-    `band_tension` (N): the tension the slip forces in `values` belong to (None: unscaled)."""
+    `HISTORY_MODELS[model]`, f0 last) on every `decimate`-th sample of `loop`, driven from rest
+    (`initial="rest"`) or from the state whose force (+ f0) is the first measured force
+    (`"measured"`: Jenkins and the band brake); `band_tension` (N): the tension the slip forces
+    in `values` belong to (None: unscaled)."""
     if model not in HISTORY_MODELS:
         raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
+    if initial not in INITIAL_STATES or (initial == "measured" and model not in MEASURED_START):
+        allowed = INITIAL_STATES if model in MEASURED_START else ("rest",)
+        raise ValueError(f"initial = {initial!r} is not one of {list(allowed)} for the {model} "
+                         "model")  # fmt: skip
     dec = int(check_range(decimate, "decimate", 1, None, lo_open=False))
     records = _records([loop], dec, band_tension)
     spec = HISTORY_MODELS[model]
     tr = _Transform(tuple(pos for _, pos in spec), 1.0)  # θ of f0 in physical units here
     theta = [np.log(v) if pos else v for v, (_, pos) in zip(values, spec)]
-    r = np.asarray(_residuals(_HistoryResiduals(model, tr), jnp.asarray(theta), records))
+    fn = _HistoryResiduals(model, tr, initial)
+    r = np.asarray(_residuals(fn, jnp.asarray(theta), records))
     t, u, f, s, _ = records[0]
     return np.asarray(f) + r * s, _nrmse(r, records)

@@ -20,6 +20,7 @@ Units: displacement m, force N, stiffness N/m, β 1/m. The force does not depend
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
@@ -74,6 +75,21 @@ class BandBrake(AbstractIncrementalElement):
 
     def initial_state(self) -> Array:
         return jnp.zeros((), dtype=jnp.float64)
+
+    def state_for_force(self, force) -> Array:
+        """The state e (m) whose force is `force` (N), clipped to the slip forces: a record that
+        starts loaded (a residual band tension) starts there. Bisection (the force rises with e)."""
+        lo, hi = self.limits()
+        target = jnp.clip(jnp.asarray(force, jnp.float64), -self.F_neg, self.F_pos)
+
+        def halve(_, bounds):
+            a, b = bounds
+            mid = 0.5 * (a + b)
+            below = self.force(mid) < target
+            return jnp.where(below, mid, a), jnp.where(below, b, mid)
+
+        a, b = jax.lax.fori_loop(0, 80, halve, (lo, hi))
+        return 0.5 * (a + b)
 
     def increment(self, state, du):
         lo, hi = self.limits()

@@ -137,6 +137,10 @@ class Jenkins(AbstractHysteresisElement):
     def increment(self, state, du):
         return jnp.clip(state + du, -self.A0, self.A0)
 
+    def state_for_force(self, force) -> Array:
+        """The spring deflection (m) whose force is `force` (N), clipped to ±μN."""
+        return jnp.clip(jnp.asarray(force, jnp.float64) / self.K_d, -self.A0, self.A0)
+
 
 def mindlin_unit_bank(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Iwan discretisation of the Mindlin virgin curve in units of A0 (slip limits) and K_d

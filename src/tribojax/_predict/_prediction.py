@@ -120,13 +120,15 @@ def load_model(path) -> FittedModel:
     return model
 
 
-def predict(model: FittedModel, record) -> Prediction:
+def predict(model: FittedModel, record, *, initial: str = "rest") -> Prediction:
     """Evaluate `model` on `record`, a record of its kind it may never have seen (a slip run for
     a slip model, a loop or history for a loop or history model, a friction curve for a curve
     model): the record's model rebuilt with the saved parameters and effects (`_rebuild`),
     nothing refitted. A loop model is compared from the record's first reversal on (as it is
     fitted); a history model from rest at the first sample (every `decimate`-th sample of the
-    fit). ValueError when the record is of another kind."""
+    fit), or with `initial="measured"` from the state that carries the record's first measured
+    force (Jenkins and band-brake history models). ValueError when the record is of another
+    kind."""
     if not isinstance(model, FittedModel):
         raise ValueError(f"model must be a FittedModel (tribojax.load_model), got "
                          f"{type(model).__name__}")  # fmt: skip
@@ -134,7 +136,11 @@ def predict(model: FittedModel, record) -> Prediction:
     need = "loop" if model.kind == "history" else RECORD_KINDS[model.kind].record_kind
     _check_kind(model, record, need, "predicts")
     if model.kind == "history":
-        x_name, unit, (x, measured, predicted) = "time_s", "N", _history(model, record)
+        x_name, unit = "time_s", "N"
+        x, measured, predicted = _history(model, record, initial)
+    elif initial != "rest":
+        raise ValueError(f"initial = {initial!r}: a {model.kind} model starts as its fit did; "
+                         "'measured' is for history models")  # fmt: skip
     else:
         rk = RECORD_KINDS[model.kind]
         baseline, theta, designs, s = rebuild(model, record)
@@ -186,10 +192,10 @@ def _check_history(model, where) -> list:
     return names
 
 
-def _history(model, loop):
+def _history(model, loop, initial="rest"):
     names = _check_history(model, "model")
     dec = int(model.options.get("decimate", 1))
     values = [model.parameters[n] for n in names]
     tension = model.options.get("band_tension_N")
-    force, _ = history_force(model.options["element"], values, loop, dec, tension)
+    force, _ = history_force(model.options["element"], values, loop, dec, tension, initial)
     return np.asarray(loop.t[::dec]), np.asarray(loop.f[::dec]), force
