@@ -32,6 +32,7 @@ __all__ = [
     "CommandError",
     "Progress",
     "claim_outputs",
+    "decimate_factor",
     "error",
     "progress",
     "reduce_record",
@@ -342,23 +343,26 @@ def with_band_tension(record, value, path):
     return dataclasses.replace(record, band_tension=value)
 
 
+def decimate_factor(args) -> int | None:
+    """`--decimate auto|off|N` as None (auto), 1 (off) or N; CommandError otherwise."""
+    text = str(args.decimate).strip().lower()
+    if text in ("auto", "off"):
+        return None if text == "auto" else 1
+    try:
+        factor = int(text)
+    except ValueError:
+        raise CommandError(f"--decimate = {args.decimate!r}: expected auto, off or an integer "
+                           ">= 1") from None  # fmt: skip
+    if factor < 1:
+        raise CommandError(f"--decimate = {factor} is outside the allowed range [1, inf)")
+    return factor
+
+
 def reduce_record(record, args, *, whole_cycles: bool = False):
     """(the record reduced as `--decimate` asks, the `Decimation`): `tribojax.decimate_record`.
 
     A reduction is announced on stdout in one line."""
-    text = str(args.decimate).strip().lower()
-    if text == "auto":
-        factor = None
-    elif text == "off":
-        factor = 1
-    else:
-        try:
-            factor = int(text)
-        except ValueError:
-            raise CommandError(f"--decimate = {args.decimate!r}: expected auto, off or an integer "
-                               ">= 1") from None  # fmt: skip
-        if factor < 1:
-            raise CommandError(f"--decimate = {factor} is outside the allowed range [1, inf)")
+    factor = decimate_factor(args)
     if args.max_samples < 4:
         raise CommandError(f"--max-samples = {args.max_samples} is outside the allowed range "
                            "[4, inf)")  # fmt: skip

@@ -35,6 +35,7 @@ from ._common import (
     FAILED,
     CommandError,
     claim_outputs,
+    decimate_factor,
     error,
     progress,
     reduce_record,
@@ -163,13 +164,7 @@ def _check_joint(records, paths, args) -> None:
 
 def _history_decimate(args) -> int:
     """`--decimate N` of a history fit: every N-th sample (auto, off: all)."""
-    text = str(args.decimate).strip().lower()
-    if text in ("auto", "off"):
-        return 1
-    if not text.isdigit() or int(text) < 1:
-        raise CommandError(f"--decimate = {args.decimate!r}: expected auto, off or an integer "
-                           ">= 1")  # fmt: skip
-    return int(text)
+    return decimate_factor(args) or 1
 
 
 def _fit_joint(loops, args, start):
