@@ -56,8 +56,8 @@ def test_effects_vanish_at_their_null_and_are_differentiable():
     f0 = loop_force(LoopSpec(MUN, KD), base.record, microslip=False)
     assert float(jnp.max(jnp.abs(base.predict(theta, null) - f0))) < 1e-12 * MUN
     # jit == eager, and jacfwd against central differences in θ and every knob
-    # w, β, c, backlash ε, ln(g/A), γ, K_d ∝ N^p
-    knobs = jnp.array([0.3, 0.05, 0.08, 0.6, np.log(0.3), 0.03, 0.5])
+    # w, β, c, backlash ε, ln(g/A), γ, K_d ∝ N^p, self-energizing σ, direction asymmetry a
+    knobs = jnp.array([0.3, 0.05, 0.08, 0.6, np.log(0.3), 0.03, 0.5, 1.5, 0.1])
     assert knobs.size == len(base.knob_names)
     eager = base.predict(theta, knobs)
     jitted = jax.jit(type(base).predict)(base, theta, knobs)

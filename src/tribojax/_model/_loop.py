@@ -5,7 +5,8 @@ microslip law, wu2015 Eq 2, as an Iwan bank) driven through the record's displac
 first upward mean-crossing, μN and K_d fitted as logarithms, compared with the force from the
 first reversal on (`prepare_loop`). Its physics knobs (null 0) are those of `loop_force`:
 microslip weight w, normal-load slope β and curvature γ (μN ∝ N, K_d ∝ N^p, wu2015 Eq 5),
-viscous coefficient c/c_ref, backlash depth ε and gap ln(g/A). `fit_loop(model="history")` and
+viscous coefficient c/c_ref, backlash depth ε and gap ln(g/A), self-energizing exponent σ and
+direction asymmetry a of the slip force. `fit_loop(model="history")` and
 `discover` fit this one model.
 
 Noise (when the sidecar gives none) and its AR(1) ρ come from differences between cycles
@@ -39,11 +40,12 @@ from ._loop_force import KD_LOAD_EXPONENT, LoopData, LoopSpec, loop_branch, loop
 
 BRANCH_NAMES = {0: "unloading", 1: "loading"}
 LOOP_KNOBS = ("microslip", "load_slope", "viscous", "backlash", "log_gap", "load_curve",
-          "kd_exponent")
+              "kd_exponent", "energizing", "asymmetry")
 
 class LoopBaseline(AbstractBaseline):
     """Jenkins element (μN in N, K_d in N/m; θ = their logs) driven by a loop record's
-    displacement; knobs (w, β, c/c_ref, ε, ln(g/A)) as in the module docstring."""
+    displacement; knobs (w, β, c/c_ref, ε, ln(g/A), γ, p, σ, a) as in the module docstring and
+    `loop_force`'s."""
 
     kind: ClassVar[str] = "loop"
     param_names: ClassVar[tuple[str, ...]] = ("mu_N", "K_d")
@@ -89,6 +91,8 @@ class LoopBaseline(AbstractBaseline):
             gap=self.record.A * jnp.exp(knobs[4]),
             gamma=knobs[5],
             kd_exponent=knobs[6],
+            energizing=knobs[7],
+            asymmetry=knobs[8],
         )
         return loop_force(spec, self.record, check=False)
 

@@ -27,7 +27,18 @@ One generalised element covers the baseline and every physical augmentation:
   rises along K_d on the far side (a rigid play in series with the Jenkins element); 0 < ε < 1
   leaves a soft stiffness (1 − ε)·K_d across the gap. ε = 0 is the baseline. For a bank each
   slider carries the clearance (exact for one element; for the Mindlin bank the slider of limit
-  y_j < (1 − ε)g/2 slips below its own force k_j·y_j).
+  y_j < (1 − ε)g/2 slips below its own force k_j·y_j);
+* `self_energizing` (exponent σ, —): the friction force q·F_slip (q ∈ [−1, 1] its share of the
+  slip force F_slip = μN·s(u)) is passed through ψ_σ(q) = sign(q)·expm1(σ|q|)/expm1(σ), which
+  keeps the slip force and zero force and bends the stick branch between them. A band brake's
+  tension grows as e^{μφ} with the wrapped angle φ (capstan law, Euler–Eytelwein; the device of
+  `BandBrake`): with φ taken to grow in proportion to the share of the slip force already
+  carried, the force rises exponentially towards slip and falls steeply just after a reversal
+  (σ > 0); σ < 0 is a softening stick branch. σ = 0 is the baseline (ψ = q).
+* `direction_asymmetry` (a, —): the slip force in the positive direction μN·s·(1 + a), in the
+  negative μN·s·(1 − a) (a self-energizing band is energized in one direction only, `BandBrake`'s
+  F₊ ≠ F₋): the force q·F_slip becomes (1 + a·sign q)·q·F_slip. Unlike a force offset it leaves
+  zero force (the clearance's plateau) at zero. a = 0 is the baseline.
 
 Rate-independent updates are exact: z_j ← clip(z_j + Δu, −L_j, L_j), L_j = y_j·a(u) + ε·g/2,
 f = Σ k_j·b(u)·(z_j − ε·clip(z_j, −g/2, g/2)) with a = s^(1−p), b = s^p (a = b = 1
@@ -141,6 +152,23 @@ class LoopSpec(eqx.Module):
     c: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     depth: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     gap: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+    energizing: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+    asymmetry: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
+
+
+SIGMA_MAX = 30.0  # |σ| of `self_energizing`: e^30 between the stick branch's ends is far beyond it
+SIGMA_SERIES = 1e-3  # |σ| below which ψ_σ is its series in σ (exact to ~σ³)
+
+
+def energize(q: jax.Array, sigma: jax.Array) -> jax.Array:
+    """ψ_σ(q) = sign(q)·expm1(σ|q|)/expm1(σ) for q ∈ [−1, 1] (module docstring, `self_energizing`):
+    odd, ψ(0) = 0, ψ(±1) = ±1, ψ_0(q) = q; smooth in σ through 0 (a series there)."""
+    x = jnp.abs(q)
+    small = jnp.abs(sigma) < SIGMA_SERIES
+    s = jnp.where(small, 1.0, sigma)
+    exact = jnp.expm1(s * x) / jnp.expm1(s)
+    series = x * (1.0 + 0.5 * sigma * (x - 1.0) + sigma**2 * (x * x / 6.0 - x / 4.0 + 1.0 / 12.0))
+    return jnp.sign(q) * jnp.where(small, series, exact)
 
 
 _Y_MINDLIN, _K_MINDLIN = mindlin_unit_bank(N_IWAN)  # the Mindlin bank in units of A0, K_d
@@ -183,7 +211,24 @@ def loop_force(
     limit = jnp.maximum(a[:, None] + spec.depth * h / y[None, :], 0.0)
     z = IwanBank(y, k).deflections(data.u, limit)[data.skip :]
     z = z - spec.depth * jnp.clip(z, -h, h)  # the clearance's dead zone
-    return spec.K_d * b[data.skip :] * (z @ k) + spec.c * data.v
+    force = spec.K_d * b[data.skip :] * (z @ k)
+    if check:
+        force = fail_if(force, jnp.abs(spec.energizing) > SIGMA_MAX,
+                        f"self_energizing: energizing{_got(spec.energizing)} is outside the "
+                        f"allowed range [-{SIGMA_MAX:g}, {SIGMA_MAX:g}]")  # fmt: skip
+        force = fail_if(force, jnp.abs(spec.asymmetry) >= 1.0,
+                        f"direction_asymmetry: asymmetry{_got(spec.asymmetry)} is outside the "
+                        "allowed range (-1, 1)")  # fmt: skip
+    slip = spec.mu_N * s_safe[data.skip :]  # the slip force μN·s(u)
+    q = jnp.clip(force / slip, -1.0, 1.0)
+    sigma = jnp.clip(spec.energizing, -SIGMA_MAX, SIGMA_MAX)
+    shaped = slip * energize(q, sigma) * (1.0 + spec.asymmetry * jnp.sign(q))
+    return shaped + spec.c * data.v
+
+
+def _got(x) -> str:
+    """" = <value>" for a concrete scalar (an eager check's message), "" under a trace."""
+    return "" if isinstance(x, jax.core.Tracer) else f" = {float(x):g}"
 
 
 def loop_branch(loop: HysteresisLoop) -> np.ndarray:

@@ -7,7 +7,8 @@ K_d ∝ N^0.7616, wu2015 Eq 5; a viscous force c·u̇; a backlash of depth ε an
 model that `fit_loop(model="history")` fits; its noise model is `cycle_noise`.
 
 Effects (registered for `default_effects("loop")`, names as in the issues): `microslip`,
-`viscous_damping`, `normal_load_variation`, `backlash`, and the measurement effect
+`viscous_damping`, `normal_load_variation`, `backlash`, the band brake's `self_energizing` and
+`direction_asymmetry` (issue 30), and the measurement effect
 `force_offset` (a constant added to the force); each moves one knob (or the offset) with a signed
 strength, so the null is interior and the Rao score test applies. `backlash` has a nuisance, the
 gap g, not identified under the null: a grid of g/A seeds the score (Davies: the largest score,
@@ -126,6 +127,36 @@ class Backlash(AbstractEffect):
                              nuisance={"gap_m": q * A},
                              free=((1, "gap_m", lambda s, g0=q * A: g0 * np.exp(s)),))
                 for q in GAP_GRID]  # fmt: skip
+
+
+@register_effect
+class SelfEnergizing(AbstractEffect):
+    """A self-energizing contact (a band brake, `tribojax.BandBrake`): the stick branch between
+    the slip forces bends as ψ_σ(q) = sign(q)·expm1(σ|q|)/expm1(σ) of the share q of the slip
+    force (capstan law T₀e^{μφ} with the wrapped angle φ growing with the share carried;
+    `loop_force`). σ > 0: the force rises exponentially towards slip and drops steeply just after
+    a reversal; σ = 0 null."""
+
+    name: ClassVar[str] = "self_energizing"
+    kind: ClassVar[str] = "loop"
+    description: ClassVar[str] = "exponential (capstan) rise of the force towards slip, exponent sigma"
+
+    def designs(self, baseline):
+        return _knob_design(baseline, "energizing", ("sigma",), ("1",), 1.0)
+
+
+@register_effect
+class DirectionAsymmetry(AbstractEffect):
+    """Slip forces that differ with the direction of sliding, μN(1 ± a) (a band energized in one
+    direction, `BandBrake`'s F₊ ≠ F₋); zero force stays at zero, unlike `force_offset`; a = 0
+    null."""
+
+    name: ClassVar[str] = "direction_asymmetry"
+    kind: ClassVar[str] = "loop"
+    description: ClassVar[str] = "slip force muN(1 + a) sliding forward, muN(1 - a) backward"
+
+    def designs(self, baseline):
+        return _knob_design(baseline, "asymmetry", ("a",), ("1",), 1.0)
 
 
 @register_effect
