@@ -42,7 +42,19 @@ NOTES = {
     "damping); not expected in a dry friction band",
     "normal_load_variation": "normal_load_variation: band tension varying with rotation; "
     "possible in a banded device",
+    "self_energizing": "self_energizing: the band's capstan rise towards slip, expected: the "
+    "device is a self-energizing band brake",
+    "direction_asymmetry": "direction_asymmetry: a band energized more in one direction, "
+    "expected for a self-energizing band brake",
 }
+FIRST_EXPECTED = ("backlash", "self_energizing")  # the device's clearance or its band's rise
+BAND_BRAKE_EFFECTS = ("self_energizing", "direction_asymmetry")
+TRANSFER_TRAIN = "1Hz30lbtension1amplitude"
+"""The sine test discovery is run on for `discovery_predicts` (chosen before any result: the
+middle of the frequency and amplitude grid); every other record is scored, never fitted."""
+WINDOWS_S = {"earthquake_ImperialValleyDBE_30lb": (3.0, 7.5),
+             "earthquake_KocaeliDBE_30lb": (6.0, 14.0)}  # fmt: skip
+"""The dataset authors' scored windows (samples 3072–7679, 6144–14335 at 1024 Hz), in seconds."""
 
 
 def brfd_files(src: Path) -> list[Path]:
@@ -78,8 +90,9 @@ def physical_sense(effects) -> str:
     if not effects:
         return "nothing named: backlash was expected for this device"
     lines = [NOTES.get(e, e) for e in effects]
-    if effects[0] != "backlash":
-        lines.insert(0, "backlash not named first, though expected for this device")
+    if effects[0] not in FIRST_EXPECTED:
+        lines.insert(0, "neither backlash nor the band's rise named first, though expected for "
+                        "this device")
     return "; ".join(lines)
 
 
@@ -144,6 +157,68 @@ def brfd_discovery(src, short: bool, log) -> list[dict]:
     return rows
 
 
+def discovery_predicts(src, log, train: str = TRANSFER_TRAIN) -> dict:
+    """Discovery on one sine test (`train`, the CLI's path), with the loop vocabulary without
+    and with the band brake's effects (`BAND_BRAKE_EFFECTS`); each discovered model then
+    predicts every other brfd record of `src` (`tribojax.predict`, nothing refitted; a loop
+    model is compared from a record's first reversal on) and the earthquake windows
+    (`WINDOWS_S`, on the predicted samples inside them). Returns {"train", "vocabularies": {name:
+    {"effects", "excess_before/after", "heldout_excess_before/after", "records": {test:
+    {"nrmse", "window_nrmse", "window_coverage"}}}}}."""
+    files = brfd_files(Path(src))
+    path = next(p for p in files if p.stem == train)
+    reduced, _ = tj.decimate_record(tj.read_record(path), None,
+                                    max_samples=tj.DISCOVER_MAX_SAMPLES, whole_cycles=True)  # fmt: skip
+    vocab = {"without band-brake effects": [e for e in tj.discovery.default_effects("loop")
+                                            if e.name not in BAND_BRAKE_EFFECTS],
+             "with band-brake effects": None}  # fmt: skip
+    out = {"train": train, "vocabularies": {}}
+    for name, effects in vocab.items():
+        t0 = time.perf_counter()
+        report = discover(loop_baseline(reduced), effects=effects)
+        row = {"effects": list(report.effects), "verdict": report.verdict,
+               "strengths": report.as_dict()["strengths"],
+               "excess_before_N": report.excess_rmse_before,
+               "excess_after_N": report.excess_rmse_after,
+               "heldout_excess_before_N": report.heldout_excess_before,
+               "heldout_excess_after_N": report.heldout_excess_after, "records": {}}  # fmt: skip
+        for other in files:
+            if other.stem == train:
+                continue
+            pred = tj.predict(report.fitted, tj.read_record(other))
+            rec = {"nrmse": pred.nrmse}
+            if other.stem in WINDOWS_S:
+                lo, hi = WINDOWS_S[other.stem]
+                inside = (pred.x >= lo) & (pred.x < hi)
+                m, p = pred.measured[inside], pred.predicted[inside]
+                rec["window_nrmse"] = float(np.sqrt(np.mean((p - m) ** 2)) / np.std(m))
+                rec["window_coverage"] = float(inside.sum() / round((hi - lo) * 1024))
+            row["records"][other.stem] = rec
+        row["seconds"] = time.perf_counter() - t0
+        out["vocabularies"][name] = row
+        log(f"discover {train} ({name}): {'+'.join(row['effects']) or 'none'}, excess "
+            f"{row['excess_before_N']:.3g} -> {row['excess_after_N']:.3g} N (held out "
+            f"{row['heldout_excess_before_N']:.3g} -> {row['heldout_excess_after_N']:.3g}); "
+            "predicted: " + ", ".join(f"{k} {v['nrmse']:.3f}" for k, v in row["records"].items()))
+    return out
+
+
+def transfer_table(result) -> str:
+    """Markdown table of `discovery_predicts`: NRMSE per record not fitted, per vocabulary."""
+    names = list(result["vocabularies"])
+    rows = ["| record (not fitted) | " + " | ".join(names) + " |",
+            "|---|" + "---|" * len(names)]  # fmt: skip
+    first = result["vocabularies"][names[0]]["records"]
+    for test in first:
+        cells = []
+        for n in names:
+            r = result["vocabularies"][n]["records"][test]
+            w = f"; window {r['window_nrmse']:.3f}" if "window_nrmse" in r else ""
+            cells.append(f"{r['nrmse']:.3f}{w}")
+        rows.append(f"| {test} | " + " | ".join(cells) + " |")
+    return "\n".join(rows)
+
+
 def table(rows) -> str:
     """Markdown table of the rows (test, effects, verdict, excess before/after, gap)."""
     out = ["| test | named effects | verdict | excess before (N) | after (N) | gap (mm) |",
@@ -158,10 +233,21 @@ def table(rows) -> str:
 
 
 if __name__ == "__main__":
+    import json
+    import sys
+
     shared = Path(__file__).resolve().parents[1].parent / "shared/data/real"
     t_start = time.perf_counter()
-    result = brfd_discovery(
-        shared, False, lambda m: print(f"[{time.perf_counter() - t_start:7.1f} s] {m}", flush=True)
-    )
-    print(table(result))
-    print(np.round([r["seconds"] for r in result], 1))
+
+    def log(m):
+        print(f"[{time.perf_counter() - t_start:7.1f} s] {m}", flush=True)
+
+    if sys.argv[1:2] == ["--predicts"]:  # discovery on one sine, predictions of the others
+        result = discovery_predicts(shared, log)
+        if len(sys.argv) > 2:
+            Path(sys.argv[2]).write_text(json.dumps(result, indent=1, default=float))
+        print(transfer_table(result))
+    else:
+        result = brfd_discovery(shared, False, log)
+        print(table(result))
+        print(np.round([r["seconds"] for r in result], 1))

@@ -19,6 +19,7 @@ from tribojax._model._loop_force import (SIGMA_SERIES, LoopSpec, energize, loop_
 from tribojax.discovery import default_effects, discover_loop
 
 NOISE = 60.0  # N
+TENSION = 133.4  # N (30 lb): the record is a band brake's
 
 
 def test_energize_keeps_the_slip_force_and_bends_the_stick_branch():
@@ -51,9 +52,16 @@ def test_out_of_range_strengths_are_refused_with_their_value():
         loop_force(LoopSpec(1.0, 1e4, asymmetry=-1.0), data)
 
 
-def test_both_are_registered_loop_effects():
+def test_candidates_on_a_band_brakes_records_only():
     names = {e.name for e in default_effects("loop")}
     assert {"self_energizing", "direction_asymmetry", "backlash"} <= names
+    t = np.linspace(0.0, 3.0, 301)
+    u, f = 1e-3 * np.sin(2 * np.pi * t), np.cos(2 * np.pi * t)
+    for tension, expected in ((None, False), (TENSION, True)):
+        base = tj.discovery.loop_baseline(tj.HysteresisLoop(t=t, u=u, f=f, band_tension=tension))
+        applies = {e.name: e.applies(base) for e in default_effects("loop")}
+        assert applies["self_energizing"] is applies["direction_asymmetry"] is expected
+        assert applies["backlash"] and applies["force_offset"]
 
 
 def test_discovery_names_the_band_brake_and_its_model_predicts_another_drive():
@@ -65,7 +73,7 @@ def test_discovery_names_the_band_brake_and_its_model_predicts_another_drive():
     t = np.linspace(0.0, 3.0, 751)
     u = 8e-3 * np.sin(2 * np.pi * t)
     f = _reference(u, P) + np.random.default_rng(0).normal(0.0, NOISE, t.size)
-    rep = discover_loop(tj.HysteresisLoop(t=t, u=u, f=f))
+    rep = discover_loop(tj.HysteresisLoop(t=t, u=u, f=f, band_tension=TENSION))
     assert set(rep.effects) == {"self_energizing", "direction_asymmetry", "backlash"}
     a_true = (P["F_pos"] - P["F_neg"]) / (P["F_pos"] + P["F_neg"])  # 0.143
     assert rep.strengths["direction_asymmetry"]["a"]["value"] == pytest.approx(a_true, abs=0.015)
@@ -82,3 +90,27 @@ def test_discovery_names_the_band_brake_and_its_model_predicts_another_drive():
     jenkins = tj.discovery.discover_loop(tj.HysteresisLoop(t=t, u=u, f=f), effects=[],
                                          max_effects=0).fitted  # fmt: skip
     assert found < 0.1 and found < 0.4 * tj.predict(jenkins, other).nrmse
+
+
+def test_cli_discover_takes_the_band_tension(tmp_path):
+    """`tribojax discover LOOP.csv --band-tension 30lb`: the record is a band brake's, so its
+    effects are candidates (a CSV loop carries no tension of its own); the saved model names
+    them and `tribojax predict` takes it."""
+    import json
+
+    from tribojax._cli._main import main
+    from tribojax._io._loop import write_loop
+
+    t = np.linspace(0.0, 3.0, 751)
+    u = 8e-3 * np.sin(2 * np.pi * t)
+    f = _reference(u, P) + np.random.default_rng(1).normal(0.0, NOISE, t.size)
+    path = tmp_path / "band.csv"
+    write_loop(tj.HysteresisLoop(t=t, u=u, f=f), path)
+    assert main(["discover", str(path), "--out", str(tmp_path / "d"), "--band-tension", "30lb",
+                 "--quiet"]) == 0  # fmt: skip
+    data = json.loads((tmp_path / "d" / "discovery.json").read_text())
+    assert {"self_energizing", "direction_asymmetry"} <= set(data["effects"])
+    assert main(["predict", str(tmp_path / "d" / "discovery.json"), str(path), "--out",
+                 str(tmp_path / "p")]) == 0  # fmt: skip
+    pred = json.loads((tmp_path / "p" / "prediction.json").read_text())
+    assert pred["nrmse"] < 0.05

@@ -1,6 +1,8 @@
 """Discovery on measured friction-damper (brfd) records: the study's rows on short excerpts.
 
-The damper has a clearance at motion reversal; `backlash` must lead the ranking on its records.
+The damper is a self-energizing band brake with a clearance at motion reversal: `backlash` (on
+records without a band tension, where the band's effects are no candidates) or the band's
+`self_energizing` rise must lead the ranking on its records.
 """
 
 import dataclasses
@@ -40,22 +42,28 @@ def test_bundled_excerpt_ranks_backlash_first():
 
 
 @pytest.mark.skipif(not SHARED.exists(), reason="../shared/data/real (full brfd data) absent")
-def test_shared_excerpt_names_backlash():
-    """Two steady cycles of the 0.25 Hz, 0.5 in test (blocks of 16: 524 samples): backlash is
-    named first, with the gap seen in the loops (a zero-force plateau of about 5 mm)."""
+def test_shared_excerpt_names_the_band_brake():
+    """Two steady cycles of the 0.25 Hz, 0.5 in test (blocks of 16: 524 samples). The record
+    carries its band tension (30 lb, from the file name), so the band brake's effects are
+    candidates: the capstan rise is named first (ΔBIC −32, backlash −24 in the same round), then
+    the direction asymmetry, a ≈ 0.13 (the band-brake element fitted on all ten sines has
+    (F₊ − F₋)/(F₊ + F₋) = 0.14); the excess misfit goes from 2.2 kN to 0.54 kN (with backlash and
+    a force offset, the vocabulary without the band's effects: 0.9 kN), still far above the
+    noise over most of the loop: partly_explained."""
     loop = _excerpt(tj.read_record(SHARED), 8.0, 16.2)
+    assert loop.band_tension == pytest.approx(30 * 4.4482216152605)
     row = discover_brfd_test(SHARED, record=loop, factor=16)
-    # backlash first (ΔBIC −23), then a force offset (ΔBIC −32 in the second round: the two
-    # directions' friction differs); they take the excess misfit from 2.2 kN to 0.9 kN, more
-    # than halved, but it stays far above the noise over most of the loop: partly_explained
-    assert row["effects"] == ["backlash", "force_offset"]
-    assert 4.0 < row["backlash_gap_mm"] < 6.5
-    assert row["backlash_depth"] > 0.8
-    assert row["excess_rmse_after_N"] < 0.5 * row["excess_rmse_before_N"]
+    assert row["effects"][:2] == ["self_energizing", "direction_asymmetry"]
+    assert [c["name"] for c in row["first_round"][:2]] == ["self_energizing", "backlash"]
+    assert 0.08 < row["strengths"]["direction_asymmetry"]["a"]["value"] < 0.18
+    assert row["strengths"]["self_energizing"]["sigma"]["value"] > 0.5
+    assert row["excess_rmse_after_N"] < 0.3 * row["excess_rmse_before_N"]
     assert row["verdict"] == "partly_explained" and row["misfit"]["share_of_samples"] > 0.5
+    assert row["physical_sense"].startswith("self_energizing: the band's capstan rise")
 
 
 def test_files_and_notes():
     assert brfd_files(ROOT / "no-such-folder") == sorted((BUNDLED.parent).glob("*.csv"))
     assert physical_sense([]).startswith("nothing named")
-    assert physical_sense(["force_offset"]).startswith("backlash not named first")
+    assert physical_sense(["force_offset"]).startswith("neither backlash nor the band's rise")
+    assert physical_sense(["backlash", "force_offset"]).startswith("backlash: expected")

@@ -196,6 +196,7 @@ def discover_arguments(parser) -> None:
                         help="start from the model saved in a discovery.json or fit.json (its "
                         "effects refitted on this record), and look for more")  # fmt: skip
     add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
+    _band_tension_argument(parser)  # a band brake's record: its effects become candidates
 
 
 def predict_arguments(parser) -> None:

@@ -38,6 +38,7 @@ from ._common import (
     error,
     progress,
     reduce_record,
+    with_band_tension,
     write_json_atomic,
 )
 
@@ -75,7 +76,7 @@ def run_discover(args, out=None, err=None) -> int:
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
     start = load_model(args.from_model) if args.from_model else None
     with claim_outputs(src, [target, figure], force=args.force):
-        record = read_record(src, args.format)
+        record = with_band_tension(read_record(src, args.format), args.band_tension, src)
         make_baseline, plot = _discovery_of(record, src)
         # a long series is reduced; a curve (a few points) never is
         record, reduction = (reduce_record(record, args, whole_cycles=True) if record.reducible

@@ -36,6 +36,11 @@ class AbstractEffect(eqx.Module):
         the Rao statistic at the current fit. Default: no refinement."""
         return design
 
+    def applies(self, baseline: AbstractBaseline) -> bool:
+        """Whether the effect is a candidate on this record by default (e.g. a device's own
+        physics on records of that device). Default: True."""
+        return True
+
     def reject(self, nuisance: dict) -> str | None:
         """A reason why a refit with these fitted nuisance values is not this effect (it is
         then not accepted), or None. Default: None."""

@@ -60,6 +60,8 @@ class LoopBaseline(AbstractBaseline):
     noise: Array  # force-noise sd from the record (N), NaN when unknown (an array leaf, so
     # records of one length share a compiled fit)
     element: str = eqx.field(static=True, default="jenkins")  # or "mindlin" (w = 1)
+    # a band brake's record (it carries a band tension): the band's effects are candidates
+    band_brake: bool = eqx.field(static=True, default=False)
 
     def knob_null(self):
         null = np.zeros(len(LOOP_KNOBS))
@@ -162,6 +164,7 @@ def loop_baseline(loop: HysteresisLoop, element: str = "jenkins", start=None,
         theta0=jnp.log(jnp.array(start)),
         noise=jnp.asarray(np.nan if noise is None else float(noise)),
         element=element,
+        band_brake=loop.band_tension is not None,
     )
 
 

@@ -84,6 +84,12 @@ def analyse_loop(loop: HysteresisLoop, *, window: float = 0.05) -> LoopAnalysis:
         swings.append(ff.max() - ff.min())
         k2.append(_reversal_slope(loop.u, loop.f, a + int(np.argmax(uu)), span))
         k1.append(_reversal_slope(loop.u, loop.f, a + int(np.argmin(uu)), span))
+    # a reversal the record ends on (no samples after it) gives no slope (measured: the 0.25 Hz
+    # brfd tests end 28 samples after their last minimum)
+    k1, k2 = ([k for k in ks if k is not None] for ks in (k1, k2))
+    if not k1 or not k2:
+        raise ValueError(f"{loop.source}: no reversal with samples after it to measure the "
+                         "stiffness K_d (wu2015 Eq 6)")  # fmt: skip
     k1, k2 = float(np.mean(k1)), float(np.mean(k2))
     K_d = 0.5 * (k1 + k2)
     mu_N = 0.5 * float(np.mean(swings))
@@ -103,11 +109,14 @@ def analyse_loop(loop: HysteresisLoop, *, window: float = 0.05) -> LoopAnalysis:
 
 
 def _reversal_slope(u, f, r, span) -> float:
-    """df/du at the reversal sample r, from a quadratic over the following samples within span."""
+    """df/du at the reversal sample r, from a quadratic over the following samples within span;
+    None when the record ends inside the span with fewer than 4 samples after r."""
     j = r + 1
     while j < len(u) and abs(u[j] - u[r]) <= span:
         j += 1
     du, df = u[r:j] - u[r], f[r:j]
+    if len(du) < 4 and j == len(u):
+        return None
     if len(du) < 4:
         raise ValueError(
             f"only {len(du)} samples within the slope window after the reversal at sample {r}; "

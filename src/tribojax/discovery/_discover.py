@@ -132,7 +132,8 @@ def discover(
 
     Args:
         baseline: a concrete baseline holding the record (e.g. `slip_baseline(run)`).
-        effects: candidate effects; default `default_effects(baseline.kind)`. Add your own:
+        effects: candidate effects; default those of `default_effects(baseline.kind)` that
+            apply to the record (`AbstractEffect.applies`). Add your own:
             `effects=[*default_effects("slip"), MyEffect()]`.
         n_starts: refit starts per candidate with a nuisance grid (at least the effect's
             `refit_starts`): the best grid point by score (refined), then the best ones a
@@ -198,7 +199,9 @@ def _checked(baseline, effects, max_effects, alpha) -> list:
         raise ValueError(f"max_effects = {max_effects} is outside the allowed range [0, inf)")
     if not 0 < alpha < 1:
         raise ValueError(f"alpha = {alpha:g} is outside the allowed range (0, 1)")
-    effects = default_effects(baseline.kind) if effects is None else list(effects)
+    if effects is None:  # the registered effects that apply to this record (`applies`)
+        effects = [e for e in default_effects(baseline.kind) if e.applies(baseline)]
+    effects = list(effects)
     for e in effects:
         if not isinstance(e, AbstractEffect):
             raise ValueError(f"effects: {e!r} is not an AbstractEffect")

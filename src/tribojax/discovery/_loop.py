@@ -8,7 +8,8 @@ model that `fit_loop(model="history")` fits; its noise model is `cycle_noise`.
 
 Effects (registered for `default_effects("loop")`, names as in the issues): `microslip`,
 `viscous_damping`, `normal_load_variation`, `backlash`, the band brake's `self_energizing` and
-`direction_asymmetry` (issue 30), and the measurement effect
+`direction_asymmetry` (issue 30; candidates by default only on a band brake's records, those
+that carry a band tension: `LoopBaseline.band_brake`), and the measurement effect
 `force_offset` (a constant added to the force); each moves one knob (or the offset) with a signed
 strength, so the null is interior and the Rao score test applies. `backlash` has a nuisance, the
 gap g, not identified under the null: a grid of g/A seeds the score (Davies: the largest score,
@@ -141,6 +142,9 @@ class SelfEnergizing(AbstractEffect):
     kind: ClassVar[str] = "loop"
     description: ClassVar[str] = "exponential (capstan) rise of the force towards slip, exponent sigma"
 
+    def applies(self, baseline):
+        return baseline.band_brake
+
     def designs(self, baseline):
         return _knob_design(baseline, "energizing", ("sigma",), ("1",), 1.0)
 
@@ -154,6 +158,9 @@ class DirectionAsymmetry(AbstractEffect):
     name: ClassVar[str] = "direction_asymmetry"
     kind: ClassVar[str] = "loop"
     description: ClassVar[str] = "slip force muN(1 + a) sliding forward, muN(1 - a) backward"
+
+    def applies(self, baseline):
+        return baseline.band_brake
 
     def designs(self, baseline):
         return _knob_design(baseline, "asymmetry", ("a",), ("1",), 1.0)
