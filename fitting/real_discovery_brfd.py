@@ -162,7 +162,8 @@ def discovery_predicts(src, log, train: str = TRANSFER_TRAIN) -> dict:
     and with the band brake's effects (`BAND_BRAKE_EFFECTS`); each discovered model then
     predicts every other brfd record of `src` (`tribojax.predict`, nothing refitted; a loop
     model is compared from a record's first reversal on) and the earthquake windows
-    (`WINDOWS_S`, on the predicted samples inside them). Returns {"train", "vocabularies": {name:
+    (`WINDOWS_S`, on the predicted samples inside them), the histories from rest and from the
+    state of their first measured force (`initial="measured"`). Returns {"train", "vocabularies": {name:
     {"effects", "excess_before/after", "heldout_excess_before/after", "records": {test:
     {"nrmse", "window_nrmse", "window_coverage"}}}}}."""
     files = brfd_files(Path(src))
@@ -185,14 +186,15 @@ def discovery_predicts(src, log, train: str = TRANSFER_TRAIN) -> dict:
         for other in files:
             if other.stem == train:
                 continue
-            pred = tj.predict(report.fitted, tj.read_record(other))
+            record = tj.read_record(other)
+            pred = tj.predict(report.fitted, record)
             rec = {"nrmse": pred.nrmse}
-            if other.stem in WINDOWS_S:
-                lo, hi = WINDOWS_S[other.stem]
-                inside = (pred.x >= lo) & (pred.x < hi)
-                m, p = pred.measured[inside], pred.predicted[inside]
-                rec["window_nrmse"] = float(np.sqrt(np.mean((p - m) ** 2)) / np.std(m))
-                rec["window_coverage"] = float(inside.sum() / round((hi - lo) * 1024))
+            if other.stem in WINDOWS_S:  # a history: also from its first measured force
+                rec.update(_window(pred, other.stem))
+                loaded = tj.predict(report.fitted, record, initial="measured")
+                rec["nrmse_measured_start"] = loaded.nrmse
+                rec.update({f"{k}_measured_start": v
+                            for k, v in _window(loaded, other.stem).items()})  # fmt: skip
             row["records"][other.stem] = rec
         row["seconds"] = time.perf_counter() - t0
         out["vocabularies"][name] = row
@@ -201,6 +203,16 @@ def discovery_predicts(src, log, train: str = TRANSFER_TRAIN) -> dict:
             f"{row['heldout_excess_before_N']:.3g} -> {row['heldout_excess_after_N']:.3g}); "
             "predicted: " + ", ".join(f"{k} {v['nrmse']:.3f}" for k, v in row["records"].items()))
     return out
+
+
+def _window(pred, name) -> dict:
+    """NRMSE of a prediction on the scored window of history `name` (the predicted samples in
+    it) and the share of the window's samples predicted."""
+    lo, hi = WINDOWS_S[name]
+    inside = (pred.x >= lo) & (pred.x < hi)
+    m, p = pred.measured[inside], pred.predicted[inside]
+    return {"window_nrmse": float(np.sqrt(np.mean((p - m) ** 2)) / np.std(m)),
+            "window_coverage": float(inside.sum() / round((hi - lo) * 1024))}  # fmt: skip
 
 
 def transfer_table(result) -> str:
@@ -213,7 +225,9 @@ def transfer_table(result) -> str:
         cells = []
         for n in names:
             r = result["vocabularies"][n]["records"][test]
-            w = f"; window {r['window_nrmse']:.3f}" if "window_nrmse" in r else ""
+            w = (f"; window {r['window_nrmse']:.3f}; from the first force: "
+                 f"{r['nrmse_measured_start']:.3f}, window {r['window_nrmse_measured_start']:.3f}"
+                 if "window_nrmse" in r else "")  # fmt: skip
             cells.append(f"{r['nrmse']:.3f}{w}")
         rows.append(f"| {test} | " + " | ".join(cells) + " |")
     return "\n".join(rows)

@@ -197,6 +197,10 @@ def discover_arguments(parser) -> None:
                         "effects refitted on this record), and look for more")  # fmt: skip
     add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
     _band_tension_argument(parser)  # a band brake's record: its effects become candidates
+    parser.add_argument("--initial", choices=("rest", "measured"), default=None,
+                        help="loops and histories: the element starts at rest (default) or in "
+                        "the state that carries the record's first measured force (a history "
+                        "that begins under load)")  # fmt: skip
 
 
 def predict_arguments(parser) -> None:
@@ -209,10 +213,10 @@ def predict_arguments(parser) -> None:
                         help="the record's format (default: detected)")  # fmt: skip
     parser.add_argument("--force", action="store_true",
                         help="replace an existing DIR/prediction.json")  # fmt: skip
-    parser.add_argument("--initial", choices=("rest", "measured"), default="rest",
-                        help="history models: start from rest (default) or in the state that "
-                        "carries the record's first measured force (jenkins, "
-                        "band_brake)")  # fmt: skip
+    parser.add_argument("--initial", choices=("rest", "measured"), default=None,
+                        help="loop and history models: start from rest or in the state that "
+                        "carries the record's first measured force (history models: jenkins, "
+                        "band_brake); default: as the model was fitted (rest)")  # fmt: skip
     _band_tension_argument(parser)
 
 

@@ -81,8 +81,12 @@ def run_discover(args, out=None, err=None) -> int:
         # a long series is reduced; a curve (a few points) never is
         record, reduction = (reduce_record(record, args, whole_cycles=True) if record.reducible
                              else (record, None))  # fmt: skip
+        if args.initial is not None and record.kind != "loop":
+            raise CommandError(f"--initial is for loops and histories; {src} is "
+                               f"{record.description}")  # fmt: skip
         try:
-            baseline = make_baseline(record)
+            baseline = (make_baseline(record) if args.initial is None
+                        else loop_baseline(record, initial=args.initial))  # fmt: skip
             with progress(args, "discover"):
                 report = discover(baseline, max_effects=args.max_effects, start=start)
         except ValueError as exc:

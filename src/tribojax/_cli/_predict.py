@@ -46,7 +46,7 @@ def run_predict(args) -> int:
         pred = predict(model, record, initial=args.initial)
         data = pred.as_dict()
         data["model_file"] = str(model_path)
-        data["initial"] = args.initial
+        data["initial"] = args.initial or model.options.get("initial", "rest")
         scaled = model.options.get("band_tension_N") is not None
         if scaled:  # the slip forces scale from the model's tension to the record's
             data["band_tension_N"] = record.band_tension

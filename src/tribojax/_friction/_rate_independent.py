@@ -187,20 +187,22 @@ class IwanBank(eqx.Module):
         y = self.y * limit_scale
         return jnp.clip(z + du, -y, y)
 
-    def deflections(self, u, limit_scale=None) -> Array:
-        """Deflections (len(u), n) driven from rest along the displacement history u (m).
+    def deflections(self, u, limit_scale=None, z0=None) -> Array:
+        """Deflections (len(u), n) driven along the displacement history u (m) from rest, or from
+        the deflections `z0` (n, m) at u[0].
 
         `limit_scale` (len(u), optional): the slip limits at each sample are y·s (a varying
         normal load); exact for a rate-independent bank between samples.
         """
         s = jnp.ones_like(u) if limit_scale is None else limit_scale
+        z0 = jnp.zeros_like(self.y) if z0 is None else jnp.asarray(z0)
 
         def step(z, inp):
             z = self.increment(z, inp[0], inp[1])
             return z, z
 
-        _, zs = jax.lax.scan(step, jnp.zeros_like(self.y), (jnp.diff(u), s[1:]))
-        return jnp.concatenate([jnp.zeros((1, self.y.shape[0])), zs])
+        _, zs = jax.lax.scan(step, z0, (jnp.diff(u), s[1:]))
+        return jnp.concatenate([z0[None, :], zs])
 
 
 def _three_halves(p):

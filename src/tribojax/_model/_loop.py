@@ -80,6 +80,8 @@ class LoopBaseline(AbstractBaseline):
         return np.log(np.asarray(values, dtype=float))
 
     def options(self):
+        if self.record.loaded:  # a model fitted from a loaded start predicts from one
+            return {"element": self.element, "initial": "measured"}
         return {"element": self.element}
 
     def predict(self, theta, knobs):
@@ -139,14 +141,15 @@ def history_start(loop: HysteresisLoop) -> tuple[float, float]:
 
 
 def loop_baseline(loop: HysteresisLoop, element: str = "jenkins", start=None,
-                  noise_std=None) -> LoopBaseline:  # fmt: skip
+                  noise_std=None, initial: str = "rest") -> LoopBaseline:  # fmt: skip
     """The model of a loop record (Jenkins, or `element="mindlin"`), started from `start` (μN in
     N, K_d in N/m) or `analyse_loop`'s μN and wu2015 Eq 6 K_d (a history, `periodic=False`:
     `history_start`, the noise from first differences). The force noise sd is `noise_std`, else
-    the record's (sidecar), else None (estimated)."""
+    the record's (sidecar), else None (estimated). `initial`: the element starts at "rest" or
+    "measured", in the state that carries the record's first measured force (`prepare_loop`)."""
     if element not in ("jenkins", "mindlin"):
         raise ValueError(f"element must be one of ['jenkins', 'mindlin'], got {element!r}")
-    data = prepare_loop(loop)
+    data = prepare_loop(loop, initial)
     if loop.periodic:
         a = analyse_loop(loop)
         period, guess = 2.0 * np.pi / a.omega, (a.mu_N, a.K_d)

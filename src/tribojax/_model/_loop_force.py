@@ -76,6 +76,10 @@ class LoopData(eqx.Module):
         index: index of each fitted sample in the original record.
         c_scale: viscous-coefficient scale F/V (N·s/m): half the peak-to-peak force over half the
             peak-to-peak velocity of the record.
+        f_start: measured force at the first driven sample (N).
+        loaded: (static) start in the state that carries `f_start` (`loaded_state`: the bank
+            loaded from rest to that force) instead of at rest — a history that begins with the
+            device under load (a band left engaged by the test before).
     """
 
     u: jax.Array
@@ -84,9 +88,12 @@ class LoopData(eqx.Module):
     A: jax.Array
     index: jax.Array
     c_scale: jax.Array
+    f_start: jax.Array
     skip: int = eqx.field(static=True)
+    loaded: bool = eqx.field(static=True, default=False)
 
 
+INITIAL_STATES = ("rest", "measured")
 REVERSAL_TRAVEL = 0.02  # a history's first reversal: the drive turns back by this share of ptp(u)
 
 
@@ -105,9 +112,13 @@ def first_reversal(u, travel: float = REVERSAL_TRAVEL) -> int:
     return int(np.argmax(u[: i + 1]) if down[i] else np.argmin(u[: i + 1]))
 
 
-def prepare_loop(loop: HysteresisLoop) -> LoopData:
+def prepare_loop(loop: HysteresisLoop, initial: str = "rest") -> LoopData:
     """`LoopData` of a record: a periodic loop is driven from its first upward crossing, a history
-    (`periodic=False`) from its first sample; both are fitted from the first reversal on."""
+    (`periodic=False`) from its first sample; both are fitted from the first reversal on.
+    `initial`: "rest" (the element starts unloaded) or "measured" (in the state that carries the
+    force measured at the first driven sample)."""
+    if initial not in INITIAL_STATES:
+        raise ValueError(f"initial = {initial!r}: one of {list(INITIAL_STATES)} expected")
     t, u = loop.t, loop.u
     mid = 0.5 * (u.max() + u.min())
     if loop.periodic:
@@ -128,7 +139,9 @@ def prepare_loop(loop: HysteresisLoop) -> LoopData:
         A=jnp.asarray(0.5 * (u.max() - u.min())),
         index=jnp.asarray(index),
         c_scale=jnp.asarray(0.5 * np.ptp(loop.f) / (0.5 * np.ptp(v))),
+        f_start=jnp.asarray(loop.f[first]),
         skip=skip,
+        loaded=initial == "measured",
     )
 
 
@@ -183,8 +196,9 @@ def loop_force(
     `microslip=False` (static) skips the Mindlin bank (use it when w is identically 0: the result
     is the same, at a fraction of the cost). `check=True` refuses β, γ that make N(u) ≤ 0 and a
     gap < 0 (ValueError, or equinox's runtime error under jit); `check=False` (inside fits, where
-    a trial step may overshoot) floors N(u)/N0 at S_MIN instead. References: wu2015 Eqs 1, 2, 5
-    (see the module docstring).
+    a trial step may overshoot) floors N(u)/N0 at S_MIN instead. The bank starts at rest, or
+    (`data.loaded`) in the state of the first measured force (`loaded_state`). References:
+    wu2015 Eqs 1, 2, 5 (see the module docstring).
     """
     x = data.u / data.A
     s = 1.0 + spec.beta * x + spec.gamma * x * x
@@ -206,24 +220,58 @@ def loop_force(
         y, k = A0 * jnp.ones(1), jnp.ones(1)
     if check:
         b = fail_if(b, spec.gap < 0.0, "backlash: gap (m) is outside the allowed range [0, inf)")
+        b = fail_if(b, jnp.abs(spec.energizing) > SIGMA_MAX,
+                    f"self_energizing: energizing{_got(spec.energizing)} is outside the allowed "
+                    f"range [-{SIGMA_MAX:g}, {SIGMA_MAX:g}]")  # fmt: skip
+        b = fail_if(b, jnp.abs(spec.asymmetry) >= 1.0,
+                    f"direction_asymmetry: asymmetry{_got(spec.asymmetry)} is outside the "
+                    "allowed range (-1, 1)")  # fmt: skip
     h = 0.5 * jnp.maximum(spec.gap, 0.0)
     # per-slider limit scale (n, m): y_j·a(u) + ε·h, floored at 0 (a trial ε < 0 inside fits)
     limit = jnp.maximum(a[:, None] + spec.depth * h / y[None, :], 0.0)
-    z = IwanBank(y, k).deflections(data.u, limit)[data.skip :]
-    z = z - spec.depth * jnp.clip(z, -h, h)  # the clearance's dead zone
-    force = spec.K_d * b[data.skip :] * (z @ k)
-    if check:
-        force = fail_if(force, jnp.abs(spec.energizing) > SIGMA_MAX,
-                        f"self_energizing: energizing{_got(spec.energizing)} is outside the "
-                        f"allowed range [-{SIGMA_MAX:g}, {SIGMA_MAX:g}]")  # fmt: skip
-        force = fail_if(force, jnp.abs(spec.asymmetry) >= 1.0,
-                        f"direction_asymmetry: asymmetry{_got(spec.asymmetry)} is outside the "
-                        "allowed range (-1, 1)")  # fmt: skip
-    slip = spec.mu_N * s_safe[data.skip :]  # the slip force μN·s(u)
-    q = jnp.clip(force / slip, -1.0, 1.0)
     sigma = jnp.clip(spec.energizing, -SIGMA_MAX, SIGMA_MAX)
-    shaped = slip * energize(q, sigma) * (1.0 + spec.asymmetry * jnp.sign(q))
-    return shaped + spec.c * data.v
+
+    def output(z, bb, ss):
+        """The force from deflections z (samples, n) at load factors bb = s^p, ss = s."""
+        z = z - spec.depth * jnp.clip(z, -h, h)  # the clearance's dead zone
+        force = spec.K_d * bb * (z @ k)
+        slip = spec.mu_N * ss  # the slip force μN·s(u)
+        q = jnp.clip(force / slip, -1.0, 1.0)
+        return slip * energize(q, sigma) * (1.0 + spec.asymmetry * jnp.sign(q))
+
+    z0 = None
+    if data.loaded:  # the state of the first measured force, reached by loading from rest
+        z0 = loaded_state(lambda zz: output(zz[None], b[:1], s_safe[:1])[0], y * limit[0],
+                          data.f_start)  # fmt: skip
+    z = IwanBank(y, k).deflections(data.u, limit, z0)[data.skip :]
+    return output(z, b[data.skip :], s_safe[data.skip :]) + spec.c * data.v
+
+
+BISECTIONS = 64  # halvings of the deflection interval: 2^-64 of it, below round-off
+
+
+def loaded_state(force_of, limits, target) -> jax.Array:
+    """Slider deflections z_j = clip(x, ±L_j) (m) of a bank loaded from rest to the deflection x
+    whose force `force_of(z)` (N, non-decreasing in x) is `target` (N), clipped to the forces
+    the bank can carry (±slip). x by bisection, then one Newton step from it with its value held
+    fixed, so that dx/dθ = −(∂F/∂θ)/(∂F/∂x) (the implicit-function derivative; none inside a
+    clearance, where ∂F/∂x = 0)."""
+    top = jnp.max(limits)
+    at = lambda x: force_of(jnp.clip(x, -limits, limits))  # noqa: E731
+    goal = jnp.clip(target, at(-top), at(top))
+
+    def halve(_, bounds):
+        lo, hi = bounds
+        mid = 0.5 * (lo + hi)
+        low = at(mid) < goal
+        return jnp.where(low, mid, lo), jnp.where(low, hi, mid)
+
+    lo, hi = jax.lax.fori_loop(0, BISECTIONS, halve, (-top, top))
+    xb = jax.lax.stop_gradient(0.5 * (lo + hi))
+    value, slope = jax.jvp(at, (xb,), (jnp.ones_like(xb),))
+    steep = slope > 1e-12 * jnp.abs(goal) / jnp.maximum(top, 1e-300)
+    x = xb - jnp.where(steep, (value - goal) / jnp.where(steep, slope, 1.0), 0.0)
+    return jnp.clip(x, -limits, limits)
 
 
 def _got(x) -> str:

@@ -48,7 +48,8 @@ def _slip(record, options):
 RECORD_KINDS = {
     "slip": RecordKind("slip_run", _slip, lambda b: ("time_s", np.asarray(b.t)),
                        lambda b: np.asarray(b.slip), lambda b: "m"),
-    "loop": RecordKind("loop", lambda rec, o: loop_baseline(rec, o.get("element", "jenkins")),
+    "loop": RecordKind("loop", lambda rec, o: loop_baseline(rec, o.get("element", "jenkins"),
+                                                            initial=o.get("initial", "rest")),
                        lambda b: ("time_s", np.asarray(b.t)), lambda b: np.asarray(b.record.f),
                        lambda b: "N"),
     "curve": RecordKind("friction_curve", lambda rec, o: curve_baseline(rec),

@@ -120,28 +120,33 @@ def load_model(path) -> FittedModel:
     return model
 
 
-def predict(model: FittedModel, record, *, initial: str = "rest") -> Prediction:
+def predict(model: FittedModel, record, *, initial: str | None = None) -> Prediction:
     """Evaluate `model` on `record`, a record of its kind it may never have seen (a slip run for
     a slip model, a loop or history for a loop or history model, a friction curve for a curve
     model): the record's model rebuilt with the saved parameters and effects (`_rebuild`),
     nothing refitted. A loop model is compared from the record's first reversal on (as it is
     fitted); a history model from rest at the first sample (every `decimate`-th sample of the
     fit), or with `initial="measured"` from the state that carries the record's first measured
-    force (Jenkins and band-brake history models). ValueError when the record is of another
-    kind."""
+    force (Jenkins and band-brake history models; loop models: `loaded_state`). `initial=None`:
+    as the model was fitted (rest, or "measured" for a loop model fitted from a loaded start).
+    ValueError when the record is of another kind."""
     if not isinstance(model, FittedModel):
         raise ValueError(f"model must be a FittedModel (tribojax.load_model), got "
                          f"{type(model).__name__}")  # fmt: skip
     source = str(getattr(record, "source", ""))
     need = "loop" if model.kind == "history" else RECORD_KINDS[model.kind].record_kind
     _check_kind(model, record, need, "predicts")
+    if initial not in (None, "rest", "measured"):
+        raise ValueError(f"initial = {initial!r}: one of [None, 'rest', 'measured'] expected")
     if model.kind == "history":
         x_name, unit = "time_s", "N"
-        x, measured, predicted = _history(model, record, initial)
-    elif initial != "rest":
+        x, measured, predicted = _history(model, record, initial or "rest")
+    elif initial == "measured" and model.kind != "loop":
         raise ValueError(f"initial = {initial!r}: a {model.kind} model starts as its fit did; "
-                         "'measured' is for history models")  # fmt: skip
+                         "'measured' is for loop and history models")  # fmt: skip
     else:
+        if model.kind == "loop" and initial is not None:
+            model = dataclasses.replace(model, options={**model.options, "initial": initial})
         rk = RECORD_KINDS[model.kind]
         baseline, theta, designs, s = rebuild(model, record)
         x_name, x = rk.axis(baseline)
