@@ -163,13 +163,13 @@ def discovery_predicts(src, log, train: str = TRANSFER_TRAIN) -> dict:
     predicts every other brfd record of `src` (`tribojax.predict`, nothing refitted; a loop
     model is compared from a record's first reversal on) and the earthquake windows
     (`WINDOWS_S`, on the predicted samples inside them), the histories from rest and from the
-    state of their first measured force (`initial="measured"`). Returns {"train", "vocabularies": {name:
-    {"effects", "excess_before/after", "heldout_excess_before/after", "records": {test:
-    {"nrmse", "window_nrmse", "window_coverage"}}}}}."""
+    state of their first measured force (`initial="measured"`). Returns {"train",
+    "vocabularies": {name: {"effects", "excess_before/after", "heldout_excess_before/after",
+    "records": {test: {"nrmse", "window_nrmse", "window_coverage", ..._measured_start}}}}}."""
     files = brfd_files(Path(src))
     path = next(p for p in files if p.stem == train)
-    reduced, _ = tj.decimate_record(tj.read_record(path), None,
-                                    max_samples=tj.DISCOVER_MAX_SAMPLES, whole_cycles=True)  # fmt: skip
+    reduced, _ = tj.decimate_record(tj.read_record(path), None, whole_cycles=True,
+                                    max_samples=tj.DISCOVER_MAX_SAMPLES)  # fmt: skip
     vocab = {"without band-brake effects": [e for e in tj.discovery.default_effects("loop")
                                             if e.name not in BAND_BRAKE_EFFECTS],
              "with band-brake effects": None}  # fmt: skip

@@ -5,17 +5,22 @@ The records come from the NumPy band-brake loop of tests/test_band_brake.py (a p
 a drag spring across a clearance and an exponential rise to F₊ ≠ F₋), which shares no code with
 the loop model; it was written by the same hand as the effects, so the identification below is
 a cross-check of the implementation, not a blind test. The real device is in
-fitting/brfd_discovery.py (docs/data.md)."""
+fitting/real_discovery_brfd.py --predicts (docs/data.md)."""
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from test_band_brake import P, _drive, _reference
 
 import tribojax as tj
-from tribojax._model._loop_force import (SIGMA_SERIES, LoopSpec, energize, loop_force,
-                                         prepare_loop)  # fmt: skip
+from test_band_brake import P, _drive, _reference
+from tribojax._model._loop_force import (
+    SIGMA_SERIES,
+    LoopSpec,
+    energize,
+    loop_force,
+    prepare_loop,  # fmt: skip
+)
 from tribojax.discovery import default_effects, discover_loop
 
 NOISE = 60.0  # N

@@ -140,7 +140,7 @@ class SelfEnergizing(AbstractEffect):
 
     name: ClassVar[str] = "self_energizing"
     kind: ClassVar[str] = "loop"
-    description: ClassVar[str] = "exponential (capstan) rise of the force towards slip, exponent sigma"
+    description: ClassVar[str] = "exponential (capstan) rise of the force to slip, exponent sigma"
 
     def applies(self, baseline):
         return baseline.band_brake
