@@ -237,7 +237,10 @@ def loop_force(
         force = spec.K_d * bb * (z @ k)
         slip = spec.mu_N * ss  # the slip force μN·s(u)
         q = jnp.clip(force / slip, -1.0, 1.0)
-        return slip * energize(q, sigma) * (1.0 + spec.asymmetry * jnp.sign(q))
+        # the band's bend and asymmetry as a change of the force: exactly none at σ = a = 0,
+        # also where a fit's trial step (w > 1, ε < 0) carries the force beyond the slip force
+        bent = energize(q, sigma) * (1.0 + spec.asymmetry * jnp.sign(q))
+        return force + slip * (bent - q)
 
     z0 = None
     if data.loaded:  # the state of the first measured force, reached by loading from rest
