@@ -56,7 +56,7 @@ WEIGHT_S = {
     "test_contact.py": 71, "test_slip.py": 56, "test_sensitivity.py": 53,
     "test_discovery_slip.py": 51, "test_fit_user.py": 46, "test_fitting_studies.py": 26,
     "test_mhb_excitation.py": 26, "test_mhb.py": 24, "test_discovery_loop.py": 24,
-    "test_cache.py": 40,
+    "test_cache.py": 26,
 }  # the rest: under 20 s each, in file order
 
 
