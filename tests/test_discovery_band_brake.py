@@ -105,8 +105,6 @@ def test_cli_discover_takes_the_band_tension(tmp_path):
     """`tribojax discover LOOP.csv --band-tension 30lb`: the record is a band brake's, so its
     effects are candidates (a CSV loop carries no tension of its own); the saved model names
     them and `tribojax predict` takes it."""
-    import json
-
     from tribojax._cli._main import main
     from tribojax._io._loop import write_loop
 

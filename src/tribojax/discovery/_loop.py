@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from typing import ClassVar
 
+import equinox as eqx
 import numpy as np
 
 from .._io._loop import HysteresisLoop
@@ -130,8 +131,23 @@ class Backlash(AbstractEffect):
                 for q in GAP_GRID]  # fmt: skip
 
 
+class AbstractBandEffect(AbstractEffect):
+    """An effect of a band brake's loop: one signed strength moving one knob of the loop model,
+    a default candidate only on a band brake's records (`LoopBaseline.band_brake`)."""
+
+    kind: ClassVar[str] = "loop"
+    knob: eqx.AbstractClassVar[str]
+    strength: eqx.AbstractClassVar[str]
+
+    def applies(self, baseline):
+        return baseline.band_brake
+
+    def designs(self, baseline):
+        return _knob_design(baseline, self.knob, (self.strength,), ("1",), 1.0)
+
+
 @register_effect
-class SelfEnergizing(AbstractEffect):
+class SelfEnergizing(AbstractBandEffect):
     """A self-energizing contact (a band brake, `tribojax.BandBrake`): the stick branch between
     the slip forces bends as ψ_σ(q) = sign(q)·expm1(σ|q|)/expm1(σ) of the share q of the slip
     force (capstan law T₀e^{μφ} with the wrapped angle φ growing with the share carried;
@@ -139,31 +155,21 @@ class SelfEnergizing(AbstractEffect):
     a reversal; σ = 0 null."""
 
     name: ClassVar[str] = "self_energizing"
-    kind: ClassVar[str] = "loop"
     description: ClassVar[str] = "exponential (capstan) rise of the force to slip, exponent sigma"
-
-    def applies(self, baseline):
-        return baseline.band_brake
-
-    def designs(self, baseline):
-        return _knob_design(baseline, "energizing", ("sigma",), ("1",), 1.0)
+    knob: ClassVar[str] = "energizing"
+    strength: ClassVar[str] = "sigma"
 
 
 @register_effect
-class DirectionAsymmetry(AbstractEffect):
+class DirectionAsymmetry(AbstractBandEffect):
     """Slip forces that differ with the direction of sliding, μN(1 ± a) (a band energized in one
     direction, `BandBrake`'s F₊ ≠ F₋); zero force stays at zero, unlike `force_offset`; a = 0
     null."""
 
     name: ClassVar[str] = "direction_asymmetry"
-    kind: ClassVar[str] = "loop"
     description: ClassVar[str] = "slip force muN(1 + a) sliding forward, muN(1 - a) backward"
-
-    def applies(self, baseline):
-        return baseline.band_brake
-
-    def designs(self, baseline):
-        return _knob_design(baseline, "asymmetry", ("a",), ("1",), 1.0)
+    knob: ClassVar[str] = "asymmetry"
+    strength: ClassVar[str] = "a"
 
 
 @register_effect
