@@ -117,7 +117,7 @@ def test_independent_loop_generator_matches_the_library_elements():
 def test_discover_on_independent_records(monkeypatch):
     """CI form: slip runs — a clean record, in-vocabulary physics effects (load coupling with
     other exponents for F_s and K_τ, an exponential Stribeck curve, a stage mode, the mode also
-    run with one fit at a time: the same numbers), an out-of-vocabulary readout step — and
+    run with one fit at a time: the same numbers), out-of-vocabulary mains pickup — and
     loops: a quadratic load variation at constant stiffness, a lag between the force and
     displacement channels (out of vocabulary); TRIBOJAX_FULL=1: the study's CI subset
     (benchmarks/discovery_study.py CI_LABELS). These replace the CI cases of
