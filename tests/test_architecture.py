@@ -281,3 +281,14 @@ def test_no_isinstance_dispatch_on_records():
             if named & records:
                 found.append(f"{path}:{node.lineno}: {func.id} on {sorted(named & records)}")
     assert not found, "isinstance dispatch on records:\n" + "\n".join(found)
+
+
+def test_no_classes_made_at_runtime():
+    """No class is made by a three-argument `type(...)` call in `src/` (issue 29: the table
+    effects were): every effect and model is a class statement that a reader can find."""
+    found = []
+    for path in sorted(SRC.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            if getattr(getattr(node, "func", None), "id", None) == "type" and len(node.args) == 3:
+                found.append(f"{path}:{node.lineno}")
+    assert not found, "classes made by type():\n" + "\n".join(found)

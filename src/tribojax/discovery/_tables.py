@@ -32,6 +32,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 import diffrax as dfx
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -143,36 +144,55 @@ def _knob(name, strength, unit, scale=1.0, knob_set=None, nuisance=None, n_nuisa
                         n_nuisance=n_nuisance)  # fmt: skip
 
 
-class _TableEffect(AbstractEffect):
+class _TableKnobEffect(AbstractEffect):
+    """An effect that moves one knob of the table model by its strength times `scale`."""
+
     kind: ClassVar[str] = "wang2022_table"
-    knob: ClassVar[str]
-    strength: ClassVar[str]
-    unit: ClassVar[str]
+    knob: eqx.AbstractClassVar[str]
+    strength: eqx.AbstractClassVar[str]
+    unit: eqx.AbstractClassVar[str]
     scale: ClassVar[float] = 1.0
 
     def designs(self, baseline):
         return [_knob(self.knob, self.strength, self.unit, self.scale)]
 
 
-# The one-knob effects: (effect name, knob, strength name, unit, scale of the strength)
-_ONE_KNOB = (
-    ("position_error", "position_error", "epsilon", "m/m", 1e-9),
-    ("sensor_drift", "sensor_drift", "rate", "nm/s", 1.0),
-    ("gross_sliding", "gross_sliding", "delta", "1 (F_s deficit at the lowest load)", 0.1),
-    ("load_coupling", "load_coupling", "kappa", "1 (per g)", 0.1),
-    ("viscous_friction", "viscous", "sigma2_over_C_tau", "1", 1.0),
-)
+class TablePositionError(_TableKnobEffect):
+    name: ClassVar[str] = "position_error"
+    knob: ClassVar[str] = "position_error"
+    strength: ClassVar[str] = "epsilon"
+    unit: ClassVar[str] = "m/m"
+    scale: ClassVar[float] = 1e-9
 
 
-def _one_knob_effect(name, knob, strength, unit, scale) -> type:
-    """The `_TableEffect` class of one row of `_ONE_KNOB`."""
-    attrs = dict(name=name, knob=knob, strength=strength, unit=unit, scale=scale)
-    notes = {k: ClassVar[type(v)] for k, v in attrs.items()}  # class constants, not fields
-    return type(f"Table_{name}", (_TableEffect,),
-                {**attrs, "__annotations__": notes, "__module__": __name__})  # fmt: skip
+class TableSensorDrift(_TableKnobEffect):
+    name: ClassVar[str] = "sensor_drift"
+    knob: ClassVar[str] = "sensor_drift"
+    strength: ClassVar[str] = "rate"
+    unit: ClassVar[str] = "nm/s"
 
 
-_EFFECT_CLASSES = {row[0]: _one_knob_effect(*row) for row in _ONE_KNOB}
+class TableGrossSliding(_TableKnobEffect):
+    name: ClassVar[str] = "gross_sliding"
+    knob: ClassVar[str] = "gross_sliding"
+    strength: ClassVar[str] = "delta"
+    unit: ClassVar[str] = "1 (F_s deficit at the lowest load)"
+    scale: ClassVar[float] = 0.1
+
+
+class TableLoadCoupling(_TableKnobEffect):
+    name: ClassVar[str] = "load_coupling"
+    knob: ClassVar[str] = "load_coupling"
+    strength: ClassVar[str] = "kappa"
+    unit: ClassVar[str] = "1 (per g)"
+    scale: ClassVar[float] = 0.1
+
+
+class TableViscousFriction(_TableKnobEffect):
+    name: ClassVar[str] = "viscous_friction"
+    knob: ClassVar[str] = "viscous"
+    strength: ClassVar[str] = "sigma2_over_C_tau"
+    unit: ClassVar[str] = "1"
 
 
 class TableStribeck(AbstractEffect):
@@ -206,6 +226,5 @@ class TablePositionStep(AbstractEffect):
 
 def wang2022_table_effects() -> list[AbstractEffect]:
     """The candidate effects for `wang2022_table_baseline` (not registered: pass explicitly)."""
-    c = _EFFECT_CLASSES
-    return [c["position_error"](), c["sensor_drift"](), c["gross_sliding"](), c["load_coupling"](),
-            TableStribeck(), c["viscous_friction"](), TablePositionStep()]  # fmt: skip
+    return [TablePositionError(), TableSensorDrift(), TableGrossSliding(), TableLoadCoupling(),
+            TableStribeck(), TableViscousFriction(), TablePositionStep()]  # fmt: skip
