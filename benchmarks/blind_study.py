@@ -20,9 +20,10 @@ summary) and OUT/blind_study.md (the table). Default OUT: DIR.
 
 benchmarks/blind_study_before.jsonl: the rows of the code before any issue-32 change (stop 31,
 all 45 records; 4,019 s of discovery on this 2-core machine, partly under load).
-benchmarks/blind_study_after.jsonl: the rows of the code after the issue-32 changes, for the 42
-records two runs finished (stop 33: 31 records, two processes side by side beside the test suite;
-stop 35: 11 more, beside other work: its times are not comparable with the before column's);
+benchmarks/blind_study_after.jsonl: the rows of the code after the issue-32 changes, all 45
+records (stop 33: 31 records, two processes side by side beside the test suite; stop 35: 11 more,
+beside other work; stop 38: s3007, s3008, s3027, `--resume`, alone: the times of these runs are
+not comparable with the before column's);
 notebooks/05_discovery.ipynb tabulates both.
 """
 

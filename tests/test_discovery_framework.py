@@ -178,6 +178,30 @@ def test_chi2_sf_matches_scipy():
             assert chi2_sf(x, dof) == pytest.approx(want, rel=1e-10, abs=1e-300)
 
 
+def test_window_p_values_in_one_call_are_the_scalar_ones():
+    # find_regions tests every window in one compiled call (padded to a power of two): the same
+    # p-values as one call per window (to rounding: a vectorised kernel), at lengths around the
+    # padding's steps, and the same regions
+    from tribojax._fit._noise import chi2_sf, chi2_sf_many, find_regions
+
+    rng = np.random.default_rng(3)
+    for n in (0, 1, 7, 8, 9, 300):
+        x, dof = rng.uniform(0.0, 400.0, n), rng.uniform(0.5, 200.0, n)
+        many = chi2_sf_many(x, dof)
+        assert many.shape == (n,)
+        np.testing.assert_allclose(many, [chi2_sf(a, b) for a, b in zip(x, dof)], rtol=1e-13)
+    r = rng.normal(size=2000)
+    r[700:800] += 1.5  # a misfit in one stretch
+    seg = np.repeat(np.arange(10), 200)
+    sigma, rho, alpha = 1.0, 0.3, 0.01
+    regions = find_regions(r, np.arange(2000.0), seg, sigma, rho, n_windows=64, alpha=alpha)
+    assert [(g["i0"], g["i1"]) for g in regions] == [(700, 800)]
+    c = (1 + rho**2) / (1 - rho**2)
+    q = np.sum((r[700:800] / sigma) ** 2)
+    m = 60  # windows: 6 of ~33 samples in each of the 10 segments (w = 2000 // 64 = 31)
+    assert regions[0]["p_value"] == pytest.approx(min(1.0, m * chi2_sf(q / c, 100 / c)), rel=1e-12)
+
+
 def test_chi2_logsf_where_the_p_value_underflows():
     # closed forms, independent of the series: Q(1/2, x/2) = erfc(√(x/2)) = 2Φ(−√x), and for
     # even dof Q(a, z) = e^{−z} Σ_{j<a} z^j/j!

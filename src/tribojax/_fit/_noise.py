@@ -50,6 +50,19 @@ def _gammaincc(a, z):
     return gammaincc(a, z)
 
 
+def chi2_sf_many(x, dof) -> np.ndarray:
+    """`chi2_sf` of many (x, dof) pairs in one compiled call (arrays of equal length; padded
+    to a power of two so that few programs serve every length): a record's window tests made
+    23,600 calls of the scalar form, 1.3 ms each, on one brfd history's discovery."""
+    ensure_x64()
+    x, dof = np.asarray(x, dtype=float).ravel(), np.asarray(dof, dtype=float).ravel()
+    n = x.size
+    size = max(8, 1 << max(n - 1, 0).bit_length())
+    a, z = np.ones(size), np.zeros(size)
+    a[:n], z[:n] = dof / 2.0, np.maximum(x, 0.0) / 2.0
+    return np.asarray(_gammaincc(jnp.asarray(a), jnp.asarray(z)), dtype=float)[:n]
+
+
 def chi2_logsf(x, dof) -> float:
     """log P(χ²_dof > x): `chi2_sf` in log form, for comparing p-values that underflow to 0
     (x above ~1,400 for dof 1). Where Q(a, z) (a = dof/2, z = x/2) is below 1e-280 it is the
@@ -129,7 +142,10 @@ def find_regions(r, x, segment, sigma, rho, *, n_windows=32, alpha=0.01, segment
     w = max(8, r.size // n_windows)
     wins = _windows(segment, w)
     m = len(wins)
-    flags = [(_window_p(r[a:b], sigma, rho)[1] * m) < alpha for a, b in wins]
+    c = (1.0 + rho**2) / (1.0 - rho**2)
+    q = np.array([np.sum((r[a:b] / sigma) ** 2) for a, b in wins])
+    n_w = np.array([b - a for a, b in wins], dtype=float)
+    flags = list(chi2_sf_many(q / c, n_w / c) * m < alpha)
     regions = []
     i = 0
     seg = np.asarray(segment)
