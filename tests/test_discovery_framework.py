@@ -202,6 +202,19 @@ def test_window_p_values_in_one_call_are_the_scalar_ones():
     assert regions[0]["p_value"] == pytest.approx(min(1.0, m * chi2_sf(q / c, 100 / c)), rel=1e-12)
 
 
+def test_table_effects_are_one_module_with_a_named_field():
+    effects = disc.wang2022_table_effects()
+    assert [e.name for e in effects] == ["position_error", "sensor_drift", "gross_sliding",
+                                         "load_coupling", "stribeck", "viscous_friction",
+                                         "position_step"]  # fmt: skip
+    from tribojax.discovery._tables import TableKnobEffect
+
+    (d,) = TableKnobEffect("position_error").designs(None)
+    assert d.strength_names == ("epsilon",) and d.strength_scale.tolist() == [1e-9]
+    with pytest.raises(ValueError, match=r"name = 'stribeck'.*one of \['gross_sliding'"):
+        TableKnobEffect("stribeck")
+
+
 def test_chi2_logsf_where_the_p_value_underflows():
     # closed forms, independent of the series: Q(1/2, x/2) = erfc(√(x/2)) = 2Φ(−√x), and for
     # even dof Q(a, z) = e^{−z} Σ_{j<a} z^j/j!
