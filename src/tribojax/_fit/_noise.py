@@ -124,11 +124,12 @@ def _windows(segment, w):
     return out
 
 
-def _window_p(r, sigma, rho):
+def _windows_p(r, spans, sigma, rho):
+    """(mean r²/σ², p-value) arrays of the sample ranges `spans` of `r` (module docstring)."""
     c = (1.0 + rho**2) / (1.0 - rho**2)
-    q = float(np.sum((np.asarray(r) / sigma) ** 2))
-    nu = r.size / c
-    return q / r.size, chi2_sf(q / c, nu)
+    q = np.array([np.sum((r[a:b] / sigma) ** 2) for a, b in spans])
+    n = np.array([b - a for a, b in spans], dtype=float)
+    return q / n, chi2_sf_many(q / c, n / c)
 
 
 def find_regions(r, x, segment, sigma, rho, *, n_windows=32, alpha=0.01, segment_names=None):
@@ -142,10 +143,7 @@ def find_regions(r, x, segment, sigma, rho, *, n_windows=32, alpha=0.01, segment
     w = max(8, r.size // n_windows)
     wins = _windows(segment, w)
     m = len(wins)
-    c = (1.0 + rho**2) / (1.0 - rho**2)
-    q = np.array([np.sum((r[a:b] / sigma) ** 2) for a, b in wins])
-    n_w = np.array([b - a for a, b in wins], dtype=float)
-    flags = list(chi2_sf_many(q / c, n_w / c) * m < alpha)
+    flags = list(_windows_p(r, wins, sigma, rho)[1] * m < alpha)
     regions = []
     i = 0
     seg = np.asarray(segment)
@@ -157,7 +155,7 @@ def find_regions(r, x, segment, sigma, rho, *, n_windows=32, alpha=0.01, segment
         while j + 1 < m and flags[j + 1] and seg[wins[j + 1][0]] == seg[wins[i][0]]:
             j += 1
         a, b = wins[i][0], wins[j][1]
-        stat, p = _window_p(r[a:b], sigma, rho)
+        stat, p = (float(v[0]) for v in _windows_p(r, [(a, b)], sigma, rho))
         label = int(seg[a])
         regions.append(
             {
