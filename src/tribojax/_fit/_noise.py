@@ -144,9 +144,9 @@ def find_regions(r, x, segment, sigma, rho, *, n_windows=32, alpha=0.01, segment
     wins = _windows(segment, w)
     m = len(wins)
     flags = list(_windows_p(r, wins, sigma, rho)[1] * m < alpha)
-    regions = []
-    i = 0
     seg = np.asarray(segment)
+    spans = []
+    i = 0
     while i < m:
         if not flags[i]:
             i += 1
@@ -154,8 +154,13 @@ def find_regions(r, x, segment, sigma, rho, *, n_windows=32, alpha=0.01, segment
         j = i
         while j + 1 < m and flags[j + 1] and seg[wins[j + 1][0]] == seg[wins[i][0]]:
             j += 1
-        a, b = wins[i][0], wins[j][1]
-        stat, p = (float(v[0]) for v in _windows_p(r, [(a, b)], sigma, rho))
+        spans.append((wins[i][0], wins[j][1]))
+        i = j + 1
+    if not spans:
+        return []
+    stats, ps = _windows_p(r, spans, sigma, rho)  # every region in one call
+    regions = []
+    for (a, b), stat, p in zip(spans, stats, ps):
         label = int(seg[a])
         regions.append(
             {
@@ -165,11 +170,10 @@ def find_regions(r, x, segment, sigma, rho, *, n_windows=32, alpha=0.01, segment
                 "i0": int(a),
                 "i1": int(b),
                 "n": int(b - a),
-                "statistic": stat,
-                "p_value": min(1.0, p * m),
+                "statistic": float(stat),
+                "p_value": min(1.0, float(p) * m),
             }
         )
-        i = j + 1
     return regions
 
 

@@ -67,9 +67,6 @@ class FrictionCurve(AbstractRecord):
         if set(self.units) != set(_UNIT_KEYS):
             raise ValueError(f"{self.source}: units must have the keys {list(_UNIT_KEYS)}")
 
-    def __len__(self) -> int:
-        return len(self.velocity)
-
     @property
     def friction_error(self) -> np.ndarray:
         """Standard error of each mean friction, scatter/√samples (same unit as friction)."""
@@ -84,23 +81,23 @@ class FrictionCurve(AbstractRecord):
 @final
 @dataclasses.dataclass(frozen=True)
 class FrictionTransient(AbstractRecord):
-    """A measured friction transient: times t (s, increasing), velocity and friction samples in
-    `units` (as for `FrictionCurve`). A start–stop run: rest, one direction, rest, the other."""
-
-    t: np.ndarray
-    velocity: np.ndarray
-    friction: np.ndarray
-    units: dict = dataclasses.field(default_factory=_si_units)
-    source: str = "<array>"
+    """A measured friction transient: a start–stop run (rest, one direction, rest, the other)."""
 
     kind: ClassVar[str] = "friction_transient"
     description: ClassVar[str] = "a friction transient"
 
+    t: np.ndarray
+    """Sample times, s, strictly increasing."""
+    velocity: np.ndarray
+    """Velocity samples, in `units["velocity_unit"]`."""
+    friction: np.ndarray
+    """Friction samples, in `units["friction_unit"]`."""
+    units: dict = dataclasses.field(default_factory=_si_units)
+    """{"velocity_unit", "friction_unit"}, as for `FrictionCurve`."""
+    source: str = "<array>"
+
     def __post_init__(self):
         self._set_series(("t", "velocity", "friction"), time="t")
-
-    def __len__(self) -> int:
-        return len(self.t)
 
 
 EPOS_UNITS_SI = {"velocity_unit": "rad/s", "friction_unit": "N m"}

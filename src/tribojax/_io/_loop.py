@@ -88,9 +88,6 @@ class HysteresisLoop(AbstractRecord):
         """
         return DisplacementHistory(self.t, self.u)
 
-    def __len__(self) -> int:
-        return len(self.t)
-
     def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(t, u, f): the displacement drives, the force responds."""
         return self.t, self.u, self.f

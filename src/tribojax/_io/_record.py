@@ -78,6 +78,7 @@ class AbstractRecord(abc.ABC):
                              f"{', '.join(str(len(x)) for x in arrays.values())}")  # fmt: skip
         for name, x in arrays.items():
             object.__setattr__(self, name, x)
+        object.__setattr__(self, "_length", len(arrays[names[0]]))
         t = arrays.get(time)
         steps = np.flatnonzero(np.diff(t) <= 0) if t is not None else ()
         if len(steps):
@@ -86,8 +87,14 @@ class AbstractRecord(abc.ABC):
                              f"(t = {t[i]:g} s after {t[i - 1]:g} s)")  # fmt: skip
 
     @abc.abstractmethod
+    def __post_init__(self) -> None:
+        """Check the fields and freeze the series (`_set_series`), raising ValueError that names
+        the source and the field."""
+
     def __len__(self) -> int:
-        """The number of samples (points, for a curve)."""
+        """The number of samples (points, for a curve): the length of the series `_set_series`
+        checked."""
+        return self._length
 
     def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(t, drive, response): the channels a block reduction acts on (`reducible` records).

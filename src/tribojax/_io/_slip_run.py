@@ -92,9 +92,6 @@ class SlipRun(AbstractRecord):
         for name, unit in (("normal_load", "N"), ("noise_std", "m")):
             object.__setattr__(self, name, positive_or_none(getattr(self, name), name, src, unit))
 
-    def __len__(self) -> int:
-        return len(self.t)
-
     def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(t, accel, slip): the stage acceleration drives, the slip responds."""
         return self.t, self.accel, self.slip

@@ -17,13 +17,9 @@ from ._effects import default_effects as default_effects
 from ._effects import register_effect as register_effect
 from ._fit import FOLD_SHARE_MIN as FOLD_SHARE_MIN
 from ._fit import MAX_STEPS as MAX_STEPS
-from ._fit import evaluate as evaluate
 from ._fit import fit_model as fit_model
 from ._fit import fit_record as fit_record
 from ._fit import heldout_residual as heldout_residual
-from ._fit import pack_designs as pack_designs
-from ._fit import padded_args as padded_args
-from ._fit import padded_residual as padded_residual
 from ._fit import record_scale as record_scale
 from ._loop import LOOP_KNOBS as LOOP_KNOBS
 from ._loop import LoopBaseline as LoopBaseline
@@ -46,6 +42,10 @@ from ._rebuild import RECORD_KINDS as RECORD_KINDS
 from ._rebuild import fit_saved as fit_saved
 from ._rebuild import on_baseline as on_baseline
 from ._rebuild import rebuild as rebuild
+from ._residual import evaluate as evaluate
+from ._residual import pack_designs as pack_designs
+from ._residual import padded_args as padded_args
+from ._residual import padded_residual as padded_residual
 from ._saved import KINDS as KINDS
 from ._saved import MODEL_FORMAT as MODEL_FORMAT
 from ._saved import FittedModel as FittedModel

@@ -117,6 +117,12 @@ class AbstractBaseline(eqx.Module):
     def knob_null(self) -> np.ndarray:
         """Knob values under which every effect vanishes (the baseline physics)."""
 
+    def for_knobs(self, moved: tuple[bool, ...]) -> AbstractBaseline:
+        """This model for a fit or an evaluation in which only the knobs flagged in `moved` (one
+        bool per knob) may leave their null: a baseline may drop the physics that the others
+        carry (the same values from a smaller program). Default: itself."""
+        return self
+
     @abc.abstractmethod
     def start(self) -> np.ndarray:
         """Start θ for the baseline fit (unconstrained)."""

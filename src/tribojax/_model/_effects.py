@@ -47,20 +47,24 @@ class AbstractEffect(eqx.Module):
         return None
 
 
-_REGISTRY: dict[str, dict[str, type]] = {}
+_REGISTRY: dict[str, dict[str, type | AbstractEffect]] = {}
 
 
-def register_effect(cls):
-    """Class decorator: make `cls` (an AbstractEffect with a no-argument constructor) part of
-    `default_effects(cls.kind)`. Registering a name twice replaces the earlier class."""
-    if not (isinstance(cls, type) and issubclass(cls, AbstractEffect)):
-        raise TypeError(f"register_effect expects an AbstractEffect subclass, got {cls!r}")
-    _REGISTRY.setdefault(cls.kind, {})[cls.name] = cls
-    return cls
+def register_effect(effect):
+    """Make `effect` part of `default_effects(effect.kind)`: an AbstractEffect subclass with a
+    no-argument constructor (as a class decorator) or an instance (an effect with named fields,
+    e.g. `BandBrakeEffect("self_energizing")`). Returns `effect`. Registering a name twice
+    replaces the earlier entry."""
+    is_class = isinstance(effect, type) and issubclass(effect, AbstractEffect)
+    if not (is_class or isinstance(effect, AbstractEffect)):
+        raise TypeError(f"register_effect expects an AbstractEffect subclass or instance, "
+                        f"got {effect!r}")  # fmt: skip
+    _REGISTRY.setdefault(effect.kind, {})[effect.name] = effect
+    return effect
 
 
 def default_effects(kind: str) -> list[AbstractEffect]:
     """Instances of the registered effects of `kind` ("slip" or "loop"), in registration order."""
     if kind not in _REGISTRY:
         raise ValueError(f"kind = {kind!r}: no effects registered; known: {sorted(_REGISTRY)}")
-    return [cls() for cls in _REGISTRY[kind].values()]
+    return [e() if isinstance(e, type) else e for e in _REGISTRY[kind].values()]

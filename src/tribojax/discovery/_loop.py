@@ -25,7 +25,6 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-import equinox as eqx
 import numpy as np
 
 from .._io._loop import HysteresisLoop
@@ -131,45 +130,51 @@ class Backlash(AbstractEffect):
                 for q in GAP_GRID]  # fmt: skip
 
 
-class AbstractBandEffect(AbstractEffect):
-    """An effect of a band brake's loop: one signed strength moving one knob of the loop model,
-    a default candidate only on a band brake's records (`LoopBaseline.band_brake`)."""
+_BAND = {
+    "self_energizing": ("energizing", "sigma",
+                        "exponential (capstan) rise of the force to slip, exponent sigma"),
+    "direction_asymmetry": ("asymmetry", "a",
+                            "slip force muN(1 + a) sliding forward, muN(1 - a) backward"),
+}  # fmt: skip
+"""The band brake's effects: name -> (knob of the loop model, strength, description)."""
 
+
+class BandBrakeEffect(AbstractEffect):
+    """An effect of a band brake's loop (`tribojax.BandBrake`), `name` one of `_BAND`'s: one
+    signed strength moving one knob of the loop model, a default candidate only on a band
+    brake's records (`LoopBaseline.band_brake`).
+
+    - `self_energizing`: the stick branch between the slip forces bends as
+      ψ_σ(q) = sign(q)·expm1(σ|q|)/expm1(σ) of the share q of the slip force (capstan law
+      T₀e^{μφ} with the wrapped angle φ growing with the share carried; `loop_force`). σ > 0:
+      the force rises exponentially towards slip and drops steeply just after a reversal.
+    - `direction_asymmetry`: slip forces that differ with the direction of sliding, μN(1 ± a)
+      (a band energized in one direction, `BandBrake`'s F₊ ≠ F₋); zero force stays at zero,
+      unlike `force_offset`.
+
+    Strength 0 is the null in both."""
+
+    name: str
     kind: ClassVar[str] = "loop"
-    knob: eqx.AbstractClassVar[str]
-    strength: eqx.AbstractClassVar[str]
+
+    def __check_init__(self):
+        if self.name not in _BAND:
+            raise ValueError(f"name = {self.name!r}: a band brake effect is one of {sorted(_BAND)}")
+
+    @property
+    def description(self) -> str:
+        return _BAND[self.name][2]
 
     def applies(self, baseline):
         return baseline.band_brake
 
     def designs(self, baseline):
-        return _knob_design(baseline, self.knob, (self.strength,), ("1",), 1.0)
+        knob, strength, _ = _BAND[self.name]
+        return _knob_design(baseline, knob, (strength,), ("1",), 1.0)
 
 
-@register_effect
-class SelfEnergizing(AbstractBandEffect):
-    """A self-energizing contact (a band brake, `tribojax.BandBrake`): the stick branch between
-    the slip forces bends as ψ_σ(q) = sign(q)·expm1(σ|q|)/expm1(σ) of the share q of the slip
-    force (capstan law T₀e^{μφ} with the wrapped angle φ growing with the share carried;
-    `loop_force`). σ > 0: the force rises exponentially towards slip and drops steeply just after
-    a reversal; σ = 0 null."""
-
-    name: ClassVar[str] = "self_energizing"
-    description: ClassVar[str] = "exponential (capstan) rise of the force to slip, exponent sigma"
-    knob: ClassVar[str] = "energizing"
-    strength: ClassVar[str] = "sigma"
-
-
-@register_effect
-class DirectionAsymmetry(AbstractBandEffect):
-    """Slip forces that differ with the direction of sliding, μN(1 ± a) (a band energized in one
-    direction, `BandBrake`'s F₊ ≠ F₋); zero force stays at zero, unlike `force_offset`; a = 0
-    null."""
-
-    name: ClassVar[str] = "direction_asymmetry"
-    description: ClassVar[str] = "slip force muN(1 + a) sliding forward, muN(1 - a) backward"
-    knob: ClassVar[str] = "asymmetry"
-    strength: ClassVar[str] = "a"
+for _name in _BAND:
+    register_effect(BandBrakeEffect(_name))
 
 
 @register_effect
