@@ -227,14 +227,18 @@ def loop_force(
                     f"direction_asymmetry: asymmetry{_got(spec.asymmetry)} is outside the "
                     "allowed range (-1, 1)")  # fmt: skip
     h = 0.5 * jnp.maximum(spec.gap, 0.0)
-    # per-slider limit scale (n, m): y_j·a(u) + ε·h, floored at 0 (a trial ε < 0 inside fits)
-    limit = jnp.maximum(a[:, None] + spec.depth * h / y[None, :], 0.0)
+    widen = spec.depth * h / y  # per slider: limit scale y_j·a(u) + ε·h, floored at 0 (a trial
+    # ε < 0 inside fits)
     sigma = jnp.clip(spec.energizing, -SIGMA_MAX, SIGMA_MAX)
 
-    def output(z, bb, ss):
-        """The force from deflections z (samples, n) at load factors bb = s^p, ss = s."""
-        z = z - spec.depth * jnp.clip(z, -h, h)  # the clearance's dead zone
-        force = spec.K_d * bb * (z @ k)
+    def spring(z):
+        """Σ_j k_j·(z_j − ε·clip(z_j, ±h)) of deflections z (…, n): the clearance's dead zone,
+        summed over the sliders."""
+        return (z - spec.depth * jnp.clip(z, -h, h)) @ k
+
+    def output(zk, bb, ss):
+        """The force from the summed spring deflections zk at load factors bb = s^p, ss = s."""
+        force = spec.K_d * bb * zk
         slip = spec.mu_N * ss  # the slip force μN·s(u)
         q = jnp.clip(force / slip, -1.0, 1.0)
         # the band's bend and asymmetry as a change of the force: exactly none at σ = a = 0,
@@ -242,12 +246,24 @@ def loop_force(
         bent = energize(q, sigma) * (1.0 + spec.asymmetry * jnp.sign(q))
         return force + slip * (bent - q)
 
-    z0 = None
+    bank = IwanBank(y, k)
+    z0 = jnp.zeros_like(y)
     if data.loaded:  # the state of the first measured force, reached by loading from rest
-        z0 = loaded_state(lambda zz: output(zz[None], b[:1], s_safe[:1])[0], y * limit[0],
-                          data.f_start)  # fmt: skip
-    z = IwanBank(y, k).deflections(data.u, limit, z0)[data.skip :]
-    return output(z, b[data.skip :], s_safe[data.skip :]) + spec.c * data.v
+        z0 = loaded_state(lambda zz: output(spring(zz), b[0], s_safe[0]),
+                          y * jnp.maximum(a[0] + widen, 0.0), data.f_start)  # fmt: skip
+
+    def step(z, inp):
+        du, a_i = inp
+        z = bank.increment(z, du, jnp.maximum(a_i + widen, 0.0))
+        return z, spring(z)
+
+    if microslip:  # the sum over the sliders inside the scan, no (samples, sliders) array:
+        # the Jacobian on a 4,783-sample history 110 -> 30 ms
+        _, zk = jax.lax.scan(step, z0, (jnp.diff(data.u), a[1:]))
+        zk = jnp.concatenate([spring(z0)[None], zk])
+    else:  # one slider: the scan carries its deflection alone (1.5 ms against 6-12 ms)
+        zk = spring(bank.deflections(data.u, jnp.maximum(a[:, None] + widen[None, :], 0.0), z0))
+    return output(zk[data.skip :], b[data.skip :], s_safe[data.skip :]) + spec.c * data.v
 
 
 BISECTIONS = 64  # halvings of the deflection interval: 2^-64 of it, below round-off
