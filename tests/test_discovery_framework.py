@@ -215,6 +215,21 @@ def test_table_effects_are_one_module_with_a_named_field():
         TableKnobEffect("stribeck")
 
 
+def test_band_brake_effects_are_one_module_registered_as_instances():
+    from tribojax.discovery._loop import BandBrakeEffect
+
+    loop = [e.name for e in disc.default_effects("loop")]
+    assert loop == ["microslip", "viscous_damping", "normal_load_variation", "backlash",
+                    "self_energizing", "direction_asymmetry", "force_offset"]  # fmt: skip
+    energizing = disc.default_effects("loop")[4]
+    assert energizing == BandBrakeEffect("self_energizing")
+    assert "capstan" in energizing.description
+    with pytest.raises(ValueError, match=r"name = 'backlash'.*one of \['direction_asymmetry'"):
+        BandBrakeEffect("backlash")
+    with pytest.raises(TypeError, match="AbstractEffect subclass or instance"):
+        disc.register_effect("self_energizing")
+
+
 def test_chi2_logsf_where_the_p_value_underflows():
     # closed forms, independent of the series: Q(1/2, x/2) = erfc(√(x/2)) = 2Φ(−√x), and for
     # even dof Q(a, z) = e^{−z} Σ_{j<a} z^j/j!

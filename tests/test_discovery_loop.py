@@ -91,6 +91,30 @@ def test_effects_vanish_at_their_null_and_are_differentiable():
                                rtol=1e-9, atol=0)  # fmt: skip
 
 
+def test_model_drops_the_mindlin_bank_only_while_w_is_held_at_zero():
+    """`for_knobs`: a fit in which the microslip weight w stays 0 runs the Jenkins element
+    without the 128-slider Mindlin bank; its force and Jacobian over θ and the other knobs are
+    those of the full bank at w = 0. Where w may move, or the element is Mindlin (w = 1 at the
+    null), the bank stays."""
+    base = disc.loop_baseline(hidden_effect_loop("none", 0.0, 2.0, 0))
+    names = base.knob_names
+    lean = base.for_knobs(tuple(n != "microslip" for n in names))
+    assert base.bank and not lean.bank
+    assert base.for_knobs(tuple(True for _ in names)) is base
+    mindlin = dataclasses.replace(base, element="mindlin")
+    assert mindlin.for_knobs(tuple(False for _ in names)) is mindlin
+    theta = jnp.log(jnp.array([MUN, KD]))
+    knobs = jnp.array([0.0, 0.05, 0.08, 0.6, np.log(0.3), 0.03, 0.5, 1.5, 0.1])
+    x = jnp.concatenate([theta, knobs])
+    out = [jax.jit(jax.jacfwd(lambda z, b=b: b.predict(z[:2], z[2:])))(x) for b in (base, lean)]
+    value = [jax.jit(lambda z, b=b: b.predict(z[:2], z[2:]))(x) for b in (base, lean)]
+    np.testing.assert_allclose(np.asarray(value[1]), np.asarray(value[0]), rtol=0,
+                               atol=1e-12 * MUN)  # fmt: skip
+    J_full, J_lean = (np.delete(np.asarray(J), 2, axis=1) for J in out)  # all but ∂/∂w
+    np.testing.assert_allclose(J_lean, J_full, rtol=0, atol=1e-12 * np.max(np.abs(J_full)))
+    assert np.max(np.abs(np.asarray(out[0])[:, 2])) > 0  # the bank's own column: w is seen
+
+
 def test_backlash_gap_below_zero_is_refused():
     data = prepare_loop(hidden_effect_loop("none", 0.0, 2.0, 0))
     with pytest.raises(ValueError, match="gap"):
