@@ -1,11 +1,11 @@
-"""The fit of a record model with its effects: the one residual, solver and statistics that
+"""The fit of a record model with its effects: the solver, start policy and statistics that
 `fit`, `predict` and `discover` share.
 
-Every fit minimises ‖(model − y)/scale‖² over x = [θ_b, s] with the effect strengths s padded to
-`K_MAX` (inactive ones masked out of the model and held at 0), through one module-level residual
-function (`padded_residual`), so one compiled solve serves the model alone and every combination
-of effects on one record shape. The solver is `LevenbergMarquardt.record` (the library's one LM);
-the statistics are `fit_statistics` (the one delta method) on the active columns.
+Every fit minimises ‖(model − y)/scale‖² over x = [θ_b, s] through the one residual
+(`_residual.padded_residual`: strengths padded to `K_MAX`, one compiled solve per record shape).
+The solver is `LevenbergMarquardt.record` (the library's one LM); the statistics are
+`fit_statistics` (the one delta method) on the active columns; `heldout_residual` is the
+two-fold check, `fit_record` the model alone.
 """
 
 from __future__ import annotations
