@@ -137,6 +137,7 @@ def test_bad_input():
         tj.simulate_slip(el, solver="euler")
 
 
+@pytest.mark.raises_inside_jit
 def test_solver_failure_is_reported():
     el = tj.PreSlipLuGre(**ROW)
     with pytest.raises(Exception, match="max_steps"):
