@@ -151,3 +151,26 @@ def finite_result(fn, *args, what: str):
     with failures_as_nan():
         out = fn(*args)
     return jax.tree_util.tree_map(lambda x: finite_or_raise(x, what), out)
+
+
+def cacheable_call(fn, *args, failed=None, raising=None):
+    """`fn(*args)` for a caller outside any trace (inside one: `raising(*args)`), compiled so
+    that JAX's persistent cache keeps it: with failures as NaN (`failures_as_nan`: no host
+    callback). If `failed(out)` (default: a non-finite array in the output), `raising(*args)`
+    (default `fn`) runs with the usual raising checks, so the user meets the check's own
+    exception and message (or, if nothing raises, gets that run's output): a second compilation
+    only where something failed."""
+    raising = fn if raising is None else raising
+    if any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(args)):
+        return raising(*args)  # inside a caller's trace: the checks as they are
+    with failures_as_nan():
+        out = fn(*args)
+    failed = _non_finite if failed is None else failed
+    return raising(*args) if failed(out) else out
+
+
+def _non_finite(out) -> bool:
+    return not all(bool(np.all(np.isfinite(np.asarray(x))))
+                   for x in jax.tree_util.tree_leaves(out)
+                   if np.asarray(x).dtype.kind in "fc")  # fmt: skip
+

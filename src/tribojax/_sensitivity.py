@@ -31,7 +31,7 @@ import jax
 import numpy as np
 
 from ._chain import phase_slips
-from ._checks import check_range, fail_if
+from ._checks import cacheable_call, check_range, fail_if
 from ._contact._contact import ContactParameters
 from ._contact._materials import ContactPair
 from ._contact._presets import wang2022_pair, wang2022_table3_model
@@ -329,7 +329,7 @@ def elasticities(fn, params: dict, *, mode: str = "fwd") -> Elasticities:
         if float(v) == 0.0:
             raise ValueError(f"{k} = 0: an elasticity needs a nonzero input (use the Jacobian)")
         point[k] = v
-    y, J = _value_and_jacobian(fn, point, mode)
+    y, J = cacheable_call(_value_and_jacobian, fn, point, mode)
     order = getattr(fn, "outputs", None)  # the chains' own order; else jax's (sorted) one
     outputs = tuple(order) if order is not None and set(order) == set(y) else tuple(y)
     values = np.array([float(y[o]) for o in outputs])

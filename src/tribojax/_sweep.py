@@ -20,7 +20,7 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from ._checks import as_f64
+from ._checks import as_f64, cacheable_call
 from ._precision import ensure_x64
 
 
@@ -93,10 +93,11 @@ def sweep(fn, batch, *, devices=None):
     # inside a conditional, which deadlocks XLA's CPU collectives; jax.shard_map fails on
     # equinox's error_if and optimistix's closure conversion. Members are independent, so no
     # communication is needed.)
-    local = []
-    for device in sharding.mesh.devices.flat:
-        part = jax.tree.map(lambda x: _shard_on(x, device), placed)
-        local.append(_vmapped(fn, part))
+    parts = [jax.tree.map(lambda x, d=device: _shard_on(x, d), placed)
+             for device in sharding.mesh.devices.flat]  # fmt: skip
+    # all parts dispatched before any is checked (cacheable_call: one program without host
+    # callbacks per part; a non-finite output runs them again with the raising checks)
+    local = cacheable_call(lambda f, ps: [_vmapped(f, p) for p in ps], fn, parts)
     total = n + pad
 
     def assemble(*parts):

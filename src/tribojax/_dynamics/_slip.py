@@ -20,7 +20,7 @@ import optimistix as optx
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array
 
-from .._checks import as_f64, check_range, fail_if
+from .._checks import as_f64, cacheable_call, check_range, fail_if
 from .._friction._element import AbstractFrictionElement
 from .._presets import WANG2022_RETICLE_MASS_KG
 from ._adjoint import ForwardJacobianAdjoint
@@ -242,8 +242,16 @@ def simulate_slip(
     ts = jnp.linspace(0.0, t_end, 2301) if ts is None else as_f64(ts, "ts")
     ts = fail_if(ts, jnp.any(jnp.diff(ts) < 0), "ts must be non-decreasing")
     ts = fail_if(ts, jnp.any((ts < 0) | (ts > t_end)), "ts must lie within [0, t_end]")
-    return _solve(element, profile, mass, ts, t_end, rtol, atol, int(max_steps), throw, adjoint,
-                  dt0, solver)  # fmt: skip
+    args = (element, profile, mass, ts, t_end, rtol, atol, int(max_steps))
+
+    # called eagerly: a program without host callbacks (cached), `throw=False` inside; a failure
+    # runs the raising program, whose exception (the check's or diffrax's) the user then meets
+    def failed(sol):
+        finite = all(bool(jnp.all(jnp.isfinite(x))) for x in (sol.slip, sol.velocity))
+        return not finite or (throw and not bool(sol.ok))
+
+    return cacheable_call(lambda a: _solve(*a, False, adjoint, dt0, solver), args, failed=failed,
+                          raising=lambda a: _solve(*a, throw, adjoint, dt0, solver))
 
 
 def slip_phase_averages(
