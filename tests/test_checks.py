@@ -6,6 +6,7 @@ import sys
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 import pytest
 
 import tribojax as tj
@@ -158,3 +159,52 @@ def test_a_failure_carried_as_nan_is_raised_at_the_boundary():
 
     with pytest.raises(ValueError, match=r"alpha = -0.5 is outside the allowed range \(0, inf\)"):
         table3_phase_slips(-0.5)
+
+
+def _compile_log(fn):
+    """(result of fn(), JAX's compile-log lines: persistent-cache hits, writes, refusals)."""
+    import logging
+
+    lines = []
+
+    class Keep(logging.Handler):
+        def emit(self, record):
+            lines.append(record.getMessage())
+
+    log = logging.getLogger("jax._src.compiler")
+    handler, level = Keep(level=logging.DEBUG), log.level
+    log.addHandler(handler)
+    log.setLevel(logging.DEBUG)
+    try:
+        return fn(), lines
+    finally:
+        log.removeHandler(handler)
+        log.setLevel(level)
+
+
+def test_eager_calls_compile_cacheable_programs_and_still_raise_the_checks_message():
+    # issue 31: a library call made outside any trace compiles without host callbacks (JAX 0.10
+    # never stores those), and a failure still reaches the user as the check's own message
+    from tribojax._checks import cacheable_call, check_range
+
+    f = eqx.filter_jit(lambda F: check_range(F, "load", 0.0) * 2.0)
+    _, plain = _compile_log(lambda: f(jnp.asarray([1.0, 2.0, 3.0])))
+    assert any("uses host callbacks" in m for m in plain)  # the raising check is a callback
+    out, lines = _compile_log(lambda: cacheable_call(f, jnp.asarray([1.0, 2.0, 3.0, 4.0])))
+    assert out.tolist() == [2.0, 4.0, 6.0, 8.0]
+    assert lines and not any("uses host callbacks" in m for m in lines)
+    with pytest.raises(eqx.EquinoxRuntimeError, match=r"load is outside the allowed range"):
+        cacheable_call(f, jnp.asarray([1.0, -2.0, 3.0, 4.0]))
+    # simulate_slip called eagerly (a save grid no other test uses: compiled here or read back)
+    el = tj.PreSlipLuGre(*map(jnp.asarray, (1.1, 2.0e7, 150.0, 1.0)))  # arrays: traced in both
+    ts = jnp.linspace(0.0, 0.3, 53)
+    sol, lines = _compile_log(lambda: tj.simulate_slip(el, ts=ts, t_end=0.3))
+    assert bool(sol.ok) and np.all(np.isfinite(np.asarray(sol.slip)))
+    assert not any("uses host callbacks" in m for m in lines), lines
+    assert any("cache hit" in m or "compile" in m for m in lines)
+    # the raising program that a caller's jit traces gives the same slip to the solver's
+    # accuracy, not bit for bit: the NaN-mode check is another XLA program, and the step
+    # control carries a rounding difference to rtol level (measured 1.3e-14 m of 1.9e-8 m)
+    traced = np.asarray(jax.jit(lambda e: tj.simulate_slip(e, ts=ts, t_end=0.3).slip)(el))
+    peak = np.max(np.abs(traced))
+    assert peak > 1e-8 and np.max(np.abs(traced - np.asarray(sol.slip))) < 1e-5 * peak
