@@ -154,7 +154,8 @@ def test_noise_floor_lm_stops_on_the_statistical_rule():
     lines = []
     fit = tj.least_squares_fit(residuals, jnp.array([1.0, 0.0]), (x, y), names=("A", "b"),
                                sigma_known=True, max_steps=50, jac="fwd",
-                               solver=LevenbergMarquardt.noise_floor(0.0, 0.0, max_rejections=100),
+                               solver=LevenbergMarquardt.noise_floor(0.0, 0.0, max_rejections=100,
+                                                                     report=True),
                                progress=lines.append)  # fmt: skip
     assert fit.result == tj.RESULTS.successful and fit.steps < 50
     assert float(jnp.max(jnp.abs(gauss_newton_step(fit.residuals, fit.jacobian)))) < 0.05

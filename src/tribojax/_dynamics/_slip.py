@@ -16,6 +16,7 @@ import diffrax as dfx
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optimistix as optx
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array
@@ -247,7 +248,7 @@ def simulate_slip(
     # called eagerly: a program without host callbacks (cached), `throw=False` inside; a failure
     # runs the raising program, whose exception (the check's or diffrax's) the user then meets
     def failed(sol):
-        finite = all(bool(jnp.all(jnp.isfinite(x))) for x in (sol.slip, sol.velocity))
+        finite = all(np.all(np.isfinite(np.asarray(x))) for x in (sol.slip, sol.velocity))
         return not finite or (throw and not bool(sol.ok))
 
     return cacheable_call(lambda a: _solve(*a, False, adjoint, dt0, solver), args, failed=failed,

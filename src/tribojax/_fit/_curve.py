@@ -33,7 +33,7 @@ from ._solver import LevenbergMarquardt
 # Stribeck dip: β walks towards a step, every late step rejected); the noise-floor LM stops when
 # the Gauss–Newton step left is below 0.05 standard errors in every parameter.
 _RTOL, _ATOL = 1e-10, 1e-12
-_SOLVER = LevenbergMarquardt.noise_floor(_RTOL, _ATOL, report=False)  # no progress: cached
+_SOLVER = LevenbergMarquardt.noise_floor(_RTOL, _ATOL)
 
 STEADY_NAMES = ("F_c", "F_s", "v_s", "beta", "sigma2")
 

@@ -244,8 +244,7 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         for _ in range(3):  # a noise-floor stop short of the optimum restarts where it stopped
             fit = least_squares_fit(fn, theta, records, names=tuple(n for n, _ in spec),
                                     transform=tr, max_steps=max_steps, jac="fwd",
-                                    solver=LevenbergMarquardt.noise_floor(rtol, 1e-3 * rtol,
-                                                                          report=False),
+                                    solver=LevenbergMarquardt.noise_floor(rtol, 1e-3 * rtol),
                                     optimum_tol=1.0)  # fmt: skip
             if fit.result != RESULTS.short_of_optimum:
                 break

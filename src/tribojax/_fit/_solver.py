@@ -124,12 +124,13 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
         self.max_rejections, self.padded, self.report = max_rejections, padded, report
 
     @classmethod
-    def noise_floor(cls, rtol, atol, max_rejections=6, step_tol=0.05, report=True):
+    def noise_floor(cls, rtol, atol, max_rejections=6, step_tol=0.05, report=False):
         """For residuals through an adaptive ODE solve: textbook trust-region cutoffs (Nocedal &
         Wright, Alg. 4.1: shrink below ρ = 0.25, grow above 0.75; with ODE residuals ρ rarely
         exceeds optimistix's 0.99 and the region never grew), the `step_tol` and
-        `max_rejections` stops, each step reported to `least_squares_fit(progress=...)` (with
-        `report`: a host callback, so the solve is then not kept in the compilation cache)."""
+        `max_rejections` stops; with `report=True` each step is reported to
+        `least_squares_fit(progress=...)` (a host callback: the solve is then not kept in the
+        compilation cache, hence off by default)."""
         return cls(rtol, atol, descent=optx.DampedNewtonDescent(),
                    search=optx.ClassicalTrustRegion(high_cutoff=0.75, low_cutoff=0.25),
                    step_tol=step_tol, max_rejections=max_rejections, report=report)  # fmt: skip
