@@ -293,3 +293,42 @@ def test_undetermined_parameter_gives_infinite_not_nan_std_error():
     want = np.exp(0.3) * np.sqrt(st.theta_covariance[0, 0])
     assert np.isfinite(A) and A == pytest.approx(want)
     assert st.theta_covariance[0, 0] == pytest.approx((r @ r / 48) / (J[:, 0] @ J[:, 0]))
+
+def test_a_refit_behind_a_candidate_at_the_noise_has_a_step_budget(monkeypatch):
+    # `_refit` with `target` (the cost of a candidate that reached the noise): each start gets
+    # QUICK_STEPS steps; one that ran out goes on with the full budget only within QUICK_MARGIN
+    # of the target. Without a target: the full budget, as before. (One step does not reach
+    # the hidden bump's optimum from either start.)
+    from tribojax._limits import MAX_STEPS
+    from tribojax._model import fit_record
+    from tribojax.discovery import _refits
+
+    base = _record("bump")
+    state = fit_record(base)
+    y = np.asarray(base.data().y)
+    r = (y - state.prediction) / state.scale
+    design = Bump().designs(base)[0]
+    calls, real = [], _refits.fit_model
+
+    def spy(*args, max_steps=MAX_STEPS, **kw):
+        fit = real(*args, max_steps=max_steps, **kw)
+        calls.append((max_steps, fit.rss))
+        return fit
+
+    monkeypatch.setattr(_refits, "fit_model", spy)
+    monkeypatch.setattr(_refits, "QUICK_STEPS", 1)
+
+    def refit(target):
+        calls.clear()
+        return _refits._refit(base, state, design, "bump", y, state.scale, r, {}, target)
+
+    full = refit(None)
+    assert {b for b, _ in calls} == {MAX_STEPS} and full.converged
+    assert full.rss < 0.05 * state.rss
+    far = refit(1e-3 * full.rss)  # every start ran out far above the target: not continued
+    assert {b for b, _ in calls} == {1} and not far.converged and far.steps == 1
+    best_cut = min(rss for _, rss in calls)
+    assert best_cut > 1.5 * full.rss
+    near = refit(best_cut / _refits.QUICK_MARGIN)  # the best one is within the margin: goes on
+    assert [b for b, _ in calls] == [1, 1, MAX_STEPS]
+    assert near.converged and near.rss == pytest.approx(full.rss, rel=1e-6)
