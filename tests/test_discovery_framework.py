@@ -327,6 +327,7 @@ def test_a_refit_behind_a_candidate_at_the_noise_has_a_step_budget(monkeypatch):
     assert full.rss < 0.05 * state.rss
     far = refit(1e-3 * full.rss)  # every start ran out far above the target: not continued
     assert {b for b, _ in calls} == {1} and not far.converged and far.steps == 1
+    assert far.message.startswith("not refitted to the end")
     best_cut = min(rss for _, rss in calls)
     assert best_cut > 1.5 * full.rss
     near = refit(best_cut / _refits.QUICK_MARGIN)  # the best one is within the margin: goes on

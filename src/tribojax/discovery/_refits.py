@@ -4,6 +4,8 @@ current model's own optimum."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from .._fit._measures import bic, delta_bic, rms
@@ -61,9 +63,13 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None):
         fits.append(fit_from(zero)())
     fits += [f.result() for f in running[len(first) :]]
     good = [f for f in fits if f.converged and np.isfinite(f.rss)]
-    run = [f for f in fits if np.isfinite(f.rss) and f.steps >= budget and not f.converged]
-    if target is not None:  # only a refit that may still reach the explaining one's cost
-        run = [f for f in run if f.rss <= QUICK_MARGIN * target]
+    ran_out = [f for f in fits if np.isfinite(f.rss) and f.steps >= budget and not f.converged]
+    run = ran_out if target is None else [f for f in ran_out if f.rss <= QUICK_MARGIN * target]
+    if not good and ran_out and not run:  # cut short: every start far above the target
+        return dataclasses.replace(
+            min(ran_out, key=lambda f: f.rss),
+            message=f"not refitted to the end: after {QUICK_STEPS} steps its cost was above "
+                    f"{QUICK_MARGIN:g}x that of a candidate that reaches the noise")  # fmt: skip
     if run and min(f.rss for f in run) < min((f.rss for f in good), default=np.inf):
         # a fit that ran out of steps while still descending, below every converged one (e.g.
         # an unidentified F_s walking to its bound: a hidden position error at 20 kPa, 128
@@ -168,10 +174,6 @@ def refit_round(run, state, ranking, n_refit, threshold, by_name, base_ok) -> li
             rss_explains = min(new.rss, rss_explains or np.inf)
         if not usable:
             c.refit_message = new.message or "refit failed"
-            if rss_explains is not None and not new.converged:
-                c.refit_message = (f"not refitted to the end: after {QUICK_STEPS} steps its cost "
-                                   f"was above {QUICK_MARGIN:g}x that of a candidate that "
-                                   "reaches the noise")  # fmt: skip
             continue
         rho1 = residual_rho(y - new.prediction)
         c.delta_bic = _delta_bic(new.rss, state.rss, n, d.k + d.n_nuisance, rho1)
