@@ -17,7 +17,11 @@ host callback) or a call under a trace runs through `eqx.filter_jit` as before (
 not exportable leaves an empty `.refused` marker: later processes trace it once, not twice).
 Each file holds its payload's sha256: a truncated or corrupt file is ignored and written again;
 files are written to a temporary name and renamed, so concurrent processes never read half a
-file.
+file. Exporting, reading back and compiling a stored program hold one lock per process
+(`_LOWERING`): these steps build and print MLIR modules, which JAX does not support from several
+Python threads at once (jax issues #32354, #28551); a crash of a test worker while discovery's
+threads met new programs (CI, 2026-11-29) is the reason. Running a compiled program does not take
+it, so fits still run side by side.
 The function's outputs must be arrays in tuples, lists or dicts.
 """
 
@@ -217,16 +221,21 @@ def _export(fn, treedef, static, leaves):
         return None
 
 
+_LOWERING = threading.RLock()
+
+
 def _program(fn, treedef, static, leaves, stem: Path):
-    """The stored program at `stem` (read, or exported and written), jitted; None if refused."""
+    """The stored program at `stem` (read, or exported and written), compiled for `leaves`' shapes;
+    None if refused. Holds `_LOWERING` throughout."""
     path, refused = stem.with_suffix(".jaxexp"), stem.with_suffix(".refused")
-    if refused.exists():
-        return None
-    exported = _read(path)
-    if exported is None:
-        exported = _export(fn, treedef, static, leaves)
-        _write(path if exported is not None else refused, exported)
-    return None if exported is None else jax.jit(exported.call)
+    with _LOWERING:
+        if refused.exists():
+            return None
+        exported = _read(path)
+        if exported is None:
+            exported = _export(fn, treedef, static, leaves)
+            _write(path if exported is not None else refused, exported)
+        return None if exported is None else jax.jit(exported.call).lower(*leaves).compile()
 
 
 def cached_jit(fn):
