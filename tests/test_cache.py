@@ -197,3 +197,53 @@ def test_stored_trace_key_names_everything_the_trace_depends_on():
     assert key(UserModel(x), 2.0, jnp.sin) is None
     fn = E.cached_jit(_scaled)  # falls back to equinox.filter_jit
     assert float(fn(x, 2.0, jnp.sin)[0]) == float(jnp.sin(1.0) * 2.0)
+
+
+def test_threads_meeting_new_programs_export_and_compile_one_at_a_time(tmp_path, monkeypatch):
+    """Exporting, reading back and compiling a stored program build MLIR modules, which JAX does
+    not support from several threads at once (jax #32354, #28551): `_export._LOWERING` makes
+    threads that meet new programs take turns there, and each still gets its own numbers."""
+    import threading
+    import time
+
+    import jax.numpy as jnp
+    import numpy as np
+    from scipy.special import gammaincc
+
+    import tribojax._export as E
+    from tribojax._fit._noise import _gammaincc
+
+    monkeypatch.setattr(E, "export_dir", lambda: tmp_path)  # new programs, in a fresh folder
+    active, most = [0], [0]
+    export, read = E._export, E._read
+
+    def timed(step):
+        def run(*args):
+            active[0] += 1
+            most[0] = max(most[0], active[0])
+            time.sleep(0.2)  # a slow lowering: another thread would enter meanwhile
+            try:
+                return step(*args)
+            finally:
+                active[0] -= 1
+
+        return run
+
+    monkeypatch.setattr(E, "_export", timed(export))
+    monkeypatch.setattr(E, "_read", timed(read))
+    sizes = (3, 5, 7, 11)  # one new program per thread (the shape is in the key)
+    out = {}
+
+    def call(n):
+        a, z = jnp.linspace(0.5, 2.0, n), jnp.linspace(0.1, 3.0, n)
+        out[n] = (np.asarray(_gammaincc(a, z)), gammaincc(np.asarray(a), np.asarray(z)))
+
+    threads = [threading.Thread(target=call, args=(n,)) for n in sizes]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert sorted(out) == list(sizes) and most[0] == 1
+    for got, want in out.values():
+        np.testing.assert_allclose(got, want, rtol=1e-12)
+    assert len(list(tmp_path.glob("*.jaxexp"))) == len(sizes)  # each program stored
