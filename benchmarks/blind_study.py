@@ -27,9 +27,7 @@ summary) and OUT/blind_study.md (the table). Default OUT: DIR.
 benchmarks/blind_study_before.jsonl: the rows of the code before any issue-32 change (stop 31,
 all 45 records; 4,019 s of discovery on this 2-core machine, partly under load).
 benchmarks/blind_study_after.jsonl: the rows of the code after the issue-32 changes, all 45
-records (stop 33: 31 records, two processes side by side beside the test suite; stop 35: 11 more,
-beside other work; stop 38: s3007, s3008, s3027, `--resume`, alone: the times of these runs are
-not comparable with the before column's);
+records in one run at one commit (stop 42, 2026-11-29, idle machine: 2,891 s of discovery);
 notebooks/05_discovery.ipynb tabulates both.
 """
 
