@@ -10,6 +10,7 @@ import pytest
 from jaxtyping import Array
 
 import tribojax.discovery as disc
+from tribojax._model import VS_GRID
 from tribojax.discovery import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign
 
 
@@ -209,10 +210,41 @@ def test_table_effects_are_one_module_with_a_named_field():
                                          "position_step"]  # fmt: skip
     from tribojax.discovery._tables import TableKnobEffect
 
-    (d,) = TableKnobEffect("position_error").designs(None)
+    (d,) = TableKnobEffect("position_error").designs(disc.wang2022_table_baseline())
     assert d.strength_names == ("epsilon",) and d.strength_scale.tolist() == [1e-9]
     with pytest.raises(ValueError, match=r"name = 'stribeck'.*one of \['gross_sliding'"):
         TableKnobEffect("stribeck")
+
+
+def test_each_friction_law_effect_is_one_module_for_every_record_kind():
+    """Stribeck, viscous and load dependence are written once (issue 29): the candidates of
+    slip runs, curves, loops and tables are instances of the same three classes, under the names
+    each kind's reports use; a kind an effect has no form for is refused, naming the allowed."""
+    from tribojax.discovery._friction_effects import LoadDependence, Stribeck, Viscous
+
+    lists = {k: disc.default_effects(k) for k in ("slip", "curve", "loop")}
+    lists["wang2022_table"] = disc.wang2022_table_effects()
+    found = {(type(e).__name__, k, e.name) for k, es in lists.items() for e in es
+             if isinstance(e, (LoadDependence, Stribeck, Viscous))}  # fmt: skip
+    assert found == {
+        ("Stribeck", "slip", "stribeck"), ("Stribeck", "curve", "stribeck"),
+        ("Stribeck", "wang2022_table", "stribeck"),
+        ("Viscous", "slip", "viscous_friction"), ("Viscous", "loop", "viscous_damping"),
+        ("Viscous", "curve", "viscous"), ("Viscous", "wang2022_table", "viscous_friction"),
+        ("LoadDependence", "slip", "load_coupling"), ("LoadDependence", "wang2022_table",
+                                                      "load_coupling"),
+        ("LoadDependence", "loop", "normal_load_variation")}  # fmt: skip
+    assert all(e.kind == k for k, es in lists.items() for e in es)
+    # the same physics in two kinds: the table's Stribeck is the slip run's on the same v_s grid,
+    # its strength in units of 0.1 and v_s held (one nuisance counted)
+    table, slip = Stribeck("wang2022_table"), Stribeck("slip")
+    t_designs = table.designs(disc.wang2022_table_baseline())
+    assert [d.nuisance for d in t_designs] == [{"v_s_m_per_s": v} for v in VS_GRID]
+    assert all(d.n_nuisance == 1 and d.strength_scale.tolist() == [0.1] for d in t_designs)
+    assert slip.refit_starts == 1 and Stribeck("curve").refit_starts == 3
+    assert not Viscous("slip").score_gate and Viscous("loop").score_gate
+    with pytest.raises(ValueError, match=r"kind = 'loop': Stribeck applies to \['slip', 'curve'"):
+        Stribeck("loop")
 
 
 def test_band_brake_effects_are_one_module_registered_as_instances():

@@ -14,6 +14,7 @@ from ._curve import CurveBaseline as CurveBaseline
 from ._curve import curve_baseline as curve_baseline
 from ._effects import AbstractEffect as AbstractEffect
 from ._effects import default_effects as default_effects
+from ._effects import knob_design as knob_design
 from ._effects import register_effect as register_effect
 from ._fit import FOLD_SHARE_MIN as FOLD_SHARE_MIN
 from ._fit import MAX_STEPS as MAX_STEPS

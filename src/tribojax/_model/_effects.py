@@ -8,6 +8,7 @@ import abc
 from typing import ClassVar
 
 import equinox as eqx
+import numpy as np
 
 from ._base import AbstractBaseline, EffectDesign
 
@@ -68,3 +69,15 @@ def default_effects(kind: str) -> list[AbstractEffect]:
     if kind not in _REGISTRY:
         raise ValueError(f"kind = {kind!r}: no effects registered; known: {sorted(_REGISTRY)}")
     return [e() if isinstance(e, type) else e for e in _REGISTRY[kind].values()]
+
+
+def knob_design(baseline, knobs, names, units, scale, **kw) -> EffectDesign:
+    """A design whose strengths move the named knobs of `baseline` (its `knob_names`): `knobs`
+    {knob: gain} or a sequence of knobs (gain 1), one strength each in that order; `scale` the
+    physical strength per unit strength; further `EffectDesign` fields as keywords."""
+    gains = knobs if isinstance(knobs, dict) else dict.fromkeys(knobs, 1.0)
+    gain = np.zeros((len(baseline.knob_names), len(gains)))
+    for j, (knob, g) in enumerate(gains.items()):
+        gain[baseline.knob_names.index(knob), j] = g
+    return EffectDesign(tuple(names), tuple(units), np.atleast_1d(np.asarray(scale, float)),
+                        knob_gain=gain, **kw)  # fmt: skip

@@ -2,9 +2,10 @@
 its baseline, knobs, noise and weighting are described there), `discover_curve` and its figure.
 
 Effects (registered for `default_effects("curve")`, the issue's names): `stribeck` (strength A;
-v_s seeded by a grid over the record's velocities and fitted with β in the refit), `asymmetry`
-(T0) and `viscous` (ln δ). Each has a signed strength whose null is interior, so the Rao score
-test applies.
+v_s seeded by a grid over the record's velocities and fitted with β in the refit) and `viscous`
+(ln δ), the friction law's effects written once for every record kind (`_friction_effects`),
+and `asymmetry` (T0). Each has a signed strength whose null is interior, so the Rao score test
+applies.
 """
 
 from __future__ import annotations
@@ -14,44 +15,13 @@ from typing import ClassVar
 import numpy as np
 
 from .._io._curve import FrictionCurve
-from .._model import BETA_START, CURVE_KNOBS, EffectDesign, curve_baseline
+from .._model import curve_baseline, knob_design
 from .._plot import pyplot, save_figure
 from ._core import AbstractEffect, default_effects, register_effect
 from ._discover import DiscoveryReport, discover
+from ._friction_effects import Stribeck, Viscous
 
-N_VS_GRID = 9  # Stribeck velocities on the score grid, spaced geometrically over the record
-
-
-def _gain(*knobs):
-    gain = np.zeros((len(CURVE_KNOBS), len(knobs)))
-    for j, k in enumerate(knobs):
-        gain[CURVE_KNOBS.index(k), j] = 1.0
-    return gain
-
-
-@register_effect
-class CurveStribeck(AbstractEffect):
-    """Stribeck weakening (LuGre steady law, wang2022 Eq 25): the Coulomb level becomes
-    F_c + A·exp(−|v/v_s|^β), A = F_s − F_c the static excess (friction unit). v_s is seeded by a
-    geometric grid over the record's |v| (`N_VS_GRID` points, the best score) and β from 1.5;
-    both are fitted with A in the refit (reported under "nuisance")."""
-
-    name: ClassVar[str] = "stribeck"
-    kind: ClassVar[str] = "curve"
-    description: ClassVar[str] = "velocity weakening F_c + A exp(-|v/v_s|^beta) (LuGre steady law)"
-    refit_starts: ClassVar[int] = 3
-
-    def designs(self, baseline):
-        a = np.abs(np.asarray(baseline.v))
-        grid = np.geomspace(0.5 * a.min(), 0.5 * a.max(), N_VS_GRID)
-        scale = np.array([float(baseline.f_ref), 1.0, 1.0])
-        return [EffectDesign(("F_s_minus_F_c", "log10_v_s_shift", "log_beta_shift"),
-                             (baseline.units[1], "1", "1"), scale,
-                             knob_gain=_gain("stribeck", "log10_v_s", "log_beta"),
-                             knob_set={"log10_v_s": np.log10(vs)}, nuisance={"v_s": vs},
-                             free=((1, "v_s", lambda u, v0=vs: v0 * 10.0**u),
-                                   (2, "beta", lambda u: BETA_START * np.exp(u))))
-                for vs in grid]  # fmt: skip
+register_effect(Stribeck("curve"))
 
 
 @register_effect
@@ -64,22 +34,11 @@ class CurveAsymmetry(AbstractEffect):
     description: ClassVar[str] = "direction-dependent level: T0 added in both directions"
 
     def designs(self, baseline):
-        scale = np.array([float(baseline.f_ref)])
-        return [EffectDesign(("T0",), (baseline.units[1],), scale, knob_gain=_gain("asymmetry"))]
+        return [knob_design(baseline, ["asymmetry"], ("T0",), (baseline.units[1],),
+                            float(baseline.f_ref))]  # fmt: skip
 
 
-@register_effect
-class CurveViscous(AbstractEffect):
-    """A power-law viscous term: σ2·v becomes sgn(v)·σ2·v_ref·|v/v_ref|^δ, strength ln δ (0: the
-    linear term of the baseline)."""
-
-    name: ClassVar[str] = "viscous"
-    kind: ClassVar[str] = "curve"
-    description: ClassVar[str] = "power-law viscous friction sigma2 v_ref |v/v_ref|^delta"
-
-    def designs(self, baseline):
-        return [EffectDesign(("log_delta",), ("1",), np.ones(1),
-                             knob_gain=_gain("log_viscous_exponent"))]  # fmt: skip
+register_effect(Viscous("curve"))
 
 
 def discover_curve(curve: FrictionCurve, effects=None, **kw) -> DiscoveryReport:

@@ -7,7 +7,8 @@ K_d ∝ N^0.7616, wu2015 Eq 5; a viscous force c·u̇; a backlash of depth ε an
 model that `fit_loop(model="history")` fits; its noise model is `cycle_noise`.
 
 Effects (registered for `default_effects("loop")`, names as in the issues): `microslip`,
-`viscous_damping`, `normal_load_variation`, `backlash`, the band brake's `self_energizing` and
+`viscous_damping`, `normal_load_variation` (the friction law's effects written once for every
+record kind: `_friction_effects`), `backlash`, the band brake's `self_energizing` and
 `direction_asymmetry` (issue 30; candidates by default only on a band brake's records, those
 that carry a band tension: `LoopBaseline.band_brake`), and the measurement effect
 `force_offset` (a constant added to the force); each moves one knob (or the offset) with a signed
@@ -28,20 +29,15 @@ from typing import ClassVar
 import numpy as np
 
 from .._io._loop import HysteresisLoop
-from .._model import KD_LOAD_EXPONENT, LOOP_KNOBS, EffectDesign, loop_baseline
+from .._model import EffectDesign, knob_design, loop_baseline
 from .._plot import pyplot
 from ._core import AbstractEffect, register_effect
 from ._discover import DiscoveryReport, discover
+from ._friction_effects import LoadDependence, Viscous
 
 GAP_GRID = tuple(np.geomspace(0.02, 1.2, 10).tolist())
 """Seeds of the backlash gap g as a fraction of the record's half peak-to-peak displacement A
 (score grid and refit starts; the refit fits g itself)."""
-
-
-def _knob_design(baseline, knob, names, units, scale):
-    gain = np.zeros((len(LOOP_KNOBS), 1))
-    gain[LOOP_KNOBS.index(knob), 0] = 1.0
-    return [EffectDesign(names, units, np.atleast_1d(np.asarray(scale, float)), knob_gain=gain)]
 
 
 @register_effect
@@ -54,56 +50,11 @@ class Microslip(AbstractEffect):
     description: ClassVar[str] = "partial slip (Mindlin), weight w of the Mindlin law"
 
     def designs(self, baseline):
-        return _knob_design(baseline, "microslip", ("w",), ("1",), 1.0)
+        return [knob_design(baseline, ["microslip"], ("w",), ("1",), 1.0)]
 
 
-@register_effect
-class ViscousDamping(AbstractEffect):
-    """A force c·u̇ (c in N·s/m) in parallel with the contact; c = 0 null."""
-
-    name: ClassVar[str] = "viscous_damping"
-    kind: ClassVar[str] = "loop"
-    description: ClassVar[str] = "force proportional to velocity, c·du/dt"
-
-    def designs(self, baseline):
-        scale = float(baseline.record.c_scale)
-        return _knob_design(baseline, "viscous", ("c",), ("N s/m",), scale)
-
-
-@register_effect
-class NormalLoadVariation(AbstractEffect):
-    """Normal load varying with displacement, N(u) = N0(1 + β·u/A) or N0(1 + β·u/A + γ·(u/A)²)
-    (`degrees` 1 and 2), μN ∝ N and K_d ∝ N^p with p = 0.7616 (wu2015 Eq 5) or p = 0 (a stiffness
-    that does not follow the load, `kd_exponents`); every combination is refitted and the lower
-    BIC kept; β = γ = 0 null, p a fixed nuisance of each design.
-
-    The linear term is a tilted counter-face; γ a load that rises (or falls) towards both ends of
-    the stroke (a curved or wavy face, a rocking fixture): it is even in u, so the score of the
-    linear term alone does not see it (measured on independent loops with N ∝ 1 + γ(u/A)²). With
-    p = 0.7616 only, a load gradient at constant stiffness (independent loops, β ≈ 0.18) left
-    2.3 noise sd of misfit and a force offset was named first.
-    """
-
-    name: ClassVar[str] = "normal_load_variation"
-    kind: ClassVar[str] = "loop"
-    description: ClassVar[str] = "normal load varying with u: N0(1 + beta u/A + gamma (u/A)^2)"
-    degrees: tuple = (1, 2)
-    kd_exponents: tuple = (KD_LOAD_EXPONENT, 0.0)
-    refit_starts: ClassVar[int] = 4  # every design is refitted (the score cannot choose)
-
-    def designs(self, baseline):
-        out = []
-        for deg in self.degrees:
-            gain = np.zeros((len(LOOP_KNOBS), deg))
-            for j, knob in enumerate(("load_slope", "load_curve")[:deg]):
-                gain[LOOP_KNOBS.index(knob), j] = 1.0
-            names = ("beta", "gamma")[:deg]
-            for p in self.kd_exponents:
-                design = EffectDesign(names, ("1",) * deg, np.ones(deg), knob_gain=gain,
-                                      knob_set={"kd_exponent": float(p)},
-                                      nuisance={"degree": float(deg), "kd_exponent": float(p)})
-                out.append(design)  # fmt: skip
-        return out
+for _effect in (Viscous("loop"), LoadDependence("loop")):
+    register_effect(_effect)  # the friction law's effects, written once (`_friction_effects`)
 
 
 @register_effect
@@ -121,12 +72,10 @@ class Backlash(AbstractEffect):
 
     def designs(self, baseline):
         A = float(baseline.record.A)
-        gain = np.zeros((len(LOOP_KNOBS), 2))
-        gain[LOOP_KNOBS.index("backlash"), 0] = gain[LOOP_KNOBS.index("log_gap"), 1] = 1.0
-        return [EffectDesign(("depth", "log_gap_shift"), ("1", "1"), np.ones(2),
-                             knob_gain=gain, knob_set={"log_gap": float(np.log(q))},
-                             nuisance={"gap_m": q * A},
-                             free=((1, "gap_m", lambda s, g0=q * A: g0 * np.exp(s)),))
+        return [knob_design(baseline, ("backlash", "log_gap"), ("depth", "log_gap_shift"),
+                            ("1", "1"), np.ones(2), knob_set={"log_gap": float(np.log(q))},
+                            nuisance={"gap_m": q * A},
+                            free=((1, "gap_m", lambda s, g0=q * A: g0 * np.exp(s)),))
                 for q in GAP_GRID]  # fmt: skip
 
 
@@ -170,7 +119,7 @@ class BandBrakeEffect(AbstractEffect):
 
     def designs(self, baseline):
         knob, strength, _ = _BAND[self.name]
-        return _knob_design(baseline, knob, (strength,), ("1",), 1.0)
+        return [knob_design(baseline, [knob], (strength,), ("1",), 1.0)]
 
 
 for _name in _BAND:

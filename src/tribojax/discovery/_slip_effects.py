@@ -1,10 +1,10 @@
-"""Slip effects of discovery: additive (`sensor_drift`, `position_error`, `vibration`) and
-knobs of the one pre-slip element (`load_coupling`, `stribeck`, `viscous_friction`); the
-baseline and the knobs are in `_slip` (see its docstring for the physics)."""
+"""Slip effects of discovery: the additive ones (`sensor_drift`, `position_error`, `vibration`),
+then the friction law's knobs of the one pre-slip element (`load_coupling`, `stribeck`,
+`viscous_friction`: `_friction_effects`, written once for every record kind); the model and its
+knobs are `tribojax._model.SlipBaseline`'s."""
 
 from __future__ import annotations
 
-import dataclasses
 from typing import ClassVar
 
 import numpy as np
@@ -13,7 +13,6 @@ from .._fit._noise import noise_estimate
 from .._model import (
     KNOBS,
     N_ODE_KNOBS,
-    VS_GRID,
     ZETA_MAX,
     EffectDesign,
     golden_max,
@@ -21,14 +20,8 @@ from .._model import (
     stage_travel,
 )
 from ._core import AbstractEffect, register_effect
+from ._friction_effects import LoadDependence, Stribeck, Viscous
 
-KAPPA_STARTS = (-0.3, 1.0)  # load-coupling refit starts, κ per g
-# viscous refit starts, σ2 in units of the start C_τ (a start at 1 was the lowest cost in none of
-# the 21 viscous refits of the 20 viscous and Stribeck study records, and the slowest: on the
-# benchmark record it crept 72 steps back to σ2 = 0)
-SIGMA2_STARTS = (10.0, 100.0)
-VS_START_FACTORS = (1.0, 0.3, 3.0)  # Stribeck refit starts: v_s in units of the record's slip speed
-DELTA_START = 0.02  # Stribeck refit starts: δ
 ZETA_AT_BOUND = 0.98  # a refitted mode with ζ ≥ this × ZETA_MAX is at its bound (`reject`)
 
 
@@ -197,85 +190,5 @@ def _zeta(u):
     return float(ZETA_MAX / (1.0 + np.exp(-u)))
 
 
-def _knob_design(knob, strength, unit, scale, knob_set=None, nuisance=None, n_nuisance=0):
-    gain = np.zeros((len(KNOBS), 1))
-    gain[KNOBS.index(knob), 0] = 1.0
-    return EffectDesign((strength,), (unit,), np.array([scale]), knob_gain=gain,
-                        knob_set=knob_set or {}, nuisance=nuisance or {},
-                        n_nuisance=n_nuisance)  # fmt: skip
-
-
-@register_effect
-class LoadCoupling(AbstractEffect):
-    """Normal load (hence F_s and K_τ) varying with stage acceleration: N = N₀(1 + κa/g)."""
-
-    name: ClassVar[str] = "load_coupling"
-    kind: ClassVar[str] = "slip"
-
-    def designs(self, baseline):
-        # seeds of κ (per g) for the refit: near m·a_max ≈ F_s the baseline's optimum can sit far
-        # from the coupled one (a hidden coupling at the fast drive: the Gauss–Newton and zero
-        # starts stopped at 75–350 noise sd, κ from −0.3 or 1.0 reached 5 sd)
-        d = _knob_design("load_coupling", "kappa", "1 (per g)", 1.0)
-        return [dataclasses.replace(d, starts=tuple((k,) for k in KAPPA_STARTS))]
-
-
-def record_slip_speed(t, slip) -> float:
-    """Peak slip speed of a measured slip record, m/s: max |dx/dt| of the reading smoothed by a
-    five-sample moving average (its noise enters the derivative divided by ≈ 5 sample steps)."""
-    t, x = np.asarray(t, float), np.asarray(slip, float)
-    if x.size < 7:
-        return float(np.max(np.abs(np.gradient(x, t))))
-    xs = np.convolve(x, np.ones(5) / 5.0, mode="valid")
-    return float(np.max(np.abs(np.gradient(xs, t[2:-2]))))
-
-
-@register_effect
-class Stribeck(AbstractEffect):
-    """Velocity weakening g(v) = F_s(1 − δ(1 − exp(−(v/v_s)²))) (wang2022 Eq 25, β = 2); v_s
-    scored on the grid `VS_GRID` and fitted jointly with δ in the refit.
-
-    Refit starts: the best grid v_s by score, then δ = `DELTA_START` at v_s =
-    v_pk·`VS_START_FACTORS`, v_pk the record's own peak slip speed (`record_slip_speed`): a velocity
-    weakening changes the slip only where v is near v_s. Measured on an independent record
-    (exponential weakening, 4 kPa, fast drive, true v_s near v_pk = 2.1 µm/s): the score's best v_s
-    was the grid's top (0.32 mm/s) and its refits stopped at 3.8 noise sd; from v_s = 3.2 µm/s the
-    refit reached the noise (δ = 0.114, v_s = 1.4 µm/s; Eq 25's β = 2 fits the exponential shape).
-    """
-
-    name: ClassVar[str] = "stribeck"
-    kind: ClassVar[str] = "slip"
-
-    def designs(self, baseline):
-        gain = np.zeros((len(KNOBS), 2))
-        gain[KNOBS.index("stribeck"), 0] = gain[KNOBS.index("log10_v_s"), 1] = 1.0
-        v_pk = record_slip_speed(baseline.t, baseline.slip)
-        out = []
-        for vs in VS_GRID:
-            starts = tuple((DELTA_START, float(np.log10(v_pk * c / vs))) for c in VS_START_FACTORS
-                           if v_pk > 0)  # fmt: skip
-            out.append(EffectDesign(("delta", "log10_v_s_shift"), ("1", "1"), np.ones(2),
-                                    knob_gain=gain, knob_set={"log10_v_s": np.log10(vs)},
-                                    nuisance={"v_s_m_per_s": vs}, starts=starts,
-                                    free=((1, "v_s_m_per_s", lambda u, v0=vs: v0 * 10.0**u),)))
-        return out  # fmt: skip
-
-
-@register_effect
-class ViscousFriction(AbstractEffect):
-    """A viscous term σ2·v in the friction force (LuGre σ2, wang2022 Eq 25).
-
-    While the contact sticks, ż ≈ v and σ2·v is C_τ·ż: at the baseline's fit the viscous
-    column is nearly that of C_τ, the score sees little, and the optimum (σ2 many times C_τ, C_τ
-    itself poorly determined) lies far along that valley. The refit is therefore made whatever
-    the score (`score_gate` False) and also starts from σ2 = `SIGMA2_STARTS` × the reference
-    damping (the start C_τ); the ΔBIC of the refit decides.
-    """
-
-    name: ClassVar[str] = "viscous_friction"
-    kind: ClassVar[str] = "slip"
-    score_gate: ClassVar[bool] = False
-
-    def designs(self, baseline):
-        d = _knob_design("viscous", "sigma2", "N s/m", float(baseline.sigma_ref))
-        return [dataclasses.replace(d, starts=tuple((v,) for v in SIGMA2_STARTS))]
+for _effect in (LoadDependence("slip"), Stribeck("slip"), Viscous("slip")):
+    register_effect(_effect)  # after the additive effects, in this candidate order

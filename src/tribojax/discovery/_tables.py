@@ -15,7 +15,8 @@ Knobs (null in brackets) and the effects of kind "wang2022_table" that move them
                      lowest load (the paper's gross relative sliding at 0.6 kPa)
     load_coupling    κ [0]: N(t) = N(1 + κa/g) (as on the slip side)
     stribeck         δ_s [0], v_s on a grid: velocity weakening (as on the slip side)
-    viscous_friction ν [0]: σ2 = ν·C_τ (as on the slip side)
+    viscous_friction ν [0]: σ2 = ν·C_τ (as on the slip side; these three are the friction
+                     law's effects written once for every record kind, `_friction_effects`)
 
 and one measurement effect with an additive basis (no knob):
     position_step    s [0] on cell k (a grid over the 24 cells): ln|T| + s in that one cell — a
@@ -39,9 +40,10 @@ from jaxtyping import Array
 
 from .._chain import phase_slips, table3_contact, wang2022_loads
 from .._dynamics._profiles import TrapezoidProfile
-from .._model import VS_GRID, AbstractBaseline, AugmentedPreSlip, DiscoveryData, EffectDesign
+from .._model import AbstractBaseline, AugmentedPreSlip, DiscoveryData, EffectDesign, knob_design
 from .._tables import wang2022_table
 from ._core import AbstractEffect
+from ._friction_effects import TABLE, LoadDependence, Stribeck, Viscous
 
 TABLE_KNOBS = ("position_error", "sensor_drift", "gross_sliding", "load_coupling", "stribeck",
                "log10_v_s", "viscous")  # fmt: skip
@@ -135,21 +137,11 @@ def wang2022_table_baseline() -> Wang2022TableBaseline:
     )
 
 
-def _knob(name, strength, unit, scale=1.0, knob_set=None, nuisance=None, n_nuisance=0):
-    gain = np.zeros((len(TABLE_KNOBS), 1))
-    gain[TABLE_KNOBS.index(name), 0] = scale
-    return EffectDesign((strength,), (unit,), np.array([scale]), knob_gain=gain,
-                        knob_set=knob_set or {}, nuisance=nuisance or {},
-                        n_nuisance=n_nuisance)  # fmt: skip
-
-
-# The one-knob effects: name -> (knob, strength name, unit, scale of the strength)
+# The one-knob effects of the table model alone: name -> (knob, strength name, unit, scale)
 _ONE_KNOB = {
     "position_error": ("position_error", "epsilon", "m/m", 1e-9),
     "sensor_drift": ("sensor_drift", "rate", "nm/s", 1.0),
     "gross_sliding": ("gross_sliding", "delta", "1 (F_s deficit at the lowest load)", 0.1),
-    "load_coupling": ("load_coupling", "kappa", "1 (per g)", 0.1),
-    "viscous_friction": ("viscous", "sigma2_over_C_tau", "1", 1.0),
 }
 
 
@@ -165,16 +157,8 @@ class TableKnobEffect(AbstractEffect):
                              f"{sorted(_ONE_KNOB)}")  # fmt: skip
 
     def designs(self, baseline):
-        return [_knob(*_ONE_KNOB[self.name])]
-
-
-class TableStribeck(AbstractEffect):
-    name: ClassVar[str] = "stribeck"
-    kind: ClassVar[str] = "wang2022_table"
-
-    def designs(self, baseline):
-        return [_knob("stribeck", "delta", "1", 0.1, {"log10_v_s": np.log10(vs)},
-                      {"v_s_m_per_s": vs}, 1) for vs in VS_GRID]  # fmt: skip
+        knob, strength, unit, scale = _ONE_KNOB[self.name]
+        return [knob_design(baseline, {knob: scale}, (strength,), (unit,), scale)]
 
 
 class TablePositionStep(AbstractEffect):
@@ -199,6 +183,6 @@ class TablePositionStep(AbstractEffect):
 
 def wang2022_table_effects() -> list[AbstractEffect]:
     """The candidate effects for `wang2022_table_baseline` (not registered: pass explicitly)."""
-    one = [TableKnobEffect(n) for n in ("position_error", "sensor_drift", "gross_sliding",
-                                        "load_coupling")]  # fmt: skip
-    return [*one, TableStribeck(), TableKnobEffect("viscous_friction"), TablePositionStep()]
+    one = [TableKnobEffect(n) for n in ("position_error", "sensor_drift", "gross_sliding")]
+    law = [LoadDependence(TABLE), Stribeck(TABLE), Viscous(TABLE)]  # `_friction_effects`
+    return [*one, *law, TablePositionStep()]
