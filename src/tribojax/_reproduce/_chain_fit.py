@@ -55,6 +55,7 @@ from .._chain import chain_contact as chain_contact
 from .._chain import chain_phase_slips, mu_min, to_physical, to_theta, wang2022_loads
 from .._checks import as_f64, runtime_message
 from .._fit._engine import FAILED_RESIDUAL, FitResult, gauss_newton_step, least_squares_fit
+from .._fit._measures import rms
 from .._fit._solver import LevenbergMarquardt
 from .._presets import CHAIN_DEFAULTS
 from .._results import RESULTS, result_name
@@ -81,10 +82,11 @@ def paper_theory_slips() -> np.ndarray:
     return np.stack([wang2022_table(n)["theory_nm"] for n in TABLES], axis=1)
 
 
-def rms_relative(model, measured) -> float:
-    """√mean((model/measured − 1)²) over all cells: the acceptance metric."""
+def rms_relative(model, measured, keep=None) -> float:
+    """√mean((model/measured − 1)²) over all cells (or those where `keep` is True): the
+    acceptance metric."""
     r = np.asarray(model, dtype=float) / np.asarray(measured, dtype=float) - 1.0
-    return float(np.sqrt(np.mean(r**2)))
+    return rms(r if keep is None else r[np.asarray(keep, dtype=bool)])
 
 
 def symmetric_bound(measured=None) -> dict:

@@ -42,7 +42,14 @@ from scipy import special, stats
 from .._fit._measures import bic
 from .._results import RESULTS, result_name
 from .._tables import wang2022_table
-from ._chain_fit import TABLES, ChainFit, fit_measured_slips, measured_slips, paper_theory_slips
+from ._chain_fit import (
+    TABLES,
+    ChainFit,
+    fit_measured_slips,
+    measured_slips,
+    paper_theory_slips,
+    rms_relative,
+)
 
 NOISE_MODELS = ("relative", "absolute", "mixed")
 """Noise shapes of `robust_fit_measured_slips`: relative (on ln|T|), absolute (nm) and mixed
@@ -127,9 +134,8 @@ def _cell_list(values, mask=None, key="value") -> list[dict]:
 
 
 def rms_relative_masked(model, measured, keep) -> float:
-    """√mean((model/measured − 1)²) over the cells where `keep` is True."""
-    r = np.asarray(model, dtype=float) / np.asarray(measured, dtype=float) - 1.0
-    return float(np.sqrt(np.mean(r[np.asarray(keep, dtype=bool)] ** 2)))
+    """`rms_relative` over the cells where `keep` is True."""
+    return rms_relative(model, measured, keep)
 
 
 @dataclasses.dataclass(frozen=True)
