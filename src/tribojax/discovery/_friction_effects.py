@@ -80,34 +80,34 @@ class Stribeck(_OneKindEach):
         return 3 if self.kind == "curve" else 1
 
     def designs(self, baseline):
-        if self.kind == "curve":
+        kind = self.kind
+        if kind == "curve":
             a = np.abs(np.asarray(baseline.v))
-            grid = np.geomspace(0.5 * a.min(), 0.5 * a.max(), N_VS_GRID)
-            strength = ("F_s_minus_F_c", baseline.units[1], float(baseline.f_ref), 1.0)
-            key = "v_s"
-        else:
+            grid, key = np.geomspace(0.5 * a.min(), 0.5 * a.max(), N_VS_GRID), "v_s"
+            knobs = dict.fromkeys(("stribeck", "log10_v_s", "log_beta"), 1.0)
+            names = ("F_s_minus_F_c", "log10_v_s_shift", "log_beta_shift")
+            units, scale = (baseline.units[1], "1", "1"), [float(baseline.f_ref), 1.0, 1.0]
+        elif kind == "slip":
             grid, key = VS_GRID, "v_s_m_per_s"
-            strength = ("delta", "1", 0.1, 0.1) if self.kind == TABLE else ("delta", "1", 1.0, 1.0)
-        name, unit, scale, gain = strength
-        v_pk = record_slip_speed(baseline.t, baseline.slip) if self.kind == "slip" else 0.0
+            knobs = dict.fromkeys(("stribeck", "log10_v_s"), 1.0)
+            names, units, scale = ("delta", "log10_v_s_shift"), ("1", "1"), [1.0, 1.0]
+        else:  # a table: v_s held at its grid point, one nuisance counted in ΔBIC
+            grid, key = VS_GRID, "v_s_m_per_s"
+            knobs, names, units, scale = {"stribeck": 0.1}, ("delta",), ("1",), 0.1
+        v_pk = record_slip_speed(baseline.t, baseline.slip) if kind == "slip" else 0.0
         out = []
         for vs in grid:
             kw = {"knob_set": {"log10_v_s": np.log10(vs)}, "nuisance": {key: vs}}
-            if self.kind == TABLE:
-                out.append(knob_design(baseline, {"stribeck": gain}, (name,), (unit,), scale,
-                                       n_nuisance=1, **kw))  # fmt: skip
-                continue
-            knobs, names = ["stribeck", "log10_v_s"], [name, "log10_v_s_shift"]
-            free = [(1, key, lambda u, v0=vs: v0 * 10.0**u)]
-            if self.kind == "curve":
-                knobs, names = knobs + ["log_beta"], names + ["log_beta_shift"]
-                free.append((2, "beta", lambda u: BETA_START * np.exp(u)))
+            if kind == TABLE:
+                kw["n_nuisance"] = 1
             else:
+                kw["free"] = ((1, key, lambda u, v0=vs: v0 * 10.0**u),)
+            if kind == "curve":
+                kw["free"] += ((2, "beta", lambda u: BETA_START * np.exp(u)),)
+            if kind == "slip":
                 kw["starts"] = tuple((DELTA_START, float(np.log10(v_pk * c / vs)))
                                      for c in VS_START_FACTORS if v_pk > 0)  # fmt: skip
-            shifts = len(knobs) - 1
-            out.append(knob_design(baseline, knobs, names, [unit] + ["1"] * shifts,
-                                   [scale] + [1.0] * shifts, free=tuple(free), **kw))  # fmt: skip
+            out.append(knob_design(baseline, knobs, names, units, scale, **kw))
         return out
 
 
