@@ -51,26 +51,6 @@ def test_hysteresis_out_keeps_an_earlier_result_and_never_mixes_runs(tmp_path, c
     assert sorted(p.name for p in out.iterdir()) == ["hysteresis.csv", "hysteresis.png"]
 
 
-def test_a_command_that_draws_imports_matplotlib_alongside_its_work(tmp_path):
-    # a fresh interpreter: `hysteresis` draws a figure, so matplotlib is imported on one background
-    # thread while it computes (issue 31); `contact` draws none and starts no such thread
-    code = textwrap.dedent("""
-        import sys
-        from tribojax import _plot
-        from tribojax._cli._main import main
-        assert main(["contact", "--D", "2.5", "--G", "1e-9", "--load", "5"]) == 0
-        print("contact", len(_plot._PRELOAD), "matplotlib.pyplot" in sys.modules)
-        assert main(["hysteresis", "--n", "4", "--out", sys.argv[1]]) == 0
-        print("hysteresis", len(_plot._PRELOAD), [t.name for t in _plot._PRELOAD],
-              [t.is_alive() for t in _plot._PRELOAD], "matplotlib.pyplot" in sys.modules)
-    """)
-    out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "h")], capture_output=True,
-                         text=True, check=True).stdout.splitlines()  # fmt: skip
-    assert "contact 0 False" in out, out
-    assert "hysteresis 1 ['tribojax-pyplot'] [False] True" in out, out
-    assert (tmp_path / "h" / "hysteresis.png").stat().st_size > 1000
-
-
 def test_a_lock_left_by_a_dead_run_is_taken_over(tmp_path, capsys):
     out = tmp_path / "c"
     out.mkdir()

@@ -48,7 +48,6 @@ SUBCOMMANDS = [
 
 # Subcommands that show a progress display on a terminal (`--quiet` turns it off).
 LONG_RUNNING = ("reproduce", "fit", "discover", "frf")
-FIGURES = ("reproduce", "hysteresis", "discover", "fit", "predict", "frf")  # commands that draw
 
 
 def _version() -> str:
@@ -90,10 +89,6 @@ def main(argv=None) -> int:
 
     module, function = args.target.split(":")
     run = getattr(importlib.import_module(f"{__package__}.{module}"), function)
-    if args.command in FIGURES:  # the command's own imports are done: matplotlib alongside
-        from .._plot import preload_pyplot
-
-        preload_pyplot()
     return run_command(args.command, run, args, debug=debug)
 
 
