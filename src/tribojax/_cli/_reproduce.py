@@ -129,7 +129,7 @@ def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = Non
     block["paper_theory_rms_relative_residual_unflagged"] = rd[
         "paper_theory_rms_relative_residual_unflagged"
     ]
-    block["plain_rms_relative_residual_unflagged"] = robust_fit.rms_relative_masked(
+    block["plain_rms_relative_residual_unflagged"] = chain_fit.rms_relative(
         fit.model_nm, measured, keep
     )
     block["robust"] = rd

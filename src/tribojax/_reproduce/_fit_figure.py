@@ -6,8 +6,7 @@ import numpy as np
 
 from .._plot import pyplot, save_figure
 from .._tables import wang2022_table
-from ._chain_fit import TABLES, measured_slips, paper_theory_slips
-from ._robust_fit import rms_relative_masked
+from ._chain_fit import TABLES, measured_slips, paper_theory_slips, rms_relative
 
 
 def plot_fit_measured(plain_nm, robust_nm, flagged, path=None, *, files=True):
@@ -58,9 +57,9 @@ def plot_fit_measured(plain_nm, robust_nm, flagged, path=None, *, files=True):
     axes[0].legend(handles, labels, fontsize=7)
     fig.suptitle(
         f"wang2022 Tables 4–7: rms relative residual over the unflagged cells — robust "
-        f"{rms_relative_masked(robust_nm, y, ~flagged):.3f}, plain "
-        f"{rms_relative_masked(plain_nm, y, ~flagged):.3f}, paper theory "
-        f"{rms_relative_masked(paper, y, ~flagged):.3f}"
+        f"{rms_relative(robust_nm, y, ~flagged):.3f}, plain "
+        f"{rms_relative(plain_nm, y, ~flagged):.3f}, paper theory "
+        f"{rms_relative(paper, y, ~flagged):.3f}"
     )
     if path is not None:
         save_figure(fig, path)

@@ -133,11 +133,6 @@ def _cell_list(values, mask=None, key="value") -> list[dict]:
     return out
 
 
-def rms_relative_masked(model, measured, keep) -> float:
-    """`rms_relative` over the cells where `keep` is True."""
-    return rms_relative(model, measured, keep)
-
-
 @dataclasses.dataclass(frozen=True)
 class RobustChainFit:
     """A Student-t (robust) full-chain fit of the measured slips (module docstring).
@@ -207,11 +202,11 @@ class RobustChainFit:
 
     @property
     def rms_relative_residual(self) -> float:
-        return rms_relative_masked(self.model_nm, self.target_nm, np.ones(self.target_nm.shape))
+        return rms_relative(self.model_nm, self.target_nm)
 
     @property
     def rms_relative_residual_unflagged(self) -> float:
-        return rms_relative_masked(self.model_nm, self.target_nm, ~self.flagged)
+        return rms_relative(self.model_nm, self.target_nm, ~self.flagged)
 
     def flagged_cells(self) -> list[dict]:
         """[{"table", "vacuum_kPa", "standardized_residual"}] of the flagged cells."""
@@ -261,7 +256,7 @@ class RobustChainFit:
             ],  # fmt: skip
         )
         if paper is not None:
-            out["paper_theory_rms_relative_residual_unflagged"] = rms_relative_masked(
+            out["paper_theory_rms_relative_residual_unflagged"] = rms_relative(
                 paper, self.target_nm, ~self.flagged
             )
         return out
