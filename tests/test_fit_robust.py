@@ -1,6 +1,6 @@
-"""The robust (Student-t, EM) fit machinery and the profile likelihoods (issue 19).
+"""The robust (Student-t maximum likelihood) fit machinery and the profile likelihoods (issue 19).
 
-The EM and the flags are checked here on a straight-line problem whose data are made by NumPy
+The maximisation and the flags are checked here on a straight-line problem whose data are made by NumPy
 (seed 0) and whose Student-t maximum likelihood is found independently by SciPy's Nelder–Mead
 on the log-likelihood written out with `scipy.stats.t`. The chain-level fit to the measured
 Tables 4–7 is checked in test_reproduce.py (its CLI run includes it); the long profile study is
@@ -10,12 +10,14 @@ marked slow.
 import math
 import os
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy import optimize, stats
 
 import tribojax as tj
+from tribojax._reproduce import _chain_fit as cf
 from tribojax._reproduce import _profile_likelihood as pr
 from tribojax._reproduce import _robust_fit as rb
 
@@ -48,6 +50,10 @@ def test_noise_shapes_and_bad_input():
         rb.noise_shape(y, "percent")
     with pytest.raises(ValueError, match="nu = 0"):
         tj.robust_fit_measured_slips(nu=0)
+    with pytest.raises(ValueError, match=r"student_t nu = -1.0 is outside the allowed range"):
+        tj.fit_measured_slips(student_t=(-1.0, 0.1))
+    with pytest.raises(ValueError, match=r"student_t scale = 0.0 is outside the allowed range"):
+        tj.fit_measured_slips(student_t=(4.0, 0.0))
 
 
 def test_flag_threshold_holds_the_family_wise_level():
@@ -83,12 +89,46 @@ def test_profile_interval_of_a_parabola():
     assert pr._crossing(x[i0:], 0.01 * d[i0:], pr.CHI2_95) is None  # flat: open side
 
 
-# --- EM on the one engine against SciPy's t maximum likelihood ----------------------------------
+# --- the Student-t likelihood on the one engine against SciPy's t maximum likelihood ------------
+
+
+@pytest.mark.parametrize("nu", [1.0, 4.0, math.inf])
+def test_student_t_residuals_square_to_the_likelihood_and_invert(nu):
+    rng = np.random.default_rng(3)
+    r = np.concatenate([rng.standard_normal(20) * 0.3, [0.0, 1e-9, -4.0, 25.0]])
+    s, inv_nu = 0.2, 0.0 if math.isinf(nu) else 1.0 / nu
+    psi = np.asarray(cf.student_t_residuals(jnp.asarray(r), s, inv_nu))
+    # Σψ² = −2ℓ + 2n·ln s + const: the same differences between residual sets as SciPy's density
+    dist = stats.norm if math.isinf(nu) else stats.t(nu)
+    r2 = r[::-1] * 1.7
+    psi2 = np.asarray(cf.student_t_residuals(jnp.asarray(r2), s, inv_nu))
+    want = -2 * (np.sum(dist.logpdf(r2 / s)) - np.sum(dist.logpdf(r / s)))
+    assert np.sum(psi2**2) - np.sum(psi**2) == pytest.approx(want, rel=1e-12)
+    assert np.all(np.sign(psi) == np.sign(r))
+    np.testing.assert_allclose(cf.student_t_residuals_inverse(psi, s, inv_nu), r, rtol=1e-12,
+                               atol=1e-300)  # fmt: skip
+    # smooth through r = 0: the derivative there is √((ν+1)/ν)/s, and agrees with differences
+    d = jax.grad(lambda x: cf.student_t_residuals(x, s, inv_nu))
+    assert float(d(0.0)) == pytest.approx(math.sqrt(1 + inv_nu) / s, rel=1e-12)
+    for x in (1e-7, 0.05, 0.3, 3.0):
+        h = 1e-6 * max(x, 1e-3)
+        fd = (cf.student_t_residuals(x + h, s, inv_nu) - cf.student_t_residuals(x - h, s, inv_nu))
+        assert float(d(x)) == pytest.approx(float(fd) / (2 * h), rel=1e-7)
+
+
+@pytest.mark.parametrize("nu", [1.0, 4.0, math.inf])
+def test_t_scale_maximises_the_likelihood_over_the_scale(nu):
+    r = np.random.default_rng(4).standard_t(3, 40) * 0.1
+    s = rb.t_scale(r, nu)
+    ref = optimize.minimize_scalar(lambda ls: -rb.student_t_loglik(r, np.exp(ls), 1.0, nu),
+                                   bounds=(-10, 2), method="bounded",
+                                   options=dict(xatol=1e-12))  # fmt: skip
+    assert s == pytest.approx(np.exp(ref.x), rel=1e-6)
 
 
 def _line_residuals(theta, args):
-    x, y, sigma, sqrt_w = args
-    return sqrt_w * (theta[0] + theta[1] * x - y) / sigma
+    x, y, sigma, scale, inv_nu = args
+    return cf.student_t_residuals((theta[0] + theta[1] * x - y) / sigma, scale, inv_nu)
 
 
 @pytest.fixture(scope="module")
@@ -102,28 +142,31 @@ def line_data():
     return x, y
 
 
-def _em_line(x, y, nu):
+def _t_line(x, y, nu):
     sigma = np.abs(y)
+    inv_nu = 0.0 if math.isinf(nu) else 1.0 / nu
 
-    def m_step(u, previous):
-        args = (jnp.asarray(x), jnp.asarray(y), jnp.asarray(sigma), jnp.asarray(np.sqrt(u)))
+    def theta_step(scale, previous):
+        args = (jnp.asarray(x), jnp.asarray(y), jnp.asarray(sigma), jnp.asarray(scale),
+                jnp.asarray(inv_nu))  # fmt: skip
         fit = tj.least_squares_fit(_line_residuals, previous.theta, args, names=("a", "b"))
         return fit, fit.theta[0] + fit.theta[1] * x
 
-    first = m_step(np.ones_like(y), tj.FitResult(
+    first = theta_step(1.0, tj.FitResult(
         names=("a", "b"), values=np.zeros(2), std_errors=np.zeros(2), covariance=np.eye(2),
         correlation=np.eye(2), theta=np.zeros(2), residuals=np.zeros(0),
         singular_values=np.ones(2), converged=True,
-    ))  # fmt: skip
-    return rb.student_t_em(m_step, y, sigma, nu, (*first, 1.0), tol=1e-10, max_iterations=500)
+    ))  # fmt: skip (ordinary least squares)
+    return rb.student_t_ml(theta_step, y, sigma, nu, first, tol=1e-10, max_iterations=500)
 
 
 @pytest.mark.parametrize("nu", [1.0, 4.0])
-def test_em_reaches_scipys_t_maximum_likelihood(line_data, nu):
+def test_maximisation_reaches_scipys_t_maximum_likelihood(line_data, nu):
     x, y = line_data
-    fit, r, u, s, history, result = _em_line(x, y, nu)
+    fit, r, u, s, history, result = _t_line(x, y, nu)
     assert result == tj.RESULTS.successful
-    assert np.all(np.diff(history) > -1e-9)  # EM never lowers the likelihood
+    assert np.all(np.diff(history) > -1e-9)  # each round raises the likelihood
+    assert len(history) <= 6  # 4 and 3 fits here; EM took 30 (ν = 1) and 13 (ν = 4) to this tol
 
     def nll(p):
         a, b, log_s = p
@@ -135,22 +178,30 @@ def test_em_reaches_scipys_t_maximum_likelihood(line_data, nu):
     np.testing.assert_allclose(fit.theta, ref.x[:2], rtol=1e-5)
     assert s == pytest.approx(np.exp(ref.x[2]), rel=1e-4)
     assert history[-1] == pytest.approx(-ref.fun, abs=1e-6)
+    # at the optimum the weighted normal equations with the EM weights hold (EM's fixed point)
+    X = np.column_stack([np.ones_like(x), x]) / np.abs(y)[:, None]
+    np.testing.assert_array_less(np.abs(X.T @ (u * r)), 1e-6 * (np.abs(X.T) @ np.abs(u * r)))
     # the planted outlier is flagged (z ≈ 7.5) and heavily down-weighted; cell 12 is a −2.8σ
     # draw of the Gaussian noise, which the Cauchy fit (ν = 1) places at −3.2: flagged there too
-    z = rb.standardized_residuals(r, fit.jacobian)
+    Jw = np.sqrt(u)[:, None] * X
+    z = rb.standardized_residuals(r, Jw)
     flagged = np.flatnonzero(np.abs(z) > rb.flag_threshold(y.size)).tolist()
     assert flagged == ([12, 17] if nu == 1.0 else [17])
     assert u[17] < 0.1 * np.median(u)
 
 
-def test_gaussian_em_is_one_least_squares_fit(line_data):
+def test_gaussian_maximisation_is_one_least_squares_fit(line_data):
     x, y = line_data
-    fit, r, u, s, history, result = _em_line(x, y, math.inf)
+    fit, r, u, s, history, result = _t_line(x, y, math.inf)
     assert np.all(u == 1.0) and len(history) == 2  # the start, then one fit that moves nothing
     # the outlier inflates the Gaussian scale and standard errors (measured: ×2.2), not the t's
-    t_fit, _, _, t_s, _, _ = _em_line(x, y, 4.0)
-    assert s > 1.5 * t_s and np.all(fit.std_errors > 1.5 * t_fit.std_errors)
-    assert np.all(np.abs(t_fit.theta - [2.0, 3.0]) < 2 * t_fit.std_errors)  # truth: 2 + 3x
+    t_fit, _, t_u, t_s, _, _ = _t_line(x, y, 4.0)
+    assert s > 1.5 * t_s
+    X = np.column_stack([np.ones_like(x), x]) / np.abs(y)[:, None]
+    se = s * np.sqrt(np.diag(np.linalg.inv(X.T @ X)))
+    t_se = t_s * np.sqrt(np.diag(np.linalg.inv(X.T @ (t_u[:, None] * X))))
+    assert np.all(se > 1.5 * t_se)
+    assert np.all(np.abs(t_fit.theta - [2.0, 3.0]) < 2 * t_se)  # truth: 2 + 3x
 
 
 # --- the long profile study (chain) --------------------------------------------------------------

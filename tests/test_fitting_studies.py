@@ -55,7 +55,7 @@ def test_wu2015_loops_study_short_form(tmp_path):
 @pytest.mark.slow
 @pytest.mark.skipif(
     os.environ.get("TRIBOJAX_FULL") != "1",
-    reason="several full-chain EM fits (minutes); short CI form: the robust fit in the reproduce "
+    reason="several robust full-chain fits (minutes); short CI form: the robust fit in the reproduce "
     "CLI test and tests/test_fit_robust.py",
 )
 def test_wang2022_robust_study_short_form(tmp_path):

@@ -115,7 +115,7 @@ def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = Non
         return False
     if bar is not None:
         bar.step("robust fit")
-    print("robust fit (Student-t noise by EM on the same engine) ...")
+    print("robust fit (Student-t maximum likelihood on the same engine) ...")
     t0 = time.perf_counter()
     robust = robust_fit.robust_fit_measured_slips(
         noise=robust_fit.HEADLINE_NOISE, floor_nm=robust_fit.HEADLINE_FLOOR_NM,
@@ -145,7 +145,7 @@ def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = Non
         f"{rd['rms_relative_residual_unflagged']:.3f} (paper theory "
         f"{rd['paper_theory_rms_relative_residual_unflagged']:.3f}, plain fit "
         f"{block['plain_rms_relative_residual_unflagged']:.3f}); converged: {robust.converged}, "
-        f"{len(robust.history) - 1} EM steps, {time.perf_counter() - t0:.1f} s"
+        f"{len(robust.history) - 1} rounds, {time.perf_counter() - t0:.1f} s"
     )
     fig_path = None if out_dir is None else out_dir / "fit_measured.png"
     if fig_path and plot_fit_measured(fit.model_nm, robust.model_nm, robust.flagged, fig_path):

@@ -136,18 +136,39 @@ def _announce(phys):
     _PROGRESS["last"] = phys.tolist()  # the trial point, for messages if the chain raises
 
 
+def student_t_residuals(r, scale, inv_nu):
+    """ψ_i = sign(r_i)·√((ν+1)·ln(1 + r_i²/(ν s²))): residuals whose sum of squares is the
+    Student-t −2 log-likelihood of r at the scale s, up to terms in s alone (Lange, Little &
+    Taylor 1989, Eq 1; `inv_nu` = 1/ν, 0 for the Gaussian: ψ = r/s). Least squares on ψ is the
+    t maximum likelihood in θ at fixed s. Traceable; ψ/r is smooth and positive, also at r = 0."""
+    q = inv_nu * (r / scale) ** 2
+    small = q < 1e-12
+    q_safe = jnp.where(small, 1.0, q)  # double-where: no 0/0 in the unused branch
+    g = jnp.where(small, 1.0 - 0.5 * q, jnp.log1p(q_safe) / q_safe)  # ln(1 + q)/q
+    return r / scale * jnp.sqrt((1.0 + inv_nu) * g)
+
+
+def student_t_residuals_inverse(psi, scale, inv_nu) -> np.ndarray:
+    """r from ψ = `student_t_residuals(r, scale, inv_nu)` (NumPy; ψ is odd and increasing)."""
+    psi = np.asarray(psi, dtype=float)
+    if inv_nu == 0:
+        return psi * scale
+    return np.sign(psi) * scale * np.sqrt(np.expm1(psi**2 * inv_nu / (1.0 + inv_nu)) / inv_nu)
+
+
 def _residuals(theta, args, adjoint, shown=False):
     # (model − y)/σ·√w per cell (σ = y: model/y − 1, the default), or (ln|model| − ln|y|)/σ·√w
-    # in log form; the robust fit passes its noise model's σ, form and IRLS weights w (one
-    # compiled solve serves all)
-    theta_full0, idx, mu_min_, y, sigma, sqrt_w, log_form, loads = args
+    # in log form, then ψ of `student_t_residuals` (identity for inv_nu = 0, s = 1); the robust
+    # fit passes its noise model's σ, form, weights w or (ν, s) (one compiled solve serves all)
+    theta_full0, idx, mu_min_, y, sigma, sqrt_w, log_form, inv_nu, t_scale, loads = args
     phys = to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_min_)
     if shown:  # host callbacks: a program holding them is not kept in the compilation cache
         jax.debug.callback(_announce, jax.lax.stop_gradient(phys))
     slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
     safe = jnp.where(slips == 0, 1.0, slips)  # double-where: ln|0| is not used
     d = jnp.where(log_form > 0.5, jnp.log(jnp.abs(safe)) - jnp.log(jnp.abs(y)), slips - y)
-    r = jnp.where(ok[:, None], sqrt_w * d / sigma, FAILED_RESIDUAL).ravel()
+    psi = student_t_residuals(sqrt_w * d / sigma, t_scale, inv_nu)
+    r = jnp.where(ok[:, None], psi, FAILED_RESIDUAL).ravel()
     if shown:
         jax.debug.callback(_report, jax.lax.stop_gradient(r @ r), jax.lax.stop_gradient(phys))
     return r
@@ -279,6 +300,7 @@ def fit_measured_slips(
     sigma=None,
     weights=None,
     log_residuals=False,
+    student_t=None,
 ) -> ChainFit:
     """Fit the free chain parameters to measured phase slips by Levenberg–Marquardt.
 
@@ -303,6 +325,9 @@ def fit_measured_slips(
             √weight (iteratively reweighted least squares, `robust_fit_measured_slips`).
         log_residuals: residuals (ln|model| − ln|target|)/sigma instead of (model − target)/sigma
             (a relative error model whose heavy-tailed form is a proper density).
+        student_t: (ν, s) with ν > 0 (inf: Gaussian) and scale s > 0: minimise the Student-t
+            −log-likelihood of those residuals at the fixed scale s instead of their squares
+            (`student_t_residuals`; `robust_fit_measured_slips`); `fit.residuals` are then ψ.
     Returns:
         ChainFit; `result` a `tribojax.RESULTS` member, `converged` False (with `fit.message`)
         when LM did not succeed or stopped short of the optimum (`RESULTS.short_of_optimum`:
@@ -341,6 +366,12 @@ def fit_measured_slips(
             raise ValueError(f"{name} must be finite with the target's shape {target.shape}")
     if np.any(sigma == 0) or np.any(weights <= 0):
         raise ValueError("sigma must be non-zero and weights > 0 in every cell")
+    nu, t_scale = (math.inf, 1.0) if student_t is None else (float(v) for v in student_t)
+    if not nu > 0:
+        raise ValueError(f"student_t nu = {nu} is outside the allowed range (0, inf]")
+    if not (math.isfinite(t_scale) and t_scale > 0):
+        raise ValueError(f"student_t scale = {t_scale} is outside the allowed range (0, inf)")
+    inv_nu = 0.0 if math.isinf(nu) else 1.0 / nu
     start_full = dict(DEFAULTS)
     for k, v in dict(start or {}).items():
         if k not in PARAMETERS:
@@ -350,7 +381,8 @@ def fit_measured_slips(
     theta_full0 = jnp.asarray(to_theta([start_full[k] for k in PARAMETERS], PARAMETERS, mu_lo))
     idx = jnp.array([PARAMETERS.index(n) for n in free])
     args = (theta_full0, idx, jnp.asarray(mu_lo), jnp.asarray(target), jnp.asarray(sigma),
-            jnp.asarray(np.sqrt(weights)), jnp.asarray(float(log_residuals)), loads)  # fmt: skip
+            jnp.asarray(np.sqrt(weights)), jnp.asarray(float(log_residuals)),
+            jnp.asarray(inv_nu), jnp.asarray(t_scale), loads)  # fmt: skip
     residuals = _RESIDUALS[("fwd" if jac == "fwd" else "bwd", bool(progress))]
 
     def transform(theta):
@@ -380,7 +412,8 @@ def fit_measured_slips(
     theta = jnp.asarray(fit.theta)
     phys = np.asarray(to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo))
     r, J = fit.residuals, fit.jacobian  # at the optimum, from least_squares_fit's statistics
-    d = r.reshape(target.shape) / np.sqrt(weights) * sigma
+    d = student_t_residuals_inverse(r, t_scale, inv_nu).reshape(target.shape)
+    d = d / np.sqrt(weights) * sigma
     model = target * np.exp(d) if log_residuals else d + target
     # scaled Jacobian: ∂r/∂log p = J_θ (dp/dθ)^-1 diag(p) (transform is diagonal)
     dpdth = np.diag(np.asarray(jax.jacfwd(transform)(jnp.asarray(fit.theta))))

@@ -3,9 +3,9 @@
 For a chain parameter p_k and a grid of values, the profile log-likelihood is
 ℓ_P(p_k) = max ℓ over the other free parameters and the scale with p_k held at the value (the
 Student-t ℓ of `tribojax._reproduce._robust_fit`). Each grid point starts from its
-neighbour's optimum with the robust optimum's EM weights, then takes a few EM steps. By Wilks'
-theorem 2(ℓ̂ − ℓ_P) is approximately χ²₁, so the 95 % interval is where it stays below 3.84; a
-side where it never gets there inside the grid is open: the data do not bound the parameter there.
+neighbour's optimum with the robust optimum's EM weights, then takes a few rounds of the
+maximisation (`student_t_ml`). By Wilks' theorem 2(ℓ̂ − ℓ_P) is approximately χ²₁, so the 95 %
+interval is where it stays below 3.84; a side where it never gets there inside the grid is open: the data do not bound the parameter there.
 A parameter that was fixed in the robust fit is profiled with the fit's free parameters free
 (its ℓ_P then tells whether freeing it would pay).
 """
@@ -46,7 +46,7 @@ def profile_likelihood(
         robust: the robust fit (noise model, ν, weights, optimum).
         name: a chain parameter ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha").
         values: grid of physical values (need not contain the optimum; it is added).
-        em_iterations: EM steps per grid point after the weighted fit.
+        em_iterations: rounds of `student_t_ml` per grid point after the weighted fit.
         target, loads: as for the robust fit (default wang2022 Tables 4–7).
         fit_kw: passed to `fit_measured_slips`.
     Returns:

@@ -1,4 +1,4 @@
-"""Robust full-chain fit of wang2022's measured slips: Student-t noise fitted by EM (IRLS).
+"""Robust full-chain fit of wang2022's measured slips: Student-t noise by maximum likelihood.
 
 Noise model. Each measured phase slip y_i of Tables 4–7 is its model value with a Student-t
 error of ν degrees of freedom (ν = ∞: Gaussian) and scale s, in one of three shapes:
@@ -18,11 +18,17 @@ Gaussian Σ_i [−½ ln 2π − ln(s σ_i) − r_i²/(2s²)]. The relative and a
 proper; the mixed one takes σ_i at the measured values, which for ν < ∞ leaves tails ∝ 1/|y|
 that do not normalise (its ℓ is then only indicative).
 
-Fit. For fixed ν, EM is iteratively reweighted least squares (Lange et al., Eqs 4–5): E-step
-u_i = (ν+1)/(ν + r_i²/s²); M-step θ = argmin Σ u_i r_i² (`fit_measured_slips` with weights u:
-the one engine, warm after the first call) and s² = Σ u_i r_i²/Σ u_i (the parameter-expanded
-form, Kent, Tyler & Vardi 1994: the same fixed point, since Σ u_i = n at the optimum). EM stops
-when one step raises ℓ by less than `tol`.
+Fit. For fixed ν the maximum of ℓ over θ and s is found by coordinate ascent
+(`student_t_ml`): θ at fixed s by least squares on ψ_i = sign(r_i)·√((ν+1)·ln(1 + r_i²/(νs²))),
+whose sum of squares is −2ℓ up to terms in s (`fit_measured_slips(student_t=(ν, s))`: the one
+engine, the one compiled solve), then s at fixed θ exactly (the root of Σ u_i r_i²/s² = n,
+`t_scale`), until one round raises ℓ by less than `tol`. Its fixed point is EM's — the
+likelihood equations Σ u_i r_i ∂r_i/∂θ = 0 with u_i = (ν+1)/(ν + r_i²/s²) (Lange et al.,
+Eqs 4–5) — but EM (iteratively reweighted least squares) takes the weights u as fixed in each
+fit and converges linearly (seven weighted fits for the headline model), while the ψ fit
+follows the likelihood itself and s hardly moves θ (location and scale are orthogonal for a
+symmetric density): two fits and a check. The reported chain is the least-squares fit weighted
+by u at the optimum (it stays put there), whose Jacobian gives the standard errors s²(JᵀUJ)⁻¹.
 
 Outliers. The standardized residual of a cell is z_i = r_i/(ŝ·√(1 − h_ii)), h the leverage of
 the weighted fit (hat matrix of √u·J) and ŝ = 1.4826·median|r_i| the robust standard deviation
@@ -37,7 +43,7 @@ import dataclasses
 import math
 
 import numpy as np
-from scipy import special, stats
+from scipy import optimize, special, stats
 
 from .._fit._measures import bic
 from .._results import RESULTS, result_name
@@ -145,8 +151,9 @@ class RobustChainFit:
         residuals: r (module docstring), (n, 4). weights: the EM weights u, (n, 4).
         standardized: z, (n, 4) (core scale `core_scale(residuals)`). threshold: the flag
             level on |z|.
-        log_likelihood: ℓ at the optimum; history: ℓ after each EM step.
-        result: `tribojax.RESULTS` (successful when EM and the last inner fit converged).
+        log_likelihood: ℓ at the optimum; history: ℓ at the start and after each round of
+            `student_t_ml` (reproduction.json's "em_iterations" counts them).
+        result: `tribojax.RESULTS` (successful when the maximisation and its fits converged).
     """
 
     chain: ChainFit
@@ -221,7 +228,8 @@ class RobustChainFit:
             "noise": self.noise,
             "floor_nm": self.floor_nm,
             "scale": self.scale,
-            "fitted_by": "EM = iteratively reweighted least squares on least_squares_fit",
+            "fitted_by": "maximum likelihood on least_squares_fit: theta at fixed scale "
+                         "(Student-t residuals), then the scale, until the likelihood stops rising",
         }
 
     def as_dict(self) -> dict:
@@ -270,35 +278,62 @@ def _log_resid(y, model, sigma):
     return np.log(np.abs(y / np.asarray(model)))
 
 
-def student_t_em(m_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3, log=False):
-    """EM for Student-t noise around a weighted least-squares fit (Lange et al. 1989, Eqs 4–5).
+def t_scale(r, nu) -> float:
+    """The maximum-likelihood scale s of residuals r at fixed θ: the root of
+    Σ u_i r_i²/s² = n with u_i = (ν+1)/(ν + r_i²/s²) (∂ℓ/∂s = 0; unique, since the sum falls
+    from (ν+1)·#{r_i ≠ 0} to 0 as s grows); ν = inf: s² = mean r²."""
+    r = np.asarray(r, dtype=float).ravel()
+    rms_ = math.sqrt(float(np.mean(r**2)))
+    if math.isinf(nu) or rms_ == 0:
+        return rms_
+    r2 = r**2
+
+    def excess(log_s):
+        t = r2 * math.exp(-2.0 * log_s)
+        return float(np.sum((nu + 1.0) * t / (nu + t))) - r.size
+
+    # the root lies below rms·√((ν+1)/ν), where Σ u r²/s² ≤ (ν+1)/ν·Σ r²/s² = n, and above
+    # rms·e⁻⁴⁰, where the sum is ≈ (ν+1)·#{r_i ≠ 0} > n unless most r_i are 0
+    lo, hi = math.log(rms_) - 40.0, math.log(rms_ * math.sqrt((nu + 1.0) / nu))
+    if excess(lo) <= 0:  # almost every residual is exactly zero
+        return rms_
+    return math.exp(optimize.brentq(excess, lo, hi, xtol=1e-14, rtol=1e-14))
+
+
+def student_t_ml(theta_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3, log=False):
+    """Student-t maximum likelihood around a least-squares model by coordinate ascent.
+
+    Each iteration maximises ℓ over θ at the current scale s — one least-squares fit of the
+    residuals ψ of `student_t_residuals`, whose sum of squares is −2ℓ up to terms in s — and
+    then over s at that θ (`t_scale`, exact). Both steps raise ℓ, and the two converge together
+    quickly: for a symmetric density the Fisher information of θ and s is block diagonal, so θ
+    hardly moves when s does. It reaches EM's fixed point (the same likelihood equations,
+    Lange et al. Eqs 4–5) in a few fits instead of one weighted fit per EM step (the headline
+    fit of `tribojax reproduce`: 3 fits and 8 evaluations against 7 fits and 22).
 
     Args:
-        m_step: (weights, previous fit) -> (fit, model): the weighted least-squares fit of
-            Σ u_i r_i² (weights u enter its residual function as √u) and its model values.
+        theta_step: (s, previous fit) -> (fit, model): the fit of θ at fixed scale s, started
+            from the previous fit; the fits need `converged` and `result`.
         y, sigma: data and noise shapes (same shape); r = (y − model)/σ, or ln|y/model| if
             `log` (σ then enters ℓ only, as the Jacobian |y|).
-        nu: degrees of freedom (inf: Gaussian, one weighted fit).
-        first: (fit, model, weights) to start from (e.g. the unweighted fit, weights 1).
-        max_iterations, tol: stop when one EM step raised ℓ by less than `tol` (nats).
+        nu: degrees of freedom (inf: Gaussian, one least-squares fit).
+        first: (fit, model) to start from (e.g. the plain least-squares fit).
+        max_iterations, tol: stop when one iteration raised ℓ by less than `tol` (nats).
     Returns:
-        (fit, r, u, s, history of ℓ, RESULTS member); the fits need `converged` and `result`.
+        (fit, r, u, s, history of ℓ, RESULTS member); u are the EM weights at the optimum
+        (`em_weights`): J_θᵀ·diag(u)·r = 0 there, the likelihood equations.
     """
     y, sigma = np.asarray(y, dtype=float), np.asarray(sigma, dtype=float)
-    fit, model, u = first
+    fit, model = first
     resid = _log_resid if log else _lin_resid
     r = resid(y, model, sigma)
-    u = np.broadcast_to(np.asarray(u, dtype=float), y.shape)
-    scale = math.sqrt(float(np.sum(u * r**2) / y.size))
+    scale = t_scale(r, nu)
     history = [student_t_loglik(r, scale, sigma, nu)]
     result = RESULTS.not_converged
     for _ in range(int(max_iterations)):
-        u = em_weights(r, scale, nu)
-        fit, model = m_step(u, fit)
+        fit, model = theta_step(scale, fit)
         r = resid(y, model, sigma)
-        # Σu instead of n (PX-EM, Kent, Tyler & Vardi 1994): same fixed point (Σu = n at the
-        # optimum), fewer steps
-        scale = math.sqrt(float(np.sum(u * r**2) / np.sum(u)))
+        scale = t_scale(r, nu)
         history.append(student_t_loglik(r, scale, sigma, nu))
         if not fit.converged:
             result = fit.result
@@ -306,7 +341,7 @@ def student_t_em(m_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3, lo
         if abs(history[-1] - history[-2]) < tol:
             result = RESULTS.successful
             break
-    return fit, r, u, scale, tuple(history), result
+    return fit, r, em_weights(r, scale, nu), scale, tuple(history), result
 
 
 def robust_fit_measured_slips(
@@ -324,24 +359,27 @@ def robust_fit_measured_slips(
     tol: float = 1e-3,
     **fit_kw,
 ) -> RobustChainFit:
-    """Student-t fit of the chain to the measured phase slips by EM (module docstring).
+    """Student-t fit of the chain to the measured phase slips (module docstring).
 
     Args:
         start: physical start values (as `fit_measured_slips`); ignored if `initial` is given.
         free: the free chain parameters (`fit_measured_slips`).
         noise, floor_nm: the noise shape ("relative", "absolute", or "mixed" with floor c nm).
-        nu: Student-t degrees of freedom, > 0 (inf: the Gaussian likelihood, one weighted fit).
+        nu: Student-t degrees of freedom, > 0 (inf: the Gaussian likelihood, one fit).
         target, loads: data and loads (default: wang2022 Tables 4–7 at Table 3's loads).
-        initial: a `ChainFit` of the same data and free parameters to start EM from (its
-            model gives the first weights; saves the first fit; any noise shape);
-            `initial_weights` the weights it was fitted with (default 1). Without `initial`,
-            the first fit from `start` uses `initial_weights` (e.g. another fit's EM weights:
-            a start away from the outlier's pull).
-        max_iterations, tol: EM stops when ℓ rose by less than `tol` (nats) in one step.
+        initial: a `ChainFit` of the same data and free parameters to start from (its model
+            gives the first scale; saves the first fit; any noise shape). Without it, the first
+            fit from `start` is a least-squares fit weighted by `initial_weights` (default 1;
+            e.g. another fit's EM weights: a start away from the outlier's pull).
+        max_iterations, tol: the maximisation (`student_t_ml`) stops when ℓ rose by less than
+            `tol` (nats) in one iteration.
         fit_kw: passed to `fit_measured_slips` (max_steps, rtol, atol, jac, progress).
     Returns:
-        RobustChainFit; `result` is `RESULTS.not_converged` when EM used up `max_iterations`,
-        or the inner fit's result when that failed. Never raises for non-convergence.
+        RobustChainFit; its `chain` is the weighted least-squares fit with the EM weights at
+        the optimum (where that fit's normal equations are the likelihood equations: it stays
+        put, and its Jacobian √u·J gives the standard errors s²(JᵀUJ)⁻¹ and the leverages).
+        `result` is `RESULTS.not_converged` when `max_iterations` were used up, or the inner
+        fit's result when that failed. Never raises for non-convergence.
     """
     if not (nu > 0):
         raise ValueError(f"nu = {nu} is outside the allowed range (0, inf]")
@@ -352,21 +390,24 @@ def robust_fit_measured_slips(
               **fit_kw)  # fmt: skip
     if initial is None:  # weighted by `initial_weights` if given (e.g. another fit's EM weights)
         initial = fit_measured_slips(start, weights=initial_weights, **kw)
-    fit = initial
 
-    def m_step(u, previous):
-        new = fit_measured_slips(previous.parameters, weights=u, **kw)
+    def theta_step(scale, previous):
+        new = fit_measured_slips(previous.parameters, student_t=(nu, scale), **kw)
         return new, new.model_nm
 
-    u0 = 1.0 if initial_weights is None else initial_weights
-    fit, r, u, scale, history, result = student_t_em(
-        m_step, y, sigma, nu, (fit, fit.model_nm, u0), max_iterations=max_iterations, tol=tol,
-        log=log,
+    fit, r, u, scale, history, result = student_t_ml(
+        theta_step, y, sigma, nu, (initial, initial.model_nm), max_iterations=max_iterations,
+        tol=tol, log=log,
     )  # fmt: skip
-    z = standardized_residuals(r, fit.fit.jacobian)
+    chain = fit_measured_slips(fit.parameters, weights=u, **kw)  # statistics at the optimum
+    if result == RESULTS.successful and not chain.converged:
+        result = chain.result
+    r = (_log_resid if log else _lin_resid)(y, chain.model_nm, sigma)
+    scale = t_scale(r, nu)
+    z = standardized_residuals(r, chain.fit.jacobian)
     return RobustChainFit(
-        chain=fit, noise=noise, floor_nm=None if noise != "mixed" else float(floor_nm),
+        chain=chain, noise=noise, floor_nm=None if noise != "mixed" else float(floor_nm),
         nu=float(nu), scale=scale, residuals=r, weights=u, standardized=z,
-        threshold=flag_threshold(y.size), log_likelihood=history[-1], history=history,
-        result=result,
+        threshold=flag_threshold(y.size), log_likelihood=student_t_loglik(r, scale, sigma, nu),
+        history=history, result=result,
     )  # fmt: skip
