@@ -126,6 +126,17 @@ def test_t_scale_maximises_the_likelihood_over_the_scale(nu):
     assert s == pytest.approx(np.exp(ref.x), rel=1e-6)
 
 
+def test_t_scale_of_a_cell_not_evaluated_is_nan_not_an_exception():
+    assert math.isnan(rb.t_scale(np.array([0.1, np.nan, -0.2]), 4.0))
+
+
+def test_a_robust_fit_whose_inner_fit_stops_short_says_so():
+    # two LM steps per fit: the first fit stops on its budget, and the robust fit reports it
+    f = tj.robust_fit_measured_slips(max_steps=2)
+    assert not f.converged and f.result == tj.RESULTS.nonlinear_max_steps_reached
+    assert f.as_dict()["converged"] is False and np.all(np.isfinite(f.model_nm))
+
+
 def _line_residuals(theta, args):
     x, y, sigma, scale, inv_nu = args
     return cf.student_t_residuals((theta[0] + theta[1] * x - y) / sigma, scale, inv_nu)

@@ -191,7 +191,8 @@ class ChainFit:
         fit: FitResult over the free parameters (θ statistics, covariance by the delta method).
         parameters: all five physical parameters (free and fixed), dict.
         free: names of the free parameters.
-        model_nm, target_nm: (n, 4) phase slips at the optimum and the fitted data.
+        model_nm, target_nm: (n, 4) phase slips at the optimum (NaN in a cell the chain could
+            not evaluate there) and the fitted data.
         scaled_singular_values, scaled_right_vectors: SVD of the Jacobian of the residuals with
             respect to log p (elasticities); rows of the right vectors are parameter combinations,
             largest singular value first.
@@ -412,9 +413,10 @@ def fit_measured_slips(
     theta = jnp.asarray(fit.theta)
     phys = np.asarray(to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo))
     r, J = fit.residuals, fit.jacobian  # at the optimum, from least_squares_fit's statistics
-    d = student_t_residuals_inverse(r, t_scale, inv_nu).reshape(target.shape)
-    d = d / np.sqrt(weights) * sigma
-    model = target * np.exp(d) if log_residuals else d + target
+    failed = (r == FAILED_RESIDUAL).reshape(target.shape)  # cells not evaluated: NaN model
+    d = student_t_residuals_inverse(np.where(r == FAILED_RESIDUAL, 0.0, r), t_scale, inv_nu)
+    d = d.reshape(target.shape) / np.sqrt(weights) * sigma
+    model = np.where(failed, np.nan, target * np.exp(d) if log_residuals else d + target)
     # scaled Jacobian: ∂r/∂log p = J_θ (dp/dθ)^-1 diag(p) (transform is diagonal)
     dpdth = np.diag(np.asarray(jax.jacfwd(transform)(jnp.asarray(fit.theta))))
     S = J / dpdth[None, :] * np.asarray(fit.values)[None, :]

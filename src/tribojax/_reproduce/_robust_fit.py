@@ -284,7 +284,7 @@ def t_scale(r, nu) -> float:
     from (ν+1)·#{r_i ≠ 0} to 0 as s grows); ν = inf: s² = mean r²."""
     r = np.asarray(r, dtype=float).ravel()
     rms_ = math.sqrt(float(np.mean(r**2)))
-    if math.isinf(nu) or rms_ == 0:
+    if math.isinf(nu) or rms_ == 0 or not math.isfinite(rms_):  # (NaN: a cell not evaluated)
         return rms_
     r2 = r**2
 
@@ -332,12 +332,12 @@ def student_t_ml(theta_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3
     result = RESULTS.not_converged
     for _ in range(int(max_iterations)):
         fit, model = theta_step(scale, fit)
+        if not fit.converged:  # r, s and ℓ stay those of the last fit that converged
+            result = fit.result
+            break
         r = resid(y, model, sigma)
         scale = t_scale(r, nu)
         history.append(student_t_loglik(r, scale, sigma, nu))
-        if not fit.converged:
-            result = fit.result
-            break
         if abs(history[-1] - history[-2]) < tol:
             result = RESULTS.successful
             break
@@ -404,7 +404,9 @@ def robust_fit_measured_slips(
         result = chain.result
     r = (_log_resid if log else _lin_resid)(y, chain.model_nm, sigma)
     scale = t_scale(r, nu)
-    z = standardized_residuals(r, chain.fit.jacobian)
+    J = chain.fit.jacobian
+    ok = np.all(np.isfinite(r)) and np.all(np.isfinite(J))  # else a cell was not evaluated
+    z = standardized_residuals(r, J) if ok else np.full_like(r, np.nan)
     return RobustChainFit(
         chain=chain, noise=noise, floor_nm=None if noise != "mixed" else float(floor_nm),
         nu=float(nu), scale=scale, residuals=r, weights=u, standardized=z,
