@@ -130,6 +130,20 @@ def test_t_scale_of_a_cell_not_evaluated_is_nan_not_an_exception():
     assert math.isnan(rb.t_scale(np.array([0.1, np.nan, -0.2]), 4.0))
 
 
+def test_a_start_with_a_cell_not_evaluated_ends_the_maximisation_at_once():
+    y, model = np.array([1.0, 2.0, 3.0]), np.array([1.1, np.nan, 2.9])
+    first = tj.FitResult(names=("a",), values=np.zeros(1), std_errors=np.zeros(1),
+                         covariance=np.eye(1), correlation=np.eye(1), theta=np.zeros(1),
+                         residuals=np.zeros(3), singular_values=np.ones(1),
+                         converged=True)  # fmt: skip
+
+    def theta_step(scale, previous):
+        raise AssertionError("no fit from a start that could not be evaluated")
+
+    fit, r, u, s, history, result = rb.student_t_ml(theta_step, y, y, 4.0, (first, model))
+    assert fit is first and result == tj.RESULTS.model_failed_at_start and math.isnan(s)
+
+
 def test_a_robust_fit_whose_inner_fit_stops_short_says_so():
     # two LM steps per fit: the first fit stops on its budget, and the robust fit reports it
     f = tj.robust_fit_measured_slips(max_steps=2)

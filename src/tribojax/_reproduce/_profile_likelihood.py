@@ -3,9 +3,11 @@
 For a chain parameter p_k and a grid of values, the profile log-likelihood is
 ℓ_P(p_k) = max ℓ over the other free parameters and the scale with p_k held at the value (the
 Student-t ℓ of `tribojax._reproduce._robust_fit`). Each grid point starts from its
-neighbour's optimum with the robust optimum's EM weights, then takes a few rounds of the
-maximisation (`student_t_ml`). By Wilks' theorem 2(ℓ̂ − ℓ_P) is approximately χ²₁, so the 95 %
-interval is where it stays below 3.84; a side where it never gets there inside the grid is open: the data do not bound the parameter there.
+neighbour's optimum with the robust optimum's EM weights (where the chain cannot be evaluated
+at that start, from the optimum half-way to it first, up to `CONTINUATION_STEPS` times), then
+takes a few rounds of the maximisation (`student_t_ml`). By Wilks' theorem 2(ℓ̂ − ℓ_P) is
+approximately χ²₁, so the 95 % interval is where it stays below 3.84; a side where it never
+gets there inside the grid is open: the data do not bound the parameter there.
 A parameter that was fixed in the robust fit is profiled with the fit's free parameters free
 (its ℓ_P then tells whether freeing it would pay).
 """
@@ -15,10 +17,12 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
+from .._results import RESULTS
 from ._chain_fit import fit_measured_slips
 from ._robust_fit import RobustChainFit, residual_form, robust_fit_measured_slips
 
 CHI2_95 = float(stats.chi2.ppf(0.95, 1))  # 3.84
+CONTINUATION_STEPS = 3  # halvings towards a grid value the neighbour's optimum cannot reach
 
 
 def _crossing(x, d, level):
@@ -69,9 +73,23 @@ def profile_likelihood(
     for side in (grid[grid > best], grid[grid < best][::-1]):  # outward from the optimum
         start = dict(robust.parameters)
         for v in side:
-            start[name] = float(v)
-            first = fit_measured_slips(start, free=others, target=y, loads=loads, **form,
-                                       weights=robust.weights, **fit_kw)  # fmt: skip
+
+            def weighted(at, value):
+                return fit_measured_slips(dict(at, **{name: float(value)}), free=others,
+                                          target=y, loads=loads, **form,
+                                          weights=robust.weights, **fit_kw)  # fmt: skip
+
+            first, here = weighted(start, v), start[name]
+            for _ in range(CONTINUATION_STEPS):
+                if first.result != RESULTS.model_failed_at_start:
+                    break
+                # the neighbour's optimum is outside the chain's domain at v: half-way first
+                here = 0.5 * (here + float(v))
+                half = weighted(start, here)
+                if not half.converged:
+                    break
+                start = dict(half.parameters)
+                first = weighted(start, v)
             fit = robust_fit_measured_slips(
                 free=others, noise=robust.noise, floor_nm=robust.floor_nm, nu=robust.nu,
                 target=y, loads=loads, initial=first, initial_weights=robust.weights,

@@ -330,6 +330,9 @@ def student_t_ml(theta_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3
     scale = t_scale(r, nu)
     history = [student_t_loglik(r, scale, sigma, nu)]
     result = RESULTS.not_converged
+    if not math.isfinite(scale):  # the start has a cell the model could not evaluate
+        bad = fit.result if not fit.converged else RESULTS.model_failed_at_start
+        return fit, r, em_weights(r, scale, nu), scale, tuple(history), bad
     for _ in range(int(max_iterations)):
         fit, model = theta_step(scale, fit)
         if not fit.converged:  # r, s and ℓ stay those of the last fit that converged
@@ -399,9 +402,11 @@ def robust_fit_measured_slips(
         theta_step, y, sigma, nu, (initial, initial.model_nm), max_iterations=max_iterations,
         tol=tol, log=log,
     )  # fmt: skip
-    chain = fit_measured_slips(fit.parameters, weights=u, **kw)  # statistics at the optimum
-    if result == RESULTS.successful and not chain.converged:
-        result = chain.result
+    chain = fit  # (the start could not be evaluated: nothing to weight)
+    if np.all(np.isfinite(u)):
+        chain = fit_measured_slips(fit.parameters, weights=u, **kw)  # statistics at the optimum
+        if result == RESULTS.successful and not chain.converged:
+            result = chain.result
     r = (_log_resid if log else _lin_resid)(y, chain.model_nm, sigma)
     scale = t_scale(r, nu)
     J = chain.fit.jacobian
