@@ -2,7 +2,8 @@
 
     python -m fitting.wang2022_robust [--out DIR] [--short]
 
-1. The plain fit (relative Gaussian, D, G, μ_t free) and Student-t maximum-likelihood fits under
+1. The plain fit (relative Gaussian, D, G, μ_t free) and Student-t maximum-likelihood fits (two
+   starts each: the plain fit and the headline optimum; the higher likelihood kept) under
    three noise shapes — relative (σ ∝ |T|), absolute (σ = const nm) and mixed (σ ∝ √(T² + c²)) — and several
    degrees of freedom ν: log-likelihood, AIC, BIC, parameters, flagged cells, rms relative
    residual over the unflagged cells and the paper theory's on the same cells.
@@ -61,12 +62,23 @@ def run(short: bool = False, profiles_only: bool = False) -> dict:
     if profiles_only:
         models = []
     rows, fits = [], {}
+    # the headline model first: its optimum is the second start of every model (the likelihood
+    # of a heavy-tailed absolute shape has several maxima: from the plain fit alone the absolute
+    # ν = 1 fit ended at ℓ = −50.33, from the headline optimum at −48.62)
+    best = tj.robust_fit_measured_slips(initial=plain)
     for noise, floor in models:
         for nu in nus:
             t = time.perf_counter()
-            f = tj.robust_fit_measured_slips(noise=noise, floor_nm=floor, nu=nu, initial=plain)
+            kw = dict(noise=noise, floor_nm=floor, nu=nu)
+            tries = {"plain_fit": tj.robust_fit_measured_slips(initial=plain, **kw),
+                     "headline_optimum": tj.robust_fit_measured_slips(best.parameters, **kw)}
+            ok = {k: f for k, f in tries.items() if math.isfinite(f.log_likelihood)}
+            start = max(ok or tries, key=lambda k: (ok or tries)[k].log_likelihood)
+            f = tries[start]
             fits[(noise, floor, nu)] = f
-            rows.append(_row(f, time.perf_counter() - t))
+            rows.append(dict(_row(f, time.perf_counter() - t), start=start,
+                             log_likelihood_by_start={k: g.log_likelihood
+                                                      for k, g in tries.items()}))  # fmt: skip
             _log(f"{noise} {floor} nu={nu}: ll {f.log_likelihood:.3f}, aic {f.aic:.2f}, "
                  f"flagged {f.flagged_cells()}, {time.perf_counter() - t:.0f} s")  # fmt: skip
     # ν chosen from a grid counts as one more parameter
@@ -83,11 +95,10 @@ def run(short: bool = False, profiles_only: bool = False) -> dict:
         "noise_models": rows,
     }
     if rows:
-        best = min(r["aic_with_nu"] for r in rows)
-        out["within_2_aic_of_best"] = [r["loss"] for r in rows if r["aic_with_nu"] < best + 2]
+        lowest = min(r["aic_with_nu"] for r in rows)
+        out["within_2_aic_of_best"] = [r["loss"] for r in rows if r["aic_with_nu"] < lowest + 2]
     if short:
         return out
-    best = tj.robust_fit_measured_slips(initial=plain)  # the headline model
     out["headline"] = _row(best, 0.0)
     out["profiles"] = {}
     for name, grid in PROFILE_GRIDS.items():
