@@ -3,9 +3,9 @@
     python -m fitting.wang2022_robust [--out DIR] [--short]
 
 1. The plain fit (relative Gaussian, D, G, μ_t free) and Student-t maximum-likelihood fits (two
-   starts each: the plain fit and the headline optimum; the higher likelihood kept) under
-   three noise shapes — relative (σ ∝ |T|), absolute (σ = const nm) and mixed (σ ∝ √(T² + c²)) — and several
-   degrees of freedom ν: log-likelihood, AIC, BIC, parameters, flagged cells, rms relative
+   starts each: the plain fit and the headline optimum; the higher likelihood kept) under three
+   noise shapes — relative (σ ∝ |T|), absolute (σ = const nm) and mixed (σ ∝ √(T² + c²)) — and
+   several degrees of freedom ν: log-likelihood, AIC, BIC, parameters, flagged cells, rms relative
    residual over the unflagged cells and the paper theory's on the same cells.
 2. The headline model (`tj.robust_fit_measured_slips()`'s defaults: relative, ν = 4; chosen
    among the models within 2 AIC of the best, the relative shape being the acceptance metric's

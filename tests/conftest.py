@@ -111,4 +111,24 @@ def pytest_xdist_make_scheduler(config, log):
         def _split_scope(self, nodeid):
             return _unit(nodeid)
 
+        def remove_node(self, node):
+            # xdist 3.8 puts every unit of a crashed worker back in the queue, finished ones too;
+            # a new worker handed a finished unit runs nothing, nothing asks for the next unit,
+            # and the session hangs (a crash near the end ate CI's 5,400 s at stop 41): only
+            # units with tests left go back
+            work = self.assigned_work.get(node, {})
+            for scope in [s for s, unit in work.items() if all(unit.values())]:
+                del work[scope]
+            return super().remove_node(node)
+
+        def mark_test_pending(self, item):
+            # pytest-rerunfailures asks for the test a crashed worker was running once more
+            # (LoadScopeScheduling refuses); `remove_node` already queued it unless it ran
+            pending = [u for w in (self.workqueue, *self.assigned_work.values())
+                       for u in w.values() if u.get(item) is False]  # fmt: skip
+            if not pending:
+                self.workqueue.setdefault(self._split_scope(item), {})[item] = False
+                for node in self.assigned_work:
+                    self._reschedule(node)
+
     return _UnitScheduling(config, log)

@@ -1,7 +1,7 @@
 """The robust (Student-t maximum likelihood) fit machinery and the profile likelihoods (issue 19).
 
-The maximisation and the flags are checked here on a straight-line problem whose data are made by NumPy
-(seed 0) and whose Student-t maximum likelihood is found independently by SciPy's Nelder–Mead
+The maximisation and the flags are checked here on a straight-line problem whose data are made by
+NumPy (seed 0) and whose Student-t maximum likelihood is found independently by SciPy's Nelder–Mead
 on the log-likelihood written out with `scipy.stats.t`. The chain-level fit to the measured
 Tables 4–7 is checked in test_reproduce.py (its CLI run includes it); the long profile study is
 marked slow.
@@ -17,9 +17,9 @@ import pytest
 from scipy import optimize, stats
 
 import tribojax as tj
-from tribojax._reproduce import _chain_fit as cf
 from tribojax._reproduce import _profile_likelihood as pr
 from tribojax._reproduce import _robust_fit as rb
+from tribojax._reproduce import _student_t as st
 
 # --- the likelihood, weights, flags (no model) -------------------------------------------------
 
@@ -34,7 +34,7 @@ def test_loglik_is_scipys_density(nu):
     r = (y - model) / sigma
     dist = stats.norm if math.isinf(nu) else stats.t(nu)
     want = np.sum(dist.logpdf((y - model) / (s * sigma)) - np.log(s * sigma))
-    assert rb.student_t_loglik(r, s, sigma, nu) == pytest.approx(want, rel=1e-12)
+    assert st.student_t_loglik(r, s, sigma, nu) == pytest.approx(want, rel=1e-12)
 
 
 def test_noise_shapes_and_bad_input():
@@ -97,37 +97,37 @@ def test_student_t_residuals_square_to_the_likelihood_and_invert(nu):
     rng = np.random.default_rng(3)
     r = np.concatenate([rng.standard_normal(20) * 0.3, [0.0, 1e-9, -4.0, 25.0]])
     s, inv_nu = 0.2, 0.0 if math.isinf(nu) else 1.0 / nu
-    psi = np.asarray(cf.student_t_residuals(jnp.asarray(r), s, inv_nu))
+    psi = np.asarray(st.student_t_residuals(jnp.asarray(r), s, inv_nu))
     # Σψ² = −2ℓ + 2n·ln s + const: the same differences between residual sets as SciPy's density
     dist = stats.norm if math.isinf(nu) else stats.t(nu)
     r2 = r[::-1] * 1.7
-    psi2 = np.asarray(cf.student_t_residuals(jnp.asarray(r2), s, inv_nu))
+    psi2 = np.asarray(st.student_t_residuals(jnp.asarray(r2), s, inv_nu))
     want = -2 * (np.sum(dist.logpdf(r2 / s)) - np.sum(dist.logpdf(r / s)))
     assert np.sum(psi2**2) - np.sum(psi**2) == pytest.approx(want, rel=1e-12)
     assert np.all(np.sign(psi) == np.sign(r))
-    np.testing.assert_allclose(cf.student_t_residuals_inverse(psi, s, inv_nu), r, rtol=1e-12,
+    np.testing.assert_allclose(st.student_t_residuals_inverse(psi, s, inv_nu), r, rtol=1e-12,
                                atol=1e-300)  # fmt: skip
     # smooth through r = 0: the derivative there is √((ν+1)/ν)/s, and agrees with differences
-    d = jax.grad(lambda x: cf.student_t_residuals(x, s, inv_nu))
+    d = jax.grad(lambda x: st.student_t_residuals(x, s, inv_nu))
     assert float(d(0.0)) == pytest.approx(math.sqrt(1 + inv_nu) / s, rel=1e-12)
     for x in (1e-7, 0.05, 0.3, 3.0):
         h = 1e-6 * max(x, 1e-3)
-        fd = (cf.student_t_residuals(x + h, s, inv_nu) - cf.student_t_residuals(x - h, s, inv_nu))
+        fd = st.student_t_residuals(x + h, s, inv_nu) - st.student_t_residuals(x - h, s, inv_nu)
         assert float(d(x)) == pytest.approx(float(fd) / (2 * h), rel=1e-7)
 
 
 @pytest.mark.parametrize("nu", [1.0, 4.0, math.inf])
 def test_t_scale_maximises_the_likelihood_over_the_scale(nu):
     r = np.random.default_rng(4).standard_t(3, 40) * 0.1
-    s = rb.t_scale(r, nu)
-    ref = optimize.minimize_scalar(lambda ls: -rb.student_t_loglik(r, np.exp(ls), 1.0, nu),
+    s = st.t_scale(r, nu)
+    ref = optimize.minimize_scalar(lambda ls: -st.student_t_loglik(r, np.exp(ls), 1.0, nu),
                                    bounds=(-10, 2), method="bounded",
                                    options=dict(xatol=1e-12))  # fmt: skip
     assert s == pytest.approx(np.exp(ref.x), rel=1e-6)
 
 
 def test_t_scale_of_a_cell_not_evaluated_is_nan_not_an_exception():
-    assert math.isnan(rb.t_scale(np.array([0.1, np.nan, -0.2]), 4.0))
+    assert math.isnan(st.t_scale(np.array([0.1, np.nan, -0.2]), 4.0))
 
 
 def test_a_start_with_a_cell_not_evaluated_ends_the_maximisation_at_once():
@@ -140,7 +140,7 @@ def test_a_start_with_a_cell_not_evaluated_ends_the_maximisation_at_once():
     def theta_step(scale, previous):
         raise AssertionError("no fit from a start that could not be evaluated")
 
-    fit, r, u, s, history, result = rb.student_t_ml(theta_step, y, y, 4.0, (first, model))
+    fit, r, u, s, history, result = st.student_t_ml(theta_step, y, y, 4.0, (first, model))
     assert fit is first and result == tj.RESULTS.model_failed_at_start and math.isnan(s)
 
 
@@ -153,7 +153,7 @@ def test_a_robust_fit_whose_inner_fit_stops_short_says_so():
 
 def _line_residuals(theta, args):
     x, y, sigma, scale, inv_nu = args
-    return cf.student_t_residuals((theta[0] + theta[1] * x - y) / sigma, scale, inv_nu)
+    return st.student_t_residuals((theta[0] + theta[1] * x - y) / sigma, scale, inv_nu)
 
 
 @pytest.fixture(scope="module")
@@ -182,7 +182,7 @@ def _t_line(x, y, nu):
         correlation=np.eye(2), theta=np.zeros(2), residuals=np.zeros(0),
         singular_values=np.ones(2), converged=True,
     ))  # fmt: skip (ordinary least squares)
-    return rb.student_t_ml(theta_step, y, sigma, nu, first, tol=1e-10, max_iterations=500)
+    return st.student_t_ml(theta_step, y, sigma, nu, first, tol=1e-10, max_iterations=500)
 
 
 @pytest.mark.parametrize("nu", [1.0, 4.0])

@@ -55,8 +55,8 @@ def test_wu2015_loops_study_short_form(tmp_path):
 @pytest.mark.slow
 @pytest.mark.skipif(
     os.environ.get("TRIBOJAX_FULL") != "1",
-    reason="several robust full-chain fits (minutes); short CI form: the robust fit in the reproduce "
-    "CLI test and tests/test_fit_robust.py",
+    reason="several robust full-chain fits (minutes); short CI form: the robust fit in the "
+    "reproduce CLI test and tests/test_fit_robust.py",
 )
 def test_wang2022_robust_study_short_form(tmp_path):
     from fitting import wang2022_robust

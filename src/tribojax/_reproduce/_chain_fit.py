@@ -24,9 +24,8 @@ near the optimum the misfit is flat to that level along the D–G valley.
 `LevenbergMarquardt.noise_floor` therefore stops on statistical grounds (the Gauss–Newton step left
 is below 0.05 standard errors) or after six rejected steps in a row, and a fit counts as converged
 only if the Gauss–Newton step still left is below `GN_STEP_TOL` standard errors (else
-`RESULTS.short_of_optimum`). Rows where
-F_s <= m·a_max (the reticle would slide grossly, outside Eq 27's pre-sliding model) or the contact
-fails get the failed-evaluation residual `FAILED_RESIDUAL`, so LM backs off.
+`RESULTS.short_of_optimum`). Rows where F_s <= m·a_max (the reticle would slide grossly, outside
+Eq 27's pre-sliding model) or the contact fails get the residual `FAILED_RESIDUAL` (LM backs off).
 
 Failures. If the compiled fit raises (an `equinox` runtime check inside the chain at a trial
 point), `fit_measured_slips` turns that into `ChainFitError` naming the trial point. With the
@@ -60,6 +59,7 @@ from .._fit._solver import LevenbergMarquardt
 from .._presets import CHAIN_DEFAULTS
 from .._results import RESULTS, result_name
 from .._tables import wang2022_table
+from ._student_t import student_t_parameters, student_t_residuals, student_t_residuals_inverse
 
 PARAMETERS = ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha")
 """Parameters of the full chain, in order: D, G (m), μ_t, σ_s (Pa) of the contact model (wang2022
@@ -136,30 +136,9 @@ def _announce(phys):
     _PROGRESS["last"] = phys.tolist()  # the trial point, for messages if the chain raises
 
 
-def student_t_residuals(r, scale, inv_nu):
-    """ψ_i = sign(r_i)·√((ν+1)·ln(1 + r_i²/(ν s²))): residuals whose sum of squares is the
-    Student-t −2 log-likelihood of r at the scale s, up to terms in s alone (Lange, Little &
-    Taylor 1989, Eq 1; `inv_nu` = 1/ν, 0 for the Gaussian: ψ = r/s). Least squares on ψ is the
-    t maximum likelihood in θ at fixed s. Traceable; ψ/r is smooth and positive, also at r = 0."""
-    q = inv_nu * (r / scale) ** 2
-    small = q < 1e-12
-    q_safe = jnp.where(small, 1.0, q)  # double-where: no 0/0 in the unused branch
-    g = jnp.where(small, 1.0 - 0.5 * q, jnp.log1p(q_safe) / q_safe)  # ln(1 + q)/q
-    return r / scale * jnp.sqrt((1.0 + inv_nu) * g)
-
-
-def student_t_residuals_inverse(psi, scale, inv_nu) -> np.ndarray:
-    """r from ψ = `student_t_residuals(r, scale, inv_nu)` (NumPy; ψ is odd and increasing)."""
-    psi = np.asarray(psi, dtype=float)
-    if inv_nu == 0:
-        return psi * scale
-    return np.sign(psi) * scale * np.sqrt(np.expm1(psi**2 * inv_nu / (1.0 + inv_nu)) / inv_nu)
-
-
 def _residuals(theta, args, adjoint, shown=False):
-    # (model − y)/σ·√w per cell (σ = y: model/y − 1, the default), or (ln|model| − ln|y|)/σ·√w
-    # in log form, then ψ of `student_t_residuals` (identity for inv_nu = 0, s = 1); the robust
-    # fit passes its noise model's σ, form, weights w or (ν, s) (one compiled solve serves all)
+    # ψ (`student_t_residuals`; identity at inv_nu = 0, s = 1) of (model − y)/σ·√w per cell, or of
+    # (ln|model| − ln|y|)/σ·√w: the robust fit's σ, form, w or (ν, s) (one compiled solve for all)
     theta_full0, idx, mu_min_, y, sigma, sqrt_w, log_form, inv_nu, t_scale, loads = args
     phys = to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_min_)
     if shown:  # host callbacks: a program holding them is not kept in the compilation cache
@@ -191,8 +170,7 @@ class ChainFit:
         fit: FitResult over the free parameters (θ statistics, covariance by the delta method).
         parameters: all five physical parameters (free and fixed), dict.
         free: names of the free parameters.
-        model_nm, target_nm: (n, 4) phase slips at the optimum (NaN in a cell the chain could
-            not evaluate there) and the fitted data.
+        model_nm, target_nm: (n, 4) phase slips at the optimum (NaN: not evaluated), the data.
         scaled_singular_values, scaled_right_vectors: SVD of the Jacobian of the residuals with
             respect to log p (elasticities); rows of the right vectors are parameter combinations,
             largest singular value first.
@@ -326,9 +304,8 @@ def fit_measured_slips(
             √weight (iteratively reweighted least squares, `robust_fit_measured_slips`).
         log_residuals: residuals (ln|model| − ln|target|)/sigma instead of (model − target)/sigma
             (a relative error model whose heavy-tailed form is a proper density).
-        student_t: (ν, s) with ν > 0 (inf: Gaussian) and scale s > 0: minimise the Student-t
-            −log-likelihood of those residuals at the fixed scale s instead of their squares
-            (`student_t_residuals`; `robust_fit_measured_slips`); `fit.residuals` are then ψ.
+        student_t: (ν, s), ν > 0 (inf: Gaussian), s > 0: minimise those residuals' Student-t
+            −log-likelihood at the scale s (`student_t_residuals`; `fit.residuals` are ψ).
     Returns:
         ChainFit; `result` a `tribojax.RESULTS` member, `converged` False (with `fit.message`)
         when LM did not succeed or stopped short of the optimum (`RESULTS.short_of_optimum`:
@@ -346,9 +323,7 @@ def fit_measured_slips(
     loads = wang2022_loads() if loads is None else as_f64(loads, "loads")
     target = measured_slips() if target is None else np.asarray(target, dtype=float)
     if target.shape != (loads.shape[0], 4):
-        raise ValueError(
-            f"target has shape {target.shape}; expected ({loads.shape[0]}, 4) (loads × T4..T7)"
-        )
+        raise ValueError(f"target has shape {target.shape}; expected ({loads.shape[0]}, 4)")
     if not np.all(np.isfinite(target)) or np.any(target == 0):
         i = np.argwhere(~np.isfinite(target) | (target == 0))[0]
         raise ValueError(
@@ -356,10 +331,7 @@ def fit_measured_slips(
             "need finite, non-zero data"
         )
     if target.size <= len(free):
-        raise ValueError(
-            f"{target.size} data for {len(free)} free parameters: a fit needs more data than "
-            "parameters"
-        )
+        raise ValueError(f"{target.size} data for {len(free)} free parameters: too few data")
     sigma = target if sigma is None else np.asarray(sigma, dtype=float)
     weights = np.ones_like(target) if weights is None else np.asarray(weights, dtype=float)
     for name, a in (("sigma", sigma), ("weights", weights)):
@@ -367,12 +339,7 @@ def fit_measured_slips(
             raise ValueError(f"{name} must be finite with the target's shape {target.shape}")
     if np.any(sigma == 0) or np.any(weights <= 0):
         raise ValueError("sigma must be non-zero and weights > 0 in every cell")
-    nu, t_scale = (math.inf, 1.0) if student_t is None else (float(v) for v in student_t)
-    if not nu > 0:
-        raise ValueError(f"student_t nu = {nu} is outside the allowed range (0, inf]")
-    if not (math.isfinite(t_scale) and t_scale > 0):
-        raise ValueError(f"student_t scale = {t_scale} is outside the allowed range (0, inf)")
-    inv_nu = 0.0 if math.isinf(nu) else 1.0 / nu
+    inv_nu, t_scale = student_t_parameters(student_t)
     start_full = dict(DEFAULTS)
     for k, v in dict(start or {}).items():
         if k not in PARAMETERS:
@@ -414,7 +381,7 @@ def fit_measured_slips(
     phys = np.asarray(to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo))
     r, J = fit.residuals, fit.jacobian  # at the optimum, from least_squares_fit's statistics
     failed = (r == FAILED_RESIDUAL).reshape(target.shape)  # cells not evaluated: NaN model
-    d = student_t_residuals_inverse(np.where(r == FAILED_RESIDUAL, 0.0, r), t_scale, inv_nu)
+    d = student_t_residuals_inverse(np.where(failed.ravel(), 0.0, r), t_scale, inv_nu)
     d = d.reshape(target.shape) / np.sqrt(weights) * sigma
     model = np.where(failed, np.nan, target * np.exp(d) if log_residuals else d + target)
     # scaled Jacobian: ∂r/∂log p = J_θ (dp/dθ)^-1 diag(p) (transform is diagonal)
