@@ -92,7 +92,7 @@ def profile_likelihood(
                 first = weighted(start, v)
             fit = robust_fit_measured_slips(
                 free=others, noise=robust.noise, floor_nm=robust.floor_nm, nu=robust.nu,
-                target=y, loads=loads, initial=first, initial_weights=robust.weights,
+                target=y, loads=loads, initial=first,
                 max_iterations=em_iterations, **fit_kw,
             )  # fmt: skip
             ok = bool(first.converged and fit.chain.converged)
