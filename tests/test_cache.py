@@ -137,10 +137,14 @@ def test_dependency_floors_are_met():
     deps = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["dependencies"]
     for dep in deps:
         spec = dep.split(";")[0].strip()
-        name, floor = re.fullmatch(r"([A-Za-z0-9_.-]+)>=([0-9.]+)", spec).groups()
+        name, floor, ceiling = re.fullmatch(r"([A-Za-z0-9_.-]+)>=([0-9.]+)(?:,<([0-9.]+))?",
+                                            spec).groups()  # fmt: skip
         have = tuple(int(x) for x in re.findall(r"\d+", version(name))[:3])
         need = tuple(int(x) for x in floor.split("."))
         assert have >= need, f"{name} {version(name)} is below the floor {floor}"
+        if ceiling is not None:  # an upper bound (ml_dtypes: pyproject says why)
+            below = tuple(int(x) for x in ceiling.split("."))
+            assert have < below, f"{name} {version(name)} is not below {ceiling}"
 
 
 def _scaled(x, k, fn):  # a user's function: its source is not versioned by the key

@@ -185,3 +185,41 @@ def test_a_jacobian_that_is_not_finite_is_a_failed_fit_not_a_crash():
     fit = tj.least_squares_fit(residuals, jnp.array([7.0]), names=("a",))
     assert fit.result == tj.RESULTS.model_failed_at_start and not fit.converged
     assert np.all(np.isinf(fit.std_errors))
+
+
+def _rosenbrock(theta, args):  # module level: one compiled solve whatever the budget
+    return jnp.stack([10.0 * (theta[1] - theta[0] ** 2), 1.0 - theta[0]])
+
+
+def test_step_budget_is_a_run_time_value_of_one_compiled_solve():
+    # the library's LM takes the step budget at run time (options["budget"] under a static cap
+    # of MAX_STEPS): the same iterates and outcome as optimistix's own static max_steps, and
+    # budgets of 1, 3 and 100 steps share one compiled solve
+    import optimistix as optx
+
+    from tribojax._fit import _engine
+    from tribojax._fit._solver import LevenbergMarquardt
+
+    solver = LevenbergMarquardt(1e-10, 1e-12)
+    y0 = jnp.array([-1.2, 1.0])
+    fits = {k: tj.least_squares_fit(_rosenbrock, y0, names=("a", "b"), solver=solver,
+                                    max_steps=k, jac="fwd") for k in (3, 100)}  # fmt: skip
+    def programs():  # stored programs and programs traced in this process
+        return len(_engine._solve_jit.programs) + _engine._solve_jit.jitted._cached._cache_size()
+
+    before = programs()
+    for k, fit in fits.items():
+        ref = optx.least_squares(_rosenbrock, solver, y0, options=dict(jac="fwd"), max_steps=k,
+                                 throw=False)  # fmt: skip
+        assert np.array_equal(fit.theta, np.asarray(ref.value)), k
+        assert fit.steps == int(ref.stats["num_steps"])
+        ran_out = bool(ref.result == optx.RESULTS.nonlinear_max_steps_reached)
+        assert (fit.result == tj.RESULTS.nonlinear_max_steps_reached) == ran_out
+    assert fits[3].steps == 3 and not fits[3].converged
+    assert fits[100].converged and np.allclose(fits[100].values, [1.0, 1.0], atol=1e-8)
+    # a budget of one step is the start's linearisation, from the same compiled program
+    r, J = _engine.value_and_jacobian(_rosenbrock, y0, None, solver=solver, max_steps=100)
+    assert programs() == before
+    want_J = jax.jacfwd(_rosenbrock)(y0, None)
+    assert np.allclose(np.asarray(r), np.asarray(_rosenbrock(y0, None)), rtol=1e-14, atol=0)
+    assert np.allclose(np.asarray(J), np.asarray(want_J), rtol=1e-14, atol=0)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import abc
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike
@@ -39,11 +40,13 @@ def _validated_nodes(times, values, what: str, quantity: str = "accelerations"):
             f"{what}: times and {quantity} must be 1-D of equal length >= 2, got shapes "
             f"{times.shape} and {values.shape}"
         )
-    times = fail_if(times, ~jnp.all(jnp.isfinite(times)), f"{what}: a time is NaN or infinite")
+    xp = jnp if isinstance(times, jax.core.Tracer) or isinstance(values, jax.core.Tracer) else np
+    # (NumPy on concrete nodes: no JAX program compiled and dispatched per eager check)
+    times = fail_if(times, ~xp.all(xp.isfinite(times)), f"{what}: a time is NaN or infinite")
     values = fail_if(
-        values, ~jnp.all(jnp.isfinite(values)), f"{what}: an entry of {quantity} is NaN or infinite"
+        values, ~xp.all(xp.isfinite(values)), f"{what}: an entry of {quantity} is NaN or infinite"
     )
-    bad = ~jnp.all(jnp.diff(times) > 0)
+    bad = ~xp.all(xp.diff(times) > 0)
     times = fail_if(times, bad, f"{what}: times must be strictly increasing")
     return times, values
 

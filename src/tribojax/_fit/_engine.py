@@ -20,6 +20,7 @@ import optimistix as optx
 
 from .._checks import failures_as_nan
 from .._export import cached_jit
+from .._limits import MAX_STEPS
 from .._precision import ensure_x64
 from .._results import RESULTS, result_code, result_from_code, result_name
 from ._noise import noise_consistent as _noise_test
@@ -78,6 +79,9 @@ class FitResult:
         scale: the residual unit (output units; residuals = (prediction − data)/scale).
         model: the fitted record model (`tribojax._model`), effects: names of the effects it
             carries, designs: their `EffectDesign`s (record models only).
+        gain_left: the decrease of the cost that a Gauss–Newton step still predicts at the stop,
+            in residual variances (record models only; a stationary stop with gain_left ≥ 1 is
+            short of a minimum: `fit_record` then tries its next start).
     """
 
     names: tuple[str, ...]
@@ -103,6 +107,7 @@ class FitResult:
     model: object = dataclasses.field(default=None, repr=False)
     effects: tuple = ()
     designs: tuple = dataclasses.field(default=(), repr=False)
+    gain_left: float | None = None
 
     @property
     def rss(self) -> float:
@@ -236,17 +241,24 @@ def _singular_directions(sv, vt, names) -> tuple:
 
 def _solve(residual_fn, theta0, args, solver, max_steps, jac):
     """The least-squares solve: (θ, optimistix result, steps, (r, J) or None). Traced, lowered
-    and compiled with failures as NaN (no host callback), and its trace stored (`cached_jit`)."""
+    and compiled with failures as NaN (no host callback), and its trace stored (`cached_jit`).
+    The library's `LevenbergMarquardt` takes the budget as a run-time value under a static cap
+    of at least `MAX_STEPS`: one compiled solve for every budget up to it."""
+    budget = None
+    if isinstance(solver, LevenbergMarquardt) and max_steps >= 1:
+        budget, max_steps = jnp.asarray(max_steps), max(max_steps, MAX_STEPS)
     with failures_as_nan():
-        value, code, steps, final = _solve_jit(residual_fn, theta0, args, solver, max_steps, jac)
+        value, code, steps, final = _solve_jit(residual_fn, theta0, args, solver, max_steps, jac,
+                                               budget)  # fmt: skip
     return value, result_from_code(code), steps, final
 
 
 @cached_jit
-def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac):
+def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac, budget):
     # module-level and keyed by `residual_fn`'s identity, so a repeated fit with new data in
     # `args` runs warm; outputs are plain arrays so the trace can be stored
-    sol = optx.least_squares(residual_fn, solver, theta0, args, options=dict(jac=jac),
+    options = dict(jac=jac) if budget is None else dict(jac=jac, budget=budget)
+    sol = optx.least_squares(residual_fn, solver, theta0, args, options=options,
                              max_steps=max_steps, throw=False)  # fmt: skip
     # a Gauss–Newton solver's state holds the residual and its linearisation at the returned
     # point: the statistics take them from there instead of evaluating the model again
@@ -257,10 +269,23 @@ def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac):
     return sol.value, result_code(sol.result), sol.stats["num_steps"], final
 
 
-def value_and_jacobian(residual_fn, theta, args):
-    """Residual and Jacobian of `residual_fn(θ, args)` at θ from one forward pass (jitted once
-    per `residual_fn` object and argument shapes: `least_squares_fit`'s statistics reuse it;
-    compiled with failures as NaN, like the solve)."""
+def value_and_jacobian(residual_fn, theta, args, *, solver=None, max_steps=MAX_STEPS):
+    """Residual and Jacobian of `residual_fn(θ, args)` at θ from one forward pass, compiled with
+    failures as NaN like the solve.
+
+    With `solver` (a `LevenbergMarquardt`) they come from the fit's own compiled solve run with
+    a budget of one step (its first step linearises at θ; `max_steps`: the budget of the fits
+    that share the program), so a fit's start and scoring compile no second copy of the model
+    (`jac="fwd"`); without, from `jax.jacfwd` (one program per `residual_fn` and shapes,
+    reused by `least_squares_fit`'s statistics)."""
+    if solver is not None:
+        theta = jnp.asarray(theta, dtype=jnp.float64)
+        cap = max(int(max_steps), MAX_STEPS)
+        with failures_as_nan():
+            *_, final = _solve_jit(residual_fn, theta, args, solver, cap, "fwd", jnp.asarray(1))
+        if final is None:
+            raise TypeError(f"value_and_jacobian: {type(solver).__name__} keeps no Jacobian")
+        return final
     with failures_as_nan():
         return _value_and_jacobian_jit(residual_fn, theta, args)
 

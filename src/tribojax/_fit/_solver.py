@@ -13,6 +13,10 @@ damped-Newton descent and a trust region). Its configurations:
 
 Stops (each off when None), besides optimistix's Cauchy test on `rtol`, `atol`:
 
+- `options["budget"]` (an integer array, given by `least_squares_fit`): that many steps, then
+  `nonlinear_max_steps_reached` — optimistix's `max_steps` as a run-time value, so one compiled
+  solve serves every budget, a budget of one step included (the start's linearisation).
+
 - `step_tol`: after an accepted step, the Gauss–Newton step still left is below `step_tol`
   standard errors in every parameter (s² = RSS/(n − p)); not tried while a residual equals
   `FAILED_RESIDUAL`.
@@ -176,4 +180,11 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
             rejected = r @ r - jnp.sum((r + jac.mv(step)) ** 2)
             test = jnp.where(since == 0, gain < self.gain_tol * s2, rejected < self.noise_tol * s2)
             stop = stop | (~state.first_step & test)
+        budget = (options or {}).get("budget")
+        if budget is not None:  # the step budget as a run-time value (`least_squares_fit`)
+            spent = state.num_steps >= budget
+            ran_out = spent & ~stop & (state.result == optx.RESULTS.successful)
+            result = optx.RESULTS.where(ran_out, optx.RESULTS.nonlinear_max_steps_reached,
+                                        state.result)  # fmt: skip
+            return stop | spent, result
         return stop, state.result

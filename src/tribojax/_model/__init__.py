@@ -18,6 +18,7 @@ from ._effects import knob_design as knob_design
 from ._effects import register_effect as register_effect
 from ._fit import FOLD_SHARE_MIN as FOLD_SHARE_MIN
 from ._fit import MAX_STEPS as MAX_STEPS
+from ._fit import SOLVER as SOLVER
 from ._fit import fit_model as fit_model
 from ._fit import fit_record as fit_record
 from ._fit import heldout_residual as heldout_residual

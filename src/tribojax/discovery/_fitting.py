@@ -10,14 +10,15 @@ import numpy as np
 from .._fit._engine import value_and_jacobian
 from .._fit._measures import delta_bic
 from .._fit._noise import ar1_inflation
-from .._model import K_MAX, EffectDesign, pack_designs, padded_args, padded_residual
+from .._model import K_MAX, SOLVER, EffectDesign, pack_designs, padded_args, padded_residual
 from ._parallel import in_parallel
 
 
 def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
-    """∂y/∂knobs (n, n_knobs) at (θ_b, knobs), output units: the fit's own compiled residual
-    Jacobian (`value_and_jacobian(padded_residual, ...)`) with the knobs as the padded strengths,
-    K_MAX knobs per call, so scoring compiles no second copy of the model and its Jacobian. NaN
+    """∂y/∂knobs (n, n_knobs) at (θ_b, knobs), output units: the residual Jacobian from the
+    fit's own compiled solve (`value_and_jacobian(..., solver=SOLVER)`: one step) with the knobs
+    as the padded strengths, K_MAX knobs per call, so scoring compiles no second copy of the
+    model and its Jacobian. NaN
     columns where the model is not finite or a check inside it fails."""
     p, m = len(theta_b), len(knobs)
     n = baseline.data().y.shape[0]
@@ -29,7 +30,8 @@ def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
         gain[j : j + k, :k] = np.eye(k)
         args = padded_args(baseline, knobs, gain, np.zeros((n, K_MAX)), k, np.zeros(n), 1.0)
         try:
-            r, J = (np.asarray(v) for v in value_and_jacobian(padded_residual, x, args))
+            r, J = (np.asarray(v) for v in value_and_jacobian(padded_residual, x, args,
+                                                              solver=SOLVER))  # fmt: skip
         except eqx.EquinoxRuntimeError:  # a check inside the model failed
             out[:, j : j + k] = np.nan
             continue
