@@ -40,8 +40,11 @@ def _record(seed=1):
 
 def test_mode_refit_reaches_the_noise_only_with_the_restarts():
     base = disc.slip_baseline(_record())
-    state = fit_record(base)
-    assert state.converged
+    # the baseline from its first start alone (stationary with 36 variances promised: short of a
+    # minimum), where the mode's refit stalls; from the lower baseline that fit_record goes on
+    # to (RSS 119,587 against 119,597) the refit reaches the noise in 4 steps without a restart
+    state = fit_record(base, [base.starts()[0]])
+    assert state.converged and state.gain_left >= 1.0
     (vib,) = [e for e in disc.default_effects("slip") if e.name == "vibration"]
     design = vib.design(base, F_MODE, ZETA, 0.0)  # the dynamic part, at the true mode
     x0 = np.concatenate([state.theta, np.zeros(design.k)])
