@@ -239,14 +239,14 @@ def _singular_directions(sv, vt, names) -> tuple:
     return tuple(out)
 
 
-def _solve(residual_fn, theta0, args, solver, max_steps, jac):
+def _solve(residual_fn, theta0, args, solver, max_steps, jac, shared=MAX_STEPS):
     """The least-squares solve: (θ, optimistix result, steps, (r, J) or None). Traced, lowered
     and compiled with failures as NaN (no host callback), and its trace stored (`cached_jit`).
     The library's `LevenbergMarquardt` takes the budget as a run-time value under a static cap
-    of at least `MAX_STEPS`: one compiled solve for every budget up to it."""
+    of max(`max_steps`, `shared`): one compiled solve for every budget up to `shared`."""
     budget = None
     if isinstance(solver, LevenbergMarquardt) and max_steps >= 1:
-        budget, max_steps = jnp.asarray(max_steps), max(max_steps, MAX_STEPS)
+        budget, max_steps = jnp.asarray(max_steps), max(max_steps, shared, MAX_STEPS)
     with failures_as_nan():
         value, code, steps, final = _solve_jit(residual_fn, theta0, args, solver, max_steps, jac,
                                                budget)  # fmt: skip
@@ -280,9 +280,7 @@ def value_and_jacobian(residual_fn, theta, args, *, solver=None, max_steps=MAX_S
     reused by `least_squares_fit`'s statistics)."""
     if solver is not None:
         theta = jnp.asarray(theta, dtype=jnp.float64)
-        cap = max(int(max_steps), MAX_STEPS)
-        with failures_as_nan():
-            *_, final = _solve_jit(residual_fn, theta, args, solver, cap, "fwd", jnp.asarray(1))
+        *_, final = _solve(residual_fn, theta, args, solver, 1, "fwd", shared=int(max_steps))
         if final is None:
             raise TypeError(f"value_and_jacobian: {type(solver).__name__} keeps no Jacobian")
         return final
