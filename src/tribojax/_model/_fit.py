@@ -214,13 +214,15 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
                throw=False):  # fmt: skip
     """Fit a record model alone (no effects): the fit that `fit` reports and `discover` starts
     from. From each of `starts` (θ; default `baseline.starts()`) in turn until one converges at
-    a minimum; the converged fit with the lowest cost (else the lowest cost) is kept. A
-    stationary stop short of a minimum (a Gauss–Newton step still promising `NOISE_TOL`
-    residual variances or more: the trust region collapsed under the ODE's evaluation noise or
-    at a kink) does not end the starts (measured on the study's record s1036, 0.6 kPa: the first
-    start stopped at 6.6x the cost of the second). `scale`: the residual unit (default the
-    record's noise sd, else the first-difference estimate `noise_estimate` of the data, else its
-    sd); `sigma_known` (default: the record states its noise) makes the statistics use the
+    a minimum, which is kept; else the first that converged; else the lowest cost. A stationary
+    stop short of a minimum (a Gauss–Newton step still promising `NOISE_TOL` residual variances
+    or more: the trust region collapsed under the ODE's evaluation noise or at a kink) does not
+    end the starts (the study's record s1036, 0.6 kPa: the first start stopped at 6.6x the cost
+    of the second, which reached a minimum). When no start reaches one, costs are not compared
+    (the study's s1029, 10 kPa: a later start stopped lower with F_s at 10^10 N, a reticle that
+    never slips). `scale`: the residual unit (default the record's noise sd, else the
+    first-difference estimate `noise_estimate` of the data, else its sd); `sigma_known`
+    (default: the record states its noise) makes the statistics use the
     stated noise when the residual is consistent with it. `throw`: raise `FitError` when no
     start succeeded (default: return the failed fit, `result` says why)."""
     data = baseline.data()
@@ -232,8 +234,9 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
         fits.append(fit_model(baseline, (), np.asarray(th, dtype=float), y, scale,
                               max_steps=max_steps, sigma_known=known))  # fmt: skip
         if fits[-1].converged and not (fits[-1].gain_left or 0.0) >= NOISE_TOL:
-            break  # the next starts only when this one failed or stopped short of a minimum
-    return thrown(min(fits, key=lambda f: (not f.converged, f.rss)), throw)
+            return thrown(fits[-1], throw)  # at a minimum: the next starts are not needed
+    converged = [f for f in fits if f.converged]
+    return thrown(converged[0] if converged else min(fits, key=lambda f: f.rss), throw)
 
 
 def record_scale(baseline) -> float:
