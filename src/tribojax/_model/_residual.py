@@ -59,11 +59,23 @@ def _residual_and_jac(x, a: Padded):
     return r, jnp.concatenate([jnp.where(ok, J, 0.0), J_hold], axis=0)
 
 
+_traced_once = eqx.filter_jit(_residual_and_jac)
+
+
+def _model_pass(x, a: Padded):
+    """`_residual_and_jac` traced once per solve: optimistix traces the residual for its shapes
+    (under `jax.make_jaxpr`, no mesh context) and again for the linearisation (inside the solve's
+    jit, an empty abstract mesh); the same context in both makes the second a trace-cache hit
+    (measured on a 5,001-sample slip run: the model pass traced in 1.6 s instead of 2 × 1.1 s)."""
+    with jax.sharding.use_abstract_mesh(jax.sharding.get_abstract_mesh()):
+        return _traced_once(x, a)
+
+
 @eqx.filter_custom_jvp
 def padded_residual(u, a):
     """The residual function of every record-model fit, in scaled variables u = x/d (module
     level: the solve compiles once per record shape)."""
-    return _residual_and_jac(a.d * u, a)[0]
+    return _model_pass(a.d * u, a)[0]
 
 
 @padded_residual.def_jvp
@@ -71,7 +83,7 @@ def _residual_jvp(primals, tangents):
     # the Jacobian from one forward pass over (θ_b, knobs), not over the K_MAX padded strengths:
     # optimistix's linearisation and the statistics then cost one model pass per point
     u, a = primals
-    r, J = _residual_and_jac(a.d * u, a)
+    r, J = _model_pass(a.d * u, a)
     tu = tangents[0]
     return r, (jnp.zeros_like(r) if tu is None else (J * a.d[None, :]) @ tu)
 
