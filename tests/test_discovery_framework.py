@@ -168,7 +168,8 @@ def test_fit_rejects_steps_that_do_not_lower_the_cost():
 
 
 def test_chi2_sf_matches_scipy():
-    # the score and window p-values: SciPy's chi2.sf without SciPy at run time
+    # the score and window p-values: SciPy's chi2.sf without SciPy at run time (NumPy series and
+    # continued fraction), and large dof as in a long record's noise test
     from scipy import stats
 
     from tribojax._fit._noise import chi2_sf
@@ -177,12 +178,14 @@ def test_chi2_sf_matches_scipy():
         for x in (0.0, 1e-3, 0.5, 3.0, 10.0, 60.0, 300.0, 1000.0):
             want = stats.chi2.sf(x, dof)
             assert chi2_sf(x, dof) == pytest.approx(want, rel=1e-10, abs=1e-300)
+    for dof in (4999.0, 28697.0):
+        for x in (0.9 * dof, dof - 1.0, dof, dof + 2.0, 1.1 * dof):
+            assert chi2_sf(x, dof) == pytest.approx(stats.chi2.sf(x, dof), rel=1e-10)
 
 
 def test_window_p_values_in_one_call_are_the_scalar_ones():
-    # find_regions tests every window in one compiled call (padded to a power of two): the same
-    # p-values as one call per window (to rounding: a vectorised kernel), at lengths around the
-    # padding's steps, and the same regions
+    # find_regions tests every window in one vectorised call: the same p-values as one call per
+    # window (to rounding), at several lengths, and the same regions
     from tribojax._fit._noise import chi2_sf, chi2_sf_many, find_regions
 
     rng = np.random.default_rng(3)
