@@ -142,18 +142,25 @@ class Jenkins(AbstractHysteresisElement):
         return jnp.clip(jnp.asarray(force, jnp.float64) / self.K_d, -self.A0, self.A0)
 
 
-def mindlin_unit_bank(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Iwan discretisation of the Mindlin virgin curve in units of A0 (slip limits) and K_d
-    (stiffnesses): NumPy constants that depend on n (>= 2) only.
+def power_unit_bank(n: int, p=1.5, xp=np):
+    """Iwan discretisation, in units of A0 (slip limits) and K_d (stiffnesses), of the virgin curve
+    φ(x) = μN[1 − (1 − x/Y)^p], Y = p·A0 (initial slope K_d, full slip at Y): p = 3/2 is the
+    Mindlin/Koh microslip law (wu2015 Eq 2); p = 2 a bank whose slip limits are spread uniformly
+    on (0, 2A0] (a parabolic backbone); other p, power-law spreads of the limits (Iwan 1966,
+    Segalman 2005). `xp`: NumPy (constants) or jax.numpy (p traced, differentiable).
 
-    Slip displacements y_j = Y·(1 − (1 − j/n)²), Y = 1.5·A0, cluster where φ bends; the
-    stiffnesses make the bank's virgin curve the piecewise-linear interpolant of
-    φ(x) = μN[1 − (1 − x/Y)^(3/2)] at the y_j (wu2015 Eq 2; Masing branches follow, error ~1/n²).
-    """
+    Slip displacements y_j = Y·(1 − (1 − j/n)²), which cluster where φ bends; the stiffnesses make
+    the bank's virgin curve the piecewise-linear interpolant of φ at the y_j (Masing branches
+    follow, error ~1/n²)."""
     q = 1.0 - (1.0 - np.arange(n + 1) / n) ** 2  # y_j / Y
-    phi = 1.0 - (1.0 - q) ** 1.5  # virgin curve / μN at y_j
-    slopes = np.diff(phi) / (1.5 * np.diff(q))  # of the interpolant / K_d, decreasing
-    return 1.5 * q[1:], slopes - np.append(slopes[1:], 0.0)
+    phi = 1.0 - (1.0 - xp.asarray(q)) ** p  # virgin curve / μN at y_j
+    slopes = (phi[1:] - phi[:-1]) / (p * np.diff(q))  # of the interpolant / K_d, decreasing
+    return p * xp.asarray(q[1:]), slopes - xp.concatenate([slopes[1:], xp.zeros(1)])
+
+
+def mindlin_unit_bank(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The Mindlin bank (`power_unit_bank` at p = 3/2, wu2015 Eq 2) as NumPy constants."""
+    return power_unit_bank(n, 1.5)
 
 
 class IwanBank(eqx.Module):

@@ -36,17 +36,25 @@ from .._io._loop import HysteresisLoop
 from ._base import AbstractBaseline, DiscoveryData
 from ._fit import MAX_STEPS, fit_record
 from ._loop_analysis import _ELEMENTS, _loop_phase, analyse_loop
-from ._loop_force import KD_LOAD_EXPONENT, LoopData, LoopSpec, loop_branch, loop_force, prepare_loop
+from ._loop_force import (
+    KD_LOAD_EXPONENT,
+    MINDLIN_SHAPE,
+    LoopData,
+    LoopSpec,
+    loop_branch,
+    loop_force,
+    prepare_loop,
+)
 from ._residual import evaluate
 
 BRANCH_NAMES = {0: "unloading", 1: "loading"}
 LOOP_KNOBS = ("microslip", "load_slope", "viscous", "backlash", "log_gap", "load_curve",
-              "kd_exponent", "energizing", "asymmetry")
+              "kd_exponent", "energizing", "asymmetry", "log_shape")
 
 class LoopBaseline(AbstractBaseline):
     """Jenkins element (μN in N, K_d in N/m; θ = their logs) driven by a loop record's
-    displacement; knobs (w, β, c/c_ref, ε, ln(g/A), γ, p, σ, a) as in the module docstring and
-    `loop_force`'s."""
+    displacement; knobs (w, β, c/c_ref, ε, ln(g/A), γ, p, σ, a, ln(shape − 1)) as in the module
+    docstring and `loop_force`'s."""
 
     kind: ClassVar[str] = "loop"
     param_names: ClassVar[tuple[str, ...]] = ("mu_N", "K_d")
@@ -72,6 +80,7 @@ class LoopBaseline(AbstractBaseline):
         null = np.zeros(len(LOOP_KNOBS))
         null[LOOP_KNOBS.index("log_gap")] = np.log(0.1)  # irrelevant while ε = 0
         null[LOOP_KNOBS.index("kd_exponent")] = KD_LOAD_EXPONENT  # irrelevant while N(u) = N0
+        null[LOOP_KNOBS.index("log_shape")] = np.log(MINDLIN_SHAPE - 1.0)  # Mindlin's law
         null[0] = 1.0 if self.element == "mindlin" else 0.0  # the microslip weight w
         return null
 
@@ -107,6 +116,7 @@ class LoopBaseline(AbstractBaseline):
             kd_exponent=knobs[6],
             energizing=knobs[7],
             asymmetry=knobs[8],
+            shape=1.0 + jnp.exp(knobs[9]),
         )
         return loop_force(spec, self.record, microslip=self.bank, check=False)
 

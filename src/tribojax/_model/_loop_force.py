@@ -11,7 +11,9 @@ One generalised element covers the baseline and every physical augmentation:
   discretisation (`IwanBank.mindlin`, the same bank) is the Mindlin/Koh microslip element
   (wu2015 Eq 2);
 * `microslip`: the force is (1 − w)·Jenkins + w·Mindlin with the same μN and K_d (both have initial
-  slope K_d and gross-slip force μN); w = 0 is the baseline, w = 1 the full Mindlin law;
+  slope K_d and gross-slip force μN); w = 0 is the baseline, w = 1 the full Mindlin law. The
+  microslip bank's virgin curve μN[1 − (1 − x/(p·A0))^p] has the shape exponent p (`shape`):
+  3/2 is Mindlin's, 2 a bank whose slip limits are spread uniformly (`power_unit_bank`);
 * `normal_load_variation`: the normal load follows the displacement, N(u) = N0·(1 + β·u/A +
   γ·(u/A)²) (A: half the record's peak-to-peak u), so μN scales by s(u) = N(u)/N0 and K_d by
   s(u)^p (p = 0.7616, the exponent of wu2015 Eq 5, K_d ∝ N^0.7616, or p = 0: a stiffness that does
@@ -53,13 +55,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import fail_if
-from .._friction._rate_independent import IwanBank, mindlin_unit_bank
+from .._friction._rate_independent import IwanBank, power_unit_bank
 from .._io._loop import HysteresisLoop, cycle_starts
 from .._presets import WU2015_EQ5_EXPONENT
 from ._loop_analysis import analyse_loop
 
 KD_LOAD_EXPONENT = WU2015_EQ5_EXPONENT  # wu2015 Eq 5: K_d ∝ N^0.7616
 N_IWAN = 128  # Iwan elements of the Mindlin law (interpolation error ~ 1/n² of μN)
+MINDLIN_SHAPE = 1.5  # exponent of Mindlin's virgin curve (wu2015 Eq 2)
 
 
 class LoopData(eqx.Module):
@@ -151,9 +154,10 @@ class LoopSpec(eqx.Module):
     Fields: mu_N (gross-slip force, N, > 0), K_d (tangential stiffness, N/m, > 0), w (microslip
     weight, —; 0 Jenkins, 1 Mindlin), beta and gamma (normal load N(u) = N0(1 + βu/A + γ(u/A)²),
     —, N > 0 over the stroke), kd_exponent (p in K_d ∝ N^p, —; default wu2015 Eq 5's 0.7616),
-    c (viscous coefficient, N·s/m), depth (backlash depth ε, —; 0
-    none, 1 a clean clearance), gap (backlash clearance g, total travel of the drive across it,
-    m, ≥ 0).
+    shape (exponent p of the microslip law's virgin curve μN[1 − (1 − x/(p·A0))^p], —, > 1;
+    default 3/2, Mindlin; `power_unit_bank`), c (viscous coefficient, N·s/m), depth (backlash
+    depth ε, —; 0 none, 1 a clean clearance), gap (backlash clearance g, total travel of the
+    drive across it, m, ≥ 0).
     """
 
     mu_N: jax.Array
@@ -162,6 +166,7 @@ class LoopSpec(eqx.Module):
     beta: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     gamma: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     kd_exponent: jax.Array = eqx.field(default_factory=lambda: jnp.asarray(KD_LOAD_EXPONENT))
+    shape: jax.Array = eqx.field(default_factory=lambda: jnp.asarray(MINDLIN_SHAPE))
     c: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     depth: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
     gap: jax.Array = eqx.field(default_factory=lambda: jnp.zeros(()))
@@ -184,7 +189,6 @@ def energize(q: jax.Array, sigma: jax.Array) -> jax.Array:
     return jnp.sign(q) * jnp.where(small, series, exact)
 
 
-_Y_MINDLIN, _K_MINDLIN = mindlin_unit_bank(N_IWAN)  # the Mindlin bank in units of A0, K_d
 S_MIN = 0.05  # floor of N(u)/N0 inside fits (check=False)
 
 
@@ -214,8 +218,9 @@ def loop_force(
     a = s_safe / b
     A0 = spec.mu_N / spec.K_d
     if microslip:  # one bank: the Jenkins element (weight 1 − w) and the Mindlin bank (w)
-        y = A0 * jnp.concatenate([jnp.ones(1), jnp.asarray(_Y_MINDLIN)])
-        k = jnp.concatenate([jnp.ones(1) * (1.0 - spec.w), spec.w * jnp.asarray(_K_MINDLIN)])
+        y_unit, k_unit = power_unit_bank(N_IWAN, spec.shape, xp=jnp)
+        y = A0 * jnp.concatenate([jnp.ones(1), y_unit])
+        k = jnp.concatenate([jnp.ones(1) * (1.0 - spec.w), spec.w * k_unit])
     else:
         y, k = A0 * jnp.ones(1), jnp.ones(1)
     if check:

@@ -21,7 +21,8 @@ class Candidate:
     p-value Bonferroni-corrected over the effect's `grid_points`; seeds: further designs the
     refit starts from; gate: the effect's `score_gate`. Filled by the refit step: delta_bic
     (None: not refitted), rmse_after (output units), delta_bic_common, refit_message,
-    heldout_excess (the refit's held-out excess, output units, when its ΔBIC qualified).
+    heldout_excess (the refit's held-out excess, output units, when its ΔBIC qualified);
+    refit: (refit, design) of a usable refit, for the pair step (`_refits.pair_round`).
     """
 
     name: str
@@ -37,6 +38,7 @@ class Candidate:
     delta_bic_common: float | None = None
     refit_message: str | None = None
     heldout_excess: float | None = None
+    refit: tuple | None = None
 
     def public(self) -> dict:
         """The candidate as discovery.json lists it."""

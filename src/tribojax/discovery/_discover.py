@@ -23,7 +23,7 @@ from .._model import (
 )
 from ._candidates import rank
 from ._core import DELTA_BIC_THRESHOLD, AbstractEffect, default_effects
-from ._refits import MAX_MOVES, pick, refit_round
+from ._refits import MAX_MOVES, pair_round, pick, refit_round
 from ._report import DiscoveryReport, report
 from ._verdict import NoiseModel
 
@@ -171,6 +171,14 @@ def discover(
             best_c, best, moved = picked
             if moved is not None:  # a better optimum of the current model
                 moves, best_c.refit_message, best = moves + 1, _MOVED, moved
+        if picked is None and len(state.effects) + 2 <= max_effects:
+            paired = pair_round(run, state, ranking, delta_bic_threshold, by_name)
+            if paired is not None:  # two effects at once
+                rounds.append([c.public() for c in ranking.candidates])
+                state = paired
+                if run.consistent(state):
+                    break
+                continue
         rounds.append([c.public() for c in ranking.candidates])
         if picked is None:
             break
