@@ -7,10 +7,11 @@ examined while changing discovery (s3027, s5013, s5014), so they are no longer b
 
 The records are made by `benchmarks/blind/build.py` (frozen, unchanged); only the specs are new:
 every pair of the five loop effects once (but microslip with backlash, which the generator
-does not make: its clearance is written for the single Jenkins element), and four pairs of slip effects, each with its contact
-or load, drive, strengths and noise drawn by a seeded generator from the ranges of the first
-batch's catalog (`benchmarks/blind/catalog.py`). The draws were fixed, and this file committed,
-before discovery was run on any of them; no setting is tuned on them.
+does not make: its clearance is written for the single Jenkins element), and four pairs of slip
+effects, each with its contact or load, drive, strengths and noise drawn by a seeded generator
+from the ranges of the first batch's catalog (`benchmarks/blind/catalog.py`). The draws were
+fixed, and this file committed, before discovery was run on any of them; no setting is tuned on
+them.
 """
 
 from __future__ import annotations
