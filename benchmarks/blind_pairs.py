@@ -11,7 +11,9 @@ does not make: its clearance is written for the single Jenkins element), and fou
 effects, each with its contact or load, drive, strengths and noise drawn by a seeded generator
 from the ranges of the first batch's catalog (`benchmarks/blind/catalog.py`). The draws were
 fixed, and this file committed, before discovery was run on any of them; no setting is tuned on
-them.
+them. Rows: benchmarks/blind_pairs_before.jsonl (the stop-51 code, eb84d0e) and
+benchmarks/blind_pairs_after.jsonl (stop 52: loops with the pair step and the microslip shape,
+slip runs with the pair step; the shape does not touch them); docs/discovery.md tabulates both.
 """
 
 from __future__ import annotations
