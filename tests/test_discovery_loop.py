@@ -390,3 +390,8 @@ def test_microslip_shape_is_fitted_for_uniformly_spread_slip_limits(tmp_path):
     assert abs(rep.strengths["microslip"]["nuisance"]["shape"] - 2.0) < 0.1
     c_true = entry["params"]["effects"]["viscous_damping"]["c_N_s_m"]
     assert abs(rep.strengths["viscous_damping"]["c"]["value"] / c_true - 1) < 0.05
+    # saved with its shape and rebuilt: the same model (discovery.json's "fitted_model")
+    model = tj.FittedModel.from_dict(json.loads(json.dumps(rep.as_dict()["fitted_model"])))
+    assert model.effects[0].nuisance["shape"] == rep.strengths["microslip"]["nuisance"]["shape"]
+    own = tj.predict(model, tj.read_record(tmp_path / entry["file"])).predicted
+    np.testing.assert_allclose(own, rep.final_y, rtol=0, atol=1e-12 * np.ptp(rep.final_y))
