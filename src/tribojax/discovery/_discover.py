@@ -124,7 +124,9 @@ def discover(
        instead (at most `MAX_MOVES` times); else the first one that, fitted on one half of
        the record (`folds()`), lowers the current model's misfit on the other half
        (`_Run.heldout`, both ways) is added. Repeat until none qualifies, `max_effects` are
-       in, or the model is consistent with the noise ("explained"). When the baseline itself
+       in, or the model is consistent with the noise ("explained"). A round that adds nothing
+       tries its best single refits jointly in pairs (`_refits.pair_round`: two hidden effects
+       whose single refits each leave the other's misfit). When the baseline itself
        is consistent with the noise the candidates are ranked, not refitted (verdict "none").
     5. Report (`_report.report`): the verdict, the excess misfit before and after, in-sample
        and held out ("explained" needs both), and where a misfit remains its regions, signal

@@ -52,7 +52,8 @@ class Microslip(AbstractEffect):
 
     name: ClassVar[str] = "microslip"
     kind: ClassVar[str] = "loop"
-    description: ClassVar[str] = "partial slip (Mindlin), weight w of the Mindlin law"
+    description: ClassVar[str] = ("partial slip: weight w of the Mindlin law, or of a law of "
+                                  "fitted shape p")
     refit_starts: ClassVar[int] = 2  # both designs
 
     def designs(self, baseline):
