@@ -75,7 +75,9 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
     when it lowers the cost, also when it then ran out of steps). Measured on a record with a
     40 Hz mode's dynamic part (20 kPa, 5 noise sd, made here with SciPy): the vibration refit
     stopped at RSS 88,711 with 4,340 variances promised; the restarts reached the noise (4,586
-    for 4,601 samples) and the mode was named (before: "unexplained").
+    for 4,601 samples) and the mode was named (before: "unexplained"). That stall came from trial
+    points whose ODE solve ran out of steps (a 20,000-step budget); at the slip model's own
+    budget (`ODE_MAX_STEPS`) the refit reaches the noise without a restart.
 
     Args:
         theta0: start [θ_b, s] (default `baseline.start()` and zero strengths); y: the data

@@ -106,6 +106,7 @@ class SlipBaseline(AbstractBaseline):
     t_end: float = eqx.field(static=True)  # s, the last sample (a solver setting)
     alpha: float = eqx.field(static=True, default=1.0)  # bristle exponent (start when free)
     free_alpha: bool = eqx.field(static=True, default=False)
+    max_steps: int = eqx.field(static=True, default=ODE_MAX_STEPS)  # ODE steps of one solve
 
     @property
     def param_names(self):
@@ -178,7 +179,7 @@ class SlipBaseline(AbstractBaseline):
     def _solve(self, theta, knobs):
         return simulate_slip(self.element(theta, knobs), self.profile, self.mass, ts=self.t,
                              t_end=self.t_end, adjoint=dfx.ForwardMode(), throw=False,
-                             max_steps=ODE_MAX_STEPS)  # fmt: skip
+                             max_steps=self.max_steps)  # fmt: skip
 
     def _mode(self, km):
         """The mode term of the reading: A_q·q_s/rms(q_s) + A_q̇·q̇/rms(q̇), m, for knobs
@@ -202,7 +203,7 @@ class SlipBaseline(AbstractBaseline):
         element = PreSlipLuGre(F_s, K, C, self.bristle_exponent(theta))
         return simulate_slip(element, self.profile, self.mass, ts=self.t, t_end=self.t_end,
                              adjoint=dfx.ForwardMode(), throw=False,
-                             max_steps=ODE_MAX_STEPS).slip  # fmt: skip
+                             max_steps=self.max_steps).slip  # fmt: skip
 
     def value_and_jacobian(self, theta, null=None):
         def f(tb):
