@@ -38,16 +38,15 @@ def _record(seed=1):
     return tj.SlipRun(t, a, y, dr.MASS, noise_std=SIGMA)
 
 
-def _mode_fits(base):
+def _mode_fit(base):
+    """The baseline fit; returns the vibration refit at the true mode from zero amplitude."""
     state = fit_record(base)
     assert state.converged
     (vib,) = [e for e in disc.default_effects("slip") if e.name == "vibration"]
     design = vib.design(base, F_MODE, ZETA, 0.0)  # the dynamic part, at the true mode
     x0 = np.concatenate([state.theta, np.zeros(design.k)])
     y = np.asarray(base.data().y)
-    stalled = fit_model(base, (design,), x0, y, state.scale, ("vibration",), restarts=0)
-    fit = fit_model(base, (design,), x0, y, state.scale, ("vibration",))
-    return stalled, fit
+    return lambda **kw: fit_model(base, (design,), x0, y, state.scale, ("vibration",), **kw)
 
 
 def _named_at_the_noise(fit):
@@ -62,8 +61,8 @@ def test_mode_refit_reaches_the_noise_only_with_the_restarts():
     # trial points whose solve ran out before the record's end count as rejected steps
     import dataclasses
 
-    base = dataclasses.replace(disc.slip_baseline(_record()), max_steps=20_000)
-    stalled, fit = _mode_fits(base)
+    refit = _mode_fit(dataclasses.replace(disc.slip_baseline(_record()), max_steps=20_000))
+    stalled, fit = refit(restarts=0), refit()
     assert fit.steps > stalled.steps and stalled.rss > 10 * N
     _named_at_the_noise(fit)
 
@@ -74,9 +73,7 @@ def test_mode_refit_reaches_the_noise_at_the_default_budget_without_restarts():
 
     base = disc.slip_baseline(_record())
     assert base.max_steps == ODE_MAX_STEPS > 20_000
-    stalled, fit = _mode_fits(base)
-    _named_at_the_noise(stalled)
-    _named_at_the_noise(fit)
+    _named_at_the_noise(_mode_fit(base)(restarts=0))
 
 
 def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeypatch):
