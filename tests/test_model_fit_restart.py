@@ -108,3 +108,18 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
     outcomes = iter([(500.0, 112.0), (300.0, 5.0), (400.0, 2.0)])
     tried.clear()
     assert mf.fit_record(base, starts).rss == pytest.approx(500.0) and len(tried) == 3
+    # a minimum with F_s at its cap is held there by the bound: not a minimum that ends the
+    # starts (the study's s1029 and s1034, a reticle that never slips); an interior one does
+    capped = base.theta_of([0.95 * float(base.f_max), 1e7, 1e3])
+    assert base.at_bound(capped) and not base.at_bound(base.start())
+    thetas = iter([real.theta, capped, real.theta])
+
+    def canned_at(baseline, designs, theta0, *a, **k):
+        return dataclasses.replace(canned(baseline, designs, theta0), theta=next(thetas))
+
+    monkeypatch.setattr(mf, "fit_model", canned_at)
+    outcomes = iter([(500.0, 112.0), (100.0, 0.0), (120.0, 0.0)])
+    tried.clear()
+    assert mf.fit_record(base, starts).rss == pytest.approx(120.0) and len(tried) == 3
+    thetas, outcomes = iter([real.theta, capped]), iter([(500.0, 112.0), (100.0, 0.0)])
+    assert mf.fit_record(base, starts[:2]).rss == pytest.approx(500.0)  # the first converged

@@ -224,6 +224,11 @@ class AbstractBaseline(eqx.Module):
         "unit"}}, from the fitted values and standard errors; default none."""
         return {}
 
+    def at_bound(self, theta) -> bool:
+        """Whether θ sits at a bound of the model's parameters (a fit stopped there is held by
+        the bound, not at a minimum of the cost); default never."""
+        return False
+
     def signals(self) -> dict:
         """Measured signals (name → (n,) array) a remaining misfit is correlated with; default
         the abscissa."""

@@ -220,10 +220,12 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
     stop short of a minimum (a Gauss–Newton step still promising `NOISE_TOL` residual variances
     or more: the trust region collapsed under the ODE's evaluation noise or at a kink) does not
     end the starts (the study's record s1036, 0.6 kPa: the first start stopped at 6.6x the cost
-    of the second, which reached a minimum). When no start reaches one, costs are not compared
-    (the study's s1029, 10 kPa: a later start stopped lower with F_s at 10^10 N, a reticle that
-    never slips). `scale`: the residual unit (default the record's noise sd, else the
-    first-difference estimate `noise_estimate` of the data, else its sd); `sigma_known`
+    of the second, which reached a minimum). A stop at a bound of the parameters
+    (`baseline.at_bound`) is not a minimum. When no start reaches one, costs are not compared
+    (the study's s1029 and s1034, 10 kPa: a later start stopped lower with F_s at its cap, a
+    reticle that never slips, from which no effect applies). `scale`: the residual unit
+    (default the record's noise sd, else the first-difference estimate `noise_estimate` of the
+    data, else its sd); `sigma_known`
     (default: the record states its noise) makes the statistics use the
     stated noise when the residual is consistent with it. `throw`: raise `FitError` when no
     start succeeded (default: return the failed fit, `result` says why)."""
@@ -235,8 +237,10 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
     for th in baseline.starts() if starts is None else starts:
         fits.append(fit_model(baseline, (), np.asarray(th, dtype=float), y, scale,
                               max_steps=max_steps, sigma_known=known))  # fmt: skip
-        if fits[-1].converged and not (fits[-1].gain_left or 0.0) >= NOISE_TOL:
-            return thrown(fits[-1], throw)  # at a minimum: the next starts are not needed
+        f = fits[-1]
+        if f.converged and not (f.gain_left or 0.0) >= NOISE_TOL \
+                and not baseline.at_bound(f.theta[: len(baseline.param_names)]):  # fmt: skip
+            return thrown(f, throw)  # at a minimum: the next starts are not needed
     converged = [f for f in fits if f.converged]
     return thrown(converged[0] if converged else min(fits, key=lambda f: f.rss), throw)
 

@@ -58,6 +58,7 @@ N_ODE_KNOBS = 4  # the knobs of the friction element; the mode's knobs act on th
 # 1 ulp away ran out 0.08 s before the record's end (its last samples inf): the held-out fits of a
 # 35 Hz mode failed and the mode was refused. Unused steps cost nothing (ForwardMode adjoint).
 ODE_MAX_STEPS = 60_000
+F_CAP_NEAR = 0.9  # F_s above this fraction of its bound: at the bound (not identified)
 F_MAX_OVER_DRIVE = 100.0  # bound of F_s in units of m·max|a| (beyond: slip ∝ (m a/F_s)², tiny)
 LOG10_VS_RANGE = (-12.0, 3.0)  # bound of log10 v_s (m/s) in the fit
 VS_GRID = tuple(10.0 ** np.arange(-7.0, -3.4, 0.5))  # m/s, Stribeck velocity grid
@@ -163,10 +164,15 @@ class SlipBaseline(AbstractBaseline):
         `f_max` or with a standard error above its value (m·a_max/F_s too small to show it)."""
         F, sd = values["F_s"], std_errors["F_s"]
         fm = float(self.f_max)
-        if F > 0.9 * fm or not sd < F:
+        if F > F_CAP_NEAR * fm or not sd < F:
             return {"F_s": {"lower_bound": float(min(F, fm) / 2 if not sd < F else F - 2 * sd),
                             "upper_bound": fm, "unit": "N"}}  # fmt: skip
         return {}
+
+    def at_bound(self, theta) -> bool:
+        """F_s within 10 % of `f_max` (`F_CAP_NEAR`): a reticle that hardly slips."""
+        F_s = float(self.physical(np.asarray(theta, dtype=float))[0])
+        return F_s > F_CAP_NEAR * float(self.f_max)
 
     def element(self, theta, knobs):
         F_s, K, C = self.physical(theta)[:3]
