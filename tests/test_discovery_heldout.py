@@ -5,14 +5,17 @@ strength the other half of the record cannot determine.
 The discovery cases use the cheap analytic baseline of test_discovery_framework (records made
 there by NumPy, not by the candidate code)."""
 
+import dataclasses
 from typing import ClassVar
 
+import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
 import tribojax as tj
 import tribojax.discovery as disc
-from test_discovery_framework import Tone, _record
+from test_discovery_framework import DecayBaseline, Tone, _record
 from tribojax._model import N_FOLD_BLOCKS, heldout_residual, record_scale
 from tribojax.discovery import AbstractEffect, EffectDesign
 from tribojax.discovery._verdict import verdict
@@ -124,3 +127,28 @@ def test_effect_the_other_half_cannot_determine_is_not_added():
     assert g["delta_bic"] < -100  # in-sample it would have been accepted
     assert "held-out" in g["refit_message"]
     assert rep.verdict != "explained"
+
+
+class BudgetDecay(DecayBaseline):
+    """DecayBaseline whose solve "runs out of steps" (NaN after t = 1 s) below a budget of 30."""
+
+    budget: int = eqx.field(static=True, default=10)
+
+    def predict(self, theta, knobs):
+        f = super().predict(theta, knobs)
+        return jnp.where((self.t > 1.0) & (self.budget < 30), jnp.nan, f)
+
+    def more_steps(self):
+        return dataclasses.replace(self, budget=3 * self.budget)
+
+
+def test_heldout_check_is_done_again_once_with_more_steps_where_a_solve_ran_out():
+    # the slip model's case: a point next to a refit's optimum ran out of ODE steps (blind s3011)
+    rec = _record("clean")
+    x0 = np.log([1.0, 0.7])
+    enough = heldout_residual(BudgetDecay(rec.t, rec.y, rec.noise, budget=30), (), x0)
+    assert enough is not None and np.std(enough) == pytest.approx(0.005, rel=0.2)
+    retried = heldout_residual(BudgetDecay(rec.t, rec.y, rec.noise, budget=10), (), x0)
+    np.testing.assert_array_equal(retried, enough)
+    # once only: 5 -> 15 steps still runs out, and the check has no answer
+    assert heldout_residual(BudgetDecay(rec.t, rec.y, rec.noise, budget=5), (), x0) is None

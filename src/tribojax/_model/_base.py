@@ -224,6 +224,11 @@ class AbstractBaseline(eqx.Module):
         "unit"}}, from the fitted values and standard errors; default none."""
         return {}
 
+    def more_steps(self):
+        """This model with a larger step budget for its solver (a held-out check retries with it
+        where a solve ran out); None when the model has no solver budget (the default)."""
+        return None
+
     def at_bound(self, theta) -> bool:
         """Whether θ sits at a bound of the model's parameters (a fit stopped there is held by
         the bound, not at a minimum of the cost); default never."""

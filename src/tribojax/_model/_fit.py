@@ -76,8 +76,9 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
     40 Hz mode's dynamic part (20 kPa, 5 noise sd, made here with SciPy): the vibration refit
     stopped at RSS 88,711 with 4,340 variances promised; the restarts reached the noise (4,586
     for 4,601 samples) and the mode was named (before: "unexplained"). That stall came from trial
-    points whose ODE solve ran out of steps (a 20,000-step budget); at the slip model's own
-    budget (`ODE_MAX_STEPS`) the refit reaches the noise without a restart.
+    points whose ODE solve ran out of steps: with 3x the budget the refit reaches the noise
+    without a restart, but a larger budget for every fit changed the study's answers both ways
+    (docs/discovery.md), so the budget stays and the restarts with it.
 
     Args:
         theta0: start [θ_b, s] (default `baseline.start()` and zero strengths); y: the data
@@ -182,12 +183,23 @@ def heldout_residual(baseline, designs, x0, y=None, scale=1.0, effects=(),
     see it. None when the model has no folds, a fold's fit fails, or a parameter has less than
     `FOLD_SHARE_MIN` of its Jacobian energy at x0 (Σ (∂r/∂x)², where it has any) in either
     fold: that fold cannot determine it, so its fit keeps the start value, which saw the
-    held-out samples."""
+    held-out samples. Where the model is not finite (a solve ran out of steps) the check is
+    done again once with `baseline.more_steps()`."""
     y = np.asarray(baseline.data().y if y is None else y, dtype=float)
-    folds = baseline.folds()
-    if folds is None:  # no held-out check for this model
+    if baseline.folds() is None:  # no held-out check for this model
         return None
-    folds = np.asarray(folds)
+    out = _heldout(baseline, designs, x0, y, scale, effects, max_steps)
+    wider = baseline.more_steps() if out is _NOT_FINITE else None
+    if wider is not None:
+        out = _heldout(wider, designs, x0, y, scale, effects, max_steps)
+    return None if out is _NOT_FINITE else out
+
+
+_NOT_FINITE = object()  # a held-out check where the model was not finite
+
+
+def _heldout(baseline, designs, x0, y, scale, effects, max_steps):
+    folds = np.asarray(baseline.folds())
     # a parameter one fold hardly sees keeps the start value (fitted on all samples) in that
     # fold's fit: its held-out prediction would not be one (one no sample sees moves nothing).
     # Judged at the start, where both folds' fits begin: at a fold's own optimum a parameter
@@ -199,14 +211,19 @@ def heldout_residual(baseline, designs, x0, y=None, scale=1.0, effects=(),
     J = np.asarray(value_and_jacobian(padded_residual, xp, args, solver=SOLVER)[1])[: y.size, :npar]
     energy = [np.sum(J[folds == k] ** 2, axis=0) for k in (0, 1)]
     total = energy[0] + energy[1]
+    if not np.all(np.isfinite(total)):
+        return _NOT_FINITE
     share = np.minimum(*energy)[total > 0] / total[total > 0]
-    if np.any(share < FOLD_SHARE_MIN) or not np.all(np.isfinite(total)):
+    if np.any(share < FOLD_SHARE_MIN):
         return None
     out = np.empty_like(y)
     for k in (0, 1):
         f = fit_model(baseline, designs, x0, y, scale, effects, max_steps=max_steps,
                       weights=(folds != k).astype(float), restarts=0)  # fmt: skip
-        if not f.converged or not np.all(np.isfinite(f.prediction)):
+        if f.result in (RESULTS.model_failed_at_start, RESULTS.model_failed) \
+                or not np.all(np.isfinite(f.prediction)):  # fmt: skip
+            return _NOT_FINITE
+        if not f.converged:
             return None
         out[folds == k] = (y - f.prediction)[folds == k]
     return out
