@@ -78,7 +78,7 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
     for 4,601 samples) and the mode was named (before: "unexplained"). That stall came from trial
     points whose ODE solve ran out of steps: with 3x the budget the refit reaches the noise
     without a restart, but a larger budget for every fit changed the study's answers both ways
-    (docs/discovery.md), so the budget stays and the restarts with it.
+    (docs/discovery.md), so a restart is run with `baseline.more_steps()` instead.
 
     Args:
         theta0: start [θ_b, s] (default `baseline.start()` and zero strengths); y: the data
@@ -157,12 +157,15 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
         # stopped by rejections far from a minimum: the variables were scaled at the start,
         # where a nuisance shift's column is zero while its amplitude is; go on rescaled here
         # (again while each restart lowers the cost by more than the evaluation noise)
-        again = fit_model(baseline, designs, x, y, scale, effects, max_steps, sigma_known,
+        # with the model's larger solver budget, if any: trial points whose solve ran out of
+        # steps are rejected steps, a cause of such stops
+        wider = baseline.more_steps() or baseline
+        again = fit_model(wider, designs, x, y, scale, effects, max_steps, sigma_known,
                           noise_consistent, weights, restarts - 1, cost)  # fmt: skip
         if again.rss < cost:  # kept also when it ran out of steps still descending (the
             # caller may go on from it; measured: blind record s3011, a mode's refit stationary
             # at 6.08e4, its restart at 4.02e4 after 128 steps)
-            return dataclasses.replace(again, steps=again.steps + res.steps)
+            return dataclasses.replace(again, steps=again.steps + res.steps, model=baseline)
     prediction = y + scale * r
     if weights is not None:  # the samples left out are predicted, not fitted
         prediction = evaluate(baseline, x[:p], designs, x[p:])

@@ -54,9 +54,10 @@ KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling",
 ZETA_MAX = 0.3  # damping ratio bound of a structural mode (above: a low-pass of a(t), not a mode)
 N_ODE_KNOBS = 4  # the knobs of the friction element; the mode's knobs act on the reading
 ODE_MAX_STEPS = 20_000  # ODE step budget of the model's slip solve (`simulate_slip`'s)
-# the held-out check's solves, when one ran out: on the blind record s3011 (20 kPa, 4,601
-# samples) a point 1 ulp from a 35 Hz mode's refit optimum ran out 0.08 s before the record's
-# end, the held-out fits failed at their start and the mode was refused
+# the budget of a stalled fit's restarts and of a held-out check where a solve ran out: on the
+# blind record s3011 (20 kPa, 4,601 samples) a point 1 ulp from a 35 Hz mode's refit optimum ran
+# out 0.08 s before the record's end, the held-out fits failed at their start and the refit
+# stalled at 3.08 noise sd (trial points that ran out are rejected steps)
 ODE_RETRY_FACTOR = 3
 F_CAP_NEAR = 0.9  # F_s above this fraction of its bound: at the bound (not identified)
 F_MAX_OVER_DRIVE = 100.0  # bound of F_s in units of m·max|a| (beyond: slip ∝ (m a/F_s)², tiny)
@@ -170,8 +171,9 @@ class SlipBaseline(AbstractBaseline):
         return {}
 
     def more_steps(self):
-        """This model with `ODE_RETRY_FACTOR` x the ODE step budget."""
-        return dataclasses.replace(self, max_steps=ODE_RETRY_FACTOR * self.max_steps)
+        """This model with `ODE_RETRY_FACTOR` x `ODE_MAX_STEPS` ODE steps (at least its own)."""
+        steps = max(self.max_steps, ODE_RETRY_FACTOR * ODE_MAX_STEPS)
+        return dataclasses.replace(self, max_steps=steps)
 
     def at_bound(self, theta) -> bool:
         """F_s within 10 % of `f_max` (`F_CAP_NEAR`): a reticle that hardly slips."""
