@@ -225,8 +225,8 @@ class AbstractBaseline(eqx.Module):
         return {}
 
     def more_steps(self):
-        """This model with a larger step budget for its solver (a held-out check retries with it
-        where a solve ran out); None when the model has no solver budget (the default)."""
+        """This model with a larger step budget for its solver (a stalled fit's restart and a
+        held-out check where a solve ran out use it); None when it has none (the default)."""
         return None
 
     def at_bound(self, theta) -> bool:

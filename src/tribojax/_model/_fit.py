@@ -245,10 +245,9 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
     (the study's s1029 and s1034, 10 kPa: a later start stopped lower with F_s at its cap, a
     reticle that never slips, from which no effect applies). `scale`: the residual unit
     (default the record's noise sd, else the first-difference estimate `noise_estimate` of the
-    data, else its sd); `sigma_known`
-    (default: the record states its noise) makes the statistics use the
-    stated noise when the residual is consistent with it. `throw`: raise `FitError` when no
-    start succeeded (default: return the failed fit, `result` says why)."""
+    data, else its sd); `sigma_known` (default: the record states its noise) makes the
+    statistics use the stated noise when the residual is consistent with it. `throw`: raise
+    `FitError` when no start succeeded (default: return the failed fit, `result` says why)."""
     data = baseline.data()
     y = np.asarray(data.y, dtype=float)
     scale = record_scale(baseline) if scale is None else scale
