@@ -1,0 +1,96 @@
+"""A candidate refitted before another one reached the noise gets one more start from that
+one's optimum (`discovery._refits.refit_round`; the study's record s1063, a quadratic position
+error at 20 kPa whose own starts ran out 3x above the noise while a degree-6 drift reached it).
+
+The refits are canned: the rule is about which fits are run and which one is kept, not about a
+model. Each fit is a stand-in with the attributes the round reads."""
+
+import types
+
+import numpy as np
+import pytest
+
+from tribojax.discovery import EffectDesign
+from tribojax.discovery import _refits as R
+from tribojax.discovery._candidates import Candidate
+
+N = 400
+RNG = np.random.default_rng(0)
+NOISE = RNG.normal(size=N)  # white residual: AR(1) ρ ≈ 0, the ΔBIC uninflated
+
+
+def _design(k):
+    return EffectDesign(tuple(f"s{i}" for i in range(k)), ("m",) * k, np.ones(k),
+                        basis=np.zeros((N, k)))  # fmt: skip
+
+
+def _fit(rss, theta_b, k, converged=True):
+    r = NOISE * np.sqrt(rss / N)
+    return types.SimpleNamespace(converged=converged, rss=rss, message="",
+                                 theta=np.concatenate([theta_b, np.zeros(k)]), prediction=-r)
+
+
+class _Run:
+    alpha, scale, baseline = 0.05, 1.0, None
+    y = np.zeros(N)
+
+    def consistent(self, fit):
+        return fit.rss < 1.2 * N  # the noise: RSS of N unit variances
+
+
+@pytest.fixture
+def round_(monkeypatch):
+    """refit_round over two candidates: `small` (1 strength, refitted first, its own starts
+    end at 3x the noise with θ_b = 0) and `big` (7 strengths, reaches the noise with θ_b = 5).
+    Returns a function giving (accepted, state, small candidate, fits run from big's θ_b)."""
+    from_big = []
+
+    def refit(baseline, state, design, name, *args):
+        return _fit(3.0 * N, [0.0], design.k) if name == "small" else _fit(N, [5.0], design.k)
+
+    def fit_model(baseline, designs, x0, y, scale, names, max_steps):
+        from_big.append((names[-1], x0[0], max_steps))
+        return _fit(small_again, [x0[0]], designs[-1].k)
+
+    monkeypatch.setattr(R, "_refit", refit)
+    monkeypatch.setattr(R, "fit_model", fit_model)
+    monkeypatch.setattr(R, "_strengths_of", lambda run, fit, name: {})
+    effect = types.SimpleNamespace(reject=lambda strengths: None)
+    small_again = N
+
+    def go(again_rss, big_k=7):
+        nonlocal small_again
+        small_again = again_rss
+        cands = [Candidate("small", 50.0, 1, 1e-10, 1, _design(1), [], True),
+                 Candidate("big", 40.0, big_k, 1e-8, 1, _design(big_k), [], True)]  # fmt: skip
+        ranking = types.SimpleNamespace(candidates=cands, residual=None, cache=None)
+        state = types.SimpleNamespace(rss=10.0 * N, theta=np.zeros(1), designs=(), effects=())
+        accepted = R.refit_round(_Run(), state, ranking, 4, -10.0,
+                                 {"small": effect, "big": effect}, False)  # fmt: skip
+        return accepted, state, cands[0], from_big
+
+    return go
+
+
+def test_a_smaller_candidate_is_refitted_from_the_optimum_that_reaches_the_noise(round_):
+    accepted, state, small, runs = round_(0.99 * N)
+    assert runs == [("small", 5.0, R.QUICK_STEPS)]  # once, from big's θ_b, quick budget
+    assert small.refit[0].rss == pytest.approx(0.99 * N)
+    assert small.refit_message == R._AGAIN
+    assert [a[0].name for a in accepted] == ["big", "small"]
+    # at the noise with 1 strength against 7: the choice goes to the small one
+    assert R.choose(accepted, state, N)[0] is small
+
+
+def test_the_new_start_is_kept_only_where_it_is_better(round_):
+    accepted, state, small, runs = round_(5.0 * N)  # worse than its own refit (3x)
+    assert len(runs) == 1
+    assert small.refit[0].rss == pytest.approx(3.0 * N)
+    assert small.refit_message != R._AGAIN
+    assert R.choose(accepted, state, N)[0].name == "big"
+
+
+def test_no_new_start_for_a_candidate_with_as_many_parameters(round_):
+    _, _, small, runs = round_(0.99 * N, big_k=1)
+    assert runs == []
+    assert small.refit[0].rss == pytest.approx(3.0 * N)
