@@ -98,6 +98,7 @@ def run_one(spec) -> dict:
            "F_s": rep.baseline_fit["parameters"].get("F_s"), "converged": rep.converged,
            "noise_std": sd, "noise_std_true": spec_noise(spec),
            "seconds": wall}  # fmt: skip
+    row["effects_dropped"] = list(rep.settings.get("effects_dropped") or [])
     corr = rep.misfit.get("correlations") or []
     row["misfit_signals"] = [c["signal"] for c in corr]  # largest |correlation| first
     fix = rep.misfit.get("correction") or {}

@@ -94,3 +94,65 @@ def test_no_new_start_for_a_candidate_with_as_many_parameters(round_):
     _, _, small, runs = round_(0.99 * N, big_k=1)
     assert runs == []
     assert small.refit[0].rss == pytest.approx(3.0 * N)
+
+
+# backward elimination (`drop_redundant`): the study's record s1045, where `viscous_friction`
+# was added before `stribeck`, which then took the misfit to the noise alone
+
+
+def _state(rss, effects, ks):
+    f = _fit(rss, [0.0], sum(ks))
+    f.effects, f.designs = tuple(effects), tuple(_design(k) for k in ks)
+    return f
+
+
+@pytest.fixture
+def drop(monkeypatch):
+    """drop_redundant on a model of effects ("a", "b", "c") with 1, 2, 1 strengths at the noise;
+    `without[name]`: the RSS of the model refitted without that effect (any other: 3x noise)."""
+    tried = []
+
+    def fit_model(baseline, designs, x0, y, scale, names):
+        gone = "".join(sorted({"a", "b", "c"} - set(names)))
+        tried.append(gone)
+        return _state(go.without.get(gone, 3.0 * N), names, [d.k for d in designs])
+
+    monkeypatch.setattr(R, "fit_model", fit_model)
+    run = _Run()
+    run.consistent = lambda fit: fit.rss < 1.03 * N  # a tighter noise test than _Run's
+    run.baseline = types.SimpleNamespace(param_names=("A",))
+
+    def go(without, effects=("a", "b", "c"), ks=(1, 2, 1)):
+        go.without = without
+        tried.clear()
+        state, dropped = R.drop_redundant(run, _state(N, effects, ks), -10.0)
+        return state.effects, dropped, list(tried)
+
+    return go
+
+
+def test_an_earlier_effect_that_no_longer_earns_its_place_is_dropped(drop):
+    effects, dropped, tried = drop({"a": 1.001 * N, "b": 3.0 * N, "c": 3.0 * N})
+    assert dropped == ["a"] and effects == ("b", "c")
+    assert "c" not in tried  # the last one added earned its place against the model before it
+    assert tried == ["a", "b", "ab"]  # then (b, c) without b: 3x the noise, kept
+
+
+def test_effects_that_earn_their_place_are_kept(drop):
+    # dropping `a` raises the RSS by 10 %: ΔBIC = N ln(1/1.1) + ln N ≈ -32 < -10
+    effects, dropped, _ = drop({"a": 1.1 * N, "b": 3.0 * N, "c": 3.0 * N})
+    assert dropped == [] and effects == ("a", "b", "c")
+
+
+def test_no_drop_that_leaves_the_noise(drop):
+    # ΔBIC alone drops `b` (2 strengths for 4 % of the RSS: ΔBIC ≈ -15.7 + 12 > -10), but the
+    # model without it is no longer consistent with the noise (RSS < 1.03 N) where the full was
+    effects, dropped, _ = drop({"a": 3.0 * N, "b": 1.04 * N, "c": 3.0 * N})
+    assert dropped == []
+    effects, dropped, _ = drop({"a": 3.0 * N, "b": 1.02 * N, "c": 3.0 * N})
+    assert dropped == ["b"]
+
+
+def test_a_single_effect_is_never_tested(drop):
+    effects, dropped, tried = drop({"a": N}, effects=("a",), ks=(1,))
+    assert effects == ("a",) and dropped == [] and tried == []

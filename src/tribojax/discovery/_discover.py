@@ -23,7 +23,7 @@ from .._model import (
 )
 from ._candidates import rank
 from ._core import DELTA_BIC_THRESHOLD, AbstractEffect, default_effects
-from ._refits import MAX_MOVES, pair_round, pick, refit_round
+from ._refits import MAX_MOVES, drop_redundant, pair_round, pick, refit_round
 from ._report import DiscoveryReport, report
 from ._verdict import NoiseModel
 
@@ -191,12 +191,14 @@ def discover(
             base_ok = run.consistent(state)
         if run.consistent(state):  # explained: nothing is left to name
             break
+    state, dropped = drop_redundant(run, state, delta_bic_threshold) if state.converged \
+        else (state, [])  # fmt: skip
     settings = {"criterion": "Rao score (chi2, Bonferroni over grid and candidates) then "
                 "Delta BIC (AR(1)-inflated) below threshold and a lower held-out "
                 "excess (two-fold)",
                 "delta_bic_threshold": delta_bic_threshold, "alpha": alpha,
                 "max_effects": max_effects, "n_refit": n_refit, "n_windows": n_windows,
-                "candidates_offered": list(by_name)}  # fmt: skip
+                "candidates_offered": list(by_name), "effects_dropped": dropped}  # fmt: skip
     if start is not None:
         settings["start_model"] = {
             "source": start.source, "effects": [e.name for e in start.effects],
