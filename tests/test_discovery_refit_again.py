@@ -156,3 +156,12 @@ def test_no_drop_that_leaves_the_noise(drop):
 def test_a_single_effect_is_never_tested(drop):
     effects, dropped, tried = drop({"a": N}, effects=("a",), ks=(1,))
     assert effects == ("a",) and dropped == [] and tried == []
+
+
+def test_no_elimination_where_a_misfit_is_left(drop, monkeypatch):
+    # the blind band brake: at "partly explained" the AR(1)-inflated ΔBIC dropped a real effect
+    monkeypatch.setattr(R, "_delta_bic", lambda *a: 0.0)  # any drop would pass the ΔBIC test
+    run = _Run()
+    run.baseline = types.SimpleNamespace(param_names=("A",))
+    state, dropped = R.drop_redundant(run, _state(2.0 * N, ("a", "b"), (1, 1)), -10.0)
+    assert dropped == [] and state.effects == ("a", "b")

@@ -128,6 +128,10 @@ def discover(
        tries its best single refits jointly in pairs (`_refits.pair_round`: two hidden effects
        whose single refits each leave the other's misfit). When the baseline itself
        is consistent with the noise the candidates are ranked, not refitted (verdict "none").
+       A candidate refitted before another one reached the noise gets one more start from
+       that one's optimum (`_refits.refit_round`). When the search ends with a model consistent
+       with the noise, an effect added before the last one that no longer earns its place
+       beside the others is dropped (`_refits.drop_redundant`; settings["effects_dropped"]).
     5. Report (`_report.report`): the verdict, the excess misfit before and after, in-sample
        and held out ("explained" needs both), and where a misfit remains its regions, signal
        correlations and a flexible correction.
