@@ -144,7 +144,7 @@ def refit_round(run, state, ranking, n_refit, threshold, by_name, base_ok) -> li
     cands, n, y = ranking.candidates, run.y.size, run.y
     level = run.alpha / len(cands)
     accepted, dk_explains, rss_explains, explains = [], np.inf, None, None
-    before = []  # (candidate, its designs, refit) refitted before any reached the noise
+    before = []  # (candidate, its starts, refit, design) refitted before any reached the noise
     to_refit = [c for c in cands if c.p_value < level][:n_refit]
     to_refit += [c for c in cands if not c.gate and c not in to_refit]
     for c in to_refit[: 0 if base_ok else len(to_refit)]:
