@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 import tribojax.discovery as disc
-from tribojax.discovery import _parallel
+from tribojax import _parallel
 from tribojax.discovery.synthetic import NOISE_LEVELS, SLIP_EFFECTS, hidden_effect_run
 
 N, T_END = 5001, 2.5

@@ -33,6 +33,7 @@ def _fit(rss, theta_b, k, converged=True):
 class _Run:
     alpha, scale, baseline = 0.05, 1.0, None
     y = np.zeros(N)
+    noise = types.SimpleNamespace(sigma=1.0, rho=0.0)  # unit noise, as `consistent` below
 
     def consistent(self, fit):
         return fit.rss < 1.2 * N  # the noise: RSS of N unit variances
@@ -165,3 +166,38 @@ def test_no_elimination_where_a_misfit_is_left(drop, monkeypatch):
     run.baseline = types.SimpleNamespace(param_names=("A",))
     state, dropped = R.drop_redundant(run, _state(2.0 * N, ("a", "b"), (1, 1)), -10.0)
     assert dropped == [] and state.effects == ("a", "b")
+
+
+@pytest.mark.parametrize("gn_rss, runs", [(1.0 * N, 1), (1.2 * N, 3)])
+def test_starts_stop_once_the_gauss_newton_start_is_at_the_noise(monkeypatch, gn_rss, runs):
+    # _refit: the Gauss–Newton start converged at or below the noise floor (here 1.1 N) ends
+    # the starts; above it the design's two starts run and the lowest cost is kept
+    from tribojax import _parallel
+
+    calls = []
+
+    def fit_model(baseline, designs, x0, y, scale, names, max_steps, ceiling):
+        calls.append(ceiling)
+        rss = gn_rss if len(calls) == 1 else 1.1 * N
+        return types.SimpleNamespace(converged=True, rss=rss, steps=5, theta=x0, message="")
+
+    monkeypatch.setattr(R, "fit_model", fit_model)
+    monkeypatch.setattr(R, "_columns", lambda baseline, state, design, cache: np.ones((N, 1)))
+    monkeypatch.setattr(_parallel, "FIT_WORKERS", 1)  # read in order: the GN start first
+    state = types.SimpleNamespace(theta=np.zeros(1), jacobian=RNG.normal(size=(N, 1)),
+                                  rss=10.0 * N, designs=(), effects=())  # fmt: skip
+    design = types.SimpleNamespace(k=1, starts=((10.0,), (100.0,)))
+    fit = R._refit(None, state, design, "x", np.zeros(N), 1.0, NOISE, None, floor=1.1 * N)
+    assert len(calls) == runs and fit.rss == min(gn_rss, 1.1 * N)
+    assert calls == [state.rss] * runs  # no start is restarted above the current cost
+
+
+def test_noise_floor_is_one_spread_above_the_noise():
+    run = _Run()
+    run.noise = types.SimpleNamespace(sigma=2.0, rho=0.0)
+    state = types.SimpleNamespace(theta=np.zeros(3))
+    m = N - 3 - 2
+    assert R._noise_floor(run, state, _design(2)) == pytest.approx(4.0 * (m + np.sqrt(2 * m)))
+    run.noise.rho = 0.5  # AR(1): the sum of squares spreads by √((1 + ρ²)/(1 − ρ²))
+    assert R._noise_floor(run, state, _design(2)) == pytest.approx(
+        4.0 * (m + np.sqrt(2 * m * 1.25 / 0.75)))

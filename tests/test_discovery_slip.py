@@ -156,7 +156,7 @@ def test_wang2022_table_baseline_is_the_published_model():
 
 
 def test_fit_workers_setting_is_checked():
-    from tribojax.discovery._parallel import _workers
+    from tribojax._parallel import _workers
 
     assert _workers("3") == 3 and _workers(None) >= 1
     for bad in ("0", "two", "-1", "1.5"):

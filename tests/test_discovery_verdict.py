@@ -124,7 +124,7 @@ def test_discover_on_independent_records(monkeypatch):
     test_discovery_slip.py's model-made confusion records."""
     from benchmarks import discovery_study as st
 
-    from tribojax.discovery import _parallel
+    from tribojax import _parallel
 
     labels = st.CI_LABELS if os.environ.get("TRIBOJAX_FULL") else st.CI_SHORT
     specs = [s for s in st.all_specs() if any(s.label.startswith(c) for c in labels)]

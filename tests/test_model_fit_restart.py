@@ -49,6 +49,9 @@ def test_mode_refit_reaches_the_noise_only_with_the_restarts():
     stalled = fit_model(base, (design,), x0, y, state.scale, ("vibration",), restarts=0)
     fit = fit_model(base, (design,), x0, y, state.scale, ("vibration",))
     assert fit.converged and fit.steps > stalled.steps
+    # a stop at or above `ceiling` (a refit's current cost) is not restarted
+    capped = fit_model(base, (design,), x0, y, state.scale, ("vibration",), ceiling=stalled.rss)
+    assert capped.steps == stalled.steps and capped.rss == stalled.rss
     # RSS in noise variances: the stalled fit leaves > 10 per sample, the restarted one the noise
     assert stalled.rss > 10 * N
     assert fit.rss == pytest.approx(N, rel=0.05)
@@ -65,6 +68,7 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
     import dataclasses
 
     import tribojax._model._fit as mf
+    from tribojax import _parallel
 
     rec = dr.make_record(dr.RecordSpec("clean", "-", 2.0, "paper", "low", True, 3))
     base = disc.slip_baseline(rec)
@@ -82,6 +86,9 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
                                    converged=None, gain_left=gain)  # fmt: skip
 
     monkeypatch.setattr(mf, "fit_model", canned)
+    # one fit at a time: the canned outcomes go by call order (with more workers the further
+    # starts run side by side and are read in the same order)
+    monkeypatch.setattr(_parallel, "FIT_WORKERS", 1)
     starts = [base.start()] * 3
     fit = mf.fit_record(base, starts)
     assert tried == [500.0, 120.0] and fit.rss == pytest.approx(120.0)

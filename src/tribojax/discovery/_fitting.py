@@ -11,7 +11,7 @@ from .._fit._engine import value_and_jacobian
 from .._fit._measures import delta_bic
 from .._fit._noise import ar1_inflation
 from .._model import K_MAX, SOLVER, EffectDesign, pack_designs, padded_args, padded_residual
-from ._parallel import in_parallel
+from .._parallel import in_parallel
 
 
 def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
