@@ -37,7 +37,8 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 # - foundation: float64 switch, the compilation cache and stored traces (`_export`), validation,
 #   result codes, the matplotlib guard, the validating CSV reader with the bundled published
 #   tables (`_tables`), the papers' constants (`_presets`) and the shared names and budgets
-#   (`_limits`; these two import nothing);
+#   (`_limits`; these two import nothing), the threads that run independent fits side by side
+#   (`_parallel`);
 # - physics: contact (with the papers' preset pairs and load laws), surfaces, friction elements,
 #   dynamics: no records, no fits;
 # - model chain: wang2022's one path parameters → contact → element → phase slips (`_chain`);
@@ -51,7 +52,7 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 #   else imports.
 LAYERS = (
     ("foundation", {"_precision", "_cache", "_export", "_checks", "_results", "_plot", "_tables",
-                    "_presets", "_limits"}),
+                    "_presets", "_limits", "_parallel"}),
     ("physics", {"_contact", "_roughness", "_friction", "_dynamics"}),
     ("model chain", {"_chain"}),
     ("model analyses", {"_sweep", "_sensitivity"}),

@@ -1,4 +1,4 @@
-"""Two effects at once (`tribojax.discovery._refits.pair_round`, issue 32): when no single
+"""Two effects at once (`tribojax.discovery._effect_sets.pair_round`, issue 32): when no single
 candidate qualifies because the misfit a second effect leaves correlates the residual (its AR(1)
 inflation near the bound), the best single refits are fitted jointly in pairs.
 

@@ -1,9 +1,11 @@
 """A candidate refitted before another one reached the noise gets one more start from that
 one's optimum (`discovery._refits.refit_round`; the study's record s1063, a quadratic position
-error at 20 kPa whose own starts ran out 3x above the noise while a degree-6 drift reached it).
+error at 20 kPa whose own starts ran out 3x above the noise while a degree-6 drift reached it);
+backward elimination at the noise (`discovery._effect_sets.drop_redundant`); a refit's starts
+stop at the noise floor (`_refits._refit`).
 
-The refits are canned: the rule is about which fits are run and which one is kept, not about a
-model. Each fit is a stand-in with the attributes the round reads."""
+The refits are canned: the rules are about which fits are run and which one is kept, not about
+a model. Each fit is a stand-in with the attributes the round reads."""
 
 import types
 
@@ -11,6 +13,7 @@ import numpy as np
 import pytest
 
 from tribojax.discovery import EffectDesign
+from tribojax.discovery import _effect_sets as S
 from tribojax.discovery import _refits as R
 from tribojax.discovery._candidates import Candidate
 
@@ -118,7 +121,7 @@ def drop(monkeypatch):
         tried.append(gone)
         return _state(go.without.get(gone, 3.0 * N), names, [d.k for d in designs])
 
-    monkeypatch.setattr(R, "fit_model", fit_model)
+    monkeypatch.setattr(S, "fit_model", fit_model)
     run = _Run()
     run.consistent = lambda fit: fit.rss < 1.03 * N  # a tighter noise test than _Run's
     run.baseline = types.SimpleNamespace(param_names=("A",))
@@ -126,7 +129,7 @@ def drop(monkeypatch):
     def go(without, effects=("a", "b", "c"), ks=(1, 2, 1)):
         go.without = without
         tried.clear()
-        state, dropped = R.drop_redundant(run, _state(N, effects, ks), -10.0)
+        state, dropped = S.drop_redundant(run, _state(N, effects, ks), -10.0)
         return state.effects, dropped, list(tried)
 
     return go
@@ -161,10 +164,10 @@ def test_a_single_effect_is_never_tested(drop):
 
 def test_no_elimination_where_a_misfit_is_left(drop, monkeypatch):
     # the blind band brake: at "partly explained" the AR(1)-inflated ΔBIC dropped a real effect
-    monkeypatch.setattr(R, "_delta_bic", lambda *a: 0.0)  # any drop would pass the ΔBIC test
+    monkeypatch.setattr(S, "_delta_bic", lambda *a: 0.0)  # any drop would pass the ΔBIC test
     run = _Run()
     run.baseline = types.SimpleNamespace(param_names=("A",))
-    state, dropped = R.drop_redundant(run, _state(2.0 * N, ("a", "b"), (1, 1)), -10.0)
+    state, dropped = S.drop_redundant(run, _state(2.0 * N, ("a", "b"), (1, 1)), -10.0)
     assert dropped == [] and state.effects == ("a", "b")
 
 

@@ -23,7 +23,8 @@ from .._model import (
 )
 from ._candidates import rank
 from ._core import DELTA_BIC_THRESHOLD, AbstractEffect, default_effects
-from ._refits import MAX_MOVES, drop_redundant, pair_round, pick, refit_round
+from ._effect_sets import drop_redundant, pair_round
+from ._refits import MAX_MOVES, pick, refit_round
 from ._report import DiscoveryReport, report
 from ._verdict import NoiseModel
 
@@ -125,13 +126,13 @@ def discover(
        the record (`folds()`), lowers the current model's misfit on the other half
        (`_Run.heldout`, both ways) is added. Repeat until none qualifies, `max_effects` are
        in, or the model is consistent with the noise ("explained"). A round that adds nothing
-       tries its best single refits jointly in pairs (`_refits.pair_round`: two hidden effects
+       tries its best single refits jointly in pairs (`_effect_sets.pair_round`: two hidden effects
        whose single refits each leave the other's misfit). When the baseline itself
        is consistent with the noise the candidates are ranked, not refitted (verdict "none").
        A candidate refitted before another one reached the noise gets one more start from
        that one's optimum (`_refits.refit_round`). When the search ends with a model consistent
        with the noise, an effect added before the last one that no longer earns its place
-       beside the others is dropped (`_refits.drop_redundant`; settings["effects_dropped"]).
+       beside the others is dropped (`_effect_sets.drop_redundant`; settings["effects_dropped"]).
     5. Report (`_report.report`): the verdict, the excess misfit before and after, in-sample
        and held out ("explained" needs both), and where a misfit remains its regions, signal
        correlations and a flexible correction.
