@@ -73,6 +73,9 @@ def test_a_killed_run_exits_130_and_leaves_no_lock_or_output(tmp_path, sig):
     code = textwrap.dedent(f"""
         import os, signal, sys, time
         from tribojax._cli._common import claim_outputs, run_command
+        # as from a terminal: a suite started in the background by a shell without job control
+        # passes SIGINT on ignored, and Python then installs no KeyboardInterrupt handler
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         def work(args):
             with claim_outputs(None, [{str(out / "r.json")!r}], force=False):
                 open({str(out / "r.json")!r}, "w").write("partial")
