@@ -1,8 +1,8 @@
 """Independent fits side by side: a fit is one compiled solve whose ODE steps run on one core,
 and JAX releases the GIL while it runs, so the further starts of a record model's fit, the two
 folds of a held-out check, the starts of a discovery refit, a candidate's seeds and the score's
-knob Jacobians can use the other cores. Results are the same numbers as
-one after another (each call is pure)."""
+knob Jacobians can use the other cores. Results are the same numbers as one after another
+(each call is pure)."""
 
 from __future__ import annotations
 
