@@ -31,6 +31,12 @@ def ar1_inflation(rho) -> float:
     return (1.0 + rho) / (1.0 - rho)
 
 
+def ar1_square_inflation(rho):
+    """Variance inflation (1+ρ²)/(1−ρ²) of a sum of squared AR(1) terms (Satterthwaite: the sum
+    is c times a χ² with n/c degrees of freedom); ρ as given (callers clip it)."""
+    return (1.0 + rho**2) / (1.0 - rho**2)
+
+
 def chi2_sf(x, dof) -> float:
     """Survival function P(χ²_dof > x) of the chi-square distribution, the regularised upper
     incomplete gamma function Q(dof/2, x/2) (`gammaincc`); dof > 0 need not be an integer."""
@@ -164,7 +170,7 @@ def _windows(segment, w):
 
 def _windows_p(r, spans, sigma, rho):
     """(mean r²/σ², p-value) arrays of the sample ranges `spans` of `r` (module docstring)."""
-    c = (1.0 + rho**2) / (1.0 - rho**2)
+    c = ar1_square_inflation(rho)
     q = np.array([np.sum((r[a:b] / sigma) ** 2) for a, b in spans])
     n = np.array([b - a for a, b in spans], dtype=float)
     return q / n, chi2_sf_many(q / c, n / c)
@@ -232,7 +238,7 @@ def noise_consistent(r, sigma, rho=0.0, segment=None, x=None, n_params=0, *, alp
     r = np.asarray(r, dtype=float)
     n = r.size
     rho = float(np.clip(rho, 0.0, 0.95))
-    c = (1.0 + rho**2) / (1.0 - rho**2)
+    c = ar1_square_inflation(rho)
     q = float(np.sum((r / sigma) ** 2))
     if estimated:
         # σ̂ from first differences carries its own error: relative variance of σ̂² ≈ 8/n

@@ -10,7 +10,7 @@ import threading
 import numpy as np
 
 from .._fit._measures import bic, delta_bic, rms
-from .._fit._noise import RHO_MAX, ar1_inflation, residual_rho
+from .._fit._noise import RHO_MAX, ar1_inflation, ar1_square_inflation, residual_rho
 from .._model import MAX_STEPS, effect_strengths, fit_model
 from .._parallel import in_parallel, speculatively
 from ._fitting import _columns, _delta_bic
@@ -74,11 +74,13 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
         step = np.linalg.lstsq(A, r, rcond=None)[0]
         p = state.theta.size
         first.append(gauss_newton(np.concatenate([state.theta + step[:p], step[p:]])))
-    starts = [fit_from(np.concatenate([state.theta, np.asarray(s0, dtype=float)]))
-              for s0 in design.starts]  # fmt: skip
     # independent fits run side by side (`in_parallel`); the zero start, when the Gauss–Newton
     # start needs it, on this thread meanwhile
-    starts = [lambda f=f: None if done.is_set() else f() for f in starts]
+    def unless_done(call):
+        return lambda: None if done.is_set() else call()
+
+    starts = [unless_done(fit_from(np.concatenate([state.theta, np.asarray(s0, dtype=float)])))
+              for s0 in design.starts]  # fmt: skip
     running = in_parallel([*first, *starts], wait=False)
     fits = [running[0].result()] if first else []
     if done.is_set():  # the starts not yet begun are not run, one already running goes unread
@@ -209,7 +211,7 @@ def _noise_floor(run, state, design) -> float:
     σ²·(m + √(2m(1 + ρ²)/(1 − ρ²))), m = n − parameters (σ, ρ the run's noise model)."""
     m = run.y.size - state.theta.size - design.k
     rho = float(np.clip(run.noise.rho, 0.0, RHO_MAX))
-    spread = np.sqrt(2.0 * m * (1.0 + rho**2) / (1.0 - rho**2))
+    spread = np.sqrt(2.0 * m * ar1_square_inflation(rho))
     return float((run.noise.sigma / run.scale) ** 2 * (m + spread))
 
 
