@@ -74,7 +74,7 @@ def run_one(entry: dict, folder: Path) -> dict:
            "excess_after_sd": rep.excess_rmse_after / sd, "converged": rep.converged,
            "heldout_before_sd": _sd(rep.heldout_excess_before, sd),
            "heldout_after_sd": _sd(rep.heldout_excess_after, sd),
-           "noise_std": sd, "seconds": wall,
+           "final_consistent": rep.misfit.get("final_consistent"), "noise_std": sd, "seconds": wall,
            "extra": [e for e in rep.effects if e not in hidden]}  # fmt: skip
     row["ok"] = bool(score(hidden, row["effects"], rep.verdict, rep.excess_rmse_before,
                            rep.excess_rmse_after))  # fmt: skip

@@ -98,6 +98,10 @@ def run_one(spec) -> dict:
            "F_s": rep.baseline_fit["parameters"].get("F_s"), "converged": rep.converged,
            "noise_std": sd, "noise_std_true": spec_noise(spec),
            "seconds": wall}  # fmt: skip
+    h0, h1 = rep.heldout_excess_before, rep.heldout_excess_after
+    row["heldout_before_sd"] = None if h0 is None else h0 / sd
+    row["heldout_after_sd"] = None if h1 is None else h1 / sd
+    row["final_consistent"] = rep.misfit.get("final_consistent")
     row["effects_dropped"] = list(rep.settings.get("effects_dropped") or [])
     corr = rep.misfit.get("correlations") or []
     row["misfit_signals"] = [c["signal"] for c in corr]  # largest |correlation| first

@@ -152,3 +152,20 @@ def test_heldout_check_is_done_again_once_with_more_steps_where_a_solve_ran_out(
     np.testing.assert_array_equal(retried, enough)
     # once only: 5 -> 15 steps still runs out, and the check has no answer
     assert heldout_residual(BudgetDecay(rec.t, rec.y, rec.noise, budget=5), (), x0) is None
+
+
+@pytest.mark.parametrize(
+    "e1, h1, expected",
+    [
+        (0.24, 1.06, "partly_explained"),  # the study's s1082: a gap of 1.03 σ
+        (0.0, 0.55, "explained"),  # within 0.6 σ
+        (0.3, 0.65, "explained"),  # gap √(0.65² − 0.3²) = 0.58 σ
+        (0.3, 0.72, "partly_explained"),  # gap 0.65 σ
+    ],
+)
+def test_explained_needs_the_heldout_excess_close_to_the_in_sample_one(e1, h1, expected):
+    # excesses in noise sd, passed in output units with σ = 2
+    sigma = 2.0
+    args = (1, False, True, 4.0 * sigma, e1 * sigma, (4.0 * sigma, h1 * sigma))
+    assert verdict(*args, sigma=sigma) == expected
+    assert verdict(*args) == "explained"  # no σ given: the gap is not checked

@@ -41,6 +41,9 @@ class _Run:
     def consistent(self, fit):
         return fit.rss < 1.2 * N  # the noise: RSS of N unit variances
 
+    def prefetch(self, fit):  # a held-out check started early: none here
+        pass
+
 
 @pytest.fixture
 def round_(monkeypatch):
@@ -52,8 +55,8 @@ def round_(monkeypatch):
     def refit(baseline, state, design, name, *args):
         return _fit(3.0 * N, [0.0], design.k) if name == "small" else _fit(N, [5.0], design.k)
 
-    def fit_model(baseline, designs, x0, y, scale, names, max_steps):
-        from_big.append((names[-1], x0[0], max_steps))
+    def fit_model(baseline, designs, x0, y, scale, names, max_steps, abandon_above):
+        from_big.append((names[-1], x0[0], max_steps, abandon_above))
         return _fit(small_again, [x0[0]], designs[-1].k)
 
     monkeypatch.setattr(R, "_refit", refit)
@@ -78,7 +81,8 @@ def round_(monkeypatch):
 
 def test_a_smaller_candidate_is_refitted_from_the_optimum_that_reaches_the_noise(round_):
     accepted, state, small, runs = round_(0.99 * N)
-    assert runs == [("small", 5.0, R.QUICK_STEPS)]  # once, from big's θ_b, quick budget
+    # once, from big's θ_b, quick budget, abandoned while above the margin over big's cost
+    assert runs == [("small", 5.0, R.QUICK_STEPS, R.QUICK_MARGIN * N)]
     assert small.refit[0].rss == pytest.approx(0.99 * N)
     assert small.refit_message == R._AGAIN
     assert [a[0].name for a in accepted] == ["big", "small"]
@@ -171,28 +175,55 @@ def test_no_elimination_where_a_misfit_is_left(drop, monkeypatch):
     assert dropped == [] and state.effects == ("a", "b")
 
 
-@pytest.mark.parametrize("gn_rss, runs", [(1.0 * N, 1), (1.2 * N, 3)])
-def test_starts_stop_once_the_gauss_newton_start_is_at_the_noise(monkeypatch, gn_rss, runs):
-    # _refit: the Gauss–Newton start converged at or below the noise floor (here 1.1 N) ends
-    # the starts; above it the design's two starts run and the lowest cost is kept
-    from tribojax import _parallel
-
+def _refit_with(monkeypatch, gn_rss, gn_converged=True, target=None):
+    """_refit of a 1-strength design with two starts, the current cost 10 N, the noise floor
+    1.1 N; the Gauss–Newton start ends at `gn_rss`, every other start at 1.1 N. Returns the
+    kept fit and the (x0, ceiling, abandon_above, max_steps) of each fit run, in order."""
     calls = []
 
-    def fit_model(baseline, designs, x0, y, scale, names, max_steps, ceiling):
-        calls.append(ceiling)
-        rss = gn_rss if len(calls) == 1 else 1.1 * N
-        return types.SimpleNamespace(converged=True, rss=rss, steps=5, theta=x0, message="")
+    def fit_model(baseline, designs, x0, y, scale, names, max_steps, ceiling, abandon_above):
+        calls.append((float(x0[-1]), ceiling, abandon_above, max_steps))
+        first = len(calls) == 1
+        return types.SimpleNamespace(converged=gn_converged or not first, steps=5, theta=x0,
+                                     rss=gn_rss if first else 1.1 * N, message="")  # fmt: skip
 
     monkeypatch.setattr(R, "fit_model", fit_model)
     monkeypatch.setattr(R, "_columns", lambda baseline, state, design, cache: np.ones((N, 1)))
-    monkeypatch.setattr(_parallel, "FIT_WORKERS", 1)  # read in order: the GN start first
     state = types.SimpleNamespace(theta=np.zeros(1), jacobian=RNG.normal(size=(N, 1)),
                                   rss=10.0 * N, designs=(), effects=())  # fmt: skip
     design = types.SimpleNamespace(k=1, starts=((10.0,), (100.0,)))
-    fit = R._refit(None, state, design, "x", np.zeros(N), 1.0, NOISE, None, floor=1.1 * N)
-    assert len(calls) == runs and fit.rss == min(gn_rss, 1.1 * N)
-    assert calls == [state.rss] * runs  # no start is restarted above the current cost
+    fit = R._refit(None, state, design, "x", np.zeros(N), 1.0, NOISE, None, target=target,
+                   floor=1.1 * N)  # fmt: skip
+    return fit, sorted(calls[1:], key=repr), calls[0]
+
+
+@pytest.mark.parametrize("gn_rss, runs", [(1.0 * N, 1), (1.2 * N, 3)])
+def test_starts_stop_once_the_gauss_newton_start_is_at_the_noise(monkeypatch, gn_rss, runs):
+    # _refit: the Gauss–Newton start runs first; converged at or below the noise floor (here
+    # 1.1 N) it is kept alone; above it the design's two starts run and the lowest cost is kept
+    fit, others, first = _refit_with(monkeypatch, gn_rss)
+    assert 1 + len(others) == runs and fit.rss == min(gn_rss, 1.1 * N)
+    # each start's ceiling (no restart above it) and abandon bar: the current cost
+    assert {c[1:3] for c in [first, *others]} == {(10.0 * N, 10.0 * N)}
+    assert [c[0] for c in others] == [10.0, 100.0][: runs - 1]
+
+
+def test_the_zero_start_is_never_abandoned_at_the_current_cost(monkeypatch):
+    # the Gauss–Newton start failed: the zero start (strength 0) runs too; it begins at the
+    # current cost, so it has no abandon bar, while the design's starts have the current cost
+    fit, others, _ = _refit_with(monkeypatch, 20.0 * N, gn_converged=False)
+    assert [c[0] for c in others] == [0.0, 10.0, 100.0]
+    assert [c[2] for c in others] == [np.inf, 10.0 * N, 10.0 * N]
+    assert fit.rss == 1.1 * N
+
+
+def test_a_quick_refit_is_abandoned_above_the_margin_over_the_target(monkeypatch):
+    # another candidate reached RSS 1.0 N: each start has QUICK_STEPS steps and is abandoned
+    # above QUICK_MARGIN × 1.0 N; the zero start (at 10 N, beyond that margin) is not run
+    _, others, first = _refit_with(monkeypatch, 20.0 * N, gn_converged=False, target=1.0 * N)
+    assert first[2:] == (R.QUICK_MARGIN * N, R.QUICK_STEPS)
+    assert [c[0] for c in others] == [10.0, 100.0]
+    assert all(c[2:] == (R.QUICK_MARGIN * N, R.QUICK_STEPS) for c in others)
 
 
 def test_noise_floor_is_one_spread_above_the_noise():

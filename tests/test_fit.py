@@ -223,3 +223,33 @@ def test_step_budget_is_a_run_time_value_of_one_compiled_solve():
     want_J = jax.jacfwd(_rosenbrock)(y0, None)
     assert np.allclose(np.asarray(r), np.asarray(_rosenbrock(y0, None)), rtol=1e-14, atol=0)
     assert np.allclose(np.asarray(J), np.asarray(want_J), rtol=1e-14, atol=0)
+
+
+def test_a_start_above_the_bar_after_its_probe_steps_is_abandoned():
+    # options["bar"] = (probe, limit), at run time like the budget: Rosenbrock from (-1.2, 1)
+    # has cost ‖r‖² = 24.2 at the start and descends slowly along its valley; a limit below
+    # the cost it holds after 3 steps stops it there (as `nonlinear_max_steps_reached`, fewer
+    # steps than the budget); a limit it is below by then, or none, lets it converge, along
+    # the same iterates, in the same compiled solve
+    from tribojax._fit import _engine
+    from tribojax._fit._solver import LevenbergMarquardt
+
+    solver = LevenbergMarquardt(1e-10, 1e-12)
+    y0 = jnp.array([-1.2, 1.0])
+
+    def fit(bar):
+        return tj.least_squares_fit(_rosenbrock, y0, names=("a", "b"), solver=solver,
+                                    max_steps=100, jac="fwd", bar=bar)  # fmt: skip
+
+    free = fit(None)
+    three = tj.least_squares_fit(_rosenbrock, y0, names=("a", "b"), solver=solver, max_steps=3,
+                                 jac="fwd")  # fmt: skip
+    cost3 = float(three.residuals @ three.residuals)
+    before = len(_engine._solve_jit.programs) + _engine._solve_jit.jitted._cached._cache_size()
+    cut = fit((3, 0.5 * cost3))
+    assert cut.steps == 3 and cut.result == tj.RESULTS.nonlinear_max_steps_reached
+    assert np.array_equal(cut.theta, three.theta)
+    kept = fit((3, 2.0 * cost3))
+    assert kept.converged and np.array_equal(kept.theta, free.theta) and kept.steps == free.steps
+    assert len(_engine._solve_jit.programs) + _engine._solve_jit.jitted._cached._cache_size() \
+        == before  # fmt: skip

@@ -77,9 +77,12 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
     outcomes = iter([(500.0, 112.0), (120.0, 0.08), (100.0, 0.0)])  # (cost, gain left)
     tried = []
 
+    bars = []
+
     def canned(baseline, designs, theta0, *a, **k):
         rss, gain = next(outcomes)
         tried.append(rss)
+        bars.append(k.get("abandon_above"))
         r = np.zeros_like(real.residuals)
         r[0] = np.sqrt(rss)
         return dataclasses.replace(real, residuals=r, result=tj.RESULTS.successful,
@@ -92,6 +95,8 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
     starts = [base.start()] * 3
     fit = mf.fit_record(base, starts)
     assert tried == [500.0, 120.0] and fit.rss == pytest.approx(120.0)
+    # the later starts are abandoned while above the first one's cost after PROBE_STEPS steps
+    assert bars == [np.inf, pytest.approx(500.0)]
     # a stop short of a minimum at every start: all tried, the first kept (costs of stops short
     # of a minimum are not compared: the study's s1029, a lower one with F_s at 10^10 N)
     outcomes = iter([(500.0, 112.0), (300.0, 5.0), (400.0, 2.0)])

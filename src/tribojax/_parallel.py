@@ -1,8 +1,8 @@
 """Independent fits side by side: a fit is one compiled solve whose ODE steps run on one core,
 and JAX releases the GIL while it runs, so the further starts of a record model's fit, the two
-folds of a held-out check, the starts of a discovery refit, a candidate's seeds and the score's
-knob Jacobians can use the other cores. Results are the same numbers as one after another
-(each call is pure)."""
+folds of a held-out check, the starts of a discovery refit, a candidate's seeds, the score's
+knob Jacobians and a held-out check needed later (`in_background`) can use the other cores.
+Results are the same numbers as one after another (each call is pure)."""
 
 from __future__ import annotations
 
@@ -55,9 +55,27 @@ def speculatively(calls):
         ex.shutdown(wait=True, cancel_futures=True)
 
 
+def in_background(call):
+    """Start the zero-argument `call` (which may use `in_parallel`) on a thread of its own and
+    return its future; with one worker it runs when read instead."""
+    if FIT_WORKERS <= 1:
+        return _Lazy(call)
+    ex = ThreadPoolExecutor(1, thread_name_prefix="tribojax-background")
+    try:
+        return ex.submit(call)
+    finally:
+        ex.shutdown(wait=False)
+
+
 @dataclasses.dataclass
 class _Lazy:
+    """A call run when its result is first read (once)."""
+
     call: object
+    done: bool = False
+    value: object = None
 
     def result(self):
-        return self.call()
+        if not self.done:
+            self.value, self.done, self.call = self.call(), True, None
+        return self.value

@@ -239,14 +239,17 @@ def _singular_directions(sv, vt, names) -> tuple:
     return tuple(out)
 
 
-def _solve(residual_fn, theta0, args, solver, max_steps, jac, shared=MAX_STEPS):
+def _solve(residual_fn, theta0, args, solver, max_steps, jac, shared=MAX_STEPS, bar=None):
     """The least-squares solve: (θ, optimistix result, steps, (r, J) or None). Traced, lowered
     and compiled with failures as NaN (no host callback), and its trace stored (`cached_jit`).
     The library's `LevenbergMarquardt` takes the budget as a run-time value under a static cap
-    of max(`max_steps`, `shared`): one compiled solve for every budget up to `shared`."""
+    of max(`max_steps`, `shared`): one compiled solve for every budget up to `shared`, and
+    every `bar` (probe steps, cost limit; default none)."""
     budget = None
     if isinstance(solver, LevenbergMarquardt) and max_steps >= 1:
-        budget, max_steps = jnp.asarray(max_steps), max(max_steps, shared, MAX_STEPS)
+        probe, limit = (max_steps, np.inf) if bar is None else bar
+        budget = (jnp.asarray(max_steps), (jnp.asarray(probe), jnp.asarray(limit, dtype=float)))
+        max_steps = max(max_steps, shared, MAX_STEPS)
     with failures_as_nan():
         value, code, steps, final = _solve_jit(residual_fn, theta0, args, solver, max_steps, jac,
                                                budget)  # fmt: skip
@@ -257,7 +260,7 @@ def _solve(residual_fn, theta0, args, solver, max_steps, jac, shared=MAX_STEPS):
 def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac, budget):
     # module-level and keyed by `residual_fn`'s identity, so a repeated fit with new data in
     # `args` runs warm; outputs are plain arrays so the trace can be stored
-    options = dict(jac=jac) if budget is None else dict(jac=jac, budget=budget)
+    options = dict(jac=jac) if budget is None else dict(jac=jac, budget=budget[0], bar=budget[1])
     sol = optx.least_squares(residual_fn, solver, theta0, args, options=options,
                              max_steps=max_steps, throw=False)  # fmt: skip
     # a Gauss–Newton solver's state holds the residual and its linearisation at the returned
@@ -313,6 +316,7 @@ def least_squares_fit(
     solver=None,
     optimum_tol: float | None = None,
     progress=None,
+    bar: tuple | None = None,
     throw: bool = False,
 ) -> FitResult:
     """Fit θ minimising ½‖residual_fn(θ, args)‖² with an optimistix least-squares solver.
@@ -336,6 +340,9 @@ def least_squares_fit(
             left is below this many standard errors in every parameter (else
             `RESULTS.short_of_optimum`): the check for the `step_tol` stop on rejected steps.
         progress: callable receiving one line per solver step (a solver with `report=True`).
+        bar: (probe, limit) for `LevenbergMarquardt`: after `probe` steps a cost ‖r‖² above
+            `limit` stops the fit (`nonlinear_max_steps_reached` with fewer steps than
+            `max_steps`): a start not yet below a cost reached elsewhere is abandoned.
         throw: raise `FitError` when the fit does not succeed (default: return it).
     The solve is compiled once per `residual_fn` object: pass a module-level function (data in
     `args`) and repeated fits run warm.
@@ -352,7 +359,8 @@ def least_squares_fit(
     if progress is not None:
         _PROGRESS.append((progress, time.perf_counter()))
     try:
-        theta, result, steps, final = _solve(residual_fn, theta0, args, solver, int(max_steps), jac)
+        theta, result, steps, final = _solve(residual_fn, theta0, args, solver, int(max_steps), jac,
+                                             bar=bar)  # fmt: skip
     finally:
         if progress is not None:
             _PROGRESS.pop()

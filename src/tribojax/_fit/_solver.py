@@ -16,6 +16,9 @@ Stops (each off when None), besides optimistix's Cauchy test on `rtol`, `atol`:
 - `options["budget"]` (an integer array, given by `least_squares_fit`): that many steps, then
   `nonlinear_max_steps_reached` — optimistix's `max_steps` as a run-time value, so one compiled
   solve serves every budget, a budget of one step included (the start's linearisation).
+- `options["bar"]` (probe, limit), run-time values given with the budget: after `probe` steps,
+  a cost ‖r‖² still above `limit` stops the solve as `nonlinear_max_steps_reached` (a start
+  that has not come below a cost already reached elsewhere is abandoned; `fit_model`).
 
 - `step_tol`: after an accepted step, the Gauss–Newton step still left is below `step_tol`
   standard errors in every parameter (s² = RSS/(n − p)); not tried while a residual equals
@@ -196,6 +199,8 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
         budget = (options or {}).get("budget")
         if budget is not None:  # the step budget as a run-time value (`least_squares_fit`)
             spent = state.num_steps >= budget
+            probe, limit = (options or {}).get("bar", (budget, jnp.inf))
+            spent = spent | (~state.first_step & (state.num_steps >= probe) & (r @ r > limit))
             ran_out = spent & ~stop & (state.result == optx.RESULTS.successful)
             result = optx.RESULTS.where(ran_out, optx.RESULTS.nonlinear_max_steps_reached,
                                         state.result)  # fmt: skip

@@ -21,6 +21,7 @@ from .._model import (
     fit_saved,
     heldout_residual,
 )
+from .._parallel import in_background
 from ._candidates import rank
 from ._core import DELTA_BIC_THRESHOLD, AbstractEffect, default_effects
 from ._effect_sets import drop_redundant, pair_round
@@ -65,15 +66,20 @@ class _Run:
         self.base_state, self.r0, self.base_test = state, r, (ok, p)
         return state
 
+    def prefetch(self, state):
+        """Start `state`'s held-out residual in the background (`in_background`; read by
+        `heldout`); each model's is computed once."""
+        key = id(state)
+        if key not in self._heldout:
+            self._heldout[key] = (state, in_background(lambda: heldout_residual(
+                self.baseline, state.designs, state.theta, self.y, self.scale, state.effects)))
+        return self._heldout[key][1]
+
     def heldout(self, state) -> float | None:
         """The held-out excess of `state`'s model (output units, against the current noise sd):
         `heldout_residual` with its effects' nuisance values fixed, from its fitted values;
-        None when a fold's fit fails. Each model's held-out residual is computed once."""
-        key = id(state)
-        if key not in self._heldout:
-            self._heldout[key] = (state, heldout_residual(
-                self.baseline, state.designs, state.theta, self.y, self.scale, state.effects))
-        r = self._heldout[key][1]
+        None when a fold's fit fails."""
+        r = self.prefetch(state).result()
         return None if r is None else excess_rmse(r, self.noise.sigma)
 
     def consistent(self, state) -> bool:
@@ -161,6 +167,8 @@ def discover(
     run = _Run(baseline, data, np.asarray(data.y, dtype=float), state.scale, alpha, n_windows)
     run.rebase(state)
     base_ok = run.consistent(state)  # then the candidates are ranked, none is refitted or added
+    if not base_ok:  # the report and the first choice need it: computed while the search runs
+        run.prefetch(state)
     started = fit_saved(start, baseline, sigma_known=False) \
         if start is not None and state.converged else None
     state = state if started is None or not started.converged else started

@@ -5,7 +5,6 @@ current model's own optimum."""
 from __future__ import annotations
 
 import dataclasses
-import threading
 
 import numpy as np
 
@@ -39,55 +38,57 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
     hidden 0.1) at the noise level.
 
     `target`: the cost (RSS, units of `scale`) of a candidate that already reached the noise;
-    each start then has `QUICK_STEPS` steps, and goes on only within `QUICK_MARGIN` of it.
-    `floor`: the cost of a fit at the noise (`_noise_floor`); when the Gauss–Newton start
-    converges at or below it, the starts not yet begun are not run (no start can lower it by more
-    than the noise's own spread) and the running ones are not waited for. Measured on the
-    hidden-Stribeck record of benchmarks/discovery.py: the Gauss–Newton start reached RSS 4,949
-    (5,001 samples) in 19 steps; the three other starts took 102 steps to reach 4,949 twice and
-    434,095 once. A start stopped above the current cost is not restarted (`fit_model`'s
-    `ceiling`).
+    each start then has `QUICK_STEPS` steps, and goes on only within `QUICK_MARGIN` of it. A
+    start still above the current cost (or `QUICK_MARGIN` × `target`) after `PROBE_STEPS`
+    steps is abandoned (`_abandon_above`).
+    `floor`: the cost of a fit at the noise (`_noise_floor`); the Gauss–Newton start runs first,
+    alone, and when it converges at or below the floor the other starts are not run (no start
+    can lower it by more than the noise's own spread). Measured on the hidden-Stribeck record
+    of benchmarks/discovery.py: the Gauss–Newton start reached RSS 4,949 (5,001 samples) in 19
+    steps; the three other starts took 102 steps to reach 4,949 twice and 434,095 once (run
+    beside it, one that had begun went on for 39 steps after it, holding a thread the next
+    candidate's refits waited for). A start stopped above the current cost is not restarted
+    (`fit_model`'s `ceiling`).
     """
     zero = np.concatenate([state.theta, np.zeros(design.k)])
     designs, names = state.designs + (design,), state.effects + (name,)
     budget = MAX_STEPS if target is None else QUICK_STEPS
 
-    def fit_from(x0):
+    above = _abandon_above(state, target)
+
+    def fit_from(x0, above=above):
         return lambda: fit_model(baseline, designs, x0, y, scale, names, max_steps=budget,
-                                 ceiling=state.rss)  # fmt: skip
+                                 ceiling=state.rss, abandon_above=above)  # fmt: skip
 
-    done = threading.Event()  # set: the Gauss–Newton start is at the noise
-    bar = min(floor, state.rss)
-
-    def gauss_newton(x0):
-        def call():
-            f = fit_from(x0)()
-            if f.converged and f.rss <= bar:
-                done.set()  # before this worker takes the next start
-            return f
-
-        return call
-
-    first = []
+    gauss_newton = []
     A = np.concatenate([state.jacobian, _columns(baseline, state, design, cache) / scale], axis=1)
     if np.all(np.isfinite(A)):
         step = np.linalg.lstsq(A, r, rcond=None)[0]
         p = state.theta.size
-        first.append(gauss_newton(np.concatenate([state.theta + step[:p], step[p:]])))
-    # independent fits run side by side (`in_parallel`); the zero start, when the Gauss–Newton
-    # start needs it, on this thread meanwhile
-    def unless_done(call):
-        return lambda: None if done.is_set() else call()
-
-    starts = [unless_done(fit_from(np.concatenate([state.theta, np.asarray(s0, dtype=float)])))
+        gauss_newton.append(fit_from(np.concatenate([state.theta + step[:p], step[p:]])))
+    starts = [fit_from(np.concatenate([state.theta, np.asarray(s0, dtype=float)]))
               for s0 in design.starts]  # fmt: skip
-    running = in_parallel([*first, *starts], wait=False)
-    fits = [running[0].result()] if first else []
-    if done.is_set():  # the starts not yet begun are not run, one already running goes unread
+    def at_noise(fit):
+        return fit.converged and fit.rss <= min(floor, state.rss)
+
+    # the Gauss–Newton start first, alone, then the design's starts side by side
+    # (`in_parallel`); in quick mode, where every start is short, all of them side by side.
+    # A Gauss–Newton start at the noise is kept alone (the other starts not run, or not read)
+    quick = target is not None
+    fits = [] if quick else [f() for f in gauss_newton]
+    if fits and at_noise(fits[0]):
         return fits[0]
-    if not fits or not fits[0].converged or not fits[0].rss <= state.rss:
-        fits.append(fit_from(zero)())
-    fits += [f.result() for f in running[len(first) :]]
+    running = in_parallel([*gauss_newton, *starts] if quick else starts, wait=False)
+    if quick and gauss_newton:
+        fits, running = [running[0].result()], running[1:]
+        if at_noise(fits[0]):
+            return fits[0]
+    # the zero start, when the Gauss–Newton start needs it, on this thread meanwhile (in quick
+    # mode only when the current cost is within `QUICK_MARGIN` of the target: it begins there)
+    near = target is None or state.rss <= QUICK_MARGIN * target
+    if near and (not fits or not fits[0].converged or not fits[0].rss <= state.rss):
+        fits.append(fit_from(zero, np.inf)())
+    fits += [f.result() for f in running]
     good = [f for f in fits if f.converged and np.isfinite(f.rss)]
     ran_out = [f for f in fits if np.isfinite(f.rss) and f.steps >= budget and not f.converged]
     run = ran_out if target is None else [f for f in ran_out if f.rss <= QUICK_MARGIN * target]
@@ -105,6 +106,13 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
                               names, ceiling=state.rss))  # fmt: skip
         good += [f for f in fits[-1:] if f.converged and np.isfinite(f.rss)]
     return min(good, key=lambda f: f.rss) if good else fits[-1]
+
+
+def _abandon_above(state, target, zero=False) -> float:
+    """The cost above which a refit start is abandoned after `PROBE_STEPS` steps (`fit_model`):
+    the current model's (which the zero start begins at: not it), and `QUICK_MARGIN` × `target`,
+    the cost of a candidate that reached the noise, when there is one."""
+    return min(np.inf if zero else state.rss, np.inf if target is None else QUICK_MARGIN * target)
 
 
 def _apart(d1, d2):
@@ -192,6 +200,8 @@ def refit_round(run, state, ranking, n_refit, threshold, by_name, base_ok) -> li
             dk_explains = min(dk_explains, d.k + d.n_nuisance)
             if rss_explains is None or new.rss < rss_explains:
                 rss_explains, explains = new.rss, new
+            if accepted and accepted[-1][1] is new:  # the likely choice: its held-out check
+                run.prefetch(new)  # runs while the round goes on (`pick` reads it)
     for c, starts, new, d in before if explains is not None else ():
         if c.refit is not None and c.refit[0] is explains or d.k + d.n_nuisance >= dk_explains:
             continue
@@ -264,9 +274,10 @@ def _from_explaining(run, state, c, starts, explains, dk_explains):
         return None
     x0 = [np.concatenate([explains.theta[:p], np.zeros(dd.k)]) for dd in starts]
     names = state.effects + (c.name,)
+    above = _abandon_above(state, explains.rss)
     fits = in_parallel([lambda dd=dd, x=x: fit_model(run.baseline, state.designs + (dd,), x,
                                                      run.y, run.scale, names,
-                                                     max_steps=QUICK_STEPS)
+                                                     max_steps=QUICK_STEPS, abandon_above=above)
                         for dd, x in zip(starts, x0)])  # fmt: skip
     d, new = _best_start(run, starts, fits, run.y.size)
     return (d, new) if new.converged and np.isfinite(new.rss) else None

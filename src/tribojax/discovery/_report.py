@@ -179,7 +179,7 @@ def _misfit(run, rf, state):
     e0, e1 = excess_rmse(run.r0, nz.sigma), excess_rmse(rf, nz.sigma)
     held = (None, None) if base_ok else (run.heldout(run.base_state), run.heldout(state))
     v = verdict(len(state.effects), base_ok, final_ok, e0, e1,
-                None if held[0] is None else held)  # fmt: skip
+                None if held[0] is None else held, sigma=nz.sigma)  # fmt: skip
     if not baseline.noise_gate:  # no noise test: the ΔBIC selection alone decides
         v = "explained" if state.effects else "none"
     misfit = {"baseline_noise_p_value": p0, "final_noise_p_value": p1,
