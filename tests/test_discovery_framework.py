@@ -366,5 +366,7 @@ def test_a_refit_behind_a_candidate_at_the_noise_has_a_step_budget(monkeypatch):
     best_cut = min(rss for _, rss in calls)
     assert best_cut > 1.5 * full.rss
     near = refit(best_cut / _refits.QUICK_MARGIN)  # the best one is within the margin: goes on
-    assert [b for b, _ in calls] == [1, 1, MAX_STEPS]
+    # (the Gauss–Newton start, then its continuation: no zero start, which would begin at the
+    # current cost, beyond the margin over the target)
+    assert [b for b, _ in calls] == [1, MAX_STEPS]
     assert near.converged and near.rss == pytest.approx(full.rss, rel=1e-6)
