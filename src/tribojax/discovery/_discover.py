@@ -167,8 +167,6 @@ def discover(
     run = _Run(baseline, data, np.asarray(data.y, dtype=float), state.scale, alpha, n_windows)
     run.rebase(state)
     base_ok = run.consistent(state)  # then the candidates are ranked, none is refitted or added
-    if not base_ok:  # the report and the first choice need it: computed while the search runs
-        run.prefetch(state)
     started = fit_saved(start, baseline, sigma_known=False) \
         if start is not None and state.converged else None
     state = state if started is None or not started.converged else started
@@ -178,6 +176,8 @@ def discover(
         ranking = rank(baseline, effects, grids, state, run.y, run.scale, n_starts)
         if not ranking.candidates:
             break
+        if not base_ok:  # the report and the first choice need the baseline's held-out check:
+            run.prefetch(run.base_state)  # on the threads the first Gauss–Newton start leaves
         accepted = refit_round(run, state, ranking, n_refit, delta_bic_threshold, by_name,
                                base_ok)  # fmt: skip
         picked = pick(run, state, accepted, delta_bic_threshold, moves < MAX_MOVES) \

@@ -68,6 +68,7 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
         gauss_newton.append(fit_from(np.concatenate([state.theta + step[:p], step[p:]])))
     starts = [fit_from(np.concatenate([state.theta, np.asarray(s0, dtype=float)]))
               for s0 in design.starts]  # fmt: skip
+
     def at_noise(fit):
         return fit.converged and fit.rss <= min(floor, state.rss)
 
@@ -108,11 +109,11 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
     return min(good, key=lambda f: f.rss) if good else fits[-1]
 
 
-def _abandon_above(state, target, zero=False) -> float:
+def _abandon_above(state, target) -> float:
     """The cost above which a refit start is abandoned after `PROBE_STEPS` steps (`fit_model`):
-    the current model's (which the zero start begins at: not it), and `QUICK_MARGIN` × `target`,
-    the cost of a candidate that reached the noise, when there is one."""
-    return min(np.inf if zero else state.rss, np.inf if target is None else QUICK_MARGIN * target)
+    the current model's (the zero start, which begins there, has none), and `QUICK_MARGIN` ×
+    `target`, the cost of a candidate that reached the noise, when there is one."""
+    return min(state.rss, np.inf if target is None else QUICK_MARGIN * target)
 
 
 def _apart(d1, d2):
