@@ -262,7 +262,9 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
     of the second, which reached a minimum). A stop at a bound of the parameters
     (`baseline.at_bound`) is not a minimum. When no start reaches one, costs are not compared
     (the study's s1029 and s1034, 10 kPa: a later start stopped lower with F_s at its cap, a
-    reticle that never slips, from which no effect applies). `scale`: the residual unit
+    reticle that never slips, from which no effect applies). A later start still above the
+    first one's cost after `PROBE_STEPS` steps is abandoned (`fit_model`'s `abandon_above`), so a
+    later start is kept only where it comes below the first. `scale`: the residual unit
     (default the record's noise sd, else the first-difference estimate `noise_estimate` of the
     data, else its sd); `sigma_known` (default: the record states its noise) makes the
     statistics use the stated noise when the residual is consistent with it. `throw`: raise
