@@ -253,3 +253,43 @@ def test_a_start_above_the_bar_after_its_probe_steps_is_abandoned():
     assert kept.converged and np.array_equal(kept.theta, free.theta) and kept.steps == free.steps
     assert len(_engine._solve_jit.programs) + _engine._solve_jit.jitted._cached._cache_size() \
         == before  # fmt: skip
+
+
+def _valley(th, args):
+    # Rosenbrock's valley of width 1/A with its second row repeated 5,000 times (a record's
+    # many samples: a step's promised gain stays above the residual variance while it crawls)
+    return jnp.concatenate([jnp.stack([args[0] * (th[1] - th[0] ** 2)]),
+                            (1.0 - th[0]) * jnp.ones(5000)])  # fmt: skip
+
+
+def test_a_solve_that_crawls_far_from_a_minimum_is_stopped():
+    # options["crawl"] = f (run time): the record solver stops a solve whose cost fell by less
+    # than f over the last CRAWL_STEPS steps while a Gauss-Newton step promises more than half
+    # of it. A narrow valley (A = 1e6) from (-3, 9): 128 steps lower the cost by 6 % only; with
+    # f = 1 % it stops after two windows, on the iterate of that budget. A wide one (A = 1e4)
+    # from (-1.2, 1) descends slowly but steadily to the minimum in 126 steps: never stopped,
+    # the same iterates; f = 0 is off
+    from tribojax._fit._solver import CRAWL_STEPS, LevenbergMarquardt
+
+    solver = LevenbergMarquardt.record(1e-8, 1e-10, gain_tol=1e-2, noise_tol=1.0,
+                                       max_rejections=12, padded=0)  # fmt: skip
+
+    def fit(a, y0, crawl, max_steps=128):
+        return tj.least_squares_fit(_valley, jnp.array(y0), args=(jnp.asarray(a),),
+                                    names=("a", "b"), solver=solver, max_steps=max_steps,
+                                    jac="fwd", crawl=crawl)  # fmt: skip
+
+    def cost(f):
+        return float(f.residuals @ f.residuals)
+
+    free = fit(1e6, [-3.0, 9.0], 0.0)
+    assert free.steps == 128 and cost(free) > 0.9 * 80_000.0  # 80,000 at the start
+    cut = fit(1e6, [-3.0, 9.0], 0.01)
+    assert cut.result == tj.RESULTS.nonlinear_max_steps_reached
+    assert 2 * CRAWL_STEPS <= cut.steps < 4 * CRAWL_STEPS
+    same = fit(1e6, [-3.0, 9.0], 0.0, max_steps=cut.steps)
+    assert np.array_equal(cut.theta, same.theta)
+    slow = [fit(1e4, [-1.2, 1.0], f) for f in (0.0, 0.01)]
+    assert slow[0].converged and slow[0].steps > 4 * CRAWL_STEPS
+    assert np.allclose(slow[0].values, [1.0, 1.0], atol=1e-8)
+    assert np.array_equal(slow[1].theta, slow[0].theta) and slow[1].steps == slow[0].steps

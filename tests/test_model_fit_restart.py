@@ -77,12 +77,13 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
     outcomes = iter([(500.0, 112.0), (120.0, 0.08), (100.0, 0.0)])  # (cost, gain left)
     tried = []
 
-    bars = []
+    bars, crawls = [], []
 
     def canned(baseline, designs, theta0, *a, **k):
         rss, gain = next(outcomes)
         tried.append(rss)
         bars.append(k.get("abandon_above"))
+        crawls.append(k.get("stop_crawl"))
         r = np.zeros_like(real.residuals)
         r[0] = np.sqrt(rss)
         return dataclasses.replace(real, residuals=r, result=tj.RESULTS.successful,
@@ -97,6 +98,8 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
     assert tried == [500.0, 120.0] and fit.rss == pytest.approx(120.0)
     # the later starts are abandoned while above the first one's cost after PROBE_STEPS steps
     assert bars == [np.inf, pytest.approx(500.0)]
+    # every start is stopped when it crawls far from a minimum (`fit_model`'s stop_crawl)
+    assert crawls == [True, True]
     # a stop short of a minimum at every start: all tried, the first kept (costs of stops short
     # of a minimum are not compared: the study's s1029, a lower one with F_s at 10^10 N)
     outcomes = iter([(500.0, 112.0), (300.0, 5.0), (400.0, 2.0)])
@@ -117,3 +120,28 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
     assert mf.fit_record(base, starts).rss == pytest.approx(120.0) and len(tried) == 3
     thetas, outcomes = iter([real.theta, capped]), iter([(500.0, 112.0), (100.0, 0.0)])
     assert mf.fit_record(base, starts[:2]).rss == pytest.approx(500.0)  # the first converged
+
+
+def test_a_start_stopped_early_says_whether_it_crawled_or_was_abandoned(monkeypatch):
+    # the solver stops a start before its budget for two reasons (`fit_model`): its cost still
+    # above `abandon_above` after PROBE_STEPS steps, or a crawl far from any minimum
+    # (`stop_crawl`); the message names which
+    import dataclasses
+
+    import tribojax._model._fit as mf
+
+    rec = dr.make_record(dr.RecordSpec("clean", "-", 2.0, "paper", "low", True, 3))
+    base = disc.slip_baseline(rec)
+    y = np.asarray(base.data().y)
+    real = mf.least_squares_fit
+
+    def stopped(*a, **k):
+        res = real(*a, **{**k, "max_steps": 2})
+        return dataclasses.replace(res, result=tj.RESULTS.nonlinear_max_steps_reached, steps=33)
+
+    monkeypatch.setattr(mf, "least_squares_fit", stopped)
+    crawled = fit_model(base, (), base.start(), y, 1e-10, max_steps=128, stop_crawl=True)
+    assert crawled.message.startswith("crawling") and not crawled.converged
+    assert crawled.result == tj.RESULTS.nonlinear_max_steps_reached
+    abandoned = fit_model(base, (), base.start(), y, 1e-10, max_steps=128, abandon_above=1.0)
+    assert abandoned.message.startswith("abandoned") and abandoned.rss > 1.0

@@ -239,16 +239,18 @@ def _singular_directions(sv, vt, names) -> tuple:
     return tuple(out)
 
 
-def _solve(residual_fn, theta0, args, solver, max_steps, jac, shared=MAX_STEPS, bar=None):
+def _solve(residual_fn, theta0, args, solver, max_steps, jac, shared=MAX_STEPS, bar=None,
+           crawl=0.0):  # fmt: skip
     """The least-squares solve: (θ, optimistix result, steps, (r, J) or None). Traced, lowered
     and compiled with failures as NaN (no host callback), and its trace stored (`cached_jit`).
     The library's `LevenbergMarquardt` takes the budget as a run-time value under a static cap
     of max(`max_steps`, `shared`): one compiled solve for every budget up to `shared`, and
-    every `bar` (probe steps, cost limit; default none)."""
+    every `bar` (probe steps, cost limit; default none) and `crawl` (fraction; 0: off)."""
     budget = None
     if isinstance(solver, LevenbergMarquardt) and max_steps >= 1:
         probe, limit = (max_steps, np.inf) if bar is None else bar
-        budget = (jnp.asarray(max_steps), (jnp.asarray(probe), jnp.asarray(limit, dtype=float)))
+        budget = (jnp.asarray(max_steps), (jnp.asarray(probe), jnp.asarray(limit, dtype=float)),
+                  jnp.asarray(crawl, dtype=float))  # fmt: skip
         max_steps = max(max_steps, shared, MAX_STEPS)
     with failures_as_nan():
         value, code, steps, final = _solve_jit(residual_fn, theta0, args, solver, max_steps, jac,
@@ -260,7 +262,8 @@ def _solve(residual_fn, theta0, args, solver, max_steps, jac, shared=MAX_STEPS, 
 def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac, budget):
     # module-level and keyed by `residual_fn`'s identity, so a repeated fit with new data in
     # `args` runs warm; outputs are plain arrays so the trace can be stored
-    options = dict(jac=jac) if budget is None else dict(jac=jac, budget=budget[0], bar=budget[1])
+    options = dict(jac=jac) if budget is None else \
+        dict(jac=jac, budget=budget[0], bar=budget[1], crawl=budget[2])  # fmt: skip
     sol = optx.least_squares(residual_fn, solver, theta0, args, options=options,
                              max_steps=max_steps, throw=False)  # fmt: skip
     # a Gauss–Newton solver's state holds the residual and its linearisation at the returned
@@ -317,6 +320,7 @@ def least_squares_fit(
     optimum_tol: float | None = None,
     progress=None,
     bar: tuple | None = None,
+    crawl: float = 0.0,
     throw: bool = False,
 ) -> FitResult:
     """Fit θ minimising ½‖residual_fn(θ, args)‖² with an optimistix least-squares solver.
@@ -343,6 +347,9 @@ def least_squares_fit(
         bar: (probe, limit) for `LevenbergMarquardt`: after `probe` steps a cost ‖r‖² above
             `limit` stops the fit (`nonlinear_max_steps_reached` with fewer steps than
             `max_steps`): a start not yet below a cost reached elsewhere is abandoned.
+        crawl: a fraction f for `LevenbergMarquardt.record`: a solve whose cost fell by less
+            than f over the last `CRAWL_STEPS` steps while a Gauss–Newton step still promises
+            more than half of it stops the same way (0: off; the solver module's docstring).
         throw: raise `FitError` when the fit does not succeed (default: return it).
     The solve is compiled once per `residual_fn` object: pass a module-level function (data in
     `args`) and repeated fits run warm.
@@ -360,7 +367,7 @@ def least_squares_fit(
         _PROGRESS.append((progress, time.perf_counter()))
     try:
         theta, result, steps, final = _solve(residual_fn, theta0, args, solver, int(max_steps), jac,
-                                             bar=bar)  # fmt: skip
+                                             bar=bar, crawl=crawl)  # fmt: skip
     finally:
         if progress is not None:
             _PROGRESS.pop()

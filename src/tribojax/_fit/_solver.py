@@ -19,6 +19,10 @@ Stops (each off when None), besides optimistix's Cauchy test on `rtol`, `atol`:
 - `options["bar"]` (probe, limit), run-time values given with the budget: after `probe` steps,
   a cost ‖r‖² still above `limit` stops the solve as `nonlinear_max_steps_reached` (a start
   that has not come below a cost already reached elsewhere is abandoned; `fit_model`).
+- `options["crawl"]` (a fraction f, run-time, 0 = off; `RelativeTrustRegion` only): a solve whose
+  cost fell by less than f of itself over the last `CRAWL_STEPS` steps while the Gauss–Newton
+  gain gᵀ(JᵀJ)⁻¹g still promises more than half of it stops as `nonlinear_max_steps_reached`:
+  far from any minimum, the steps no longer get what the linearisation promises (`fit_record`).
 
 - `step_tol`: after an accepted step, the Gauss–Newton step still left is below `step_tol`
   standard errors in every parameter (s² = RSS/(n − p)); not tried while a residual equals
@@ -92,9 +96,14 @@ def quiet(**kwargs):
     """optimistix's `verbose` hook, silent (progress goes through `report_step`)."""
 
 
+CRAWL_STEPS = 16  # the window of the `crawl` stop (steps)
+
+
 class _RegionState(eqx.Module):
     step_size: jax.Array
     tried_gain: jax.Array  # ‖r‖² − ‖r + J·Δy‖² of the step just tried (Δy = y_eval − y)
+    steps: jax.Array  # steps taken (the `crawl` stop's clock)
+    marks: jax.Array  # ‖r‖² of the accepted point CRAWL_STEPS steps ago and 2·CRAWL_STEPS ago
 
 
 class RelativeTrustRegion(optx.ClassicalTrustRegion):
@@ -104,11 +113,13 @@ class RelativeTrustRegion(optx.ClassicalTrustRegion):
     accepted and rejected steps along the curved valley of a Stribeck refit: 32 steps, not 19.)
     Its state also keeps the decrease of ‖r‖² that the linearisation predicted for the step just
     tried, which `LevenbergMarquardt`'s `noise_tol` stop reads after a rejection (recomputing
-    that step there traced the damped-Newton descent a second time: 0.8 s of a first fit)."""
+    that step there traced the damped-Newton descent a second time: 0.8 s of a first fit).
+    Every `CRAWL_STEPS` steps it also marks the cost reached, which the `crawl` stop reads."""
 
     def init(self, y, f_info_struct):
         one = jnp.array(1.0)
-        return _RegionState(one, jnp.full_like(one, jnp.inf))
+        return _RegionState(one, jnp.full_like(one, jnp.inf), jnp.array(0),
+                            jnp.full(2, jnp.inf, dtype=one.dtype))  # fmt: skip
 
     def step(self, first_step, y, y_eval, f_info, f_eval_info, state):
         size, accept, result, _ = super().step(first_step, y, y_eval, f_info, f_eval_info,
@@ -117,7 +128,10 @@ class RelativeTrustRegion(optx.ClassicalTrustRegion):
         r = f_info.residual
         tried = r @ r - jnp.sum((r + f_info.jac.mv(jax.tree_util.tree_map(
             lambda a, b: a - b, y_eval, y))) ** 2)  # fmt: skip
-        return size, accept, result, _RegionState(size, tried)
+        steps = jnp.where(first_step, 0, state.steps + 1)
+        mark = ~first_step & (steps % CRAWL_STEPS == 0)
+        marks = jnp.where(mark, jnp.stack([r @ r, state.marks[0]]), state.marks)
+        return size, accept, result, _RegionState(size, tried, steps, marks)
 
 
 class LevenbergMarquardt(optx.AbstractGaussNewton):
@@ -168,6 +182,7 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
 
     def terminate(self, fn, y, args, options, state, tags):
         r, jac = state.f_info.residual, state.f_info.jac
+        crawling = False
         since = state.num_steps_since_acceptance
         stop = state.terminate
         if self.max_rejections is not None:
@@ -196,11 +211,17 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
             rejected = state.search_state.tried_gain
             test = jnp.where(since == 0, gain < self.gain_tol * s2, rejected < self.noise_tol * s2)
             stop = stop | (~state.first_step & test)
+            crawl = (options or {}).get("crawl")
+            if crawl is not None and isinstance(state.search_state, _RegionState):
+                clock, (now, before) = state.search_state.steps, state.search_state.marks
+                crawling = (crawl > 0) & (clock % CRAWL_STEPS == 0) & (gain > 0.5 * (r @ r)) \
+                    & (before - now < crawl * before)  # fmt: skip
         budget = (options or {}).get("budget")
         if budget is not None:  # the step budget as a run-time value (`least_squares_fit`)
             spent = state.num_steps >= budget
             probe, limit = (options or {}).get("bar", (budget, jnp.inf))
             spent = spent | (~state.first_step & (state.num_steps >= probe) & (r @ r > limit))
+            spent = spent | (~state.first_step & crawling)
             ran_out = spent & ~stop & (state.result == optx.RESULTS.successful)
             result = optx.RESULTS.where(ran_out, optx.RESULTS.nonlinear_max_steps_reached,
                                         state.result)  # fmt: skip
