@@ -100,6 +100,15 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
     assert bars == [np.inf, pytest.approx(500.0)]
     # every start is stopped when it crawls far from a minimum (`fit_model`'s stop_crawl)
     assert crawls == [True, True]
+    # a first start that did not converge (stopped crawling) still sets the bar: its cost was
+    # reached; the later start that converges is kept
+    outcomes, bars[:], tried[:] = iter([(800.0, 700.0), (120.0, 0.08)]), [], []
+    first_failed = iter([tj.RESULTS.nonlinear_max_steps_reached, tj.RESULTS.successful])
+    monkeypatch.setattr(mf, "fit_model", lambda *a, **k: dataclasses.replace(
+        canned(*a, **k), result=next(first_failed), converged=None))  # fmt: skip
+    fit = mf.fit_record(base, starts[:2])
+    assert bars == [np.inf, pytest.approx(800.0)] and fit.rss == pytest.approx(120.0)
+    monkeypatch.setattr(mf, "fit_model", canned)
     # a stop short of a minimum at every start: all tried, the first kept (costs of stops short
     # of a minimum are not compared: the study's s1029, a lower one with F_s at 10^10 N)
     outcomes = iter([(500.0, 112.0), (300.0, 5.0), (400.0, 2.0)])

@@ -271,9 +271,10 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
     (`baseline.at_bound`) is not a minimum. When no start reaches one, costs are not compared
     (the study's s1029 and s1034, 10 kPa: a later start stopped lower with F_s at its cap, a
     reticle that never slips, from which no effect applies). A later start still above the
-    first one's cost after `PROBE_STEPS` steps is abandoned (`fit_model`'s `abandon_above`), so a
-    later start is kept only where it comes below the first. A start that crawls far from any
-    minimum is stopped (`fit_model`'s `stop_crawl`; measured on the hidden-Stribeck record of
+    first one's cost after `PROBE_STEPS` steps is abandoned (`fit_model`'s `abandon_above`; also
+    when the first did not converge), so a later start is kept only where it comes below the
+    first or stops at a minimum within those steps. A start that crawls far from any minimum is
+    stopped (`fit_model`'s `stop_crawl`; measured on the hidden-Stribeck record of
     benchmarks/discovery.py on an AVX-512 machine: the first start jumped to C_τ ≈ 16,000 N·s/m
     and lost 3.5 % of its cost in 120 steps, a Gauss–Newton step promising 94 % of it; the
     second start reached the minimum). `scale`: the residual unit
@@ -298,7 +299,7 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
     def in_order():
         first = in_parallel([call(thetas[0])])[0]
         yield first
-        above = first.rss if first.converged else np.inf
+        above = first.rss if np.isfinite(first.rss) else np.inf  # a cost reached, converged or not
         yield from (fut.result() for fut in in_parallel([call(th, above) for th in thetas[1:]],
                                                         wait=False))  # fmt: skip
 
