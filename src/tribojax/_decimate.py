@@ -39,9 +39,7 @@ from ._limits import DECIMATION_MAX_SAMPLES as DECIMATION_MAX_SAMPLES
 from ._limits import DISCOVER_MAX_SAMPLES as DISCOVER_MAX_SAMPLES
 
 # A loop keeps at least this many reduced samples per cycle: the steady-loop model takes the
-# amplitude from the extreme samples of u, which a coarser reduction cuts (measured on a Jenkins
-# loop of 2048 samples per cycle: the noiseless reduced loop's misfit grows from Σ(b/σ)² = 2 at
-# 256 per cycle to 34 at 128 and 609 at 64, over 3 cycles).
+# amplitude from the extreme samples of u, which a coarser reduction cuts (docs/discovery.md).
 MIN_SAMPLES_PER_CYCLE = 256
 
 METHOD = "block local quadratic"

@@ -286,9 +286,3 @@ def floquet_exponents(system: FrictionSystem, X, omega, J=None) -> np.ndarray:
     keep = np.argsort(np.abs(lam.imag), axis=-1, kind="stable")[:, : 2 * system.n_dof]
     lam = np.take_along_axis(lam, keep, axis=-1)
     return lam if batched else lam[0]
-
-
-def is_stable(system: FrictionSystem, X, omega, tol: float = 1e-6) -> bool:
-    """Hill stability: every Floquet exponent has Re λ < tol·ω."""
-    lam = floquet_exponents(system, X, omega)
-    return bool(np.max(lam.real) < tol * float(omega))

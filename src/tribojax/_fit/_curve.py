@@ -117,14 +117,9 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2
     return dataclasses.replace(fit, fixed=fixed)
 
 
-def steady_element(fit: FitResult, sigma0=1.0, sigma1=0.0) -> tuple[LuGre, float]:
-    """(LuGre with the fitted steady law and σ0, σ1; the asymmetry T0, 0 if none)."""
-    return _law_element(dict(zip(fit.names, fit.values)), sigma0, sigma1)
-
-
 def _law_element(p: dict, sigma0=1.0, sigma1=0.0) -> tuple[LuGre, float]:
-    """`steady_element` from the steady law's parameters by name (F_c, F_s, v_s, beta, sigma2
-    and T0 if fitted)."""
+    """(LuGre with the steady law's parameters by name — F_c, F_s, v_s, beta, sigma2 — and σ0,
+    σ1; the asymmetry T0, 0 if not fitted)."""
     el = LuGre(sigma0, sigma1, p["sigma2"], p["F_c"], p["F_s"], p["v_s"], 1.0, p["beta"])
     return el, float(p.get("T0", 0.0))
 

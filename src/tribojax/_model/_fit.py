@@ -50,8 +50,7 @@ RESCALE_FACTOR = 10.0  # a column norm this much off its start value: a restart 
 def _rescaled(norms0, J) -> bool:
     """Whether a restart from the stop would scale the variables differently: some column of
     the Jacobian (per unit of x) was zero at the start and is not now, or changed its norm by
-    more than `RESCALE_FACTOR` either way. (Measured on the blind study's records s3011 and
-    s3027: eleven restarts, none of which lowered the cost, doubled the time of their fits.)"""
+    more than `RESCALE_FACTOR` either way."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         now = np.linalg.norm(J, axis=0)
         far = np.abs(np.log(now / norms0)) > np.log(RESCALE_FACTOR)
@@ -78,22 +77,12 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
     `NOISE_TOL` residual variances, and only where the scaling would change, `_rescaled`; kept
     when it lowers the cost, also when it then ran out of steps). No restart for a stop above
     `ceiling` − `NOISE_TOL` s²: a refit passes the current model's cost, which its start from zero
-    new strengths reaches, so a start stopped above it has failed (measured on the hidden-Stribeck
-    record of benchmarks/discovery.py: the viscous refit's failed starts spent 104 of the run's
-    ~480 LM steps restarting, and ended 3x-1,300x above the current cost). Measured on a record
-    with a 40 Hz mode's dynamic part (20 kPa, 5 noise sd, made here with SciPy): the vibration refit
-    stopped at RSS 88,711 with 4,340 variances promised; the restarts reached the noise (4,586
-    for 4,601 samples) and the mode was named (before: "unexplained"). That stall came from trial
-    points whose ODE solve ran out of steps: with 3x the budget the refit reaches the noise
-    without a restart, but a larger budget for every fit changed the study's answers both ways
-    (docs/discovery.md), so a restart is run with `baseline.more_steps()` instead.
+    new strengths reaches, so a start stopped above it has failed. A restart runs with
+    `baseline.more_steps()` (the stalls it mends came from ODE solves out of steps).
 
     `abandon_above`: a cost (RSS in units of `scale`) reached elsewhere (the current model's,
     another start's); a start still above it after `PROBE_STEPS` steps is abandoned (result
     `nonlinear_max_steps_reached` after fewer steps than `max_steps`, and a message saying so).
-    Measured on the hidden-Stribeck record of benchmarks/discovery.py: the two later C_τ starts
-    of the baseline took 39 and 49 steps to end at and 74x above the first start's cost, the
-    viscous refit's three starts 15–29 steps each to end 1,100x–1,800x above the current cost.
     `stop_crawl`: stop a start that crawls far from any minimum (the solver's `crawl` stop with
     `CRAWL_FRACTION`: the cost fell by less than 1 % over `CRAWL_STEPS` steps while a
     Gauss–Newton step still promises more than half of it); the same result and a message.
@@ -274,10 +263,8 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
     first one's cost after `PROBE_STEPS` steps is abandoned (`fit_model`'s `abandon_above`; also
     when the first did not converge), so a later start is kept only where it comes below the
     first or stops at a minimum within those steps. A start that crawls far from any minimum is
-    stopped (`fit_model`'s `stop_crawl`; measured on the hidden-Stribeck record of
-    benchmarks/discovery.py on an AVX-512 machine: the first start jumped to C_τ ≈ 16,000 N·s/m
-    and lost 3.5 % of its cost in 120 steps, a Gauss–Newton step promising 94 % of it; the
-    second start reached the minimum). `scale`: the residual unit
+    stopped (`fit_model`'s `stop_crawl`; the records behind these rules: docs/discovery.md).
+    `scale`: the residual unit
     (default the record's noise sd, else the first-difference estimate `noise_estimate` of the
     data, else its sd); `sigma_known` (default: the record states its noise) makes the
     statistics use the stated noise when the residual is consistent with it. `throw`: raise

@@ -125,9 +125,8 @@ class LoopBaseline(AbstractBaseline):
 
     def folds(self):
         """Alternate cycles of a periodic record with at least two (fit on the even cycles,
-        score on the odd ones and back: each fold sees every phase); else the default blocks.
-        (Measured: blocks of an eighth of a cycle fell on the same phases in every cycle, so
-        one fold held no reversal and could not determine a clearance.)"""
+        score on the odd ones and back: each fold sees every phase, and so a reversal); else
+        the default blocks."""
         t, period = np.asarray(self.t), float(self.period)
         if np.isfinite(period) and t[-1] - t[0] >= 1.5 * period:
             return (np.floor((t - t[0]) / period).astype(int)) % 2

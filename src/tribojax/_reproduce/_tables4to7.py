@@ -121,11 +121,6 @@ def reproduce_tables4to7(fit: FitResult | None = None) -> dict:
     }
 
 
-def max_abs_rel_error(rows, key: str, tables) -> float:
-    """Largest |rel. error| of `key` over rows of the given tables."""
-    return float(max(abs(r[key]) for r in rows if r["table"] in tables))
-
-
 def figure10_curves(alpha=1.0, n_points=1151):
     """Slip and bristle deflection (nm) against time for Table 3's six rows (Figure 10).
 

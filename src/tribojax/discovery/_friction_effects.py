@@ -60,11 +60,7 @@ class Stribeck(_OneKindEach):
     - slip run (`kind` "slip"): strength δ = 1 − F_c/F_s, β = 2; v_s seeded on `VS_GRID` (the
       best by score) and fitted jointly with δ in the refit, which also starts from
       δ = `DELTA_START` at v_s = v_pk·`VS_START_FACTORS`, v_pk the record's own peak slip speed
-      (`record_slip_speed`): a weakening changes the slip only where v is near v_s. Measured on an
-      independent record (exponential weakening, 4 kPa, fast drive, true v_s near v_pk =
-      2.1 µm/s): the score's best v_s was the grid's top (0.32 mm/s) and its refits stopped at
-      3.8 noise sd; from v_s = 3.2 µm/s the refit reached the noise (δ = 0.114, v_s = 1.4 µm/s;
-      Eq 25's β = 2 fits the exponential shape).
+      (`record_slip_speed`): a weakening changes the slip only where v is near v_s.
     - friction curve ("curve"): strength A = F_s − F_c in the curve's friction unit; v_s seeded by
       `N_VS_GRID` geometric points over half the record's |v| range, β from `BETA_START`, both
       fitted with A (three refit starts).
@@ -167,9 +163,7 @@ class LoadDependence(_OneKindEach):
       `kd_exponents`); every combination is refitted and the lower BIC kept; p a fixed nuisance
       of each design. The linear term is a tilted counter-face; γ a load that rises (or falls)
       towards both ends of the stroke (a curved face, a rocking fixture): it is even in u, so the
-      linear term's score does not see it (measured on independent loops with N ∝ 1 + γ(u/A)²).
-      With p = 0.7616 only, a load gradient at constant stiffness (independent loops, β ≈ 0.18)
-      left 2.3 noise sd of misfit and a force offset was named first.
+      linear term's score does not see it (the records behind both: docs/discovery.md).
     """
 
     degrees: ClassVar[tuple] = (1, 2)

@@ -17,9 +17,7 @@ from ._fitting import _columns, _delta_bic
 # A candidate refitted after another one of this round reached the noise needs the noise too
 # (it has fewer parameters: `refit_round`), so a refit that is still far above it is not run to
 # the end: each start gets `QUICK_STEPS` steps, and one that ran out goes on (`MAX_STEPS`) only
-# when its cost is within `QUICK_MARGIN` × the explaining candidate's. Measured on the hidden
-# drift record of benchmarks/discovery.py: the five Stribeck refits behind `sensor_drift` took
-# 308 steps (86 s of fits on 2 threads) and ended far above the noise.
+# when its cost is within `QUICK_MARGIN` × the explaining candidate's (docs/discovery.md).
 QUICK_STEPS = 16
 QUICK_MARGIN = 2.0
 
@@ -29,13 +27,8 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
     (the step the score test looks along), and from the current fit with the new strengths at
     zero when that fails or ends above the current cost (the nested model's optimum is a point
     of the augmented model, so ending above it is a local minimum); then from each of the
-    design's own `starts`; keep the lowest cost. (Stopping the starts once a fit passed the
-    noise test lost the better optimum: a hidden-Stribeck record where δ at its bound passed
-    with 1.15 noise variances, the next start reached 1.00, and `vibration` won on ΔBIC.)
-
-    Measured on a hidden-Stribeck slip record (2 kPa, 0.1 nm noise, seed 2): the zero start
-    stopped at δ = 0.044 with 2.1x the noise left; the Gauss–Newton start reached δ = 0.10 (the
-    hidden 0.1) at the noise level.
+    design's own `starts`; keep the lowest cost (the records behind each rule here:
+    docs/discovery.md, "Why each rule is set where it is").
 
     `target`: the cost (RSS, units of `scale`) of a candidate that already reached the noise;
     each start then has `QUICK_STEPS` steps, and goes on only within `QUICK_MARGIN` of it. A
@@ -43,12 +36,8 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
     steps is abandoned (`_abandon_above`).
     `floor`: the cost of a fit at the noise (`_noise_floor`); the Gauss–Newton start runs first,
     alone, and when it converges at or below the floor the other starts are not run (no start
-    can lower it by more than the noise's own spread). Measured on the hidden-Stribeck record
-    of benchmarks/discovery.py: the Gauss–Newton start reached RSS 4,949 (5,001 samples) in 19
-    steps; the three other starts took 102 steps to reach 4,949 twice and 434,095 once (run
-    beside it, one that had begun went on for 39 steps after it, holding a thread the next
-    candidate's refits waited for). A start stopped above the current cost is not restarted
-    (`fit_model`'s `ceiling`).
+    can lower it by more than the noise's own spread). A start stopped above the current cost
+    is not restarted (`fit_model`'s `ceiling`).
     """
     zero = np.concatenate([state.theta, np.zeros(design.k)])
     designs, names = state.designs + (design,), state.effects + (name,)
@@ -263,12 +252,9 @@ def _settle(run, state, c, d, new, threshold, by_name, accepted) -> bool:
 def _from_explaining(run, state, c, starts, explains, dk_explains):
     """A candidate refitted before another one reached the noise, refitted once more from that
     one's optimum of the current model's parameters, the candidate's strengths at zero (each of
-    its designs, `QUICK_STEPS` steps): its own starts never saw that basin. Measured on the
-    study's record s1063 (a quadratic position error at 20 kPa, noise estimated): the position
-    error's starts ended 3x above the noise (F_s 4.8 N, ran out) and a degree-6 drift was named;
-    from the drift's optimum the position error reached the noise in 3 steps (RSS 15.86 against
-    the drift's 15.87, 2 strengths against 7). Designs with fewer parameters than the explaining
-    one only (`dk_explains`). Returns (design, refit), or None."""
+    its designs, `QUICK_STEPS` steps): its own starts never saw that basin (the study's s1063).
+    Designs with fewer parameters than the explaining one only (`dk_explains`).
+    Returns (design, refit), or None."""
     p = state.theta.size
     starts = [dd for dd in starts if dd.k + dd.n_nuisance < dk_explains]
     if not starts:

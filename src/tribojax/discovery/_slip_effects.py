@@ -112,11 +112,8 @@ class Vibration(AbstractEffect):
     (default 40 frequencies between 3/T and 0.4 × the sampling rate, capped at 500 Hz,
     × ζ ∈ {0.01, 0.03, 0.1} × both forms) refined around the best grid point by golden-section
     searches on the score (log f within one grid step, then log ζ within a factor 3), then
-    fitted jointly with the amplitudes in the refit (knobs `mode_*`).
-
-    Measured on an independent record (a 48.5 Hz mode's dynamic part, 20 kPa): with the full
-    response q alone the refit had to cancel q's quasi-static part (≈ 100 times the ringing)
-    against K_τ and stopped where it started; `static` 0 is its shape.
+    fitted jointly with the amplitudes in the refit (knobs `mode_*`). Why both forms:
+    docs/discovery.md, "Why each rule is set where it is".
     """
 
     name: ClassVar[str] = "vibration"

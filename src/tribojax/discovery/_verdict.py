@@ -30,16 +30,8 @@ when the added effects make the final residual pass, at least halve the held-out
 held-out gap √max(h₁² − e₁², 0) (e₁ the final in-sample excess) at most `HELDOUT_GAP` σ;
 "partly_explained" when they at least halve e and lower the held-out excess; "unexplained"
 otherwise. Where no held-out residual could be computed (a fold's fit failed) the in-sample
-tests decide alone. (The gap: a model with the right effects, fitted on one half, predicts the
-other half to its parameter uncertainty, a held-out mean square ~2p/n σ² above the in-sample
-one; effects that fit each half's own distortion rather than a law both halves share leave a
-larger one. Measured on the project study's s1082, a 7 kPa sensor lag outside the vocabulary:
-vibration + Stribeck + viscous friction left e₁ = 0.24 σ in sample, h₁ = 1.06 σ held out, a gap
-of 1.03 σ, and had been called "explained". Over the study's 79 records whose final residual
-passed and whose held-out excess was halved, the right effect of a smooth law left gaps up to
-0.48 σ (s1051, a power-law viscous term at 0.6 kPa), a polynomial drift fitted to a random walk
-0.71–3.32 σ (the walk's blocks are not predicted by the other fold's polynomial): the bound
-0.6 σ lies between.)
+tests decide alone. (The gap bound was set on the project study: docs/discovery.md, "Why each
+rule is set where it is".)
 
 Flexible correction: the remaining residual fitted by a linear spline (hat functions on knots at
 quantiles) in one measured signal; the share of e² it removes is an upper bound on what a missing
