@@ -10,15 +10,12 @@ cache themselves (`jax_compilation_cache_dir` or `JAX_COMPILATION_CACHE_DIR`):
   (`$XDG_CACHE_HOME/tribojax/jax` or `~/.cache/tribojax/jax`, `~/Library/Caches/tribojax/jax`
   on macOS, `%LOCALAPPDATA%/tribojax/cache/jax` on Windows).
 
-Besides the folder, programs that compile in `MIN_COMPILE_S` or more are kept: all of them (JAX's
-default 1 s would skip the dozens of small ones a command's statistics and output compile, at
-50-100 ms each on 2 cores). Traced programs are kept beside it (`tribojax._export`). A program
-holding a host callback (an `equinox.error_if` that raises, `throw=True`) is never cached by jax
-0.10: the fit engine traces its programs without one (`tribojax._checks.failures_as_nan`).
-
-Safety: an entry's key hashes the program, the JAX/XLA versions and the device, so a stale entry
-is never found; an entry that cannot be read (truncated by a killed process, or being written by
-another one) is reported by JAX as a warning and compiled again, never used.
+Besides the folder, programs that compile in `MIN_COMPILE_S` or more are kept: all of them, also
+the many small ones JAX's default of 1 s would skip (docs/performance.md, The compilation cache,
+says why and why a stale or truncated entry is never used). Traced programs are kept beside it
+(`tribojax._export`). A program holding a host callback (an `equinox.error_if` that raises,
+`throw=True`) is never cached by jax 0.10: the fit engine traces its programs without one
+(`tribojax._checks.failures_as_nan`).
 """
 
 from __future__ import annotations

@@ -6,8 +6,8 @@
 under the stage cycle `TrapezoidProfile(a_max)` (docs/reproduction.md). Used by the Table 3
 calibration, the Tables 4–7 reproduction and the full-chain fits (`tribojax._reproduce`), the
 surface fit (`tribojax._fit`), the sensitivities (`tribojax._sensitivity`) and discovery's table
-baseline. Also the one mapping
-between unconstrained fit coordinates θ and physical parameters (`to_physical`, `to_theta`).
+baseline. Also the one mapping between unconstrained fit coordinates θ and physical parameters
+(`to_physical`, `to_theta`).
 
 Derivatives of the contact at many loads. optimistix 0.1.0's forward linearisation of a residual
 that contains the contact's optimistix root find is rejected by lineax as non-finite. The contact
@@ -214,9 +214,8 @@ def chain_phase_slips(
     """
     params = jnp.asarray(params, dtype=jnp.float64)
     (F_s, K, C), ok = chain_contact(params, loads)
-    # Eq 27 is a pre-sliding model: with F_s <= m·a_max the reticle slides grossly (slips of
-    # metres, outside the model and the data); such rows are flagged like failed contacts and
-    # run with harmless stand-in values (their result is not used)
+    # gross sliding (F_s <= m·a_max: slips of metres, outside Eq 27 and the data) is flagged
+    # like a failed contact, and run with harmless stand-in values (its result is not used)
     ok = ok & (F_s > WANG2022_TANGENTIAL_LOAD_N)
     F_s, K, C = (jnp.where(ok, x, safe) for x, safe in zip((F_s, K, C), (1.0, 1e7, 500.0)))
     slips = lugre_phase_slips_nm(F_s, K, C, params[4], adjoint=adjoint, atol=atol, rtol=rtol,

@@ -159,11 +159,11 @@ def decimate_record(
                          "needs 3 samples)")  # fmt: skip
     factor = int(factor)
     sigma = record.noise_std
+    cycles = None if len(t) == n else len(record.cycle_times()) - 1
     if factor == 1:
         return record, Decimation(1, "none", n, len(t), len(t), "white, per sample",
                                   None if sigma is None else "the record's noise_std", sigma,
-                                  sigma, cycles_kept=None if len(t) == n else
-                                  len(record.cycle_times()) - 1)  # fmt: skip
+                                  sigma, cycles_kept=cycles)  # fmt: skip
     if len(t) // factor < 4:
         raise ValueError(
             f"{record.source}: factor = {factor} leaves {len(t) // factor} samples of "
@@ -189,7 +189,7 @@ def decimate_record(
     follow = None if chi2 is None else bool(chi2_sf(chi2 * dof, dof) >= ALPHA / 3)
     info = Decimation(
         factor=factor, method=METHOD, samples_in_record=n, samples_used=len(tc) * factor,
-        cycles_kept=None if len(t) == n else len(record.cycle_times()) - 1,
+        cycles_kept=cycles,
         samples=len(tc), noise_std_original=float(sigma), noise_std=reduced_std,
         noise_source=source, block_chi2=chi2, blocks_follow_signal=follow,
         noise_model=(f"white noise of sd sigma per sample ({unit}); each reduced sample has sd "

@@ -1,5 +1,4 @@
-"""Traced programs kept on disk (issue 31): `cached_jit`, `eqx.filter_jit` whose trace survives
-the process.
+"""Traced programs kept on disk: `cached_jit`, `eqx.filter_jit` whose trace survives the process.
 
 JAX's persistent cache skips XLA compilation in a new process but not tracing and lowering,
 which are most of a fit's start-up (the forward-mode Jacobian of a diffrax solve). `cached_jit`
@@ -7,22 +6,17 @@ exports the lowered program (`jax.export`, StableHLO) the first time a signature
 stores it beside the compilation cache (`<cache folder>/../export`, `_cache.cache_dir`); a new
 process reads it back and only compiles it (a persistent-cache hit when warm).
 
-A stored program is used only under the same key: the function's module and name, the hash of
-every tribojax source file, the versions of the packages in `_PACKAGES`, the backend, JAX's
-trace-relevant configuration (float64, rank promotion, `failures_as_nan`), the structure and
-static values of the arguments, and each array's shape and dtype. A signature that cannot be
-keyed stably (a closure, an object without a value, a user's own function or class, whose source
-is in no version), a program that cannot be exported (a
-host callback) or a call under a trace runs through `eqx.filter_jit` as before (a program found
-not exportable leaves an empty `.refused` marker: later processes trace it once, not twice).
-Each file holds its payload's sha256: a truncated or corrupt file is ignored and written again;
-files are written to a temporary name and renamed, so concurrent processes never read half a
-file. Exporting, reading back and compiling a stored program hold one lock per process
-(`_LOWERING`): these steps build and print MLIR modules, which JAX does not support from several
-Python threads at once (jax issues #32354, #28551); a crash of a test worker while discovery's
-threads met new programs (CI, 2026-11-29) is the reason. Running a compiled program does not take
-it, so fits still run side by side.
-The function's outputs must be arrays in tuples, lists or dicts.
+A stored program is used only under the same key (docs/performance.md, Stored traces): the
+function's module and name, the hash of every tribojax source file, the versions of the packages
+in `_PACKAGES`, the backend, JAX's trace-relevant configuration, the structure and static values
+of the arguments, and each array's shape and dtype. A signature that cannot be keyed stably (a
+closure, a user's own function or class), a program that cannot be exported (a host callback;
+it leaves an empty `.refused` marker) or a call under a trace runs through plain
+`eqx.filter_jit`. Each file holds its payload's sha256 and is written by rename, so a truncated
+file is never used. Exporting, reading back and compiling hold one lock per process
+(`_LOWERING`: JAX cannot build MLIR modules from several threads at once, jax issues #32354,
+#28551); running a compiled program does not take it. The function's outputs must be arrays in
+tuples, lists or dicts.
 """
 
 from __future__ import annotations
@@ -217,7 +211,7 @@ def _export(fn, treedef, static, leaves):
              for x in leaves]  # fmt: skip
     try:
         return jax.export.export(jax.jit(flat), disabled_checks=_lapack_calls())(*specs)
-    except Exception:  # noqa: BLE001 - not exportable (a host callback): trace as before
+    except Exception:  # noqa: BLE001 - not exportable (a host callback): filter_jit traces it
         return None
 
 

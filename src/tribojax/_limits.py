@@ -22,8 +22,7 @@ MAX_STEPS = 128
 # The reduced record's default size: fits and discovery resolve wang2022's slip dynamics (ring-
 # downs near 1 kHz over a 2.3 s cycle) with 20,000 samples (blocks of 0.12 ms, hω < 1).
 DECIMATION_MAX_SAMPLES = 20_000
-# Discovery's cost grows with the record (measured under load on 10^6 slip samples: 220 s and
-# 4.6 GiB reduced to 19,608 samples, 184 s and 1.9 GiB at 4,975); its benchmark record has 5,001.
+# Discovery's cost grows with the record (docs/performance.md); its benchmark record has 5,001.
 DISCOVER_MAX_SAMPLES = 5_000
 """Samples a record is reduced to before `tribojax discover` (the CLI default of --max-samples)."""
 

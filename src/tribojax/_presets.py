@@ -32,6 +32,10 @@ WANG2022_SUCTION_AREA_M2 = 909e-6  # A_v of Eq 28
 STANDARD_GRAVITY_WANG2022 = 9.8  # m/s², g of Eq 28 (reproduces Table 3's load column)
 WANG2022_GAMMA = 1.5  # YK frequency-density parameter
 WANG2022_TABLE1_D = 2.8821  # Table 1, equivalent surface
+# Table 3's 4 kPa row (Eq 28): the reference load of the sensitivities, N.
+WANG2022_REFERENCE_LOAD_N = WANG2022_SUCTION_AREA_M2 * 4e3 + (
+    WANG2022_RETICLE_MASS_KG * STANDARD_GRAVITY_WANG2022
+)
 # The Table 3 calibration at M = 1 and Table 1's D (tests/test_presets.py checks it).
 CALIBRATED_M = 1.0
 CALIBRATED_G_M = 4.3636e-8
@@ -48,7 +52,6 @@ WANG2022_CALIBRATED = MappingProxyType(
 )
 """The Table 3 calibration (wang2022 Eqs 16, 19 fitted to Table 3's F_s and K_τ): M = 1, Table 1's
 D = 2.8821, G_m = 4.3636e-8 m, mu_t = 0.1416, sigma_s_Pa = 1.893e9 Pa."""
-# The chain fit's defaults (start and fixed values): the calibrated point and the paper's α = 1.
 CHAIN_DEFAULTS = MappingProxyType(
     {
         "D": WANG2022_TABLE1_D,
@@ -67,17 +70,6 @@ WU2015_EQ5_COEFFICIENT = 0.5924e6  # N/m per N^exponent (Eq 5 read with K_d in N
 WU2015_EQ5_EXPONENT = 0.7616  # K_d ∝ N^0.7616
 
 
-# --- wang2022 presets ---------------------------------------------------------------------------
-
-
-# Table 3's 4 kPa row (Eq 28): the reference load of the sensitivities, N.
-WANG2022_REFERENCE_LOAD_N = WANG2022_SUCTION_AREA_M2 * 4e3 + (
-    WANG2022_RETICLE_MASS_KG * STANDARD_GRAVITY_WANG2022
-)
-
-
-# The two-DOF elastic dry-friction benchmark of the harmonic-balance literature (tmdsimpy's and
-# NLvib's examples; Krack & Gross 2019): DOF 0 tangential, DOF 1 normal, both against ground.
 FRF_2DOF = MappingProxyType(
     {
         "M": ((1.0, 0.0), (0.0, 1.0)),  # kg
@@ -94,8 +86,9 @@ FRF_2DOF = MappingProxyType(
     }
 )
 """The two-DOF elastic dry-friction benchmark (tmdsimpy's and NLvib's example, Krack & Gross
-2019): mass, stiffness and damping matrices, contact stiffnesses and μ, static and harmonic
-forcing, the forcing levels F (N), harmonics and frequency range (`tribojax.frf_2dof_system`)."""
+2019; DOF 0 tangential, DOF 1 normal, both against ground): mass, stiffness and damping matrices,
+contact stiffnesses and μ, static and harmonic forcing, the forcing levels F (N), harmonics and
+frequency range (`tribojax.frf_2dof_system`)."""
 
 
 # Units of the measured rig data (exact definitions: 1 in = 25.4 mm, 1 lbf = 4.4482216152605 N)

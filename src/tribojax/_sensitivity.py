@@ -11,14 +11,9 @@ dimension D, so e_D is per *relative* change of D: +1 % of D = 2.8821 is +0.029,
 roughness; divide e_D by D for the change per unit D.
 
 Two chains, both `equinox.Module`s mapping a dict of scalar inputs to a dict of outputs:
-
-* `ReticleChain`: {D, G, mu_t, load, a_max} → FractalContact (F_s, K_τ, C_τ, z_max; wang2022
-  Eqs 14–26) → `PreSlipLuGre` (Eq 27) → the phase slips T4–T7 of Tables 4–7 under the stage cycle
-  with peak acceleration a_max (`tribojax._chain`'s path, at one load). a_max enters twice:
-  through the profile and through T/P of Eqs 18–22, with T = m·a_max (the inertial load of the
-  reticle; docs/reproduction.md).
-* `LoopChain`: the same contact, then a Jenkins or Mindlin element with μN = F_s and K_d = K_τ
-  under a harmonic displacement of fixed physical amplitude A → K̄, C̄ (wu2015 Section 5.3).
+`ReticleChain` (contact and phase slips T4–T7, `tribojax._chain`'s path at one load; a_max enters
+twice, through the stage profile and through T = m·a_max in T/P) and `LoopChain` (the same
+contact, then wu2015's K̄, C̄ of a Jenkins or Mindlin element at a fixed amplitude).
 """
 
 from __future__ import annotations
@@ -105,8 +100,7 @@ class ReticleChain(eqx.Module):
     Fields: sigma_s (Pa), M (ridges, ≥ 1), gamma (> 1), mass (kg), alpha (Eq 27 exponent),
     slip (static: also solve the slip ODE), rtol, atol, max_steps (static: slip solver settings,
     see `simulate_slip`). The defaults are 100x tighter than `simulate_slip`'s: derivatives need
-    it. At rtol 1e-6, atol 1e-16 the elasticity of T4 with respect to D (≈ 24) is 0.27 off (1 %)
-    from its value at 1e-8, 1e-18; that value is within ~1e-3 of central differences at 1e-10.
+    it (docs/reproduction.md, Further facts).
     """
 
     pair: ContactPair

@@ -1,9 +1,11 @@
 """Parameter sweeps: one model, many inputs, vmapped and sharded across devices (`jax.sharding`).
 
 `sweep(fn, batch)` evaluates `fn` on every member of a batch (a pytree of arrays with a common
-leading axis) with `jax.vmap` inside one `jax.jit`, after placing the batch on a one-axis device
-mesh, `NamedSharding(Mesh(devices, ("batch",)), P("batch"))`: each device computes its slice, and
-the outputs come back sharded the same way (XLA's sharding propagation, no home-made scheduler).
+leading axis): it places the batch on a one-axis device mesh,
+`NamedSharding(Mesh(devices, ("batch",)), P("batch"))`, runs one jitted `jax.vmap` per device on
+the slice that device holds (dispatched asynchronously, so the devices run concurrently; the
+members are independent, so nothing is communicated) and assembles the outputs into global
+arrays with the same sharding (docs/architecture.md says why not one partitioned jit).
 The batch is padded to a multiple of the device count by repeating its last member (a valid
 input, so no check fires on padding) and the padding is cut off again.
 
@@ -86,13 +88,6 @@ def sweep(fn, batch, *, devices=None):
         return jax.device_put(x, sharding)
 
     placed = jax.tree.map(place, batch)
-    # One vmapped call per device on the slice that device holds, dispatched asynchronously so
-    # the devices run concurrently; the outputs are assembled into global arrays with the same
-    # sharding. (A jit of the vmap over the sharded batch lets XLA partition it automatically,
-    # but the vmapped Newton loop of the load balance then reduces its predicate across devices
-    # inside a conditional, which deadlocks XLA's CPU collectives; jax.shard_map fails on
-    # equinox's error_if and optimistix's closure conversion. Members are independent, so no
-    # communication is needed.)
     parts = [jax.tree.map(lambda x, d=device: _shard_on(x, d), placed)
              for device in sharding.mesh.devices.flat]  # fmt: skip
     # all parts dispatched before any is checked (cacheable_call: one program without host

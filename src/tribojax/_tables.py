@@ -122,11 +122,10 @@ def read_table(path, *, columns=None, text_columns=()) -> dict[str, np.ndarray]:
         raise DataFileError(f"{path}: no header line")
     if not rows:
         raise DataFileError(f"{path}: no data rows")
-    out = {}
-    for j, name in enumerate(header):
-        values = [r[j] for r in rows]
-        out[name] = np.asarray(values, dtype=str if name in text_columns else np.float64)
-    return out
+    return {
+        name: np.asarray([r[j] for r in rows], dtype=str if name in text_columns else np.float64)
+        for j, name in enumerate(header)
+    }
 
 
 def separator_hint(header: str) -> str:

@@ -140,25 +140,14 @@ _PHYSICAL = ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m", "zmax_m")  # finite and >=
 
 
 def _contact_rows(args, D, G, result) -> list:
-    for k in CONTACT_DEFAULTS:
-        result["assumed"][k] = getattr(args, k)
-    result["assumed"]["materials"] = (
-        "wang2022 Table 2 pair (E* 41.28 GPa, G' 9.158 GPa, H 1.372 GPa)"
-    )
-    print(
-        "assumed: "
-        + ", ".join(f"{k} = {v:g}" for k, v in result["assumed"].items() if not isinstance(v, str))
-        + "; wang2022 Table 2 materials"
-    )
+    assumed = {k: getattr(args, k) for k in CONTACT_DEFAULTS}
+    print("assumed: " + ", ".join(f"{k} = {v:g}" for k, v in assumed.items())
+          + "; wang2022 Table 2 materials")  # fmt: skip
+    result["assumed"] = {**assumed, "materials": "wang2022 Table 2 pair (E* 41.28 GPa, "
+                         "G' 9.158 GPa, H 1.372 GPa)"}  # fmt: skip
     pair = wang2022_pair(sigma_s=args.sigma_s)
-    model = FractalContact(
-        FractalSurface(D, G, args.M, gamma=args.gamma),
-        pair,
-        mu_t=args.mu_t,
-        tangential_load=args.tangential_load,
-        mass=args.mass,
-        throw=False,
-    )
+    model = FractalContact(FractalSurface(D, G, args.M, gamma=args.gamma), pair, mu_t=args.mu_t,
+                           tangential_load=args.tangential_load, mass=args.mass, throw=False)
     rows = []
     print(f"{'load/N':>9} {'F_s/N':>10} {'K_tau/(N/m)':>12} {'C_tau/(Ns/m)':>12} {'z_max/nm':>9}")
     for load in args.load:

@@ -19,7 +19,6 @@ Exit codes: 0 done; 2 malformed input or refused output; 3 the baseline fit did 
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from .._io._records import read_record
@@ -55,29 +54,18 @@ _DISCOVERY = {
 }
 
 
-def _discovery_of(record, src):
-    if record.kind not in _DISCOVERY:
-        raise CommandError(f"{src}: discovery has no baseline for a {type(record).__name__} "
-                           "yet; fit it with `tribojax fit`")  # fmt: skip
-    return _DISCOVERY[record.kind]
-
-
-def baseline_for(record):
-    """The discovery baseline for a loaded record (slip run, hysteresis loop, friction curve)."""
-    return _discovery_of(record, record.source)[0](record)
-
-
-def run_discover(args, out=None, err=None) -> int:
+def run_discover(args) -> int:
     """Run `tribojax discover` with parsed `args`; the exit status (see the module docstring)."""
-    out = sys.stdout if out is None else out
-    err = sys.stderr if err is None else err
     src = Path(args.file)
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
     start = load_model(args.from_model) if args.from_model else None
     with claim_outputs(src, [target, figure], force=args.force):
         record = with_band_tension(read_record(src, args.format), args.band_tension, src)
-        make_baseline, plot = _discovery_of(record, src)
+        if record.kind not in _DISCOVERY:
+            raise CommandError(f"{src}: discovery has no baseline for a {type(record).__name__} "
+                               "yet; fit it with `tribojax fit`")  # fmt: skip
+        make_baseline, plot = _DISCOVERY[record.kind]
         # a long series is reduced; a curve (a few points) never is
         record, reduction = (reduce_record(record, args, whole_cycles=True) if record.reducible
                              else (record, None))  # fmt: skip
@@ -100,11 +88,10 @@ def run_discover(args, out=None, err=None) -> int:
         data["decimation"] = reduction.as_dict() if reduction else None
         write_json_atomic(target, data, exclusive=not args.force)
         drew = plot(report, record, figure)
-    print(f"{src}: {report.kind} record, {len(report.y)} samples", file=out)
-    print(report.summary(), file=out)
-    print(f"wrote {target}" + (f" and {figure}" if drew else " (no figure: matplotlib missing)"),
-          file=out)  # fmt: skip
+    print(f"{src}: {report.kind} record, {len(report.y)} samples")
+    print(report.summary())
+    print(f"wrote {target}" + (f" and {figure}" if drew else " (no figure: matplotlib missing)"))
     if not report.converged:
         return error(f"the baseline fit did not converge: {report.baseline_fit['message']}",
-                     err, status=3)  # fmt: skip
+                     status=3)
     return 0

@@ -11,10 +11,9 @@ or a folder of them) or `--format`; measured records are fitted by `_fit_real`. 
 (parameters, standard errors, correlation, converged, steps, rms residual, number of data, what was
 fitted, the source file; "decimation": how a long record was reduced before the fit;
 "full_record": the fitted model's residuals on every original sample; "fitted_model": the model
-as `tribojax predict` takes it) and DIR/fit.png (data and
-model, residuals). Exit status: 0 converged, 1 not converged (fit.json still written, with
-"converged": false), 2 bad input (malformed file, fewer data than parameters, an output that
-exists or would overwrite the input).
+as `tribojax predict` takes it) and DIR/fit.png (data and model, residuals). Exit status: 0
+converged, 1 not converged (fit.json still written, with "converged": false), 2 bad input
+(malformed file, fewer data than parameters, an output that exists or would overwrite the input).
 """
 
 from __future__ import annotations
@@ -75,24 +74,25 @@ def run_fit(args) -> int:
         t0 = time.perf_counter()
         fits = _fit_from_model if args.from_model else _FITS[full.kind]
         with progress(args, "fit") as bar:
-            if len(records) > 1:
-                result, curves = _fit_joint(records, args, start)
+            if len(records) > 1:  # one element's parameters (+ f0) for all of them
+                result, curves = fit_history_record(records, args.model or "best", args.max_steps,
+                                                    start, _history_decimate(args))  # fmt: skip
             else:
                 result, curves = fits(full, args, start, bar.note)
         result["wall_time_s"] = time.perf_counter() - t0
         write_json_atomic(out / "fit.json", result, exclusive=not args.force)
         drew = _plot(curves, result, out / "fit.png")
-    fit = result
     what = path if len(paths) == 1 else f"{len(paths)} records ({path.name}, ...)"
-    print(f"{result['kind']} {what}: {result['n_data']} samples, fitted {', '.join(fit['fitted'])}")
-    flat = {k for d in fit.get("unidentifiable", []) for k, c in d["direction"].items()
+    print(f"{result['kind']} {what}: {result['n_data']} samples, fitted "
+          f"{', '.join(result['fitted'])}")  # fmt: skip
+    flat = {k for d in result.get("unidentifiable", []) for k, c in d["direction"].items()
             if abs(c) > 1e-3}  # fmt: skip
-    for name in fit["fitted"]:
-        v, s = fit["parameters"][name], fit["std_errors"][name]
+    for name in result["fitted"]:
+        v, s = result["parameters"][name], result["std_errors"][name]
         print(f"  {name:6s} = {v:.6g} ± {math.inf if name in flat else s:.2g}")
     unit = result["residual_unit"]
-    print(f"  rms residual {result['rms_residual']:.4g} {unit}; converged: {fit['converged']} "
-          f"({fit['steps']} steps, {result['wall_time_s']:.1f} s)")  # fmt: skip
+    print(f"  rms residual {result['rms_residual']:.4g} {unit}; converged: "
+          f"{result['converged']} ({result['steps']} steps, {result['wall_time_s']:.1f} s)")
     if "full_record" in result:
         fr = result["full_record"]
         chi2 = f", reduced chi2 {fr['reduced_chi2']:.4g}" if fr["reduced_chi2"] else ""
@@ -101,8 +101,8 @@ def run_fit(args) -> int:
     print(f"wrote {out / 'fit.json'}" + (f" and {out / 'fit.png'}" if drew else ""))
     for text in uncertainty_warnings(result):
         warn(text)
-    if not fit["converged"]:
-        return error(f"the fit did not converge: {fit['message']}", status=FAILED)
+    if not result["converged"]:
+        return error(f"the fit did not converge: {result['message']}", status=FAILED)
     if flat:  # a flat direction: the value printed is not a result
         which = ", ".join(sorted(flat))
         return error(f"the fit stopped where the data do not determine {which} (the "
@@ -167,12 +167,6 @@ def _history_decimate(args) -> int:
     return decimate_factor(args) or 1
 
 
-def _fit_joint(loops, args, start):
-    """Loops or histories fitted together: one element's parameters (+ f0) for all of them."""
-    return fit_history_record(loops, args.model or "best", args.max_steps, start,
-                              _history_decimate(args))  # fmt: skip
-
-
 def _fit_loop_record(loop, args, start, note):
     """A loop: through its history (`--model` an element or best; default for a non-periodic
     history), else reduced as `--decimate` asks and fitted with the loop model of --element."""
@@ -202,8 +196,7 @@ def _fit_from_model(full, args, start, note):
     if model.kind not in RECORD_KINDS:
         raise CommandError(f"--from {args.from_model}: a {model.kind} model; --from takes a "
                            "slip, loop or curve model (a history: --model ELEMENT)")  # fmt: skip
-    steps = args.max_steps or MAX_STEPS
-    fit = refit(model, full, max_steps=steps)
+    fit = refit(model, full, max_steps=args.max_steps or MAX_STEPS)
     base = fit.model
     x_name, x = RECORD_KINDS[model.kind].axis(base)
     measured = np.asarray(base.data().y)
@@ -310,10 +303,8 @@ def _fit_loop(loop, args, start, reduction, note=None):
     if sigma is None:
         sigma = float(np.sqrt(np.sum(resid**2) / max(m - 2, 1)))
     d = fit_summary(fit, loop, m, resid, "N", sigma, how)
-    d["model"] = (
-        f"{args.element} ({model} loop, wu2015 Eq "
-        f"{1 if args.element == 'jenkins' else 2})"
-    )
+    eq = 1 if args.element == "jenkins" else 2
+    d["model"] = f"{args.element} ({model} loop, wu2015 Eq {eq})"
     d["nrmse"] = nrmse(resid, loop.f[-m:])
     d["normal_load_N"], d["frequency_Hz"] = loop.normal_load, loop.frequency
     if loop.normal_load is not None:

@@ -17,8 +17,7 @@ from .._fit._curve import fit_steady_curve
 from .._fit._history import HISTORY_MODELS, fit_history, predict_history
 from .._fit._measures import bic, nrmse, rms
 from .._io._curve import FrictionCurve
-from .._limits import DEVICE_MODELS, MAX_STEPS
-from .._limits import ELEMENT_MODELS as ELEMENT_MODELS
+from .._limits import DEVICE_MODELS, ELEMENT_MODELS, MAX_STEPS
 from .._predict import SAVED_KEY, fitted_model
 from ._common import CommandError
 
@@ -112,9 +111,8 @@ def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
     sigma = float(np.median(curve.friction_error))
     d = fit_summary(fit, curve, len(curve), resid, unit, sigma,
                     "per-point scatter / sqrt(samples)")  # fmt: skip
-    sides = {}
-    for side, sign in (("positive", 1), ("negative", -1)):
-        sides[side] = fit_steady_curve(curve, direction=sign, **steps).as_dict()
+    sides = {side: fit_steady_curve(curve, direction=sign, **steps).as_dict()
+             for side, sign in (("positive", 1), ("negative", -1))}
     d[SAVED_KEY] = fitted_model(fit, str(curve.source)).as_dict() if fit.converged else None
     d.update(model="lugre", nrmse=nrmse(resid, curve.friction),
              route="steady law with direction asymmetry T0", units=curve.units,

@@ -13,6 +13,7 @@ from __future__ import annotations
 import io
 import math
 import sys
+from functools import partial
 from pathlib import Path
 
 import jax
@@ -125,12 +126,8 @@ def _lugre_response(element, A, omega, K_d, A0):
     cycles = min(400, max(3, math.ceil(math.log(1e8) * A0 / (4 * float(A.min()))) + 1))
     if cycles == 400:
         print("note: 400 cycles do not settle the smallest amplitudes to 1e-8", file=sys.stderr)
-
-    def one(a):
-        return harmonic_response(
-            element, a, omega, cycles=cycles, steps_per_cycle=1024, K_d=K_d, A0=A0
-        )
-
+    one = partial(harmonic_response, element, omega=omega, cycles=cycles, steps_per_cycle=1024,
+                  K_d=K_d, A0=A0)  # fmt: skip
     return jax.jit(jax.vmap(one))(A)
 
 
@@ -139,21 +136,14 @@ def _fit_loop(args) -> dict:
     loop = read_loop(args.loop)
     analysis = analyse_loop(loop)
     fit = fit_loop(loop, args.element, model=args.fit_model)
-    result = {"loop": str(args.loop), "analysis": analysis.as_dict(), "fit": fit.as_dict()}
-    result["fit"]["element"] = args.element
-    result["fit"]["model"] = args.fit_model
+    result = {"loop": str(args.loop), "analysis": analysis.as_dict(),
+              "fit": {**fit.as_dict(), "element": args.element, "model": args.fit_model}}
     a = analysis
-    print(
-        f"loop: A = {a.A:.4g} m, muN = {a.mu_N:.4g} N, K_d (Eq 6) = {a.K_d:.4g} N/m, "
-        f"K_eq = {a.K_eq:.4g} N/m, C_eq = {a.C_eq:.4g} N s/m"
-    )
-    print(
-        f"fit ({args.element}): "
-        + ", ".join(
-            f"{n} = {v:.5g} ± {s:.2g}" for n, v, s in zip(fit.names, fit.values, fit.std_errors)
-        )
-        + f" (converged: {fit.converged}, {fit.steps} steps)"
-    )
+    print(f"loop: A = {a.A:.4g} m, muN = {a.mu_N:.4g} N, K_d (Eq 6) = {a.K_d:.4g} N/m, "
+          f"K_eq = {a.K_eq:.4g} N/m, C_eq = {a.C_eq:.4g} N s/m")  # fmt: skip
+    values = zip(fit.names, fit.values, fit.std_errors)
+    print(f"fit ({args.element}): " + ", ".join(f"{n} = {v:.5g} ± {s:.2g}" for n, v, s in values)
+          + f" (converged: {fit.converged}, {fit.steps} steps)")  # fmt: skip
     return result
 
 

@@ -1,13 +1,4 @@
-"""The `tribojax` command line.
-
-tribojax reproduce [--out DIR]   wang2022 Table 3 (published inputs and calibrated), Tables 4–7
-                                 (slip, α = 1 and fitted; full-chain fit of D, G, μ_t to the
-                                 measured slips) and wu2015 vs Eq 7: JSON + figures
-tribojax contact (--topography FILE | --D D --G G) --load N [...]   surface → D, G → F_s, K_τ, C_τ
-tribojax hysteresis [...]        K̄, C̄ (and K_eq, C_eq) of a Jenkins/Mindlin/LuGre element
-tribojax fit FILE.csv [--out DIR] fit a user's slip run or hysteresis loop: JSON + plot
-tribojax discover FILE.csv        find the effect a record's model is missing
-tribojax predict MODEL RECORD     a fitted model (fit.json, discovery.json) on another record
+"""The `tribojax` command line: the subcommands of `SUBCOMMANDS` (usage: docs/cli.md).
 
 Errors: one line `tribojax <cmd>: error: <message>` and exit status 2 (bad input) or 1 (failed
 computation); `--debug` shows the traceback; Ctrl-C exits 130.
@@ -94,10 +85,7 @@ def main(argv=None) -> int:
 
 def entry() -> NoReturn:
     """The console script: `main`, then an exit without the interpreter's teardown once the
-    command is over (its files are closed and written): after an interrupt (exit 130) that
-    teardown crashed (SIGSEGV) in 3 of 6 Ctrl-C tries during a slip fit while XLA's threads were
-    still running, and after a finished command it only frees memory (JAX's caches and backends:
-    0.3-0.5 s of a warm `tribojax fit`)."""
+    command is over (its files are closed and written); why: docs/cli.md, "Exit"."""
     status = main()
     sys.stdout.flush()
     sys.stderr.flush()

@@ -75,18 +75,14 @@ def _reproduce_slip_tables(result: dict, out_dir: Path) -> None:
         print(f"wrote {out_dir / 'figure10.png'}")
 
 
-def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = None,
-                            bar=None) -> bool:
+def _reproduce_fit_measured(result: dict, out_dir: Path | None = None, bar=None) -> bool:
     """The full-chain fits to the measured Tables 4–7 into result["fit_measured"]: the plain
-    relative least-squares fit (the block's issue-5 keys) and the robust Student-t fit (issue 19:
-    "loss", "flagged_cells", "rms_relative_residual_unflagged", ..., and "robust"); True if
-    both converged. One start here; the studies are `python -m fitting.wang2022_slip` and
-    `python -m fitting.wang2022_robust`."""
+    relative least-squares fit and the robust Student-t fit ("loss", "flagged_cells",
+    "rms_relative_residual_unflagged", ..., and "robust"); True if both converged. One start
+    here; the studies are `python -m fitting.wang2022_slip` and `python -m fitting.wang2022_robust`.
+    No per-evaluation progress lines (docs/cli.md, "Progress")."""
     print("wang2022 Tables 4-7 (measured): full-chain fit of D, G, mu_t (LM through diffrax) ...")
-    # no per-evaluation progress lines, on a terminal either: they are a host callback in the
-    # compiled fit, which JAX's cache never keeps (a warm `tribojax reproduce` in a terminal
-    # took 66 s with them, 44 s without); the display shows the step, the line below the result
-    fit = chain_fit.fit_measured_slips(start)
+    fit = chain_fit.fit_measured_slips()
     block = fit.as_dict()
     measured, paper = chain_fit.measured_slips(), chain_fit.paper_theory_slips()
     block["paper_theory_rms_relative_residual"] = chain_fit.rms_relative(paper, measured)
@@ -123,12 +119,9 @@ def _reproduce_fit_measured(result: dict, start=None, out_dir: Path | None = Non
     )  # fmt: skip
     rd = robust.as_dict()
     keep = ~robust.flagged
-    block["loss"] = rd["loss"]
-    block["flagged_cells"] = rd["flagged_cells"]
-    block["rms_relative_residual_unflagged"] = rd["rms_relative_residual_unflagged"]
-    block["paper_theory_rms_relative_residual_unflagged"] = rd[
-        "paper_theory_rms_relative_residual_unflagged"
-    ]
+    for key in ("loss", "flagged_cells", "rms_relative_residual_unflagged",
+                "paper_theory_rms_relative_residual_unflagged"):  # fmt: skip
+        block[key] = rd[key]
     block["plain_rms_relative_residual_unflagged"] = chain_fit.rms_relative(
         fit.model_nm, measured, keep
     )

@@ -152,13 +152,8 @@ class ContactParameters(eqx.Module):
 
     def as_dict(self) -> dict:
         """Plain dict of NumPy values (for printing and JSON)."""
-        import numpy as np
-
-        out = {k: np.asarray(getattr(self, k)) for k in _SCALARS}
-        out["load_share"] = np.asarray(self.load_share)
-        out["converged"] = np.asarray(self.converged)
-        out["all_plastic"] = np.asarray(self.all_plastic)
-        return out
+        keys = (*_SCALARS, "load_share", "converged", "all_plastic")
+        return {k: np.asarray(getattr(self, k)) for k in keys}
 
 
 class FractalContact(eqx.Module):
@@ -242,13 +237,8 @@ class FractalContact(eqx.Module):
         # All-plastic solution as the start; the true a'_l is never smaller (elastic and
         # elastic–plastic asperities carry less than H·a').
         y0 = jnp.log(load * (3.0 - s.D) / (self.pair.H * (s.D - 1.0)))
-        sol = optx.root_find(
-            residual,
-            optx.Newton(rtol=1e-13, atol=1e-13),
-            y0,
-            max_steps=self.max_steps,
-            throw=False,
-        )
+        solver = optx.Newton(rtol=1e-13, atol=1e-13)
+        sol = optx.root_find(residual, solver, y0, max_steps=self.max_steps, throw=False)
         ok = (sol.result == optx.RESULTS.successful) & jnp.isfinite(sol.value)
         return sol.value, ok
 
@@ -324,13 +314,8 @@ class FractalContact(eqx.Module):
         # Eqs 18, 19: stiffness from all but the plastic asperities.
         s_k, phi_d, phi_s = mindlin_factors(psi)
         root_area = [a**0.5 for a in areas[:PLASTIC]]
-        K_tau = (
-            8.0
-            * pair.G_star
-            / math.sqrt(math.pi)
-            * s_k
-            * jnp.sum(_integrals(root_area, bounds[:PLASTIC], log_al, D))
-        )
+        root_parts = _integrals(root_area, bounds[:PLASTIC], log_al, D)
+        K_tau = 8.0 * pair.G_star / math.sqrt(math.pi) * s_k * jnp.sum(root_parts)
 
         # Eqs 20–23: per-asperity energies ∝ P²/r with r = (a/π)^(1/2).
         p2_over_r = [
@@ -350,22 +335,10 @@ class FractalContact(eqx.Module):
         C_tau = jnp.where(all_plastic, 0.0, W_d / safe_ws * jnp.sqrt(self.mass * safe_k))  # Eq 24
         z_max = jnp.where(all_plastic, 0.0, F_s / safe_k)  # Eq 26
 
-        total = jnp.sum(load_parts)
-        scalars = dict(
-            load=load,
-            F_s=F_s,
-            K_tau=K_tau,
-            C_tau=C_tau,
-            z_max=z_max,
-            a_l=jnp.exp(log_al),
-            a_ec=jnp.exp(log_ec),
-            a_epc=jnp.exp(log_epc),
-            a_pc=jnp.exp(log_pc),
-            psi=psi,
-            W_d=W_d,
-            W_s=W_s,
-        )
-        values = jnp.concatenate([jnp.stack([scalars[k] for k in _SCALARS]), load_parts / total])
+        # packed in _SCALARS order
+        a_l, a_ec, a_epc, a_pc = (jnp.exp(v) for v in (log_al, log_ec, log_epc, log_pc))
+        scalars = (load, F_s, K_tau, C_tau, z_max, a_l, a_ec, a_epc, a_pc, psi, W_d, W_s)
+        values = jnp.concatenate([jnp.stack(scalars), load_parts / jnp.sum(load_parts)])
         return ContactParameters(values=values, flags=jnp.stack([ok, all_plastic]))
 
 

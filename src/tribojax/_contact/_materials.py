@@ -31,8 +31,7 @@ class Material(eqx.Module):
     def __init__(self, E, nu, H, sigma_y, G=None, name: str = ""):
         self.E = check_range(E, "E", 0.0, unit="Pa")
         self.nu = check_range(nu, "nu", -1.0, 0.5)
-        if G is None:
-            G = self.E / (2.0 * (1.0 + self.nu))
+        G = self.E / (2.0 * (1.0 + self.nu)) if G is None else G
         self.G = check_range(G, "G (shear modulus)", 0.0, unit="Pa")
         self.H = check_range(H, "H", 0.0, unit="Pa")
         self.sigma_y = check_range(sigma_y, "sigma_y", 0.0, unit="Pa")

@@ -190,15 +190,13 @@ def _run(system_of, res, first, lam0, lam1, X0, omega0, extra, opts, stability, 
         ds, ds_min, ds_max, int(max_points), int(max_newton), tol,
     )  # fmt: skip
     n, code = int(n), int(code)
-    lam_np = np.asarray(lam[:n])
-    inside = (lam_np - lam1) * np.sign(lam1 - lam0) <= 0.0
-    if code == 0 and n > 1 and not inside[-1]:
-        n -= 1  # the last step passed the end of the range
+    lam_n = np.asarray(lam[:n])
+    if code == 0 and n > 1 and (lam_n[-1] - lam1) * np.sign(lam1 - lam0) > 0.0:
+        n, lam_n = n - 1, lam_n[:-1]  # the last step passed the end of the range
     if n < 2 and code == 0:
         code = 1
     nd, nc = first.n_dof, first.n_coef
     X = np.asarray(Y[:n]).reshape(n, nd, nc) * float(x_ref)
-    lam_n = np.asarray(lam[:n])
     omega = np.array([float(omega_of(p)) for p in lam_n])
     amp = np.hypot(X[..., first.index(1)], X[..., first.index(1, True)])
     mf = np.full(n, np.nan)

@@ -40,10 +40,6 @@ def frf_2dof_system(F, *, H: int | None = None, n_time: int | None = None) -> Fr
     return FrictionSystem(structure, [contact], ex, H=H, n_time=n_time)
 
 
-def _newton(tol=1e-10):
-    return optx.Newton(rtol=tol, atol=tol)
-
-
 def amplitude_at(system: FrictionSystem, omega, dof: int = 0, X0=None, *, solver=None):
     """First-harmonic amplitude (m) of `dof` at ω (rad/s); NaN-free, check `solve_hbm` for
     convergence. Differentiable in every leaf of `system` and in ω (implicit function theorem)."""
@@ -75,8 +71,8 @@ def resonance_peak(system: FrictionSystem, omega_guess, dof: int = 0, X0=None, *
     `Peak.amplitude` by the implicit function theorem (module docstring).
     """
     w0 = jnp.asarray(omega_guess, dtype=jnp.float64)
-    sol = optx.root_find(_slope, _newton(tol), w0, (system, dof, X0), max_steps=max_steps,
-                         throw=False)  # fmt: skip
+    solver = optx.Newton(rtol=tol, atol=tol)
+    sol = optx.root_find(_slope, solver, w0, (system, dof, X0), max_steps=max_steps, throw=False)
     ok = (sol.result == optx.RESULTS.successful) & jnp.isfinite(sol.value)
     if bracket is not None:
         ok = ok & (sol.value >= bracket[0]) & (sol.value <= bracket[1])
@@ -93,8 +89,8 @@ def _frozen(system):
 
 
 def _amp_slope(system, omega, X0, dof, solver):
-    """(X, a, ∂a/∂ω, ok) at ω: the MHB solution from X0 and its ω-derivative (forward mode
-    through the implicit function theorem, dX/dω = −(∂R/∂X)⁻¹ ∂R/∂ω)."""
+    """(X, ∂a/∂ω, ok) at ω: the MHB solution from X0 and the slope of the amplitude a (forward
+    mode through the implicit function theorem, dX/dω = −(∂R/∂X)⁻¹ ∂R/∂ω)."""
 
     def solve(w):
         sol = _solve(system, w, X0, solver, 100)
@@ -104,7 +100,7 @@ def _amp_slope(system, omega, X0, dof, solver):
     i, j = system.index(1), system.index(1, True)
     a = jnp.hypot(X[dof, i], X[dof, j])
     g = (X[dof, i] * dX[dof, i] + X[dof, j] * dX[dof, j]) / jnp.where(a > 0, a, 1.0)
-    return X, a, g, ok
+    return X, g, ok
 
 
 def peak_on_grid(system: FrictionSystem, omegas, dof: int = 0, *, tol: float = 1e-9,
@@ -114,16 +110,13 @@ def peak_on_grid(system: FrictionSystem, omegas, dof: int = 0, *, tol: float = 1
     Natural continuation along the grid (each solve started from the previous solution); around
     the largest amplitude, the root of g = ∂a/∂ω inside the two neighbouring grid points by
     `refine_steps` (static) steps of regula falsi with the Illinois modification (Dowell & Jarratt
-    1971; bracketing, so
-    it cannot leave the peak's interval; g by forward-mode implicit differentiation of the MHB
-    solution). Fixed work per system, so it vmaps over systems without a loop whose trip count
-    is the slowest one's (but each solve's Newton loop still runs to its slowest lane: for
-    hundreds of systems `jax.lax.map(..., batch_size=50)` is about twice as fast as one vmap,
-    benchmarks/frf.py). `result` is successful when every solve converged, g changes sign
+    1971; bracketing, so it cannot leave the peak's interval; g by forward-mode implicit
+    differentiation of the MHB solution). Fixed work per system, so it vmaps over systems (each
+    solve's Newton loop still runs to its slowest lane: for hundreds of systems see
+    docs/structures.md). `result` is successful when every solve converged, g changes sign
     across the interval, and the last Newton correction |g/g_ω| is <= tol·ω; otherwise
-    `nonlinear_divergence` (the best point is still returned). With a sampled AFT a
-    rate-independent contact makes a(ω) piecewise smooth (a kink where a time sample changes
-    between stick and slip): a peak on a kink has no stationary point and is reported so.
+    `nonlinear_divergence` (the best point is still returned; a peak on a kink of a(ω), see
+    docs/structures.md, has no stationary point and is reported so).
     Derivatives: dω*/dp = −g_p/g_ω (implicit function theorem) and da*/dp = ∂a/∂p (envelope
     theorem, ∂a/∂ω = 0 at a stationary peak).
     """
@@ -142,8 +135,8 @@ def peak_on_grid(system: FrictionSystem, omegas, dof: int = 0, *, tol: float = 1
     inner = (i > 0) & (i < n - 1)
     lo, hi = omegas[jnp.maximum(i - 1, 0)], omegas[jnp.minimum(i + 1, n - 1)]
     fine = oks[jnp.maximum(i - 1, 0)] & oks[i] & oks[jnp.minimum(i + 1, n - 1)]
-    _, _, g_lo, ok_lo = _amp_slope(frozen, lo, Xs[jnp.maximum(i - 1, 0)], dof, solver)
-    _, _, g_hi, ok_hi = _amp_slope(frozen, hi, Xs[jnp.minimum(i + 1, n - 1)], dof, solver)
+    _, g_lo, ok_lo = _amp_slope(frozen, lo, Xs[jnp.maximum(i - 1, 0)], dof, solver)
+    _, g_hi, ok_hi = _amp_slope(frozen, hi, Xs[jnp.minimum(i + 1, n - 1)], dof, solver)
     bracketed = inner & fine & ok_lo & ok_hi & (g_lo > 0) & (g_hi < 0)
 
     def illinois(c, _):
@@ -151,7 +144,7 @@ def peak_on_grid(system: FrictionSystem, omegas, dof: int = 0, *, tol: float = 1
         den = g_lo - g_hi
         w = lo + g_lo * (hi - lo) / jnp.where(den != 0, den, 1.0)
         w = jnp.where((w > lo) & (w < hi), w, 0.5 * (lo + hi))
-        X, _, g, ok_w = _amp_slope(frozen, w, X, dof, solver)
+        X, g, ok_w = _amp_slope(frozen, w, X, dof, solver)
         up = g > 0  # the peak lies above w
         g_hi = jnp.where(up & (side > 0), 0.5 * g_hi, g_hi)  # Illinois: halve the kept end
         g_lo = jnp.where(~up & (side < 0), 0.5 * g_lo, g_lo)

@@ -57,16 +57,16 @@ class HarmonicCoefficients(eqx.Module):
     f_s: Scalar
 
 
-def _coefficients(element, A, omega, f_c, f_s) -> HarmonicCoefficients:
+def _coefficients(K_d, A0, A, omega, f_c, f_s) -> HarmonicCoefficients:
     K_eq = f_c / A
     C_eq = -f_s / (A * omega)
     return HarmonicCoefficients(
         A=A,
-        A_bar=A / element.A0,
+        A_bar=A / A0,
         K_eq=K_eq,
         C_eq=C_eq,
-        K_bar=K_eq / element.K_d,
-        C_bar=jnp.pi * omega * C_eq / element.K_d,
+        K_bar=K_eq / K_d,
+        C_bar=jnp.pi * omega * C_eq / K_d,
         W=-jnp.pi * A * f_s,
         f_c=f_c,
         f_s=f_s,
@@ -120,7 +120,7 @@ def harmonic_balance(
     # odd symmetry f(θ + π) = −f(θ): the full-cycle integrals are twice the half-cycle ones
     f_c = (2.0 / jnp.pi) * i_c
     f_s = (2.0 / jnp.pi) * i_s
-    return _coefficients(element, A, omega, f_c, f_s)
+    return _coefficients(element.K_d, element.A0, A, omega, f_c, f_s)
 
 
 def drive(element: AbstractFrictionElement, u, t=None, *, state0=None, substeps: int = 4):
@@ -206,16 +206,9 @@ def harmonic_response(
     last = slice(-steps_per_cycle - 1, -1)
     f_c = 2.0 * jnp.mean(f[last] * jnp.cos(theta[last]))
     f_s = 2.0 * jnp.mean(f[last] * jnp.sin(theta[last]))
-    norm = _Norm(
-        K_d=element.K_d if K_d is None else jnp.asarray(K_d, dtype=jnp.float64),
-        A0=element.A0 if A0 is None else jnp.asarray(A0, dtype=jnp.float64),
-    )
-    return _coefficients(norm, A, omega, f_c, f_s)
-
-
-class _Norm(eqx.Module):
-    K_d: Scalar
-    A0: Scalar
+    K_d = element.K_d if K_d is None else jnp.asarray(K_d, dtype=jnp.float64)
+    A0 = element.A0 if A0 is None else jnp.asarray(A0, dtype=jnp.float64)
+    return _coefficients(K_d, A0, A, omega, f_c, f_s)
 
 
 def _rk4(element, state, vel, t0, h, substeps):

@@ -38,19 +38,11 @@ from ._structure import Excitation, Structure, check_contacts
 
 def harmonic_layout(harmonics) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For a harmonic set: the harmonic of each coefficient, whether it is a sine, and Δ."""
-    ks, sine = [], []
-    for k in harmonics:
-        ks.append(k)
-        sine.append(False)
-        if k > 0:
-            ks.append(k)
-            sine.append(True)
-    ks, sine = np.array(ks), np.array(sine)
-    n = ks.size
-    delta = np.zeros((n, n))
-    for c in np.flatnonzero((ks > 0) & ~sine):
-        s = c + 1
-        delta[s, c], delta[c, s] = ks[c], -ks[c]
+    layout = [(k, sine) for k in harmonics for sine in ((False, True) if k > 0 else (False,))]
+    ks, sine = (np.array(v) for v in zip(*layout))
+    delta = np.zeros((ks.size, ks.size))
+    c = np.flatnonzero((ks > 0) & ~sine)  # the cosines; their sines follow at c + 1
+    delta[c + 1, c], delta[c, c + 1] = ks[c], -ks[c]
     return ks, sine, delta
 
 
@@ -172,10 +164,9 @@ class FrictionSystem(eqx.Module):
         """X of the structure without its contacts (start values), m."""
         s = self.structure
         D = omega * jnp.asarray(harmonic_layout(self.harmonics)[2])
-        n, c = self.n_dof, self.n_coef
-        eye = jnp.eye(c)
-        Z = jnp.kron(s.M, (D @ D).T) + jnp.kron(s.C, D.T) + jnp.kron(s.K, eye)
-        return jnp.linalg.solve(Z, self.forcing(omega).reshape(-1)).reshape(n, c)
+        Z = jnp.kron(s.M, (D @ D).T) + jnp.kron(s.C, D.T) + jnp.kron(s.K, jnp.eye(self.n_coef))
+        F = self.forcing(omega)
+        return jnp.linalg.solve(Z, F.reshape(-1)).reshape(F.shape)
 
     def scales(self, omega):
         """(force scale N, displacement scale m) used to make the MHB unknowns and residual O(1)."""
@@ -211,10 +202,10 @@ def solve_hbm(system: FrictionSystem, omega, X0=None, *, rtol=1e-10, atol=1e-10,
     `solver` (default `optimistix.Dogleg`: Newton steps inside a trust region, which keeps plain
     Newton from cycling between the stick and slip pieces of a friction residual; pass
     `optimistix.Newton(...)` from a close start). Start from X0 (default: the structure without
-    its contacts). Differentiable: gradients with
-    respect to any leaf of `system` (μ, N, K_d, M, C, K, forcing) and ω follow from the implicit
-    function theorem (optimistix's implicit adjoint), not from unrolled iterations. The outcome is
-    in `result` (no exception under jit); X is NaN-free but meaningless when it is not successful.
+    its contacts). Differentiable: gradients with respect to any leaf of `system` (μ, N, K_d, M,
+    C, K, forcing) and ω follow from the implicit function theorem (optimistix's implicit
+    adjoint), not from unrolled iterations. The outcome is in `result` (no exception under jit);
+    X is NaN-free but meaningless when it is not successful.
     """
     ensure_x64()
     omega = jnp.asarray(omega, dtype=jnp.float64)
@@ -249,31 +240,22 @@ def _solve_arrays(system, omega, X0, solver, max_steps):
     return X, result_code(result), sol.stats["num_steps"]
 
 
-def hill_matrices(system: FrictionSystem, X, omega, J=None):
-    """(J, Δ₁, Δ₂) of Hill's quadratic eigenvalue problem at the solution X, ω (NumPy); J = ∂R/∂X
-    (flattened, N·n_coef square) is computed unless given."""
-    n, c = system.n_dof, system.n_coef
-    if J is None:
-        X = jnp.asarray(X).reshape(-1)
-        J = jax.jacfwd(lambda y: system.residual(y.reshape(n, c), omega).reshape(-1))(X)
-    D = float(omega) * harmonic_layout(system.harmonics)[2]
-    M, C = np.asarray(system.structure.M), np.asarray(system.structure.C)
-    d1 = np.kron(C, np.eye(c)) + 2.0 * np.kron(M, D.T)
-    return np.asarray(J), d1, np.kron(M, np.eye(c))
-
-
 def floquet_exponents(system: FrictionSystem, X, omega, J=None) -> np.ndarray:
     """Hill's approximation of the 2N Floquet exponents (1/s) at a periodic solution X, ω.
 
-    Batched: with J of shape (n, N·n_coef, N·n_coef) and ω of shape (n,) (X unused then), the
-    exponents of n solutions of the same system in one stacked eigenvalue call, shape (n, 2N).
+    J = ∂R/∂X (flattened, N·n_coef square) is computed unless given. Batched: with J of shape
+    (n, N·n_coef, N·n_coef) and ω of shape (n,) (X unused then), the exponents of n solutions of
+    the same system in one stacked eigenvalue call, shape (n, 2N).
     """
-    J = np.asarray(J) if J is not None else hill_matrices(system, X, omega)[0]
+    c = system.n_coef
+    if J is None:
+        x = jnp.asarray(X).reshape(-1)
+        J = jax.jacfwd(lambda y: system.residual(y.reshape(system.n_dof, c), omega).reshape(-1))(x)
+    J = np.asarray(J)
     batched = J.ndim == 3
     J = J if batched else J[None]
     w = np.asarray(omega, dtype=float).reshape(-1)
     m = J.shape[-1]
-    c = system.n_coef
     M, C = np.asarray(system.structure.M), np.asarray(system.structure.C)
     inv = np.linalg.inv(np.kron(M, np.eye(c)))  # Δ₂⁻¹
     d1_c = inv @ np.kron(C, np.eye(c))  # Δ₁ = C ⊗ I + ω·2 M ⊗ Δᵀ (Δ per unit ω)

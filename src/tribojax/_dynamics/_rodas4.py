@@ -89,16 +89,13 @@ class Rodas4(dfx.AbstractAdaptiveSolver):
     the order holds with any step; ∂f/∂t is evaluated at the step start, so stop steps at kinks of
     a time-dependent forcing (`jump_ts`): diffrax then starts the next step just after the kink.
 
-    On tribojax's slip problem (`simulate_slip`) about a third of Kvaerno5's time per cycle (with
-    a chord iteration) at equal or better accuracy (benchmarks/slip.py).
-
     Reverse mode: each step's derivatives are exact, but `diffrax.RecursiveCheckpointAdjoint`
     recomputes the forward steps in a separately compiled program. XLA contracts multiply-adds
     differently there, so the recomputed steps differ in the last bits; Rodas4's increments are
     whole steps (not converged Newton corrections, as in Kvaerno5), so those bits reach y and the
     step-size controller, which then takes other steps than the forward pass did: a silently wrong
-    gradient (6e-3 of the largest entry on the slip problem). `simulate_slip` therefore
-    differentiates Rodas4 by forward mode in every direction (`ForwardJacobianAdjoint`).
+    gradient (docs/slip.md). `simulate_slip` therefore differentiates Rodas4 by forward mode in
+    every direction (`ForwardJacobianAdjoint`).
     """
 
     term_structure: ClassVar = dfx.AbstractTerm

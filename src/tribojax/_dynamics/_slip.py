@@ -72,8 +72,7 @@ def _vector_field(t, y, args):
 
 def _kvaerno5_chord() -> dfx.AbstractSolver:
     """Kvaerno5 (L-stable ESDIRK, order 5) with a chord iteration whose Jacobian (4×4, forward
-    mode) is re-evaluated at every stage: optimistix's `Chord`, not diffrax's `VeryChord`.
-    `simulate_slip(..., solver="kvaerno5")` (its default before Rodas4)."""
+    mode) is re-evaluated at every stage (optimistix's `Chord`, not diffrax's `VeryChord`)."""
     return dfx.Kvaerno5(root_finder=dfx.with_stepsize_controller_tols(optx.Chord)())
 
 
@@ -87,7 +86,7 @@ def _diffeqsolve(
     z0, _ = ravel_pytree(element.initial_state())
     y0 = jnp.concatenate([jnp.zeros(2, z0.dtype), jnp.zeros_like(z0), jnp.zeros(1, z0.dtype)])
     # per-component absolute tolerances: slip/deflection atol (m), velocity atol·1e3 (1/s),
-    # integral atol·0.1 s. The velocity's sets the accuracy (see simulate_slip): 1e4 gave 1e-5.
+    # integral atol·0.1 s (the velocity's sets the accuracy: docs/slip.md)
     atols = jnp.concatenate(
         [jnp.array([atol, atol * 1e3]), jnp.full(z0.shape, atol), jnp.array([atol * 0.1])]
     )
@@ -166,34 +165,20 @@ def simulate_slip(
     (`jump_ts`; Rodas4 evaluates ∂f/∂t at the step start, which diffrax then places just after a
     kink). The sgn(v) kink of the bristle law at v = 0 is crossed every half-period of the
     transients and sits under the equilibria of the hold phases: the elements' smooth sign
-    v/√(v² + ε²), ε = 1e-12 m/s, makes the right-hand side C¹ (with the exact sign Kvaerno5 and
-    diffrax's `VeryChord` reject ~99 % of their steps there and never finish).
-    `solver="kvaerno5"` selects the earlier default: Kvaerno5 (ESDIRK, order 5) with a chord
-    iteration re-evaluating the Jacobian at every stage (optimistix `Chord`), atol 1e-16.
-
-    Where the time goes: every jerk kink starts a ring-down of ~10 ms (damping ratio ~0.2) that
-    is tracked until |v| falls below its absolute tolerance, and each sign flip of v costs a
-    rejected step. The hysteresis makes a velocity error permanent (a ratchet in Δx that no
-    spring restores), so the velocity tolerance, not `rtol`, sets the accuracy of the phase
-    averages. Measured for Table 3's 0.6, 4 and 20 kPa and α = 1 and 1.26, against SciPy Radau
-    at rtol 1e-11 (exact sign): Rodas4 at the defaults (atol 1e-15) takes ~1150–1250 accepted and
-    ~180–215 rejected steps per cycle, phase averages within 1.5e-8–6.1e-7 relative (atol 3e-16:
-    ~1450–1630 steps, ≤ 2.1e-7); Kvaerno5 ~1050–1250 and 170–210 steps, within 1.9e-7–9.7e-7.
-    Rodas4 takes about a third of Kvaerno5's time per cycle (benchmarks/slip.py). A larger ε
-    lets the tail go earlier but biases the result (ε = 1e-11: 3e-7, 1e-10: 4e-6 relative).
+    v/√(v² + ε²), ε = 1e-12 m/s, makes the right-hand side C¹. `solver="kvaerno5"` selects
+    Kvaerno5 (ESDIRK, order 5) with a chord iteration re-evaluating the Jacobian at every stage
+    (optimistix `Chord`), atol 1e-16. The velocity tolerance, not `rtol`, sets the accuracy of the
+    phase averages; step counts, accuracy and cost of both solvers, and the choice of ε:
+    docs/slip.md, "Solver accuracy and cost".
 
     Derivatives (`adjoint`). With Rodas4 the default, and any diffrax adjoint passed, becomes
     `ForwardJacobianAdjoint` (tribojax._dynamics._adjoint): the solve sits inside a
     `jax.custom_jvp` whose rule is forward mode (`jax.jacfwd` through `diffrax.ForwardMode`) w.r.t.
     the differentiated float leaves of `element`, `profile` and `mass` (and dys/dts = f for
-    `ts`); `jax.grad`/`jacrev` transpose that, so both directions give the same numbers (jacrev =
-    jacfwd to 2e-16 of the largest elasticity of the phase averages). Reason: reverse mode through
-    diffrax's `RecursiveCheckpointAdjoint` recomputes the steps in a separately compiled program
-    whose rounding differs; a Rosenbrock step passes that to y and the step controller, the
-    recomputed steps differ from the forward pass and the gradient is wrong by up to 6e-3 (see
-    `Rodas4`). Cost: one solve carrying as many tangents as differentiated scalars (about 5x a
-    solve for the 4×4 Jacobian w.r.t. (F_s, K_τ, C_τ, α), either direction). Other solvers use
-    the diffrax adjoint given (default `RecursiveCheckpointAdjoint`; `jax.jacfwd` then needs
+    `ts`); `jax.grad`/`jacrev` transpose that, so both directions give the same numbers (reverse
+    mode through diffrax would recompute the Rosenbrock steps and be wrong: see `Rodas4`). Cost:
+    one solve carrying as many tangents as differentiated scalars. Other solvers use the diffrax
+    adjoint given (default `RecursiveCheckpointAdjoint`; `jax.jacfwd` then needs
     `adjoint=diffrax.ForwardMode()`), or `ForwardJacobianAdjoint()` if passed. Batches: `jax.vmap`
     over loads steps all members together (the union of their steps).
 
@@ -217,7 +202,7 @@ def simulate_slip(
     """
     profile = TrapezoidProfile() if profile is None else profile
     mass = check_range(mass, "mass", 0.0, unit="kg")
-    solver = "rodas4" if solver is None else solver  # None: the default, as before
+    solver = "rodas4" if solver is None else solver
     solver = _SOLVERS[solver]() if isinstance(solver, str) and solver in _SOLVERS else solver
     if not isinstance(solver, dfx.AbstractSolver):
         raise ValueError(

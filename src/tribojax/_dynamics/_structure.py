@@ -149,14 +149,9 @@ class FrictionContact(AbstractContact):
     def forces(self, x, period):
         u = self.relative(x)
         n = u.shape[0]
-        hist = _periodic_history(u, self.cycles)
-        if isinstance(self.element, AbstractHysteresisElement):
-            f = drive(self.element, hist)
-        else:
-            t = period / n * jnp.arange(-1, self.cycles * n, dtype=jnp.float64)
-            f = drive(self.element, hist, t, substeps=self.substeps)
-        f = f[-n:]
-        return self._spread(jnp.zeros_like(x), f)
+        t = period / n * jnp.arange(-1, self.cycles * n, dtype=jnp.float64)  # rate-dependent only
+        f = drive(self.element, _periodic_history(u, self.cycles), t, substeps=self.substeps)
+        return self._spread(jnp.zeros_like(x), f[-n:])
 
     def _spread(self, out, f):
         out = out.at[..., self.dof].add(f)

@@ -30,12 +30,8 @@ def integrate_steady(system: FrictionSystem, omega, periods: int = 100,
         return ex.static + amp_c * jnp.cos(omega * t) + ex.sine * jnp.sin(omega * t)
 
     def contact(states, x):
-        new, total = [], jnp.zeros(n)
-        for c, st in zip(system.contacts, states):
-            st, f = c.step(st, x)
-            new.append(st)
-            total = total + f
-        return tuple(new), total
+        steps = [c.step(st, x) for c, st in zip(system.contacts, states)]
+        return tuple(st for st, _ in steps), sum((f for _, f in steps), jnp.zeros(n))
 
     x = jnp.zeros(n) if x0 is None else jnp.asarray(x0)
     v = jnp.zeros(n) if v0 is None else jnp.asarray(v0)
@@ -52,6 +48,5 @@ def integrate_steady(system: FrictionSystem, omega, periods: int = 100,
         v = v_half + 0.5 * h * a
         return (x, v, a, states), x
 
-    total = periods * steps_per_period
-    (_, _, _, _), xs = jax.lax.scan(body, (x, v, a, states), jnp.arange(total))
+    _, xs = jax.lax.scan(body, (x, v, a, states), jnp.arange(periods * steps_per_period))
     return xs[-steps_per_period - 1 : -1]

@@ -32,8 +32,7 @@ from ._solver import LevenbergMarquardt
 # Plain LM never stops on a curve whose points leave a parameter undetermined (driveNo2's
 # Stribeck dip: β walks towards a step, every late step rejected); the noise-floor LM stops when
 # the Gauss–Newton step left is below 0.05 standard errors in every parameter.
-_RTOL, _ATOL = 1e-10, 1e-12
-_SOLVER = LevenbergMarquardt.noise_floor(_RTOL, _ATOL)
+_SOLVER = LevenbergMarquardt.noise_floor(1e-10, 1e-12)
 
 STEADY_NAMES = ("F_c", "F_s", "v_s", "beta", "sigma2")
 
@@ -48,14 +47,6 @@ class _SteadyResiduals(eqx.Module):
         if self.joint:
             model = model + theta[5] * jnp.std(f)
         return (model - f) / err
-
-
-def _steady_transform(joint):
-    def transform(theta):
-        out = jnp.exp(theta[:5])
-        return jnp.concatenate([out, theta[5:]]) if joint else out
-
-    return transform
 
 
 def _steady_start(v, f) -> np.ndarray:
@@ -95,33 +86,25 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2
         raise ValueError(f"{curve.source}: {len(c.velocity)} points are too few for this fit")
     v, f, err = (jnp.asarray(x) for x in (c.velocity, c.friction, c.friction_error))
     joint = direction is None
+    scale = float(np.std(c.friction))  # θ of T0 in units of the friction's sd
     theta0 = _steady_start(np.asarray(v), np.asarray(f))
     if joint:
         pos, neg = np.abs(c.friction[c.velocity > 0]), np.abs(c.friction[c.velocity < 0])
         if not (pos.size and neg.size):
             raise ValueError(f"{curve.source}: a joint fit needs points in both directions")
         T0 = 0.5 * (np.median(pos) - np.median(neg))
-        theta0 = np.append(theta0, T0 / float(np.std(c.friction)))
+        theta0 = np.append(theta0, T0 / scale)
     names = STEADY_NAMES + (("T0",) if joint else ())
-    tr = _steady_transform(joint)
-    if joint:
-        scale = float(np.std(c.friction))
 
-        def tr(theta, _s=scale):  # T0 in the friction unit
-            return jnp.concatenate([jnp.exp(theta[:5]), theta[5:] * _s])
+    def tr(theta):  # T0 in the friction unit
+        out = jnp.exp(theta[:5])
+        return jnp.concatenate([out, theta[5:] * scale]) if joint else out
 
     fit = least_squares_fit(_SteadyResiduals(joint), jnp.asarray(theta0), (v, f, err),
                             names=names, transform=tr, sigma_known=True, max_steps=max_steps,
                             jac="fwd", solver=_SOLVER)  # fmt: skip
     fixed = {"direction": "both" if joint else int(direction), **c.units}
     return dataclasses.replace(fit, fixed=fixed)
-
-
-def _law_element(p: dict, sigma0=1.0, sigma1=0.0) -> tuple[LuGre, float]:
-    """(LuGre with the steady law's parameters by name — F_c, F_s, v_s, beta, sigma2 — and σ0,
-    σ1; the asymmetry T0, 0 if not fitted)."""
-    el = LuGre(sigma0, sigma1, p["sigma2"], p["F_c"], p["F_s"], p["v_s"], 1.0, p["beta"])
-    return el, float(p.get("T0", 0.0))
 
 
 class _TransientResiduals(eqx.Module):
@@ -142,9 +125,11 @@ class _TransientResiduals(eqx.Module):
         return ((model - f) / err)[moving]
 
 
-def _transient_args(tr: FrictionTransient, steady: dict, curve_error=None):
-    """The residuals' args; `steady`: the steady law's parameters by name."""
-    law, T0 = _law_element(steady)
+def _transient_args(tr: FrictionTransient, p: dict, curve_error=None):
+    """The residuals' args; `p`: the steady law's parameters by name (F_c, F_s, v_s, beta,
+    sigma2 and the asymmetry T0, 0 if not fitted); the residuals set the law's σ0 and σ1."""
+    law = LuGre(1.0, 0.0, p["sigma2"], p["F_c"], p["F_s"], p["v_s"], 1.0, p["beta"])
+    T0 = float(p.get("T0", 0.0))
     moving = jnp.asarray(np.flatnonzero(tr.velocity != 0.0))  # at rest the drive is off
     err = curve_error if curve_error is not None else float(np.std(tr.friction[tr.velocity != 0]))
     return (law, T0, jnp.asarray(tr.velocity), jnp.asarray(np.diff(tr.t)),
@@ -164,12 +149,11 @@ def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start
     Returns FitResult with names (sigma0, sigma1), fitted as logarithms; the sampling of the
     record bounds what can be resolved (standard errors and `unidentifiable` say so).
     """
-    args = _transient_args(tr, dict(zip(steady.names, steady.values)), sigma)
-    fit = least_squares_fit(_TransientResiduals(), jnp.log(jnp.asarray(start)), args,
-                            names=("sigma0", "sigma1"), transform=jnp.exp,
-                            sigma_known=sigma is not None, max_steps=max_steps,
-                            jac="fwd", solver=_SOLVER)  # fmt: skip
     law = dict(zip(steady.names, steady.values.tolist()))
+    fit = least_squares_fit(_TransientResiduals(), jnp.log(jnp.asarray(start)),
+                            _transient_args(tr, law, sigma), names=("sigma0", "sigma1"),
+                            transform=jnp.exp, sigma_known=sigma is not None,
+                            max_steps=max_steps, jac="fwd", solver=_SOLVER)  # fmt: skip
     return dataclasses.replace(fit, fixed={"steady": law})
 
 

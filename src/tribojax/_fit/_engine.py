@@ -196,9 +196,8 @@ def fit_statistics(
 
     def delta(T):
         # T·V·S⁻¹ over the determined directions; a parameter that moves along an undetermined
-        # one (singular value ~0) gets infinite variance (and no NaN from 0·inf). (A component
-        # at round-off level, |T·v| ≤ 1e-10·|T row|, is not a dependence: driveNo2's negative-
-        # direction σ2 loaded its null Stribeck directions by 6e-17 and got an infinite error.)
+        # one (singular value ~0) gets infinite variance (and no NaN from 0·inf); a component at
+        # round-off level, |T·v| ≤ 1e-10·|T row|, is not a dependence
         A = (T @ vt[~tiny].T) / sv[~tiny][None, :]
         cov = scale2 * (A @ A.T)
         load = np.abs(T @ vt[tiny].T)

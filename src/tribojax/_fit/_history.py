@@ -66,9 +66,7 @@ def history_element(model: str, p):
         return LuGre(p[0], 0.0, 0.0, p[1], p[2], p[3], 1.0, 2.0)
     if model == "bouc_wen":
         return BoucWen(p[0], p[1], p[2], 0.5)
-    if model == "band_brake":
-        return BandBrake(*(p[i] for i in range(9)))
-    raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
+    return BandBrake(*(p[i] for i in range(9)))  # "band_brake" (callers check `model`)
 
 
 class _Transform(eqx.Module):
@@ -144,25 +142,21 @@ def _default_start(model: str, records) -> dict:
     u = np.concatenate([np.asarray(r[1]) for r in records])
     lo, hi = np.percentile(f, [2, 98])
     F, K = 0.5 * (hi - lo), 40.0 * 0.5 * (hi - lo) / max(np.ptp(u), 1e-12)
-    speeds = [
-        np.max(np.abs(np.diff(np.asarray(r[1])) / np.diff(np.asarray(r[0])))) for r in records
-    ]
-    v = max(float(max(speeds)), 1e-9)
-    base = {"mu_N": F, "K_d": K, "K": K, "F_y": F, "n": 2.0, "sigma0": K, "F_c": 0.9 * F,
-            "F_s": 1.1 * F, "v_s": 0.1 * v, "f0": 0.5 * (hi + lo),
-            **_band_brake_start({"mu_N": F, "K_d": K}, records)}  # fmt: skip
+    v = max(max(float(np.max(np.abs(np.diff(r[1]) / np.diff(r[0])))) for r in records), 1e-9)
+    base = {"n": 2.0, "v_s": 0.1 * v, **_starts(F, K, 0.5 * (hi + lo), records)}
     return {name: base[name] for name, _ in HISTORY_MODELS[model]}
 
 
-def _band_brake_start(jen: dict, records) -> dict:
-    """Band-brake start from a Jenkins fit: the slip force both ways, clearances of 3 % of the
-    displacement range, a drag of 6 % of the slip force across them, and the exponential rise
-    reaching the slip force over half the Jenkins element's elastic travel μN/K_d."""
-    F = jen["mu_N"]
+def _starts(F, K, f0, records) -> dict:
+    """Start values of every model's parameters but n and v_s from a slip force F (N), a
+    stiffness K (N/m) and an offset f0 (N); the band brake's: the slip force both ways,
+    clearances of 3 % of the displacement range, a drag of 6 % of the slip force across them,
+    and the exponential rise reaching the slip force over half the elastic travel F/K."""
     gap = max(0.03 * max(float(np.ptp(np.asarray(r[1]))) for r in records), 1e-12)
     k_gap, A = 0.06 * F / gap, 0.15 * F
-    beta = float(np.log1p((F - k_gap * gap) / A)) / (0.5 * F / jen["K_d"])
-    return {"F_pos": F, "F_neg": F, "gap_pos": gap, "gap_neg": gap, "k_gap": k_gap,
+    beta = float(np.log1p((F - k_gap * gap) / A)) / (0.5 * F / K)
+    return {"mu_N": F, "K_d": K, "K": K, "F_y": F, "sigma0": K, "F_c": 0.9 * F, "F_s": 1.1 * F,
+            "f0": f0, "F_pos": F, "F_neg": F, "gap_pos": gap, "gap_neg": gap, "k_gap": k_gap,
             "A_pos": A, "A_neg": A, "beta_pos": beta, "beta_neg": beta}  # fmt: skip
 
 
@@ -225,12 +219,8 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
     init = _default_start(model, records)
     if model != "jenkins" and set(init) - set(start or {}):
         # the Jenkins fit (exact increments, fast) gives the slip force, stiffness and offset
-        pre = fit_history(loops, "jenkins", decimate=decimate).fit.values
-        jen = dict(zip(("mu_N", "K_d", "f0"), pre))
-        shared = {"mu_N": jen["mu_N"], "K_d": jen["K_d"], "K": jen["K_d"], "F_y": jen["mu_N"],
-                  "sigma0": jen["K_d"], "F_c": 0.9 * jen["mu_N"], "F_s": 1.1 * jen["mu_N"],
-                  "f0": jen["f0"], **_band_brake_start(jen, records)}  # fmt: skip
-        init.update({k: v for k, v in shared.items() if k in init})
+        mu_N, K_d, f0 = fit_history(loops, "jenkins", decimate=decimate).fit.values
+        init.update({k: v for k, v in _starts(mu_N, K_d, f0, records).items() if k in init})
     init.update(start or {})
     unknown = set(init) - {n for n, _ in spec}
     if unknown:
@@ -252,7 +242,6 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         return fit
 
     if model == "bouc_wen" and "n" not in (start or {}):
-        # the sharpness n has separate local optima (soft n < 1, near-Jenkins n ≫ 1)
         fits = [solve({**init, "n": float(n)}) for n in n_starts]
         fit = min(fits, key=lambda f: float(np.sum(f.residuals**2)))
     else:

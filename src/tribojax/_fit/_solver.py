@@ -74,8 +74,7 @@ def gauss_newton_step(r, J):
 
 # Progress of the running fit: a solver with `report=True` reports each step through
 # `report_step` (a jax.debug.callback), which forwards to the callable
-# `least_squares_fit(progress=...)` set here.
-# A module-level hook keeps the compiled solve independent of the callable.
+# `least_squares_fit(progress=...)` set here (the compiled solve does not depend on it).
 _PROGRESS: list = []
 
 
@@ -89,7 +88,6 @@ def report_step(shown, accepted, steps, cost, gn_step):
         gn = gn if np.all(accepted) else "step rejected"
         progress(f"LM: {np.max(steps)} steps, cost {np.sum(cost):.8g}, {gn}, "
                  f"{time.perf_counter() - t0:.1f} s")  # fmt: skip
-
 
 
 def quiet(**kwargs):
@@ -109,12 +107,10 @@ class _RegionState(eqx.Module):
 class RelativeTrustRegion(optx.ClassicalTrustRegion):
     """Trust-region update of a radius in units of the Gauss–Newton step length
     (`optx.IndirectDampedNewtonDescent`), capped at 1: a rejection then shrinks the step at once
-    instead of first undoing earlier growth. (Growth 3.5, optimistix's default, alternated
-    accepted and rejected steps along the curved valley of a Stribeck refit: 32 steps, not 19.)
-    Its state also keeps the decrease of ‖r‖² that the linearisation predicted for the step just
-    tried, which `LevenbergMarquardt`'s `noise_tol` stop reads after a rejection (recomputing
-    that step there traced the damped-Newton descent a second time: 0.8 s of a first fit).
-    Every `CRAWL_STEPS` steps it also marks the cost reached, which the `crawl` stop reads."""
+    instead of first undoing earlier growth (docs/fitting.md). Its state also keeps the decrease of
+    ‖r‖² that the linearisation predicted for the step just tried, which `LevenbergMarquardt`'s
+    `noise_tol` stop reads after a rejection. Every `CRAWL_STEPS` steps it also marks the cost
+    reached, which the `crawl` stop reads."""
 
     def init(self, y, f_info_struct):
         one = jnp.array(1.0)

@@ -36,11 +36,6 @@ def surface_contact_model(D, G, mu_t, *, sigma_s=CALIBRATED_SIGMA_S, M=CALIBRATE
     return wang2022_table3_model(G, mu_t, sigma_s, M=M, D=D, throw=throw)
 
 
-def _surface_physical(theta, mu_min):
-    """θ → (D, G, μ_t) by the chain's one mapping (`tribojax._chain.to_physical`)."""
-    return to_physical(theta, SURFACE_NAMES, mu_min)
-
-
 class _SurfaceResiduals(eqx.Module):
     """Whitened log differences of (F_s, K_τ, C_τ), model − stage 1, at each run's load; data in
     `args` (loads, stage-1 log values, whitening factors, μ_t lower bound): one compilation per
@@ -51,7 +46,7 @@ class _SurfaceResiduals(eqx.Module):
 
     def __call__(self, theta, args):
         loads, target, whiten, mu_min = args
-        D, G, mu_t = _surface_physical(theta, mu_min)
+        D, G, mu_t = to_physical(theta, SURFACE_NAMES, mu_min)  # the chain's one mapping
         model_fn = surface_contact_model(D, G, mu_t, sigma_s=self.sigma_s, M=self.M)
         out = jax.vmap(model_fn)(loads)
         model = jnp.log(jnp.stack([out.F_s, out.K_tau, out.C_tau], axis=1))
@@ -126,7 +121,7 @@ def fit_surface_from_runs(
         progress("surface: D, G, mu_t from the runs' F_s, K_tau, C_tau")
     fit = least_squares_fit(_SurfaceResiduals(float(sigma_s), float(M)), theta0,
                             (loads, target, whiten, jnp.asarray(mu_min)), names=SURFACE_NAMES,
-                            transform=lambda th: _surface_physical(th, mu_min),
+                            transform=lambda th: to_physical(th, SURFACE_NAMES, mu_min),
                             sigma_known=True)  # fmt: skip
     fixed = {"alpha": float(alpha), "sigma_s_Pa": float(sigma_s), "M": float(M),
              "loads_N": [float(x) for x in loads],

@@ -105,5 +105,3 @@ class BandBrake(AbstractIncrementalElement):
         up = self._side(jnp.maximum(e, 0.0), self.gap_pos, self.A_pos, self.beta_pos)
         down = self._side(jnp.maximum(-e, 0.0), self.gap_neg, self.A_neg, self.beta_neg)
         return jnp.minimum(up, self.F_pos) - jnp.minimum(down, self.F_neg)
-
-

@@ -1,9 +1,7 @@
 """LuGre friction elements: the full model (wang2022 Eq 25) and the paper's pre-slip form (Eq 27).
 
-The state is the mean bristle deflection z (m). They implement
-`AbstractFrictionElement` with the sign convention of `tribojax._friction`: v is the velocity of
-the driving body relative to the driven one, and the force is the one transmitted to the driven
-body, so in stick F ≈ σ0·u.
+The state is the mean bristle deflection z (m); v and the force follow the sign convention of
+`AbstractFrictionElement`, so in stick F ≈ σ0·u.
 
 The sign function sgn(v) in the bristle law has a kink at v = 0 that stalls the Newton iteration
 of implicit ODE solvers whenever a contact comes to rest (the hold phases of a stage profile). The

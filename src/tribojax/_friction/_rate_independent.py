@@ -7,8 +7,8 @@ Each element is usable two ways:
     branch follows from the loop's odd symmetry f(θ + π) = −f(θ);
 (b) as an `AbstractFrictionElement` in rate form, driven by any displacement history. Because the
     elements are rate independent they also provide `increment(state, du)`: the exact state update
-    for a displacement step du without a reversal inside it, which the drivers in `_hysteresis`
-    use instead of an ODE solver.
+    for a displacement step du without a reversal inside it, which `tribojax.drive` uses instead
+    of an ODE solver.
 
 Units: displacement m, force N, stiffness N/m. A0 = μN/K_d (m) is the critical amplitude.
 """

@@ -20,11 +20,7 @@ from .._presets import INCH_M, KIP_N, LBF_N
 from .._tables import DataFileError, read_text
 from ._loop import HysteresisLoop
 
-BRFD_UNITS = {
-    "time units": "s",
-    "displacement units": "in",
-    "friction force units": "kip",
-}
+BRFD_UNITS = {"time units": "s", "displacement units": "in", "friction force units": "kip"}
 BRFD_COLUMNS = 6  # time, displacement, friction force, velocity, two actuator forces
 _SINE_NAME = re.compile(r"^(?P<f>[0-9.]+)Hz(?P<tension>[0-9.]+)lbtension(?P<A>[0-9.]+)amplitude$")
 _HISTORY_NAME = re.compile(r"^earthquake_.+_(?P<tension>[0-9.]+)lb$")

@@ -19,7 +19,7 @@ import numpy as np
 
 from .._tables import DataFileError, read_table, read_text
 from ._epos import read_epos
-from ._files import csv_header, refuse_existing, sidecar_path, write_text_atomic
+from ._files import csv_header, sidecar_path, write_record_files
 from ._record import AbstractRecord
 
 CURVE_COLUMNS = ("velocity", "friction", "friction_scatter", "velocity_scatter", "samples")
@@ -112,8 +112,7 @@ def effective_samples(x) -> float:
     s² / SE², with s the samples' standard deviation and SE the batch-means standard error of the
     mean (the series cut into `BATCHES` equal consecutive batches; SE = std of the batch means /
     √BATCHES). Clipped to [1, len(x)]: never more than the count (an anticorrelated or short
-    series keeps n). Motor-torque samples 2 ms apart have a lag-1 autocorrelation near 0.9, so
-    scatter/√n understates the error of a steady point's mean about twofold."""
+    series keeps n). Why: docs/data.md, "Correlated samples"."""
     x = np.asarray(x, dtype=float)
     n = len(x)
     if n < 2 * BATCHES:
@@ -189,7 +188,7 @@ def read_epos_transient(path) -> FrictionTransient:
     return FrictionTransient(ex.t, ex.velocity, ex.torque, dict(EPOS_UNITS_SI), str(path))
 
 
-def _read_units(path, extra=()) -> dict:
+def _read_units(path) -> dict:
     side = sidecar_path(path)
     if not side.is_file():
         raise DataFileError(f"{side}: sidecar not found; it must give {list(_UNIT_KEYS)}")
@@ -203,33 +202,22 @@ def _read_units(path, extra=()) -> dict:
     return {k: data[k] for k in _UNIT_KEYS}
 
 
-def _write(path, header, columns, units, comment, provenance, overwrite):
-    path = Path(path)
-    if path.suffix.lower() != ".csv":
-        raise ValueError(f"{path}: a record file must end in .csv (its sidecar is <stem>.json)")
-    if not overwrite:
-        refuse_existing([path, sidecar_path(path)])
-    lines = [f"# {c}" for c in comment.splitlines()] + [",".join(header)]
-    lines += [",".join(f"{v:.12g}" for v in row) for row in zip(*columns)]
-    side = {**units, **(provenance or {})}
-    write_text_atomic(sidecar_path(path), json.dumps(side, indent=2) + "\n")
-    write_text_atomic(path, "\n".join(lines) + "\n")
-
-
 def write_friction_curve(curve: FrictionCurve, path, comment="", *, provenance=None,
                          overwrite=False) -> None:  # fmt: skip
     """Write a curve as CSV `velocity,friction,friction_scatter,velocity_scatter,samples` plus a
     sidecar {"velocity_unit", "friction_unit", provenance...}, atomically; refuses to replace
     existing files unless `overwrite`."""
     cols = [getattr(curve, c) for c in CURVE_COLUMNS]
-    _write(path, CURVE_COLUMNS, cols, curve.units, comment, provenance, overwrite)
+    write_record_files(path, CURVE_COLUMNS, cols, {**curve.units, **(provenance or {})},
+                       overwrite=overwrite, comment=comment, digits=12)  # fmt: skip
 
 
 def write_friction_transient(tr: FrictionTransient, path, comment="", *, provenance=None,
                              overwrite=False) -> None:  # fmt: skip
     """Write a transient as CSV `time_s,velocity,friction` plus the units sidecar, atomically."""
-    cols = [tr.t, tr.velocity, tr.friction]
-    _write(path, TRANSIENT_COLUMNS, cols, tr.units, comment, provenance, overwrite)
+    write_record_files(path, TRANSIENT_COLUMNS, [tr.t, tr.velocity, tr.friction],
+                       {**tr.units, **(provenance or {})}, overwrite=overwrite, comment=comment,
+                       digits=12)  # fmt: skip
 
 
 def read_friction_curve(path) -> FrictionCurve | FrictionTransient:

@@ -66,11 +66,8 @@ def write_text_atomic(path, text: str, *, exclusive: bool = False) -> None:
             try:
                 os.link(tmp, path)
             except FileExistsError:
-                raise FileExistsError(
-                    17,
-                    "exists (written by another run meanwhile?); refusing to overwrite it",
-                    str(path),
-                ) from None
+                why = "exists (written by another run meanwhile?); refusing to overwrite it"
+                raise FileExistsError(17, why, str(path)) from None
         else:
             os.replace(tmp, path)
     finally:
@@ -125,10 +122,7 @@ def sidecar_path(path) -> Path:
 def _key_line(text: str, key: str) -> int | None:
     """1-based line of the first occurrence of `"key"` in a JSON text (for error messages)."""
     needle = json.dumps(key)
-    for lineno, line in enumerate(text.splitlines(), start=1):
-        if needle in line:
-            return lineno
-    return None
+    return next((n for n, line in enumerate(text.splitlines(), start=1) if needle in line), None)
 
 
 def sidecar_text(csv_path, key: str, allowed: tuple[str, ...]) -> str | None:
@@ -209,8 +203,10 @@ def read_sidecar(
 # record CSVs
 
 
-def write_record_files(path, header, columns, sidecar: dict | None, *, overwrite, comment):
-    """Write a CSV (and its sidecar) atomically; refuse existing files unless `overwrite`."""
+def write_record_files(path, header, columns, sidecar: dict | None, *, overwrite, comment,
+                       digits: int = 17):  # fmt: skip
+    """Write a CSV (values with `digits` significant digits) and its sidecar atomically; refuse
+    existing files unless `overwrite`."""
     path = Path(path)
     targets = [path] + ([sidecar_path(path)] if sidecar is not None else [])
     if path.suffix.lower() != ".csv":
@@ -218,7 +214,7 @@ def write_record_files(path, header, columns, sidecar: dict | None, *, overwrite
     if not overwrite:
         refuse_existing(targets)
     lines = [f"# {c}" for c in comment.splitlines()] + [",".join(header)]
-    lines += [",".join(f"{v:.17g}" for v in row) for row in zip(*columns)]
+    lines += [",".join(f"{v:.{digits}g}" for v in row) for row in zip(*columns)]
     if sidecar is not None:
         write_text_atomic(targets[1], json.dumps(sidecar, indent=2) + "\n")
     write_text_atomic(path, "\n".join(lines) + "\n")

@@ -34,6 +34,9 @@ from ._record import AbstractRecord
 
 LOOP_COLUMNS = ("t_s", "u_m", "f_N")  # the legacy format, no sidecar needed
 LOOP_FILE_COLUMNS = ("time_s", "displacement_m", "force_N")
+# the loop's optional metadata: field -> (sidecar key, unit)
+_METADATA = {"normal_load": ("normal_load_N", "N"), "frequency": ("frequency_Hz", "Hz"),
+             "noise_std": ("noise_std_N", "N"), "band_tension": ("band_tension_N", "N")}
 
 
 @final
@@ -69,8 +72,7 @@ class HysteresisLoop(AbstractRecord):
 
     def __post_init__(self):
         self._set_series(("t", "u", "f"), time="t")
-        for name, unit in (("normal_load", "N"), ("frequency", "Hz"), ("noise_std", "N"),
-                           ("band_tension", "N")):  # fmt: skip
+        for name, (_, unit) in _METADATA.items():
             value = positive_or_none(getattr(self, name), name, self.source, unit)
             object.__setattr__(self, name, value)
         object.__setattr__(self, "periodic", bool(self.periodic))
@@ -106,21 +108,19 @@ _LOOP_SIDECAR = {"normal_load_N": False, "frequency_Hz": True, "noise_std_N": Fa
 # an arbitrary history ("drive": "history" in the sidecar) needs neither key
 _HISTORY_SIDECAR = {**_LOOP_SIDECAR, "frequency_Hz": False}
 LOOP_DRIVES = ("harmonic", "history")
-_LOOP_UNITS = {"normal_load_N": "N", "frequency_Hz": "Hz", "noise_std_N": "N",
-               "band_tension_N": "N"}  # fmt: skip
+_LOOP_UNITS = dict(_METADATA.values())
 FREQUENCY_TOLERANCE = 0.1  # relative mismatch allowed between the sidecar and the record
 
 
 def read_loop(path) -> HysteresisLoop:
     """Load a loop: CSV `time_s,displacement_m,force_N` plus sidecar `<stem>.json`, or legacy.
 
-    The issue's format needs the sidecar {"frequency_Hz" (required, > 0), "normal_load_N",
-    "noise_std_N" and "band_tension_N" (optional, > 0)}; the legacy columns `t_s,u_m,f_N`
-    take the same sidecar if present. SI units, `#` comment lines allowed. The sidecar's
-    frequency must agree with the record's cycle spacing within 10 % (catches rad/s given as
-    Hz). A sidecar with
-    `"drive": "history"` marks an arbitrary displacement history (`periodic=False`): then
-    "normal_load_N" and "frequency_Hz" are optional.
+    The sidecar holds {"frequency_Hz" (required, > 0), "normal_load_N", "noise_std_N" and
+    "band_tension_N" (optional, > 0)}; the legacy columns `t_s,u_m,f_N` take the same sidecar
+    if present. SI units, `#` comment lines allowed. The sidecar's frequency must agree with the
+    record's cycle spacing within 10 % (catches rad/s given as Hz). A sidecar with `"drive":
+    "history"` marks an arbitrary displacement history (`periodic=False`): then "normal_load_N"
+    and "frequency_Hz" are optional.
 
     Raises DataFileError naming the file (and the line) for NaN/non-numeric entries, time that
     does not increase, fewer than one whole cycle, or a missing/malformed/inconsistent sidecar.
@@ -146,17 +146,8 @@ def read_loop(path) -> HysteresisLoop:
     schema = _LOOP_SIDECAR if drive == "harmonic" else _HISTORY_SIDECAR
     side = read_sidecar(path, schema, _LOOP_UNITS, required=new, text_keys=("drive",)) or {}
     try:
-        loop = HysteresisLoop(
-            t,
-            u,
-            f,
-            source=str(path),
-            normal_load=side.get("normal_load_N"),
-            frequency=side.get("frequency_Hz"),
-            noise_std=side.get("noise_std_N"),
-            periodic=drive == "harmonic",
-            band_tension=side.get("band_tension_N"),
-        )
+        loop = HysteresisLoop(t, u, f, source=str(path), periodic=drive == "harmonic",
+                              **{name: side.get(key) for name, (key, _) in _METADATA.items()})
     except ValueError as err:
         raise DataFileError(str(err)) from None
     if loop.frequency is not None and loop.periodic:
@@ -176,7 +167,7 @@ def write_loop(
 ) -> None:
     """Write a loop as CSV (17 digits) with optional `#` comment lines, atomically.
 
-    With `frequency` set, the issue's format `time_s,displacement_m,force_N` plus a sidecar
+    With `frequency` set, the format `time_s,displacement_m,force_N` plus a sidecar
     `<stem>.json` (an arbitrary history, `periodic=False`, always takes this format, with
     `"drive": "history"` in its sidecar); otherwise (or with legacy=True) the legacy
     `t_s,u_m,f_N` without one. Refuses (FileExistsError) if a target exists, unless
@@ -189,11 +180,9 @@ def write_loop(
     side = None
     if not legacy:
         side = {} if loop.periodic else {"drive": "history"}
-        for key, value in (("normal_load_N", loop.normal_load), ("frequency_Hz", loop.frequency),
-                           ("noise_std_N", loop.noise_std),
-                           ("band_tension_N", loop.band_tension)):  # fmt: skip
-            if value is not None:
-                side[key] = value
+        for name, (key, _) in _METADATA.items():
+            if getattr(loop, name) is not None:
+                side[key] = getattr(loop, name)
     header = LOOP_COLUMNS if legacy else LOOP_FILE_COLUMNS
     write_record_files(path, header, (loop.t, loop.u, loop.f), side, overwrite=overwrite,
                        comment=comment)  # fmt: skip

@@ -40,6 +40,9 @@ from ._record import AbstractRecord
 SLIP_COLUMNS = ("time_s", "stage_accel_m_s2", "slip_m")
 
 _SLIP_SIDECAR = {"mass_kg": True, "normal_load_N": False, "noise_std_m": False}
+# the run's metadata: field -> (sidecar key, unit)
+_METADATA = {"mass": ("mass_kg", "kg"), "normal_load": ("normal_load_N", "N"),
+             "noise_std": ("noise_std_m", "m")}
 
 
 @final
@@ -87,10 +90,9 @@ class SlipRun(AbstractRecord):
             raise ValueError(f"{src}: a slip run needs at least 2 samples, got {len(self.t)}")
         if self.t[0] < 0:
             raise ValueError(f"{src}: t[0] = {self.t[0]:g} s must be >= 0 (the run starts at rest)")
-        mass = positive_or_none(self.mass, "mass", src, "kg", required=True)
-        object.__setattr__(self, "mass", mass)
-        for name, unit in (("normal_load", "N"), ("noise_std", "m")):
-            object.__setattr__(self, name, positive_or_none(getattr(self, name), name, src, unit))
+        for name, (_, unit) in _METADATA.items():
+            value = positive_or_none(getattr(self, name), name, src, unit, required=name == "mass")
+            object.__setattr__(self, name, value)
 
     def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(t, accel, slip): the stage acceleration drives, the slip responds."""
@@ -140,17 +142,9 @@ def read_slip_run(path) -> SlipRun:
         if far:
             lineno = data_line_number(path, far[0])
             raise DataFileError(f"{path}, line {lineno}: {column} = {far[1]}")
-    units = {"mass_kg": "kg", "normal_load_N": "N", "noise_std_m": "m"}
-    side = read_sidecar(path, _SLIP_SIDECAR, units)
-    return SlipRun(
-        t,
-        table["stage_accel_m_s2"],
-        table["slip_m"],
-        mass=side["mass_kg"],
-        normal_load=side["normal_load_N"],
-        noise_std=side["noise_std_m"],
-        source=str(path),
-    )
+    side = read_sidecar(path, _SLIP_SIDECAR, dict(_METADATA.values()))
+    return SlipRun(t, table["stage_accel_m_s2"], table["slip_m"], source=str(path),
+                   **{name: side[key] for name, (key, _) in _METADATA.items()})  # fmt: skip
 
 
 def _check_time(path, t, column):
@@ -173,11 +167,8 @@ def write_slip_run(run: SlipRun, path, *, overwrite: bool = False, comment: str 
     Refuses (FileExistsError) if the CSV or its sidecar exists, unless `overwrite=True`; both are
     written through temporary files, so a failure leaves no partial file.
     """
-    side = {"mass_kg": run.mass}
-    if run.normal_load is not None:
-        side["normal_load_N"] = run.normal_load
-    if run.noise_std is not None:
-        side["noise_std_m"] = run.noise_std
+    side = {key: getattr(run, name) for name, (key, _) in _METADATA.items()
+            if getattr(run, name) is not None}  # fmt: skip
     write_record_files(path, SLIP_COLUMNS, (run.t, run.accel, run.slip), side,
                        overwrite=overwrite, comment=comment)  # fmt: skip
 

@@ -40,11 +40,9 @@ FOLD_SHARE_MIN = 1e-3  # least share of a parameter's Jacobian energy in each he
 NOISE_TOL = 1.0  # stationary: a rejected step promised < 1 residual variance (evaluation noise)
 PROBE_STEPS = 8  # steps after which a start above a cost reached elsewhere is abandoned
 CRAWL_FRACTION = 0.01  # a baseline start whose cost fell < 1 % in `CRAWL_STEPS` steps: crawling
+RESCALE_FACTOR = 10.0  # a column norm this much off its start value: a restart rescales
 SOLVER = LevenbergMarquardt.record(1e-8, 1e-10, gain_tol=GAIN_TOL, noise_tol=NOISE_TOL,
                                    max_rejections=12, padded=K_MAX)  # fmt: skip
-
-
-RESCALE_FACTOR = 10.0  # a column norm this much off its start value: a restart rescales
 
 
 def _rescaled(norms0, J) -> bool:
@@ -148,8 +146,6 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
     cost = float(r @ r)
     g, JTJ = J.T @ r, J.T @ J
     if not (np.all(np.isfinite(JTJ)) and np.all(np.isfinite(g)) and np.isfinite(cost)):
-        # (measured: an independent drift record where a refit ended at a point whose
-        # Jacobian overflowed, and the statistics' least squares raised LinAlgError)
         return failed(RESULTS.model_failed, "the model's Jacobian is not finite at the optimum",
                       res.steps)  # fmt: skip
     pred = float(g @ np.linalg.lstsq(JTJ, g, rcond=1e-12)[0])
@@ -168,17 +164,12 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
         message = ""
     if res.converged and pred >= NOISE_TOL * s2 and restarts > 0 \
             and cost < ceiling - NOISE_TOL * s2 and _rescaled(norms[:npar], J):  # fmt: skip
-        # stopped by rejections far from a minimum: the variables were scaled at the start,
-        # where a nuisance shift's column is zero while its amplitude is; go on rescaled here
-        # (again while each restart lowers the cost by more than the evaluation noise)
-        # with the model's larger solver budget, if any: trial points whose solve ran out of
-        # steps are rejected steps, a cause of such stops
+        # stopped by rejections far from a minimum: go on rescaled here (a nuisance shift's
+        # column was zero at the start) with the model's larger solver budget, if any
         wider = baseline.more_steps() or baseline
         again = fit_model(wider, designs, x, y, scale, effects, max_steps, sigma_known,
                           noise_consistent, weights, restarts - 1, cost)  # fmt: skip
-        if again.rss < cost:  # kept also when it ran out of steps still descending (the
-            # caller may go on from it; measured: blind record s3011, a mode's refit stationary
-            # at 6.08e4, its restart at 4.02e4 after 128 steps)
+        if again.rss < cost:  # kept also when it ran out of steps still descending
             return dataclasses.replace(again, steps=again.steps + res.steps, model=baseline)
     prediction = y + scale * r
     if weights is not None:  # the samples left out are predicted, not fitted
@@ -218,11 +209,8 @@ _NOT_FINITE = object()  # a held-out check where the model was not finite
 def _heldout(baseline, designs, x0, y, scale, effects, max_steps):
     folds = np.asarray(baseline.folds())
     # a parameter one fold hardly sees keeps the start value (fitted on all samples) in that
-    # fold's fit: its held-out prediction would not be one (one no sample sees moves nothing).
-    # Judged at the start, where both folds' fits begin: at a fold's own optimum a parameter
-    # can sit where the model hardly depends on it (measured: blind record s3019, C_τ with
-    # 0.015 % of its energy in one fold's fit, 48 % of it at the start, where the mode found
-    # at 80.7 Hz, ζ 0.051 for the hidden 80 Hz, 0.05 was then refused as "fit failed")
+    # fold's fit, so its held-out prediction would not be one. Judged at the start, where both
+    # folds' fits begin (at a fold's own optimum the model may hardly depend on it)
     xp, args = _padded(baseline, designs, x0, y, scale)
     npar = len(baseline.param_names) + sum(d.k for d in designs)
     J = np.asarray(value_and_jacobian(padded_residual, xp, args, solver=SOLVER)[1])[: y.size, :npar]
@@ -253,22 +241,19 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
     """Fit a record model alone (no effects): the fit that `fit` reports and `discover` starts
     from. From each of `starts` (θ; default `baseline.starts()`) in turn until one converges at
     a minimum, which is kept; else the first that converged; else the lowest cost. A stationary
-    stop short of a minimum (a Gauss–Newton step still promising `NOISE_TOL` residual variances
-    or more: the trust region collapsed under the ODE's evaluation noise or at a kink) does not
-    end the starts (the study's record s1036, 0.6 kPa: the first start stopped at 6.6x the cost
-    of the second, which reached a minimum). A stop at a bound of the parameters
-    (`baseline.at_bound`) is not a minimum. When no start reaches one, costs are not compared
-    (the study's s1029 and s1034, 10 kPa: a later start stopped lower with F_s at its cap, a
-    reticle that never slips, from which no effect applies). A later start still above the
-    first one's cost after `PROBE_STEPS` steps is abandoned (`fit_model`'s `abandon_above`; also
-    when the first did not converge), so a later start is kept only where it comes below the
-    first or stops at a minimum within those steps. A start that crawls far from any minimum is
-    stopped (`fit_model`'s `stop_crawl`; the records behind these rules: docs/discovery.md).
-    `scale`: the residual unit
-    (default the record's noise sd, else the first-difference estimate `noise_estimate` of the
-    data, else its sd); `sigma_known` (default: the record states its noise) makes the
-    statistics use the stated noise when the residual is consistent with it. `throw`: raise
-    `FitError` when no start succeeded (default: return the failed fit, `result` says why)."""
+    stop short of a minimum (a Gauss–Newton step still promising `NOISE_TOL` residual variances or
+    more: the trust region collapsed under the ODE's evaluation noise or at a kink) does not end the
+    starts. A stop at a bound of the parameters (`baseline.at_bound`) is not a minimum. When no
+    start reaches one, costs are not compared (a lower stop may be a bound's, from which no effect
+    applies). A later start still above the first one's cost after `PROBE_STEPS` steps is abandoned
+    (`fit_model`'s `abandon_above`; also when the first did not converge), so a later start is kept
+    only where it comes below the first or stops at a minimum within those steps. A start that
+    crawls far from any minimum is stopped (`fit_model`'s `stop_crawl`; the records behind these
+    rules: docs/discovery.md). `scale`: the residual unit (default the record's noise sd, else the
+    first-difference estimate `noise_estimate` of the data, else its sd); `sigma_known` (default:
+    the record states its noise) makes the statistics use the stated noise when the residual is
+    consistent with it. `throw`: raise `FitError` when no start succeeded (default: return the
+    failed fit, `result` says why)."""
     data = baseline.data()
     y = np.asarray(data.y, dtype=float)
     scale = record_scale(baseline) if scale is None else scale

@@ -51,6 +51,7 @@ BRANCH_NAMES = {0: "unloading", 1: "loading"}
 LOOP_KNOBS = ("microslip", "load_slope", "viscous", "backlash", "log_gap", "load_curve",
               "kd_exponent", "energizing", "asymmetry", "log_shape")
 
+
 class LoopBaseline(AbstractBaseline):
     """Jenkins element (μN in N, K_d in N/m; θ = their logs) driven by a loop record's
     displacement; knobs (w, β, c/c_ref, ε, ln(g/A), γ, p, σ, a, ln(shape − 1)) as in the module
@@ -72,8 +73,7 @@ class LoopBaseline(AbstractBaseline):
     # a band brake's record (it carries a band tension): the band's effects are candidates
     band_brake: bool = eqx.field(static=True, default=False)
     # the Mindlin bank is computed; False (`for_knobs`: a Jenkins model whose microslip weight
-    # w stays 0) drops it: its sliders then carry no force, and the force of one element costs
-    # ~1/70 of the bank's (the Jacobian on a 4,783-sample history: 93 ms -> 1.3 ms)
+    # w stays 0) drops it: its sliders then carry no force, and one element costs ~1/70 of it
     bank: bool = eqx.field(static=True, default=True)
 
     def knob_null(self):
@@ -201,8 +201,6 @@ def cycle_noise(r, t, period, segment=None) -> tuple[float, float]:
     j = np.clip(np.searchsorted(t, later[inside]) - 1, 0, t.size - 2)
     a = np.clip((later[inside] - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0)
     d = r[inside] - ((1.0 - a) * r[j] + a * r[j + 1])
-    # AR(1) noise of sd σ: var d = σ²(1 + P + 2Qρ), cov(d_i, d_i+1) ≈ σ²(ρ(1 + P) + Q(1 + ρ²))
-    # with P = (1 − a)² + a², Q = a(1 − a) (the interpolation correlates neighbouring copies)
     P, Q = (1.0 - a) ** 2 + a**2, a * (1.0 - a)
     grid = np.linspace(0.0, RHO_MAX, 951)
     var = 1.0 + P.mean() + 2.0 * Q.mean() * grid
@@ -211,8 +209,6 @@ def cycle_noise(r, t, period, segment=None) -> tuple[float, float]:
     dn = d / np.sqrt(1.0 + P + 2.0 * Q * rho)
     sigma = 1.4826 * float(np.median(np.abs(dn - np.median(dn))))
     return (sigma if sigma > 0 else float(np.std(dn))), rho
-
-
 
 
 def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, window: float = 0.05,

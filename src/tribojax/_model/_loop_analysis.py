@@ -84,8 +84,7 @@ def analyse_loop(loop: HysteresisLoop, *, window: float = 0.05) -> LoopAnalysis:
         swings.append(ff.max() - ff.min())
         k2.append(_reversal_slope(loop.u, loop.f, a + int(np.argmax(uu)), span))
         k1.append(_reversal_slope(loop.u, loop.f, a + int(np.argmin(uu)), span))
-    # a reversal the record ends on (no samples after it) gives no slope (measured: the 0.25 Hz
-    # brfd tests end 28 samples after their last minimum)
+    # a reversal the record ends on (no samples after it) gives no slope
     k1, k2 = ([k for k in ks if k is not None] for ks in (k1, k2))
     if not k1 or not k2:
         raise ValueError(f"{loop.source}: no reversal with samples after it to measure the "

@@ -1,8 +1,5 @@
-"""Loop-side models for discovery: a Jenkins baseline and its physical augmentations.
-
-The measured quantity of a loop record is the friction force at each sample; the model drives an
-element through the record's own displacement history (as `fit_loop(..., model="history")`), so it
-works for any history, not only a clean sinusoid.
+"""The loop model's element (`LoopBaseline`), driven through a record's own displacement history
+(any history, not only a clean sinusoid) and compared with the measured force at each sample.
 
 One generalised element covers the baseline and every physical augmentation:
 
@@ -262,11 +259,10 @@ def loop_force(
         z = bank.increment(z, du, jnp.maximum(a_i + widen, 0.0))
         return z, spring(z)
 
-    if microslip:  # the sum over the sliders inside the scan, no (samples, sliders) array:
-        # the Jacobian on a 4,783-sample history 110 -> 30 ms
+    if microslip:  # the sum over the sliders inside the scan, no (samples, sliders) array
         _, zk = jax.lax.scan(step, z0, (jnp.diff(data.u), a[1:]))
         zk = jnp.concatenate([spring(z0)[None], zk])
-    else:  # one slider: the scan carries its deflection alone (1.5 ms against 6-12 ms)
+    else:  # one slider: the scan carries its deflection alone
         zk = spring(bank.deflections(data.u, jnp.maximum(a[:, None] + widen[None, :], 0.0), z0))
     return output(zk[data.skip :], b[data.skip :], s_safe[data.skip :]) + spec.c * data.v
 

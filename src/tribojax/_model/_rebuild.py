@@ -89,9 +89,7 @@ def fit_saved(model: FittedModel, baseline, *, max_steps=MAX_STEPS, sigma_known=
     """Fit `model` (its effects included, every parameter, strength and fitted nuisance free) on
     `baseline`'s record from the saved values, in the residual unit of `fit_record`
     (`record_scale`). `sigma_known`: default the record states its noise. Returns the
-    `FitResult` of `fit_model` (measured: from the baseline fit's parameters instead of the
-    saved ones, a clearance's refit stopped at a depth of 0.05 with the misfit untouched; from
-    the saved ones it reached the noise)."""
+    `FitResult` of `fit_model` (why from the saved values: docs/fitting.md)."""
     theta, designs, s = on_baseline(model, baseline)
     known = bool(baseline.data().noise_std) if sigma_known is None else sigma_known
     return fit_model(baseline, designs, np.concatenate([theta, s]), None, record_scale(baseline),

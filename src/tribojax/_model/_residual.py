@@ -19,8 +19,7 @@ from ._base import K_MAX, AbstractBaseline
 
 
 class Padded(eqx.Module):
-    """Everything the residual needs, with the effect strengths padded to `K_MAX` (array leaves
-    only, so one compiled solve serves every combination of effects on one record shape)."""
+    """Everything the residual needs, the strengths padded to `K_MAX` (array leaves only)."""
 
     baseline: AbstractBaseline
     base: jax.Array  # knob vector at s = 0 (n_knobs,)
@@ -111,17 +110,15 @@ def pack_designs(baseline, designs):
     return base, gain, basis
 
 
-def padded_args(baseline, base, gain, basis, k, y, scale, bad=np.inf, d=None,
-                weights=None) -> Padded:  # fmt: skip
-    """The `Padded` arguments of `padded_residual` (float64 leaves). Where no knob leaves its
-    null (no gain, no knob set), the residual evaluates the null physics alone
-    (`value_and_jacobian`: the fit of the model alone, or with additive effects only); the
-    baseline is specialised to the knobs that may move (`for_knobs`).
-    `weights`: per-sample residual weights (default 1)."""
-    p = len(baseline.param_names)
-    d = np.ones(p + K_MAX) if d is None else d
+def padded_args(baseline, base, gain, basis, k, y, scale, weights=None) -> Padded:
+    """The `Padded` arguments of `padded_residual` (float64 leaves; `bad` inf and the scaling
+    `d` 1 until `fit_model` sets them). Where no knob leaves its null (no gain, no knob set), the
+    residual evaluates the null physics alone (`value_and_jacobian`: the fit of the model alone,
+    or with additive effects only); the baseline is specialised to the knobs that may move
+    (`for_knobs`). `weights`: per-sample residual weights (default 1)."""
+    d = np.ones(len(baseline.param_names) + K_MAX)
     w = np.ones(np.shape(y)) if weights is None else weights
-    arrays = (base, gain, basis, np.arange(K_MAX) < k, y, w, scale, bad, d)
+    arrays = (base, gain, basis, np.arange(K_MAX) < k, y, w, scale, np.inf, d)
     moved = np.any(gain != 0, axis=1) | (base != np.asarray(baseline.knob_null(), dtype=float))
     return Padded(_for_knobs(baseline, moved), *(jnp.asarray(v, dtype=jnp.float64) for v in arrays),
                   knobs=bool(np.any(moved)))  # fmt: skip

@@ -54,10 +54,8 @@ KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling",
 ZETA_MAX = 0.3  # damping ratio bound of a structural mode (above: a low-pass of a(t), not a mode)
 N_ODE_KNOBS = 4  # the knobs of the friction element; the mode's knobs act on the reading
 ODE_MAX_STEPS = 20_000  # ODE step budget of the model's slip solve (`simulate_slip`'s)
-# the budget of a stalled fit's restarts and of a held-out check where a solve ran out: on the
-# blind record s3011 (20 kPa, 4,601 samples) a point 1 ulp from a 35 Hz mode's refit optimum ran
-# out 0.08 s before the record's end, the held-out fits failed at their start and the refit
-# stalled at 3.08 noise sd (trial points that ran out are rejected steps)
+# x `ODE_MAX_STEPS`: the budget of a stalled fit's restarts and of a held-out check where a
+# solve ran out (docs/discovery.md, "The slip model's ODE budget")
 ODE_RETRY_FACTOR = 3
 F_CAP_NEAR = 0.9  # F_s above this fraction of its bound: at the bound (not identified)
 F_MAX_OVER_DRIVE = 100.0  # bound of F_s in units of m·max|a| (beyond: slip ∝ (m a/F_s)², tiny)
@@ -79,9 +77,7 @@ def slip_start(t, accel, slip, mass) -> np.ndarray:
     """Start values (F_s, K_τ, C_τ) of the baseline: `tribojax.slip_run_start` as an array.
 
     The one start heuristic of slip runs (the quasi-static limit of wang2022 Eq 27, searched on
-    F_s; C_τ from a damping ratio 0.1), kept under this name for discovery. It replaced a
-    hold-level heuristic that reached the same optima in as many LM steps on the hidden-effect
-    records but twice the steps of `fit_slip_run` on a drive without holds.
+    F_s; C_τ from a damping ratio 0.1), under discovery's name.
     """
     s = slip_run_start(SlipRun(t=np.asarray(t, float), accel=np.asarray(accel, float),
                                slip=np.asarray(slip, float), mass=float(mass),

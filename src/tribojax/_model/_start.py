@@ -35,9 +35,8 @@ def slip_run_start(run: SlipRun) -> dict:
 
     F_s and K_τ from the quasi-static α = 1 model fitted to the slip with F = m·a (module
     docstring; F_s searched on a log grid from 1.01 to 100 times max|m·a|, 1/K_τ by linear least
-    squares). C_τ = 2ζ√(K_τ m) with ζ = 0.1: the slip says little about C_τ before the fit, and
-    its cost has separate minima in C_τ (measured: a 6-point ζ grid at the quasi-static F_s, K_τ
-    always preferred ζ = 1, whatever the true ζ), so `fit_slip_run` starts LM from this C_τ and
+    squares). C_τ = 2ζ√(K_τ m) with ζ = 0.1: the slip says little about C_τ before the fit, and its
+    cost has separate minima in C_τ (docs/fitting.md), so `fit_slip_run` starts LM from this C_τ and
     from 0.1x and 10x it and keeps the lowest cost. Raises ValueError when the acceleration is zero
     throughout or the slip does not follow the force (no positive K_τ).
     """

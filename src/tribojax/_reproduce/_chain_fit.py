@@ -19,8 +19,8 @@ paper's own theoretical values. (T5 at 20 kPa is −0.47 nm measured; it weighs 
 Derivatives. Forward mode is the cheap direction for a handful of parameters (the slip ODE with
 `diffrax.ForwardMode()`; the contact through the custom JVP of `tribojax._chain`).
 
-Convergence. The slips come from an adaptive ODE solver (accurate to ~2e-4 here, `SLIP_ATOL`);
-near the optimum the misfit is flat to that level along the D–G valley.
+Convergence. The slips come from an adaptive ODE solver (accurate to ~2e-4 here,
+`_chain.SLIP_ATOL`); near the optimum the misfit is flat to that level along the D–G valley.
 `LevenbergMarquardt.noise_floor` therefore stops on statistical grounds (the Gauss–Newton step left
 is below 0.05 standard errors) or after six rejected steps in a row, and a fit counts as converged
 only if the Gauss–Newton step still left is below `GN_STEP_TOL` standard errors (else
@@ -28,10 +28,7 @@ only if the Gauss–Newton step still left is below `GN_STEP_TOL` standard error
 Eq 27's pre-sliding model) or the contact fails get the residual `FAILED_RESIDUAL` (LM backs off).
 
 Failures. If the compiled fit raises (an `equinox` runtime check inside the chain at a trial
-point), `fit_measured_slips` turns that into `ChainFitError` naming the trial point. With the
-Kvaerno5 slip solver this happened from D = 2.95, G = 1e-8 m, μ_t = 0.12 (a diverging stage
-Newton iteration under forward mode); Rodas4, the default since, has no Newton iteration and
-that start converges to the same optimum as the others.
+point), `fit_measured_slips` turns that into `ChainFitError` naming the trial point.
 """
 
 from __future__ import annotations
@@ -47,9 +44,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._chain import SLIP_ATOL as SLIP_ATOL
-from .._chain import SLIP_MAX_STEPS as SLIP_MAX_STEPS
-from .._chain import SLIP_RTOL as SLIP_RTOL
 from .._chain import chain_contact as chain_contact
 from .._chain import chain_phase_slips, mu_min, to_physical, to_theta, wang2022_loads
 from .._checks import as_f64, runtime_message
@@ -64,7 +58,6 @@ from ._student_t import student_t_parameters, student_t_residuals, student_t_res
 PARAMETERS = ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha")
 """Parameters of the full chain, in order: D, G (m), μ_t, σ_s (Pa) of the contact model (wang2022
 Eqs 5–24) and the bristle exponent α of the pre-slip element (Eq 27)."""
-# Defaults of the fixed ones: Table 1's D, the Table 3 calibration (M = 1), the paper's α = 1.
 DEFAULTS = dict(CHAIN_DEFAULTS)
 DEFAULT_FREE = ("D", "G_m", "mu_t")
 """The parameters `fit_measured_slips` frees by default (σ_s and α stay at `CHAIN_DEFAULTS`)."""
@@ -211,17 +204,16 @@ class ChainFit:
         """Parameter combinations (in log p) the data determine, best first; `determined` is
         False for singular values below `tol` × the largest."""
         sv = self.scaled_singular_values
-        out = []
-        for s, v in zip(sv, self.scaled_right_vectors):
-            terms = sorted(zip(self.free, v), key=lambda t: -abs(t[1]))
-            out.append(
-                {
-                    "singular_value": float(s),
-                    "determined": bool(s > tol * sv[0]),
-                    "log_combination": {k: float(c) for k, c in terms},
-                }
-            )
-        return out
+        return [
+            {
+                "singular_value": float(s),
+                "determined": bool(s > tol * sv[0]),
+                "log_combination": {
+                    k: float(c) for k, c in sorted(zip(self.free, v), key=lambda t: -abs(t[1]))
+                },
+            }
+            for s, v in zip(sv, self.scaled_right_vectors)
+        ]
 
     def as_dict(self) -> dict:
         """JSON-ready report (the `fit_measured` block of reproduction.json)."""
@@ -294,7 +286,7 @@ def fit_measured_slips(
             "bwd" (reverse mode).
         max_steps, rtol, atol: LM step budget and Cauchy tolerances (optimistix: both the step in
             θ and the change of every residual below atol + rtol·|value|). The defaults match
-            the chain's accuracy (slips to ~2e-4 relative, `SLIP_ATOL`); tighter ones make LM
+            the chain's accuracy (slips to ~2e-4 relative, `_chain.SLIP_ATOL`); tighter ones make LM
             wander along the flat D–G valley without lowering the misfit.
         progress: True prints one line per residual evaluation to stderr (long fits); a
             callable receives each line instead.
@@ -351,7 +343,7 @@ def fit_measured_slips(
     args = (theta_full0, idx, jnp.asarray(mu_lo), jnp.asarray(target), jnp.asarray(sigma),
             jnp.asarray(np.sqrt(weights)), jnp.asarray(float(log_residuals)),
             jnp.asarray(inv_nu), jnp.asarray(t_scale), loads)  # fmt: skip
-    residuals = _RESIDUALS[("fwd" if jac == "fwd" else "bwd", bool(progress))]
+    residuals = _RESIDUALS[(jac, bool(progress))]
 
     def transform(theta):
         return to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo)[idx]

@@ -48,13 +48,11 @@ def plot_fit_measured(plain_nm, robust_nm, flagged, path=None, *, files=True):
         ax.set_title(f"Table {n} (T{n})")
         ax.set_xlabel("vacuum (kPa)")
     axes[0].set_ylabel("|phase slip| (nm)")
-    handles, labels = [], []
-    for ax in axes:  # the legend entries of all panels, once
+    entries = {}  # the legend entries of all panels, once
+    for ax in axes:
         for h, lab in zip(*ax.get_legend_handles_labels()):
-            if lab not in labels:
-                handles.append(h)
-                labels.append(lab)
-    axes[0].legend(handles, labels, fontsize=7)
+            entries.setdefault(lab, h)
+    axes[0].legend(list(entries.values()), list(entries), fontsize=7)
     fig.suptitle(
         f"wang2022 Tables 4–7: rms relative residual over the unflagged cells — robust "
         f"{rms_relative(robust_nm, y, ~flagged):.3f}, plain "

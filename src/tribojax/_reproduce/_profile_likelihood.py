@@ -18,7 +18,7 @@ import numpy as np
 from scipy import stats
 
 from .._results import RESULTS
-from ._chain_fit import fit_measured_slips
+from ._chain_fit import fit_measured_slips, rms_relative
 from ._robust_fit import RobustChainFit, residual_form, robust_fit_measured_slips
 
 CHI2_95 = float(stats.chi2.ppf(0.95, 1))  # 3.84
@@ -70,15 +70,15 @@ def profile_likelihood(
     form = residual_form(y, robust.noise, robust.floor_nm)
     keep = ~robust.flagged
     points = {best: (robust.log_likelihood, robust, True)}
+
+    def weighted(at, value):
+        return fit_measured_slips(dict(at, **{name: float(value)}), free=others, target=y,
+                                  loads=loads, **form, weights=robust.weights,
+                                  **fit_kw)  # fmt: skip
+
     for side in (grid[grid > best], grid[grid < best][::-1]):  # outward from the optimum
         start = dict(robust.parameters)
         for v in side:
-
-            def weighted(at, value):
-                return fit_measured_slips(dict(at, **{name: float(value)}), free=others,
-                                          target=y, loads=loads, **form,
-                                          weights=robust.weights, **fit_kw)  # fmt: skip
-
             first, here = weighted(start, v), start[name]
             for _ in range(CONTINUATION_STEPS):
                 if first.result != RESULTS.model_failed_at_start:
@@ -101,9 +101,7 @@ def profile_likelihood(
     x = np.array(sorted(points))
     ll = np.array([points[v][0] for v in x])
     d = 2.0 * (robust.log_likelihood - ll)
-    rms = [
-        float(np.sqrt(np.mean((points[v][1].model_nm / y - 1.0)[keep] ** 2))) for v in x
-    ]  # fmt: skip
+    rms = [rms_relative(points[v][1].model_nm, y, keep) for v in x]
     i0 = int(np.argmin(np.abs(x - best)))
     hi = _crossing(x[i0:], d[i0:], CHI2_95)
     lo = _crossing(x[: i0 + 1][::-1], d[: i0 + 1][::-1], CHI2_95)

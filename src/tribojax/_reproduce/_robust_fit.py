@@ -19,17 +19,14 @@ proper; the mixed one takes σ_i at the measured values, which for ν < ∞ leav
 that do not normalise (its ℓ is then only indicative).
 
 Fit. For fixed ν the maximum of ℓ over θ and s is found by coordinate ascent
-(`student_t_ml`): θ at fixed s by least squares on ψ_i = sign(r_i)·√((ν+1)·ln(1 + r_i²/(νs²))),
-whose sum of squares is −2ℓ up to terms in s (`fit_measured_slips(student_t=(ν, s))`: the one
-engine, the one compiled solve), then s at fixed θ exactly (the root of Σ u_i r_i²/s² = n,
-`t_scale`), until one round raises ℓ by less than `tol`. Its fixed point is EM's — the
-likelihood equations Σ u_i r_i ∂r_i/∂θ = 0 with u_i = (ν+1)/(ν + r_i²/s²) (Lange et al.,
-Eqs 4–5) — but EM (iteratively reweighted least squares) takes the weights u as fixed in each
-fit and converges linearly (seven weighted fits for the headline model), while the ψ fit
-follows the likelihood itself and s hardly moves θ (location and scale are orthogonal for a
-symmetric density): two fits that move, one that confirms. The reported chain is the
-least-squares fit weighted by u at the optimum (it stays put there), whose Jacobian gives the
-standard errors s²(JᵀUJ)⁻¹.
+(`student_t_ml`, which says why it needs fewer fits than EM): θ at fixed s by least squares on
+ψ_i = sign(r_i)·√((ν+1)·ln(1 + r_i²/(νs²))), whose sum of squares is −2ℓ up to terms in s
+(`fit_measured_slips(student_t=(ν, s))`: the one engine, the one compiled solve), then s at
+fixed θ exactly (the root of Σ u_i r_i²/s² = n, `t_scale`), until one round raises ℓ by less
+than `tol`. Its fixed point is EM's: the likelihood equations Σ u_i r_i ∂r_i/∂θ = 0 with
+u_i = (ν+1)/(ν + r_i²/s²) (Lange et al., Eqs 4–5). The reported chain is the least-squares fit
+weighted by u at the optimum (it stays put there), whose Jacobian gives the standard errors
+s²(JᵀUJ)⁻¹.
 
 Outliers. The standardized residual of a cell is z_i = r_i/(ŝ·√(1 − h_ii)), h the leverage of
 the weighted fit (hat matrix of √u·J) and ŝ = 1.4826·median|r_i| the robust standard deviation

@@ -45,7 +45,6 @@ from .._presets import (
 from .._tables import wang2022_table
 
 CALIBRATED_NAMES = ("G_m", "mu_t", "sigma_s_Pa")
-FIXED_M = CALIBRATED_M
 
 
 def equivalent_G(G, M, D, M_new):
@@ -66,7 +65,7 @@ class _Table3Residuals(eqx.Module):
         return jnp.concatenate([out.F_s, out.K_tau]) / target - 1.0
 
 
-def calibrate_table3(start=(1e-8, 0.2, 1e9), *, M=FIXED_M) -> FitResult:
+def calibrate_table3(start=(1e-8, 0.2, 1e9), *, M=CALIBRATED_M) -> FitResult:
     """Fit (G, μ_t, σ_s) to Table 3's F_s and K_τ at fixed M; see the module docstring.
 
     Args:
@@ -79,7 +78,6 @@ def calibrate_table3(start=(1e-8, 0.2, 1e9), *, M=FIXED_M) -> FitResult:
     loads = jnp.asarray(t3["load_N"])
     target = jnp.concatenate([jnp.asarray(t3["Fs_N"]), jnp.asarray(t3["Ktau_N_per_m"])])
     mu_lo = mu_min(loads)  # Eq 17 needs μ_t > T/P at every load
-
     fit = least_squares_fit(
         _Table3Residuals(float(M)),
         jnp.asarray(to_theta(start, CALIBRATED_NAMES, mu_lo)),
@@ -119,12 +117,7 @@ def reproduce_table3(fit: FitResult | None = None) -> dict:
     calibrated = jax.vmap(wang2022_table3_model(G, mu_t, sigma_s, M=M))(loads)
     rows = []
     for i, v in enumerate(vac):
-        paper = {
-            "Fs_N": float(t3["Fs_N"][i]),
-            "Ktau_N_per_m": float(t3["Ktau_N_per_m"][i]),
-            "Ctau_Ns_per_m": float(t3["Ctau_Ns_per_m"][i]),
-            "zmax_nm": float(t3["zmax_nm"][i]),
-        }
+        paper = {k: float(t3[k][i]) for k in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m", "zmax_nm")}
         cal = _record(calibrated, i)
         rows.append(
             {

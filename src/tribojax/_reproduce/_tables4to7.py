@@ -3,9 +3,9 @@
 Inputs: Table 3's published F_s, K_τ, C_τ at the six vacuum levels, the 0.321 kg reticle, and
 the stage profile of docs/reproduction.md (`TrapezoidProfile()`); the model is the pre-slip
 element of Eq 27 (`PreSlipLuGre`) in the two-body slip simulation: the element → observables half
-of `tribojax._chain`. Computed at α = 1 (the paper's value)
-and with α fitted by optimistix Levenberg–Marquardt to the paper's *theoretical* Tables 4 and 6
-(12 values, relative residuals, α > 0 through α = e^θ, scatter estimated from the fit).
+of `tribojax._chain`. Computed at α = 1 (the paper's value) and with α fitted by optimistix
+Levenberg–Marquardt to the paper's *theoretical* Tables 4 and 6 (12 values, relative residuals,
+α > 0 through α = e^θ, scatter estimated from the fit).
 
 Tables 5 and 7 are not fitted. A model that is symmetric under a → −a gives T5 ≈ −T7 and
 T4 ≈ −T6; the paper's own theory has T4 ≈ −T6 but T5 ≠ −T7 at 0.6–2 kPa (−10.00 vs +13.8 nm at
@@ -28,8 +28,7 @@ from .._friction._lugre import PreSlipLuGre
 from .._plot import pyplot
 from .._presets import WANG2022_RETICLE_MASS_KG
 from .._tables import wang2022_table
-
-TABLES = (4, 5, 6, 7)
+from ._chain_fit import TABLES, measured_slips
 
 
 def table3_phase_slips(alpha, adjoint=dfx.RecursiveCheckpointAdjoint()):
@@ -180,7 +179,7 @@ def plot_figure10(result: dict, path) -> bool:
         return False
     t, slip, z = figure10_curves(1.0)
     vac = wang2022_table(3)["vacuum_kPa"]
-    measured = np.stack([wang2022_table(n)["measured_nm"] for n in TABLES], axis=1)
+    measured = measured_slips()
     windows = [(0.25, 0.6), (0.73, 1.5), (1.65, 2.0), (2.25, 2.3)]
     fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True, sharex=True)
     for i, ax in enumerate(axes.flat):

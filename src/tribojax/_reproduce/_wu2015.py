@@ -56,11 +56,9 @@ def eq7_curves(A_bar, table=None):
 
 def unit_element(name: str):
     """A `Jenkins` or `Mindlin` element with μN = 1 N and K_d = 1 N/m (A0 = 1 m), for K̄(Ā), C̄(Ā)."""
-    try:
-        cls = ELEMENTS[name]
-    except KeyError:
-        raise ValueError(f"element must be one of {sorted(ELEMENTS)}, got {name!r}") from None
-    return cls(1.0, 1.0, 1.0)
+    if name not in ELEMENTS:
+        raise ValueError(f"element must be one of {sorted(ELEMENTS)}, got {name!r}")
+    return ELEMENTS[name](1.0, 1.0, 1.0)
 
 
 @cached_jit

@@ -157,13 +157,10 @@ def psd_points(z, dx, ratio=1.5):
     f = np.fft.rfftfreq(n, dx)
     lo, hi = 4.0 / (n * dx), 1.0 / (4.0 * dx)  # Hann leakage below; sampling above
     edges = lo * ratio ** np.arange(int(np.log(hi / lo) / np.log(ratio)) + 1)
-    fc, pc = [], []
-    for a, b in zip(edges[:-1], edges[1:]):
-        sel = (f >= a) & (f < b)
-        if sel.any():
-            fc.append(math.sqrt(a * b))
-            pc.append(p[sel].mean())
-    return 1.0 / np.asarray(fc)[::-1], np.asarray(pc)[::-1]
+    bands = [(a, b, (f >= a) & (f < b)) for a, b in zip(edges[:-1], edges[1:])]
+    fc = np.asarray([math.sqrt(a * b) for a, b, sel in bands if sel.any()])
+    pc = np.asarray([p[sel].mean() for _, _, sel in bands if sel.any()])
+    return 1.0 / fc[::-1], pc[::-1]
 
 
 def _rms_constant(alpha, n):
@@ -180,12 +177,8 @@ def rms_points(z, dx):
     """(ℓ, mean square of line-detrended heights in windows of ℓ samples), averaged over rows."""
     n = z.shape[-1]
     sizes = _log_points(8, max(9, n // 4))
-    out = []
-    for m in sizes:
-        nw = n // m
-        seg = z[:, : nw * m].reshape(-1, m)
-        out.append(np.mean(_detrend(seg) ** 2))
-    return sizes * dx, np.asarray(out), sizes
+    out = [np.mean(_detrend(z[:, : n // m * m].reshape(-1, m)) ** 2) for m in sizes]
+    return sizes * dx, np.asarray(out)
 
 
 def _fit_line(x, y):
@@ -204,10 +197,8 @@ def _choose_band(lx, ly, min_decades, band, slope_range, allowance=2e-4):
 
     Candidates span at least `min_decades` and have a slope inside `slope_range` (2 < D < 3);
     among them the widest whose rms residual is within 1.5x (+ `allowance`) of the most linear
-    one wins. The PSD's allowance of 0.01 (in log10) keeps the scatter of a single profile's
-    periodogram from electing a short band by chance: on self-affine profiles of 2^14 points with
-    random phases the short band missed D by up to 0.06, the widest near-linear one by 0.03.
-    (The structure function of a YK/W-M sum ripples log-periodically: it keeps 2e-4.)
+    one wins. The PSD's allowance is 0.01 (in log10), the other methods' 2e-4 (docs/surfaces.md,
+    "How the scaling band is chosen").
     """
     n = len(lx)
     if band is not None:
@@ -272,12 +263,8 @@ def estimate_fractal(
     validate(topo)
     z, dx = _rows(topo, axis)
     z = _detrend(z)
-    if method == "structure":
-        x, y = structure_points(z, dx)
-    elif method == "psd":
-        x, y = psd_points(z, dx)
-    else:
-        x, y, _ = rms_points(z, dx)
+    points = {"structure": structure_points, "psd": psd_points, "rms": rms_points}[method]
+    x, y = points(z, dx)
     keep = y > 0
     x, y = x[keep], y[keep]
     if len(x) < 4:
@@ -325,10 +312,7 @@ def estimate_fractal(
         log_scale = alpha * math.log10(dx)
     log10G = (yc - log_const - log_scale) / (2.0 * D - 4.0)
     # uncertainty: regression error ⊕ spread over the accepted windows
-    Ds = []
-    for a, b in wins[:20]:
-        s = _fit_line(lx[a:b], ly[a:b])[0][1]
-        Ds.append(3.0 - 0.5 * (s - 1.0 if method == "psd" else s))
+    Ds = [3.0 - 0.5 * (_fit_line(lx[a:b], ly[a:b])[0][1] - shift) for a, b in wins[:20]]
     D_std = math.hypot(0.5 * math.sqrt(cov[1, 1]), float(np.std(Ds)))
     # dlog10G/dD at fixed fitted value yc: -(log10 G - xc)·2/(2D-4) (+ the constant's drift)
     dG = abs(2.0 * (log10G - xc) / (2.0 * D - 4.0)) * D_std

@@ -90,7 +90,7 @@ def validate(topo: Topography, *, min_points: int = MIN_POINTS) -> Topography:
             "for a scaling band of one decade"
         )
     span = float(np.ptp(z))
-    if span <= 1e-12 * max(1.0, float(np.max(np.abs(z)))) or span == 0.0:
+    if span <= 1e-12 * max(1.0, float(np.max(np.abs(z)))):
         raise ValueError(f"{name}: the surface is flat (height range {span:g} m); nothing to fit")
     return topo
 
@@ -114,8 +114,7 @@ def _read_plain(path: Path, dx, unit: str) -> Topography:
             raise DataFileError(f"{path}: the value at index {bad} is not a finite number")
         return Topography(z * s, dx=dx * s, dy=None if z.ndim == 1 else dx * s, source=path.name)
     rows, width = [], None
-    lines = read_text(path).splitlines()
-    for lineno, raw in enumerate(lines, start=1):
+    for lineno, raw in enumerate(read_text(path).splitlines(), start=1):
         text = raw.strip()
         if not text or text.startswith(("#", "%")):
             continue
@@ -251,8 +250,7 @@ def _looks_plain(path: Path) -> bool:
         return True
     try:
         with path.open("rb") as f:
-            head = f.read(4096)
-        text = head.decode("utf-8")
+            text = f.read(4096).decode("utf-8")
     except (OSError, UnicodeDecodeError):
         return False
     lines = [ln for ln in text.splitlines()[:6] if ln.strip() and not ln.lstrip().startswith("#")]

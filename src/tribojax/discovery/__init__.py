@@ -47,10 +47,6 @@ Register it for `default_effects(kind)` with `@register_effect`, or pass it expl
 `discover(baseline, effects=[*default_effects("slip"), MyEffect()])`. At most `K_MAX` = 12
 strengths in one model.
 
-Loop side: export `loop_baseline(loop: HysteresisLoop) -> AbstractBaseline` from this package
-(module `_loop.py`, effects of kind "loop" registered on import); `tribojax discover` sends
-loop files to it and reports "not available" while it is missing.
-
 Fitting: `tribojax.least_squares_fit` (optimistix Levenberg–Marquardt) on one residual function
 whose effect strengths are padded to `K_MAX` (inactive ones masked and held at 0), so one compiled
 solve serves every combination of effects on a record shape; its Jacobian comes from one
@@ -58,15 +54,15 @@ forward-mode pass of `predict` over θ and the knobs. `predict` must not raise i
 a trial point where it is not finite is rejected as a rise of the cost.
 
 Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration`,
-`load_coupling`, `stribeck`, `viscous_friction`): see `tribojax.discovery._slip` and
+`load_coupling`, `stribeck`, `viscous_friction`): see `tribojax._model._slip` and
 `tribojax.discovery._slip_effects`.
 
 Loop side (`loop_baseline`: Jenkins, wu2015 Eq 1, driven by the measured displacement; effects
 `microslip`, `viscous_damping`, `normal_load_variation`, `backlash`, `force_offset`;
-`discover_loop`, `plot_loop_discovery`;
-hidden-effect loops `hidden_effect_loop` and wu2015 Eq 7 stand-ins `eq7_standin_loop`): see
-`tribojax.discovery._loop`. Optional baseline hooks used there: `noise_model(r)` (σ̂, ρ̂ of the
-residual's noise) and `region_info(region)` (extra keys of a flagged region).
+`discover_loop`, `plot_loop_discovery`; hidden-effect loops `hidden_effect_loop` and wu2015 Eq 7
+stand-ins `eq7_standin_loop`): see `tribojax.discovery._loop`. Optional baseline hooks used
+there: `noise_model(r)` (σ̂, ρ̂ of the residual's noise) and `region_info(region)` (extra keys
+of a flagged region).
 
 Curve side (`curve_baseline`: Coulomb + linear viscous friction of a steady `FrictionCurve`, both
 directions, each point weighted by its standard error; effects `stribeck` (LuGre steady law),

@@ -64,9 +64,8 @@ class Ranking:
 
 def rank(baseline, effects, grids, state, y, scale, n_starts) -> Ranking:
     """Score every effect not yet in `state` at its grid designs that fit in `K_MAX`: the design
-    with the smallest log p-value (`chi2_logsf`: p underflows to 0 for a strong effect, and a tie
-    went to the design with more strengths), refined by the effect (`refine`), with its further
-    refit seeds (`_seeds`), refined likewise."""
+    with the smallest log p-value (`chi2_logsf`: p underflows to 0 for a strong effect), refined
+    by the effect (`refine`), with its further refit seeds (`_seeds`), refined likewise."""
     r = (y - state.prediction) / scale
     J_cur = state.jacobian
     cache: dict = {}
@@ -92,8 +91,7 @@ def rank(baseline, effects, grids, state, y, scale, n_starts) -> Ranking:
         pv = chi2_sf(S, dof) if dof else 1.0
         seeds = _seeds(scored, max(n_starts, e.refit_starts))
         if dof:
-            # the seeds too: a seed of the other form at a raw grid point started its refit
-            # too far off (measured: a 40 Hz mode's dynamic part seeded at 37 Hz, ζ 0.1)
+            # the seeds too: a raw grid seed starts its refit too far off (docs/discovery.md)
             seeds = [e.refine(baseline, sd, lambda dd: score_of(dd)[0]) for sd in seeds]
             d = e.refine(baseline, d, lambda dd: score_of(dd)[0])
             S2, dof2 = score_of(d)

@@ -8,6 +8,5 @@ from .._model import AbstractEffect as AbstractEffect
 from .._model import default_effects as default_effects
 from .._model import register_effect as register_effect
 
-DELTA_BIC_THRESHOLD = -10.0  # "very strong" evidence (Kass & Raftery 1995)
-"""An effect is accepted only when it lowers BIC by more than 10 ("very strong" evidence, Kass &
-Raftery 1995)."""
+DELTA_BIC_THRESHOLD = -10.0
+"""An effect is accepted only below ΔBIC = −10 ("very strong" evidence, Kass & Raftery 1995)."""

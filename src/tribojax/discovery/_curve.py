@@ -1,11 +1,10 @@
 """Curve side of discovery: the effects of the friction-curve model (`tribojax._model._curve`:
 its baseline, knobs, noise and weighting are described there), `discover_curve` and its figure.
 
-Effects (registered for `default_effects("curve")`, the issue's names): `stribeck` (strength A;
-v_s seeded by a grid over the record's velocities and fitted with β in the refit) and `viscous`
-(ln δ), the friction law's effects written once for every record kind (`_friction_effects`),
-and `asymmetry` (T0). Each has a signed strength whose null is interior, so the Rao score test
-applies.
+Effects (registered for `default_effects("curve")`): `stribeck` and `viscous`, the friction
+law's effects written once for every record kind (`_friction_effects`: their curve forms are
+described there), and `asymmetry` (T0); each has a signed strength whose null is interior, so
+the Rao score test applies.
 """
 
 from __future__ import annotations

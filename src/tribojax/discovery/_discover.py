@@ -111,8 +111,7 @@ def discover(
 
     1. Fit the baseline (`fit_record`, the fit `tribojax fit` reports: the one residual,
        transforms and LM of the record's model, strengths padded to `K_MAX` so that every refit
-       below reuses one compiled solve), from the first of `baseline.starts()` and from the next
-       ones only while none converged (the slip model: three C_τ starts).
+       below reuses one compiled solve) from `baseline.starts()` in turn, as `fit_record` says.
     2. Regions: residual windows against the noise (sidecar sd, else estimated; AR(1) ρ).
     3. Rank each candidate effect by its Rao score statistic at the current fit (LM form
        n·‖P r‖²/‖r‖², χ²_k; over a grid of nuisance settings the design with the smallest

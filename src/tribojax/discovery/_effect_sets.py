@@ -17,14 +17,10 @@ def drop_redundant(run, state, threshold):
     """Backward elimination after the forward search, for a model consistent with the noise: an
     effect added before the last one that no longer earns its place beside the others (ΔBIC of
     keeping it ≥ `threshold` against the model refitted without it, from the current optimum)
-    is dropped, the cheapest first, while the model stays consistent with the noise. Measured
-    on the study's record s1045 (a Lorentzian Stribeck dip at 0.6 kPa): Stribeck's score did
-    not see it at the baseline (p = 0.35), `viscous_friction` was added first and `stribeck`
-    second, which took the misfit to the noise; `viscous_friction` then no longer earns its
-    place. Not done where a misfit is left: the residual is then correlated by it, and the
-    AR(1) inflation of the ΔBIC drops real effects (measured: the blind band brake, whose
-    self-energizing rise, 33 % of the RSS, was dropped beside an asymmetry and a clearance at
-    "partly explained"). Returns (state, names dropped)."""
+    is dropped, the cheapest first, while the model stays consistent with the noise. Not done
+    where a misfit is left: the residual is then correlated by it, and the AR(1) inflation of
+    the ΔBIC drops real effects (the records behind both: docs/discovery.md, "Two more rules of
+    the search"). Returns (state, names dropped)."""
     dropped, n, p = [], run.y.size, len(run.baseline.param_names)
     while len(state.effects) >= 2 and run.consistent(state):
         ends = p + np.cumsum([0] + [d.k for d in state.designs])
@@ -59,14 +55,13 @@ PAIR_CANDIDATES = 3  # single refits, lowest cost first, combined in pairs by `p
 def pair_round(run, state, ranking, threshold, by_name):
     """Two effects at once (issue 32), tried when no single candidate was added: a residual that
     still holds a second effect's misfit is correlated by it, so a single refit's ΔBIC is
-    divided by an AR(1) inflation near its bound (blind loop s5014, a load variation and a
-    clearance: each single refit lowered the RMS misfit from 64 to 45-48 N, noise 4 N, at ΔBIC
-    +2 and +4). The `PAIR_CANDIDATES` usable single refits of this round with the lowest cost
-    are combined in pairs, each fitted jointly from the better one's optimum with both effects'
-    strengths. A pair qualifies when its ΔBIC against the current model is below `threshold`
-    and each of its effects earns its place against the other's single refit (ΔBIC below
-    `threshold` at the pair's own AR(1) inflation); of those, by ΔBIC, the first that lowers
-    the held-out excess (`_generalises`) is returned as its refit, else None."""
+    divided by an AR(1) inflation near its bound (docs/discovery.md, "Two effects at once").
+    The `PAIR_CANDIDATES` usable single refits of this round with the lowest cost are combined
+    in pairs, each fitted jointly from the better one's optimum with both effects' strengths. A
+    pair qualifies when its ΔBIC against the current model is below `threshold` and each of its
+    effects earns its place against the other's single refit (ΔBIC below `threshold` at the
+    pair's own AR(1) inflation); of those, by ΔBIC, the first that lowers the held-out excess
+    (`_generalises`) is returned as its refit, else None."""
     y, n, p = run.y, run.y.size, state.theta.size
     done = sorted((c for c in ranking.candidates
                    if c.refit is not None and c.refit[0].rss < state.rss),

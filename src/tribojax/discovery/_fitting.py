@@ -18,8 +18,7 @@ def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
     """∂y/∂knobs (n, n_knobs) at (θ_b, knobs), output units: the residual Jacobian from the
     fit's own compiled solve (`value_and_jacobian(..., solver=SOLVER)`: one step) with the knobs
     as the padded strengths, K_MAX knobs per call, so scoring compiles no second copy of the
-    model and its Jacobian. NaN
-    columns where the model is not finite or a check inside it fails."""
+    model and its Jacobian. NaN columns where the model is not finite or a check inside it fails."""
     p, m = len(theta_b), len(knobs)
     n = baseline.data().y.shape[0]
     x = jnp.asarray(np.concatenate([theta_b, np.zeros(K_MAX)]), dtype=jnp.float64)

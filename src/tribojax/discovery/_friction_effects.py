@@ -20,10 +20,7 @@ TABLE = "wang2022_table"
 DELTA_START = 0.02  # Stribeck refit starts on a slip run: δ
 VS_START_FACTORS = (1.0, 0.3, 3.0)  # ... and v_s in units of the record's peak slip speed
 N_VS_GRID = 9  # Stribeck velocities on a friction curve's score grid, geometric over its |v|
-# viscous refit starts on a slip run, σ2 in units of the start C_τ (a start at 1 was the lowest
-# cost in none of the 21 viscous refits of the 20 viscous and Stribeck study records, and the
-# slowest: on the benchmark record it crept 72 steps back to σ2 = 0)
-SIGMA2_STARTS = (10.0, 100.0)
+SIGMA2_STARTS = (10.0, 100.0)  # viscous refit starts on a slip run, σ2 in units of the start C_τ
 KAPPA_STARTS = (-0.3, 1.0)  # load-coupling refit starts on a slip run, κ per g
 
 
@@ -119,11 +116,9 @@ class Viscous(_OneKindEach):
     """A viscous term in the friction force (LuGre σ2·v, wang2022 Eq 25), strength 0 none.
 
     - slip run ("viscous_friction"): σ2 (N·s/m, in units of the start C_τ). While the contact
-      sticks, ż ≈ v and σ2·v is C_τ·ż: at the baseline's fit the viscous column is nearly that
-      of C_τ, the score sees little, and the optimum (σ2 many times C_τ, C_τ itself poorly
-      determined) lies far along that valley. So the refit is made whatever the score
-      (`score_gate` False) and also starts from σ2 = `SIGMA2_STARTS` × the start C_τ; the ΔBIC of
-      the refit decides.
+      sticks, σ2·v is C_τ·ż, so the score barely sees it and the optimum lies far along that
+      valley: the refit is made whatever the score (`score_gate` False) and also starts from
+      σ2 = `SIGMA2_STARTS` × the start C_τ; the ΔBIC of the refit decides.
     - loop ("viscous_damping"): a force c·u̇ (N·s/m) in parallel with the contact.
     - friction curve ("viscous"): the curve's baseline has the linear term already; the effect is
       its shape, sgn(v)·σ2·v_ref·|v/v_ref|^δ, strength ln δ (0: linear).
@@ -156,8 +151,7 @@ class LoadDependence(_OneKindEach):
     - slip run, published table: N = N₀(1 + κa/g), a the stage acceleration (inertial load
       transfer), strength κ per g (in units of 0.1 on a table); the slip run's refit also starts
       from κ = `KAPPA_STARTS`: near m·a_max ≈ F_s the baseline's optimum can sit far from the
-      coupled one (a hidden coupling at the fast drive: the Gauss–Newton and zero starts stopped
-      at 75–350 noise sd, κ from −0.3 or 1.0 reached 5 sd).
+      coupled one (docs/discovery.md).
     - loop: N(u) = N₀(1 + β·u/A) or N₀(1 + β·u/A + γ·(u/A)²) (`degrees` 1 and 2), K_d ∝ N^p with
       p = 0.7616 (wu2015 Eq 5) or p = 0 (a stiffness that does not follow the load,
       `kd_exponents`); every combination is refitted and the lower BIC kept; p a fixed nuisance

@@ -9,13 +9,11 @@ model that `fit_loop(model="history")` fits; its noise model is `cycle_noise`.
 Effects (registered for `default_effects("loop")`, names as in the issues): `microslip`,
 `viscous_damping`, `normal_load_variation` (the friction law's effects written once for every
 record kind: `_friction_effects`), `backlash`, the band brake's `self_energizing` and
-`direction_asymmetry` (issue 30; candidates by default only on a band brake's records, those
-that carry a band tension: `LoopBaseline.band_brake`), and the measurement effect
-`force_offset` (a constant added to the force); each moves one knob (or the offset) with a signed
-strength, so the null is interior and the Rao score test applies. `backlash` has a nuisance, the
-gap g, not identified under the null: a grid of g/A seeds the score (Davies: the largest score,
-Bonferroni over the grid) and the refit starts, and the refit fits ln g jointly with ε (as
-`stribeck` fits its v_s).
+`direction_asymmetry` (issue 30; default candidates only on a band brake's records,
+`LoopBaseline.band_brake`), and the measurement effect `force_offset`; each moves one knob (or
+the offset) with a signed strength, so the null is interior and the Rao score test applies.
+`backlash`'s gap g is not identified under the null: a grid of g/A seeds the score (Davies:
+the largest score, Bonferroni over the grid) and the refit starts.
 
 Regions: the abscissa is the displacement u (m) and the segments are the branches (0 =
 "unloading", u falling; 1 = "loading", u rising); each flagged region also carries "branch",
@@ -46,9 +44,8 @@ class Microslip(AbstractEffect):
     """Partial slip (Mindlin/Koh, wu2015 Eq 2): force (1 − w)·Jenkins + w·bank, the bank's virgin
     curve μN[1 − (1 − x/(p·A0))^p]; w = 0 null, w = 1 the full microslip law. Two designs: the
     Mindlin law (p = 3/2, strength w) and p fitted with w (a shift of ln(p − 1), reported as the
-    nuisance "shape"): a joint whose slip limits are spread otherwise than Mindlin's (measured:
-    an Iwan bank with uniformly spread limits, p = 2, left 1.6 noise sd that a clearance was then
-    added for, the blind loop s5013); both are refitted, the lower BIC kept."""
+    nuisance "shape"): a joint whose slip limits are spread otherwise than Mindlin's (e.g. an Iwan
+    bank with uniformly spread limits, p = 2); both are refitted, the lower BIC kept."""
 
     name: ClassVar[str] = "microslip"
     kind: ClassVar[str] = "loop"
@@ -72,9 +69,9 @@ for _effect in (Viscous("loop"), LoadDependence("loop")):
 class Backlash(AbstractEffect):
     """A clearance (dead zone) in series with the contact: after each reversal the force falls to
     zero and stays there while the drive crosses the gap g (m), then re-engages (the model in
-    `_loop_models`). Strengths: the depth ε (—; 0 none, 1 a clean clearance) and the shift of
-    ln g from its seed (g/A on `GAP_GRID`), fitted jointly; the fitted g is reported as the
-    nuisance "gap_m"."""
+    `tribojax._model._loop_force`). Strengths: the depth ε (—; 0 none, 1 a clean clearance) and
+    the shift of ln g from its seed (g/A on `GAP_GRID`), fitted jointly; the fitted g is
+    reported as the nuisance "gap_m"."""
 
     name: ClassVar[str] = "backlash"
     kind: ClassVar[str] = "loop"

@@ -14,10 +14,8 @@ from .._model import MAX_STEPS, effect_strengths, fit_model
 from .._parallel import in_parallel, speculatively
 from ._fitting import _columns, _delta_bic
 
-# A candidate refitted after another one of this round reached the noise needs the noise too
-# (it has fewer parameters: `refit_round`), so a refit that is still far above it is not run to
-# the end: each start gets `QUICK_STEPS` steps, and one that ran out goes on (`MAX_STEPS`) only
-# when its cost is within `QUICK_MARGIN` × the explaining candidate's (docs/discovery.md).
+# Refits after a candidate of the round reached the noise (`refit_round`): `QUICK_STEPS` steps
+# per start, continued only within `QUICK_MARGIN` × that candidate's cost (`_refit`).
 QUICK_STEPS = 16
 QUICK_MARGIN = 2.0
 
@@ -89,9 +87,7 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
                     f"{QUICK_MARGIN:g}x that of a candidate that reaches the noise")  # fmt: skip
     if run and min(f.rss for f in run) < min((f.rss for f in good), default=np.inf):
         # a fit that ran out of steps while still descending, below every converged one (e.g.
-        # an unidentified F_s walking to its bound: a hidden position error at 20 kPa, 128
-        # steps; a mode's refit at 0.65 of the converged fits' cost, blind record s3011) goes
-        # on from where it stopped, once
+        # an unidentified F_s walking to its bound), goes on from where it stopped, once
         fits.append(fit_model(baseline, designs, min(run, key=lambda f: f.rss).theta, y, scale,
                               names, ceiling=state.rss))  # fmt: skip
         good += [f for f in fits[-1:] if f.converged and np.isfinite(f.rss)]
@@ -140,8 +136,7 @@ def _moved_optimum(baseline, state, best, y, scale, threshold):
     """The current model refitted from `best`'s optimum (its new strengths dropped) when those
     strengths are all zero within 2 standard errors and dropping them costs no significant ΔBIC:
     the refit's gain came from moving the current model's own parameters to a better optimum,
-    not from the effect (measured: a lagged slip reading, 0.6 kPa, where `load_coupling` was
-    added with κ = 0.0006 ± 0.0004 per g and 24 noise sd of misfit went to 0.2). Else None."""
+    not from the effect (docs/discovery.md, "Noise model"). Else None."""
     k = best.designs[-1].k
     s, se = best.theta[-k:], np.sqrt(np.abs(np.diag(best.theta_covariance)))[-k:]
     if np.any(np.abs(s) > 2 * se) or not np.all(np.isfinite(se)):
@@ -252,9 +247,8 @@ def _settle(run, state, c, d, new, threshold, by_name, accepted) -> bool:
 def _from_explaining(run, state, c, starts, explains, dk_explains):
     """A candidate refitted before another one reached the noise, refitted once more from that
     one's optimum of the current model's parameters, the candidate's strengths at zero (each of
-    its designs, `QUICK_STEPS` steps): its own starts never saw that basin (the study's s1063).
-    Designs with fewer parameters than the explaining one only (`dk_explains`).
-    Returns (design, refit), or None."""
+    its designs, `QUICK_STEPS` steps): its own starts never saw that basin. Designs with fewer
+    parameters than the explaining one only (`dk_explains`). Returns (design, refit), or None."""
     p = state.theta.size
     starts = [dd for dd in starts if dd.k + dd.n_nuisance < dk_explains]
     if not starts:
@@ -313,11 +307,7 @@ def choose(accepted, state, n):
     own residual); the choice between them uses one inflation for all, that of the one with the
     lowest RSS (the error correlation estimated from the fullest model), recorded as
     `delta_bic_common`. Otherwise a candidate that leaves a smooth misfit is charged more than
-    one that leaves a rough one (measured: a hidden-Stribeck record where `vibration` won with
-    1.4x the RSS of `stribeck`). The largest inflation (the earlier rule) divided the gain of a
-    candidate that reaches the noise by that of a smooth leftover misfit (c ≈ 100: a random-walk
-    drift named `position_error` with twice the RMS misfit of `sensor_drift`).
-    Returns (candidate, refit)."""
+    one that leaves a rough one (docs/discovery.md). Returns (candidate, refit)."""
     c_common = min(accepted, key=lambda a: a[1].rss)[3]
     for c, new, dk, _ in accepted:
         c.delta_bic_common = delta_bic(new.rss, state.rss, n, dk, c_common)

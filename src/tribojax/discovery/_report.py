@@ -34,8 +34,7 @@ class DiscoveryReport:
     heldout_excess_before / heldout_excess_after: the same excess of the two-fold held-out
         residual (each fold predicted by the model fitted on the other alone; the final model's
         nuisance values fixed), output units; None when the baseline passes the noise test
-        (nothing to hold out) or a fold's fit failed. The verdict
-        "explained" needs the held-out excess at least halved.
+        (nothing to hold out) or a fold's fit failed. "explained" needs it at least halved.
     misfit: where a remaining misfit lives: noise-test p-values of the baseline and final
         residuals, the final residual's flagged regions, its correlations with the measured
         signals and a flexible (linear-spline) correction in the best signal.

@@ -73,13 +73,9 @@ class SensorDrift(AbstractEffect):
 @register_effect
 class PositionError(AbstractEffect):
     """Reading error that grows with stage travel x_s(t) (fibre bending, Abbe and cosine
-    errors): ε·x_s, or ε·x_s + ε₂·x_s² (`degrees` 1 and 2, both refitted, the lower BIC kept).
-
-    The error of a bending fibre or a tilted mirror is a smooth function of travel that is
-    zero at the start; its first two Taylor terms. With the linear term alone, a curved error
-    (measured: ε₂x_s² on independent records, 0.6–20 kPa) was taken up by a degree-6–9
-    `sensor_drift` (≈ 10 strengths reach the noise, ε·x_s left 0.6 noise sd), named first.
-    """
+    errors): ε·x_s, or ε·x_s + ε₂·x_s² (`degrees` 1 and 2, both refitted, the lower BIC kept):
+    the first two Taylor terms of a smooth error that is zero at the start (why the second:
+    docs/discovery.md)."""
 
     name: ClassVar[str] = "position_error"
     kind: ClassVar[str] = "slip"
@@ -151,8 +147,7 @@ class Vibration(AbstractEffect):
 
     def reject(self, nuisance):
         """A refit whose damping ratio ends at `ZETA_MAX` is a low-pass of the acceleration,
-        not a lightly damped mode (measured: hidden Stribeck curves taken for a "mode" at
-        ζ = 0.30, 88–198 Hz; the study's modes have ζ = 0.012–0.08)."""
+        not a lightly damped mode (docs/discovery.md)."""
         if nuisance.get("zeta", 0.0) >= ZETA_AT_BOUND * ZETA_MAX:
             return (f"not a mode: the damping ratio {nuisance['zeta']:.3g} ends at its bound "
                     f"{ZETA_MAX:g} (a low-pass of the acceleration)")  # fmt: skip

@@ -1,21 +1,20 @@
 """Is a residual noise? The verdict of a discovery run, where a misfit lives, what could close it.
 
 One noise-consistency test decides both "none" (for the baseline residual) and "explained" (for
-the final residual): with noise sd σ and AR(1) ρ (sidecar or first-difference estimates, see
-`_regions`), the residual r of a model with p parameters is consistent with the noise when
+the final residual): with noise sd σ and AR(1) ρ (sidecar or first-difference estimates of
+`_fit._noise`), the residual r of a model with p parameters is consistent with the noise when
 
   - the whole-record statistic Q = Σr²/σ² passes the χ² test (Q/c against χ²_ν, ν = (n − p)/c,
-    c = (1+ρ²)/(1−ρ²), Satterthwaite) at level α/2, and
+    c = (1+ρ²)/(1−ρ²), Satterthwaite) at level α/3, and
   - no window is flagged by `find_regions` at level α/3 (Bonferroni over windows), and
   - Fisher's g test finds no periodic component in the AR(1)-prewhitened residual
     w_t = r_t − ρ r_{t−1}: g = max periodogram ordinate / their sum over the m Fourier
     frequencies strictly between 0 and Nyquist, p ≈ m(1 − g)^(m−1) (Fisher 1929), at level α/3
     (a line such as mains pickup that a first-difference noise estimate absorbs).
 
-The χ² test is at level α/3 too. When σ is estimated from the residual's first differences, the
-whole-record test is the normal approximation of mean(r²)/σ̂² − 1 with the estimator's own
-variance added (≈ 8/n relative for σ̂²), not χ² (which would flag a σ̂ two of its standard errors
-low).
+When σ is estimated from the residual's first differences, the whole-record test is the normal
+approximation of mean(r²)/σ̂² − 1 with the estimator's own variance added (≈ 8/n relative for
+σ̂²), not χ² (which would flag a σ̂ two of its standard errors low).
 
 Excess misfit (beyond the noise): e = sqrt(max(mean(r²) − σ², 0)), output units.
 
@@ -65,10 +64,8 @@ class NoiseModel:
     def sharpen(self, baseline, fit, y) -> None:
         """Update from `fit`'s residual when its estimate σ̂ (`baseline.noise_model`) is below
         `hat`: then ρ̂ is taken from it, and σ too when estimated. σ̂ from a residual that still
-        holds a misfit is inflated by it, and ρ̂ with it (measured: σ̂ 4.6x the true σ and ρ̂ at
-        its 0.95 bound on a hidden-Stribeck record, so that a refit leaving 3.8 σ of misfit
-        passed as noise); every refit's residual is a further estimate, the smallest the least
-        contaminated."""
+        holds a misfit is inflated by it, and ρ̂ with it (docs/discovery.md, "Noise model");
+        every refit's residual is a further estimate, the smallest the least contaminated."""
         if not (fit.converged and np.all(np.isfinite(fit.prediction))):
             return
         s_new, rho_new = baseline.noise_model(y - fit.prediction)
@@ -76,8 +73,6 @@ class NoiseModel:
             self.hat, self.rho = float(s_new), float(rho_new)
             if self.estimated:
                 self.sigma = float(s_new)
-
-
 
 
 def verdict(n_effects, base_ok, final_ok, excess_before, excess_after, heldout=None, *,
