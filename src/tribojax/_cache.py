@@ -3,19 +3,13 @@
 A command pays tracing and XLA compilation in every new process; the persistent cache keeps the
 compiled programs on disk so that the second run of the same fit skips XLA compilation (tracing
 is still paid). Set when tribojax is first imported, and only if the user has not chosen a JAX
-cache themselves (`jax_compilation_cache_dir` or `JAX_COMPILATION_CACHE_DIR`):
-
-- `TRIBOJAX_CACHE=off` (or 0/no/false): leave JAX's cache settings alone;
-- `TRIBOJAX_CACHE_DIR=PATH`: keep the entries there; default the platform's user cache folder
-  (`$XDG_CACHE_HOME/tribojax/jax` or `~/.cache/tribojax/jax`, `~/Library/Caches/tribojax/jax`
-  on macOS, `%LOCALAPPDATA%/tribojax/cache/jax` on Windows).
-
-Besides the folder, programs that compile in `MIN_COMPILE_S` or more are kept: all of them, also
-the many small ones JAX's default of 1 s would skip (docs/performance.md, The compilation cache,
-says why and why a stale or truncated entry is never used). Traced programs are kept beside it
-(`tribojax._export`). A program holding a host callback (an `equinox.error_if` that raises,
-`throw=True`) is never cached by jax 0.10: the fit engine traces its programs without one
-(`tribojax._checks.failures_as_nan`).
+cache themselves (`jax_compilation_cache_dir` or `JAX_COMPILATION_CACHE_DIR`).
+`TRIBOJAX_CACHE=off` (or 0/no/false) leaves JAX's settings alone; `TRIBOJAX_CACHE_DIR` chooses
+the folder (default: the platform's user cache folder, `cache_dir`). Programs that compile in
+`MIN_COMPILE_S` or more are kept: all of them (docs/performance.md, The compilation cache, has
+the folders and says why). Traced programs are kept beside it (`tribojax._export`). A program
+holding a host callback (an `equinox.error_if` that raises, `throw=True`) is never cached by
+jax 0.10: the fit engine traces its programs without one (`tribojax._checks.failures_as_nan`).
 """
 
 from __future__ import annotations

@@ -214,9 +214,7 @@ def chain_phase_slips(
     """
     params = jnp.asarray(params, dtype=jnp.float64)
     (F_s, K, C), ok = chain_contact(params, loads)
-    # gross sliding (F_s <= m·a_max: slips of metres, outside Eq 27 and the data) is flagged
-    # like a failed contact, and run with harmless stand-in values (its result is not used)
-    ok = ok & (F_s > WANG2022_TANGENTIAL_LOAD_N)
+    ok = ok & (F_s > WANG2022_TANGENTIAL_LOAD_N)  # else gross sliding: run with stand-ins
     F_s, K, C = (jnp.where(ok, x, safe) for x, safe in zip((F_s, K, C), (1.0, 1e7, 500.0)))
     slips = lugre_phase_slips_nm(F_s, K, C, params[4], adjoint=adjoint, atol=atol, rtol=rtol,
                                  max_steps=max_steps, throw=False)  # fmt: skip

@@ -15,15 +15,13 @@ import numpy as np
 
 from ._precision import ensure_x64
 
-# Failures as values inside the fit engine's programs. A JAX trace-context state (part of every
-# jit cache key, so a program or inner jitted function traced in the mode is never reused outside
-# it, and thread-local): while it is on, checks traced under jit make the checked value NaN
-# instead of adding a host callback that raises. The fit engine compiles its programs in this
-# mode, so they hold no host callback (JAX 0.10's persistent cache skips those) and a parameter
-# the optimiser steps out of range is a rejected step. It reaches the checks inside diffrax and
-# lineax through equinox's jitted check (`_eqx_errors.branched_error_if_impl_jit`), wrapped once
-# here to pass `on_error="nan"` while the state is on. Internal APIs of jax 0.10 and equinox
-# 0.13: if either is missing, the mode is off (programs just are not cached).
+# Failures as values (`failures_as_nan`; docs/performance.md, "Programs with a host callback"):
+# a thread-local JAX trace-context state, part of every jit cache key, under which checks traced
+# under jit make the checked value NaN instead of adding a host callback that raises. Checks
+# inside diffrax and lineax reach it through equinox's jitted check
+# (`_eqx_errors.branched_error_if_impl_jit`), wrapped once here to pass `on_error="nan"` while
+# the state is on. Internal APIs of jax 0.10 and equinox 0.13: if either is missing, the mode is
+# off (programs just are not cached).
 try:
     from jax._src.config import bool_state as _bool_state
 

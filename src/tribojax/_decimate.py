@@ -19,11 +19,9 @@ A trailing remainder of fewer than `factor` samples is dropped (`samples_used` s
 were kept).
 
 The drive is not smoothed: a reduced slip run keeps the original's full-resolution acceleration
-profile (`SlipRun.drive`), since a velocity error of the drive stays in the slip for good (at
-blocks of 51 samples of wang2022's trapezoid, linear interpolation between reduced samples
-shifts the slip by 2e-12 m rms, enough to pull a 20,000-sample fit off by several standard
-errors); its reduced `accel` column serves start values and plots. A loop's displacement is
-reduced like its force (the steady-loop model takes u sample by sample).
+profile (`SlipRun.drive`), since a velocity error of the drive stays in the slip for good
+(docs/performance.md); its reduced `accel` column serves start values and plots. A loop's
+displacement is reduced like its force (the steady-loop model takes u sample by sample).
 """
 
 from __future__ import annotations
@@ -196,5 +194,4 @@ def decimate_record(
                      f"sigma*sqrt(g), g = {float(np.mean(g)):.4g} (local quadratic over "
                      f"{factor} samples, evaluated at the block's mean time)"),
     )  # fmt: skip
-    # a slip run keeps its full-resolution drive (`SlipRun.resampled`)
     return record.resampled(tc, dc, rc, noise_std=reduced_std), info

@@ -6,16 +6,12 @@ exports the lowered program (`jax.export`, StableHLO) the first time a signature
 stores it beside the compilation cache (`<cache folder>/../export`, `_cache.cache_dir`); a new
 process reads it back and only compiles it (a persistent-cache hit when warm).
 
-A stored program is used only under the same key (docs/performance.md, Stored traces): the
-function's module and name, the hash of every tribojax source file, the versions of the packages
-in `_PACKAGES`, the backend, JAX's trace-relevant configuration, the structure and static values
-of the arguments, and each array's shape and dtype. A signature that cannot be keyed stably (a
-closure, a user's own function or class), a program that cannot be exported (a host callback;
-it leaves an empty `.refused` marker) or a call under a trace runs through plain
-`eqx.filter_jit`. Each file holds its payload's sha256 and is written by rename, so a truncated
-file is never used. Exporting, reading back and compiling hold one lock per process
-(`_LOWERING`: JAX cannot build MLIR modules from several threads at once, jax issues #32354,
-#28551); running a compiled program does not take it. The function's outputs must be arrays in
+A stored program is used only under the same key (`_key`: everything its trace depends on). A
+signature that cannot be keyed stably (a closure, a user's own function or class), a program
+that cannot be exported (a host callback; it leaves an empty `.refused` marker) or a call under a
+trace runs through plain `eqx.filter_jit`. A truncated or half-written file is never used, and
+exporting, reading back and compiling hold one lock per process (`_LOWERING`); docs/performance.md
+(Stored traces) gives the key in full and the reasons. The function's outputs must be arrays in
 tuples, lists or dicts.
 """
 

@@ -1,19 +1,7 @@
 """The papers' constants and presets, in one place: wang2022 (reticle/chuck) and wu2015 (Eq 5).
 
-wang2022 (docs/reproduction.md):
-* Table 1: the equivalent surface, D = 2.8821, G = 7.768e-12 m (`wang2022_surface`); M is not
-  published.
-* Table 2: the fused-quartz chuck and the glass-ceramic reticle (`wang2022_chuck`,
-  `wang2022_reticle`, `wang2022_pair`).
-* Eq 28: normal load F = A_v P_v + m g with A_v = 909 mm², m = 0.321 kg, g = 9.8 m/s² (this g
-  reproduces Table 3's load column; `vacuum_to_load`).
-* The stage's peak acceleration a_max = 1 m/s² (`TrapezoidProfile`), so the reticle's inertial
-  load in T/P (Eqs 17–22) is T = m·a_max = 0.321 N; m is also the mass of Eq 24.
-* The Table 3 calibration (`calibrate_table3`, M = 1, D of Table 1): G = 4.3636e-8 m,
-  μ_t = 0.1416, σ_s = 1.893 GPa, rounded to the digits printed here; tests/test_presets.py
-  checks them against a fresh calibration.
-
-wu2015: Eq 5, K_d = 0.5924·N^0.7616 (N in N, K_d in N/µm; `wu2015_eq5_stiffness`).
+Each constant's source and reading (Tables 1–3, Eq 28, T = m·a_max, the Table 3 calibration) is
+in docs/reproduction.md (wang2022: inputs; wang2022: Table 3 calibration).
 """
 
 from __future__ import annotations

@@ -33,7 +33,7 @@ from ._contact._presets import wang2022_pair, wang2022_table3_model
 from ._dynamics._harmonic import harmonic_balance
 from ._friction._lugre import PreSlipLuGre
 from ._friction._rate_independent import Jenkins, Mindlin
-from ._plot import pyplot
+from ._plot import pyplot, save_figure
 from ._precision import ensure_x64
 from ._presets import (
     CALIBRATED_G_M,
@@ -60,13 +60,13 @@ DEFAULT_AMPLITUDE = 50e-9  # m
 CONTACT_OUTPUTS = ("F_s", "K_tau", "C_tau", "z_max")
 SLIP_OUTPUTS = ("T4", "T5", "T6", "T7")
 LOOP_OUTPUTS = ("A_bar", "K_bar", "C_bar")
-_RANGES = {  # name: (lo, hi, unit); open intervals
-    "D": (2.0, 3.0, ""),
-    "G": (0.0, None, "m"),
-    "mu_t": (0.0, None, ""),
-    "load": (0.0, None, "N"),
-    "a_max": (0.0, None, "m/s^2"),
-    "A": (0.0, None, "m"),
+_RANGES = {  # name: `check_range` bounds (open intervals) and unit
+    "D": dict(lo=2.0, hi=3.0),
+    "G": dict(lo=0.0, unit="m"),
+    "mu_t": dict(lo=0.0),
+    "load": dict(lo=0.0, unit="N"),
+    "a_max": dict(lo=0.0, unit="m/s^2"),
+    "A": dict(lo=0.0, unit="m"),
 }
 
 
@@ -79,11 +79,7 @@ def _checked(params: dict, names) -> dict:
         raise ValueError(
             f"params must have exactly the keys {list(names)}: missing {missing}, unknown {extra}"
         )
-    out = {}
-    for k in names:
-        lo, hi, unit = _RANGES[k]
-        out[k] = check_range(params[k], k, lo, hi, unit=unit)
-    return out
+    return {k: check_range(params[k], k, **_RANGES[k]) for k in names}
 
 
 class ReticleChain(eqx.Module):
@@ -280,8 +276,7 @@ class Elasticities:
             ax.set_visible(False)
         fig.suptitle(title)
         if path is not None:
-            fig.savefig(path, dpi=110)
-            plt.close(fig)
+            save_figure(fig, path, dpi=110)
         return fig
 
 

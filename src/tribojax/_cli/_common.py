@@ -1,10 +1,8 @@
 """Helpers shared by the subcommands: the one error path, output reservation, JSON output.
 
-Every subcommand reports a problem as one line, `tribojax <cmd>: error: <message>`, and an exit
-status: 2 for bad input (a malformed file, a parameter out of range, a refused output), 1 for a
-computation that failed, 130 for Ctrl-C. `run_command` turns any exception into that line
-(`--debug` shows the traceback instead); a subcommand may also `raise CommandError(...)` or
-`return error(...)`.
+The error line and the exit statuses: docs/cli.md, "Errors". `run_command` turns any exception
+into that line (`--debug` shows the traceback instead); a subcommand may also
+`raise CommandError(...)` or `return error(...)`.
 """
 
 from __future__ import annotations
@@ -24,6 +22,7 @@ import equinox as eqx
 from .._checks import runtime_message
 from .._decimate import decimate_record
 from .._io._files import sidecar_path, write_json_atomic
+from .._plot import pyplot, save_figure
 
 __all__ = [
     "BAD_INPUT",
@@ -34,6 +33,7 @@ __all__ = [
     "claim_outputs",
     "decimate_factor",
     "error",
+    "plot_model_and_residual",
     "progress",
     "reduce_record",
     "refused_outputs",
@@ -58,15 +58,15 @@ class CommandError(Exception):
         self.status = status
 
 
-def error(message: str, err=None, status: int = BAD_INPUT) -> int:
-    """Print `tribojax <cmd>: error: message` to stderr (or `err`); return `status` (2)."""
-    print(f"{_PROG[0]}: error: {message}", file=sys.stderr if err is None else err)
+def error(message: str, status: int = BAD_INPUT) -> int:
+    """Print `tribojax <cmd>: error: message` to stderr; return `status` (2)."""
+    print(f"{_PROG[0]}: error: {message}", file=sys.stderr)
     return status
 
 
-def warn(message: str, err=None) -> None:
-    """Print `tribojax <cmd>: warning: message` to stderr (or `err`)."""
-    print(f"{_PROG[0]}: warning: {message}", file=sys.stderr if err is None else err)
+def warn(message: str) -> None:
+    """Print `tribojax <cmd>: warning: message` to stderr."""
+    print(f"{_PROG[0]}: warning: {message}", file=sys.stderr)
 
 
 def describe(exc: BaseException) -> tuple[int, str]:
@@ -376,3 +376,24 @@ def reduce_record(record, args, *, whole_cycles: bool = False):
               f"of {how.factor}, {how.method}; noise sd {how.noise_std_original:.3g} -> "
               f"{how.noise_std:.3g})")  # fmt: skip
     return record, how
+
+
+def plot_model_and_residual(path, c: dict, title: str, resid_axes: tuple[str, str], *,
+                            labels=("data", "model"), title_size=None) -> bool:  # fmt: skip
+    """The figure of `fit` and `predict`: data and model (`c`'s "x", "data", "model", "xlabel",
+    "ylabel") over the residual ("resid_x", "resid"). False when matplotlib is missing."""
+    plt = pyplot("figure")
+    if plt is None:
+        return False
+    fig, (ax, ar) = plt.subplots(2, 1, figsize=(7, 6), constrained_layout=True,
+                                 gridspec_kw=dict(height_ratios=[3, 1.3]))  # fmt: skip
+    ax.plot(c["x"], c["data"], "k.", ms=2, label=labels[0])
+    ax.plot(c["x"], c["model"], "C3-", lw=1, label=labels[1])
+    ax.set(xlabel=c["xlabel"], ylabel=c["ylabel"])
+    ax.set_title(title, fontsize=title_size or plt.rcParams["axes.titlesize"])
+    ax.legend()
+    ar.plot(c["resid_x"], c["resid"], "C0.", ms=2)
+    ar.axhline(0, color="k", lw=0.5)
+    ar.set(xlabel=resid_axes[0], ylabel=resid_axes[1])
+    save_figure(fig, path)
+    return True

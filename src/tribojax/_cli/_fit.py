@@ -28,7 +28,6 @@ from .._fit._measures import nrmse, rms
 from .._io._records import read_record
 from .._limits import MAX_STEPS
 from .._model import evaluate, fit_loop, fit_slip_run, loop_residuals, slip_baseline
-from .._plot import pyplot, save_figure
 from .._predict import RECORD_KINDS, SAVED_KEY, fitted_model, load_model, refit
 from ._common import (
     FAILED,
@@ -36,6 +35,7 @@ from ._common import (
     claim_outputs,
     decimate_factor,
     error,
+    plot_model_and_residual,
     progress,
     reduce_record,
     warn,
@@ -76,12 +76,15 @@ def run_fit(args) -> int:
         with progress(args, "fit") as bar:
             if len(records) > 1:  # one element's parameters (+ f0) for all of them
                 result, curves = fit_history_record(records, args.model or "best", args.max_steps,
-                                                    start, _history_decimate(args))  # fmt: skip
+                                                    start, decimate_factor(args) or 1)  # fmt: skip
             else:
                 result, curves = fits(full, args, start, bar.note)
         result["wall_time_s"] = time.perf_counter() - t0
         write_json_atomic(out / "fit.json", result, exclusive=not args.force)
-        drew = _plot(curves, result, out / "fit.png")
+        drew = plot_model_and_residual(out / "fit.png", curves,
+                                       f"{Path(result['source']).name}: {result['model']}",
+                                       ("t (s)", f"model − data ({result['residual_unit']})"),
+                                       title_size=9)  # fmt: skip
     what = path if len(paths) == 1 else f"{len(paths)} records ({path.name}, ...)"
     print(f"{result['kind']} {what}: {result['n_data']} samples, fitted "
           f"{', '.join(result['fitted'])}")  # fmt: skip
@@ -162,18 +165,13 @@ def _check_joint(records, paths, args) -> None:
                            f"histories; use {', '.join(HISTORY_CHOICES)} or best")  # fmt: skip
 
 
-def _history_decimate(args) -> int:
-    """`--decimate N` of a history fit: every N-th sample (auto, off: all)."""
-    return decimate_factor(args) or 1
-
-
 def _fit_loop_record(loop, args, start, note):
     """A loop: through its history (`--model` an element or best; default for a non-periodic
     history), else reduced as `--decimate` asks and fitted with the loop model of --element."""
     model = args.model
     if model in (*HISTORY_CHOICES, "best") or (model is None and not loop.periodic):
         return fit_history_record(loop, model or "best", args.max_steps, start,
-                                  _history_decimate(args))  # fmt: skip
+                                  decimate_factor(args) or 1)  # fmt: skip
     return _fit_reduced(loop, args, start, note, _fit_loop, _loop_full_residuals)
 
 
@@ -267,16 +265,12 @@ def _fit_slip(run, args, start, reduction, note=None):
             alpha = float(args.alpha)
         except ValueError:
             raise ValueError(f"--alpha must be 'free' or a number, got {args.alpha!r}") from None
-    if run.noise_std is not None:
-        sigma, how = run.noise_std, _reduced_sigma_source(reduction, "sidecar noise_std_m")
-    else:
-        sigma, how = None, "estimated from the residuals"
+    how = (_reduced_sigma_source(reduction, "sidecar noise_std_m") if run.noise_std is not None
+           else "estimated from the residuals")  # fmt: skip
     steps = args.max_steps or MAX_STEPS
     fit = fit_slip_run(run, alpha=alpha, max_steps=steps, start=start or None, progress=note)
     resid = fit.prediction - run.slip  # model − data, m
-    if sigma is None:
-        sigma = float(np.sqrt(np.sum(resid**2) / max(len(run) - len(fit.names), 1)))
-    d = fit_summary(fit, run, len(run), resid, "m", sigma, how)
+    d = fit_summary(fit, run, len(run), resid, "m", run.noise_std, how)
     d["model"] = "PreSlipLuGre (wang2022 Eq 27), slip at every sample"
     d["nrmse"] = nrmse(resid, run.slip)
     d["mass_kg"] = run.mass
@@ -299,10 +293,7 @@ def _fit_loop(loop, args, start, reduction, note=None):
     m = len(resid)  # N, on the fitted samples (the last m)
     how = "sidecar noise_std_N" if loop.noise_std is not None else "estimated from the residuals"
     how = _reduced_sigma_source(reduction, how)
-    sigma = loop.noise_std
-    if sigma is None:
-        sigma = float(np.sqrt(np.sum(resid**2) / max(m - 2, 1)))
-    d = fit_summary(fit, loop, m, resid, "N", sigma, how)
+    d = fit_summary(fit, loop, m, resid, "N", loop.noise_std, how)
     eq = 1 if args.element == "jenkins" else 2
     d["model"] = f"{args.element} ({model} loop, wu2015 Eq {eq})"
     d["nrmse"] = nrmse(resid, loop.f[-m:])
@@ -315,23 +306,3 @@ def _fit_loop(loop, args, start, reduction, note=None):
                   xlabel="displacement u (m)", ylabel="force f (N)", resid_x=loop.t[-m:],
                   resid=resid)  # fmt: skip
     return d, curves
-
-
-def _plot(c, result, path: Path) -> bool:
-    plt = pyplot("figure")
-    if plt is None:
-        return False
-    fig, (ax, ar) = plt.subplots(2, 1, figsize=(7, 6), constrained_layout=True,
-                                 gridspec_kw=dict(height_ratios=[3, 1.3]))  # fmt: skip
-    ax.plot(c["x"], c["data"], "k.", ms=2, label="data")
-    ax.plot(c["x"], c["model"], "C3-", lw=1, label="model")
-    ax.set_xlabel(c["xlabel"])
-    ax.set_ylabel(c["ylabel"])
-    ax.set_title(f"{Path(result['source']).name}: {result['model']}", fontsize=9)
-    ax.legend()
-    ar.plot(c["resid_x"], c["resid"], "C0.", ms=2)
-    ar.axhline(0, color="k", lw=0.5)
-    ar.set_xlabel("t (s)")
-    ar.set_ylabel(f"model − data ({result['residual_unit']})")
-    save_figure(fig, path)
-    return True

@@ -1,12 +1,8 @@
-"""`tribojax fit` on measured records: history fits of loops and friction-curve fits.
-
-`--model jenkins|mindlin|lugre|bouc_wen` drives that element through the record's measured
-displacement (`tribojax.fit_history`, + a force offset f0); `--model best` fits all four and keeps
-the lowest BIC = n·ln(RSS/n) + p·ln(n). A friction curve (a folder of EPOS steady-state exports,
-or a curve CSV) is fitted with the LuGre steady law and a direction asymmetry
-(`tribojax.fit_steady_curve`; `--model lugre` or `best`). Each returns the fit.json dictionary
-(with "model" the fitted model's name and "nrmse" = rms(residual)/std(measured)) and the plot
-curves; `fit_summary` is the part of that dictionary every record kind shares.
+"""`tribojax fit` on measured records: history fits of loops (`fit_history_record`, `--model`
+an element, or best: the lowest BIC = n·ln(RSS/n) + p·ln(n)) and friction-curve fits
+(`fit_curve_record`). Each returns the fit.json dictionary (with "model" the fitted model's name
+and "nrmse" = rms(residual)/std(measured)) and the plot curves; `fit_summary` is the part of that
+dictionary every record kind shares.
 """
 
 from __future__ import annotations
@@ -27,7 +23,10 @@ HISTORY_CHOICES = (*ELEMENT_MODELS, *DEVICE_MODELS)
 
 def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:
     """The fit.json entries of a fit of `record` (its kind and source) on `n_data` data with
-    residuals `resid` (model − data, `unit`) and noise sd `sigma` (from `sigma_source`)."""
+    residuals `resid` (model − data, `unit`) and noise sd `sigma` (from `sigma_source`; None:
+    estimated from the residuals, sqrt(RSS/(n_data − parameters)))."""
+    if sigma is None:
+        sigma = float(np.sqrt(np.sum(resid**2) / max(n_data - len(fit.names), 1)))
     d = fit.as_dict()
     d.update(
         kind=record.kind,
@@ -71,8 +70,7 @@ def fit_history_record(loops, model: str, max_steps: int | None, start: dict,
     best = min(scores, key=scores.get)
     h = fits[best]
     resid = pred[best] - f
-    sigma = float(np.sqrt(np.sum(resid**2) / max(n - len(h.fit.names), 1)))
-    d = fit_summary(h.fit, loops[0], n, resid, "N", sigma, "estimated from the residuals")
+    d = fit_summary(h.fit, loops[0], n, resid, "N", None, "estimated from the residuals")
     source = "; ".join(str(lp.source) for lp in loops)
     d.update(model=best, nrmse=h.nrmse, route="history", bic=scores[best], decimate=decimate,
              normal_load_N=loops[0].normal_load, frequency_Hz=loops[0].frequency,
@@ -103,7 +101,6 @@ def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
     `max_steps` LM steps (None: the curve fit's own budget)."""
     if model not in ("lugre", "best"):
         raise CommandError(f"--model {model} does not apply to a friction curve; use lugre or best")
-    # without --max-steps: the curve fit's own budget (a steady-law step costs microseconds)
     steps = {} if max_steps is None else {"max_steps": max_steps}
     fit = fit_steady_curve(curve, **steps)
     resid = fit.residuals * curve.friction_error

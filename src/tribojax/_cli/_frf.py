@@ -114,7 +114,6 @@ def run_frf(args) -> int:
         return error(f"{args.config}: {err}" if not str(err).startswith(str(args.config)) else
                      str(err))  # fmt: skip
     out = Path(args.out)
-    # the one output path of the CLI: destination checked and locked first, no partial output
     with claim_outputs(args.config, [out / "frf.json", out / "frf.csv", out / "frf.png"],
                        force=False):  # fmt: skip
         t0 = time.perf_counter()

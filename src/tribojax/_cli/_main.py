@@ -1,8 +1,5 @@
-"""The `tribojax` command line: the subcommands of `SUBCOMMANDS` (usage: docs/cli.md).
-
-Errors: one line `tribojax <cmd>: error: <message>` and exit status 2 (bad input) or 1 (failed
-computation); `--debug` shows the traceback; Ctrl-C exits 130.
-"""
+"""The `tribojax` command line: the subcommands of `SUBCOMMANDS` (usage and errors:
+docs/cli.md)."""
 
 from __future__ import annotations
 

@@ -19,13 +19,13 @@ import numpy as np
 
 from .._io._files import write_text_atomic
 from .._io._records import read_record
-from .._plot import pyplot, save_figure
 from .._predict import load_model, predict
 from ._common import (
     FAILED,
     CommandError,
     claim_outputs,
     error,
+    plot_model_and_residual,
     refused_outputs,
     with_band_tension,
     write_json_atomic,
@@ -55,7 +55,12 @@ def run_predict(args) -> int:
         table = np.column_stack([pred.x, pred.measured, pred.predicted])
         rows = "\n".join(",".join(f"{v:.17g}" for v in row) for row in table)
         write_text_atomic(targets[1], ",".join(pred.columns()) + "\n" + rows + "\n")
-        drew = _plot(pred, targets[2])
+        curves = dict(x=pred.x, data=pred.measured, model=pred.predicted, xlabel=pred.x_name,
+                      ylabel=pred.unit, resid_x=pred.x, resid=pred.predicted - pred.measured)
+        title = f"{Path(pred.record).name}: {pred.model.kind} model, NRMSE {pred.nrmse:.3g}"
+        drew = plot_model_and_residual(targets[2], curves, title,
+                                       (pred.x_name, f"predicted − measured ({pred.unit})"),
+                                       labels=("measured", "predicted"))  # fmt: skip
     print(f"{model.kind} model ({model_path}) on {src}: {pred.x.size} samples, "
           f"NRMSE {pred.nrmse:.4g}, rms error {pred.rms_error:.4g} {pred.unit}")
     if scaled:
@@ -65,21 +70,3 @@ def run_predict(args) -> int:
     if not np.all(np.isfinite(pred.predicted)):
         return error("the model is not finite on this record", status=FAILED)
     return 0
-
-
-def _plot(pred, path) -> bool:
-    plt = pyplot("figure")
-    if plt is None:
-        return False
-    fig, (ax, ar) = plt.subplots(2, 1, figsize=(7, 6), constrained_layout=True,
-                                 gridspec_kw=dict(height_ratios=[3, 1.3]))  # fmt: skip
-    ax.plot(pred.x, pred.measured, "k.", ms=2, label="measured")
-    ax.plot(pred.x, pred.predicted, "C3-", lw=1, label="predicted")
-    ax.set(xlabel=pred.x_name, ylabel=pred.unit,
-           title=f"{Path(pred.record).name}: {pred.model.kind} model, NRMSE {pred.nrmse:.3g}")
-    ax.legend()
-    ar.plot(pred.x, pred.predicted - pred.measured, "C0.", ms=2)
-    ar.axhline(0, color="k", lw=0.5)
-    ar.set(xlabel=pred.x_name, ylabel=f"predicted − measured ({pred.unit})")
-    save_figure(fig, path)
-    return True

@@ -19,23 +19,21 @@ from .._reproduce._wu2015 import plot_wu2015, wu2015_comparison
 from ._common import claim_outputs, progress, write_json_atomic
 
 
-def _print_table3(rows, out=None) -> None:
-    out = sys.stdout if out is None else out  # at call time: the progress display wraps it
+def _print_table3(rows) -> None:
     head = (
         f"{'kPa':>5} {'F/N':>8} | {'F_s paper':>9} {'calib':>7} {'publ.':>7} | "
         f"{'K_tau paper':>11} {'calib':>9} {'publ.':>9} | {'C_tau paper':>11} {'calib':>7} | "
         f"{'z_max paper':>11} {'calib':>7}"
     )
-    print(head, file=out)
-    print("-" * len(head), file=out)
+    print(head)
+    print("-" * len(head))
     for r in rows:
         p, c, u = r["paper"], r["calibrated"], r["published_inputs"]
         print(
             f"{r['vacuum_kPa']:5.1f} {r['load_N']:8.4f} | {p['Fs_N']:9.4f} {c['Fs_N']:7.4f} "
             f"{u['Fs_N']:7.3f} | {p['Ktau_N_per_m']:11.4e} {c['Ktau_N_per_m']:9.3e} "
             f"{u['Ktau_N_per_m']:9.2e} | {p['Ctau_Ns_per_m']:11.2f} {c['Ctau_Ns_per_m']:7.1f} | "
-            f"{p['zmax_nm']:11.3f} {c['zmax_nm']:7.3f}",
-            file=out,
+            f"{p['zmax_nm']:11.3f} {c['zmax_nm']:7.3f}"
         )
 
 

@@ -80,14 +80,10 @@ def critical_areas(surface: FractalSurface, pair: ContactPair):
 def load_laws(surface: FractalSurface, pair: ContactPair, log_a_ec) -> tuple[PowerLaw, ...]:
     """Normal load P(a') of one asperity, N, in each regime (wang2022 Eqs 8, 9, 11, 13).
 
-    Eq 9 is printed with a garbled exponent; built like Eq 11 (Kogut–Etsion's P/P_c = 1.03
-    (δ/δ_c)^1.425 with the paper's ratio (a'/a'_ec)^((3-D)/2)) it is a'^(1.1375 + 0.2875 D) over
-    a'_ec^(2.1375 - 0.7125 D). The elastic–plastic laws keep the paper's deformation ratio, which
-    is below 1 inside those regimes, so the load jumps at a'_ec by the factor 3·0.34 = 1.02
-    (Kogut–Etsion's unrounded 1.03 would give 3 %). The same reading makes P(a') jump at the
-    other boundaries too, at D = 2.8821: x1.41 at a'_epc (ep2 above ep1 just below it) and ~670x
-    at a'_pc (H·a' above the ep2 law). The load balance stays continuous (integrals). See
-    docs/reproduction.md, "wang2022: misprints and corrections".
+    Eq 9's garbled exponent is corrected (built like Eq 11 from Kogut–Etsion's law) to
+    a'^(1.1375 + 0.2875 D) over a'_ec^(2.1375 - 0.7125 D). The printed elastic–plastic laws are
+    kept, so P(a') jumps at the regime boundaries (x1.02 at a'_ec) while the load balance stays
+    continuous. See docs/reproduction.md, "wang2022: misprints and corrections" (1, 6).
     """
     D, E, H = surface.D, pair.E_star, pair.H
     ln_lng = jnp.log(jnp.log(surface.gamma))
@@ -149,9 +145,7 @@ def mindlin_factors(psi):
         s_k   = (1 - ψ)^(1/3)                                    (stiffness, Eq 18)
         phi_d = 1 - (1-ψ)^(5/3) - (5ψ/6)(1 + (1-ψ)^(2/3))        (dissipation, Eq 20)
         phi_s = 3/5 - (1-ψ)^(2/3) + (2/5)(1-ψ)^(5/3)              (stored energy, Eq 22)
-    For ψ -> 0, phi_d ≈ 5ψ³/162 (Mindlin–Deresiewicz) and phi_s ≈ ψ²/3 (cancellation limits
-    relative accuracy below ψ ~ 1e-3; docs/reproduction.md, "Further facts"). Valid for
-    0 <= ψ < 1.
+    Valid for 0 <= ψ < 1; small-ψ limits and accuracy: docs/reproduction.md, "Further facts".
     """
     ok = psi < 1.0
     one_minus = jnp.where(ok, 1.0 - psi, 1.0)  # double-where: keep the power's input positive

@@ -122,14 +122,14 @@ class ContactParameters(eqx.Module):
         converged:  whether the load balance converged.
         all_plastic: every asperity is fully plastic (a'_l <= a'_pc): the model then carries no
                     tangential load, and F_s, K_τ, C_τ and z_max are returned as 0.
-        no_static_friction: F_s = z_max = 0 with K_τ > 0 (a'_l <= a'_epc); an eager call
-                    with throw=True warns (RuntimeWarning), an all-plastic contact raises.
+        no_static_friction: F_s = z_max = 0 with K_τ > 0 (a'_l <= a'_epc: no asperity is elastic
+                    or first elastic–plastic, the only ones that carry static friction); an eager
+                    call with throw=True warns (RuntimeWarning), an all-plastic contact raises.
     """
 
     values: Float[Array, "... 16"]
     flags: Bool[Array, "... 2"]
 
-    # one property per packed column, in _SCALARS order
     load, F_s, K_tau, C_tau, z_max, a_l, a_ec, a_epc, a_pc, psi, W_d, W_s = map(_packed, _SCALARS)
 
     @property
@@ -146,8 +146,6 @@ class ContactParameters(eqx.Module):
 
     @property
     def no_static_friction(self):
-        """F_s = z_max = 0 although the contact is not all plastic: no asperity is elastic or
-        first elastic–plastic (a'_l <= a'_epc), the only ones that carry static friction."""
         return (self.values[..., 1] == 0.0) & ~self.flags[..., 1]
 
     def as_dict(self) -> dict:

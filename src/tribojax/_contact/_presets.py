@@ -24,11 +24,8 @@ from ._surface import FractalSurface
 def wu2015_eq5_stiffness(N):
     """K_d (N/m) from wu2015 Eq 5, K_d = 0.5924·N^0.7616, with N in newtons.
 
-    Eq 5 is a power law (the text calls it exponential). Its units are not stated consistently:
-    read literally (N in N, K_d in N/m) it gives ~1 N/m, and read in Fig 14's per-area units
-    (MPa, MPa/m) a stiffness of the same absurd order for a ~1e-7 m² contact. Only the reading
-    N in N → K_d in N/µm gives the ~1e6 N/m of a measured sphere-on-flat loop, so that is what is
-    returned here: 0.5924e6·N^0.7616 N/m.
+    Eq 5's units are read as N in N → K_d in N/µm, the only reading that gives the ~1e6 N/m of a
+    measured loop (docs/hysteresis.md, "Measured stiffness"), so this returns 0.5924e6·N^0.7616 N/m.
     """
     N = check_range(N, "N", 0.0, unit="N")
     return WU2015_EQ5_COEFFICIENT * N**WU2015_EQ5_EXPONENT
@@ -46,8 +43,7 @@ def _wang2022_material(row: int, name: str) -> Material:
     )
 
 
-# wang2022 Table 2 (bundled as data/wang2022/table2_materials.csv). The printed header is garbled;
-# by the values column 1 is the fused-quartz chuck and column 2 the glass-ceramic reticle.
+# wang2022 Table 2 (data/wang2022/table2_materials.csv; its columns: docs/reproduction.md)
 def wang2022_chuck() -> Material:
     """Fused-quartz vacuum chuck, wang2022 Table 2: E 70.5 GPa, G 30.2 GPa, H 1.372 GPa."""
     return _wang2022_material(0, "fused quartz chuck")

@@ -72,7 +72,6 @@ def _arclength(fn, y0, lam0, lam_end, args, ds, ds_min, ds_max, max_points, max_
         ok = ok & (jnp.dot(z_new - z, t) > 0.0)
         t_new = _tangent(full, jnp.where(ok, z_new, z), t, args)
         ok = ok & jnp.all(jnp.isfinite(t_new))
-        # curvature control: the tangent may turn by at most ~0.2 rad per step
         ok = ok & ((jnp.dot(t_new, t) > _COS_MAX_TURN) | (ds <= 2.0 * ds_min))
         nsteps = sol.stats["num_steps"]
         i = c["i"] + jnp.where(ok, 1, 0)

@@ -4,12 +4,6 @@ Every quantity is a JAX function of the `FrictionSystem` pytree (μ, N, K_d, M, 
 leaves), so `jax.grad` / `equinox.filter_grad` give its derivatives. They follow from the implicit
 function theorem through the MHB solution (optimistix's implicit adjoint of `solve_hbm`):
 dX/dp = −(∂R/∂X)⁻¹ ∂R/∂p, never from unrolled Newton iterations.
-
-* `amplitude_at`: first-harmonic amplitude of one DOF at a given ω;
-* `resonance_peak`: (ω*, a*) where da/dω = 0, a second root-find on g(ω) = ∂a/∂ω, itself
-  differentiated implicitly: dω*/dp = −g_p / g_ω, and da*/dp = ∂a/∂p (envelope theorem);
-* `peak_on_grid`: a vmappable peak search with fixed work (natural continuation along an ω grid,
-  then a bracketing regula-falsi search of ∂a/∂ω = 0) for design curves over many normal loads.
 """
 
 from __future__ import annotations
@@ -67,8 +61,8 @@ def resonance_peak(system: FrictionSystem, omega_guess, dof: int = 0, X0=None, *
 
     X0: the MHB coefficients near the peak (default the linear solution; give them from a
     continuation for strongly nonlinear cases). `bracket` (lo, hi): the peak must lie inside,
-    otherwise the result is `nonlinear_divergence` at the guess. Derivatives of `Peak.omega` and
-    `Peak.amplitude` by the implicit function theorem (module docstring).
+    otherwise the result is `nonlinear_divergence` at the guess. Derivatives: dω*/dp = −g_p/g_ω
+    with g = ∂a/∂ω (implicit function theorem) and da*/dp = ∂a/∂p (envelope theorem).
     """
     w0 = jnp.asarray(omega_guess, dtype=jnp.float64)
     solver = optx.Newton(rtol=tol, atol=tol)
@@ -81,11 +75,6 @@ def resonance_peak(system: FrictionSystem, omega_guess, dof: int = 0, X0=None, *
     omega = jnp.where(ok, sol.value, w0)
     result = RESULTS.where(ok, RESULTS.successful, code)
     return Peak(omega=omega, amplitude=amplitude_at(system, omega, dof, X0), result=result)
-
-
-def _frozen(system):
-    """`system` with every array leaf cut from differentiation (for the peak search itself)."""
-    return jax.tree.map(lambda v: jax.lax.stop_gradient(v) if eqx.is_array(v) else v, system)
 
 
 def _amp_slope(system, omega, X0, dof, solver):
@@ -116,12 +105,12 @@ def peak_on_grid(system: FrictionSystem, omegas, dof: int = 0, *, tol: float = 1
     docs/structures.md). `result` is successful when every solve converged, g changes sign
     across the interval, and the last Newton correction |g/g_ω| is <= tol·ω; otherwise
     `nonlinear_divergence` (the best point is still returned; a peak on a kink of a(ω), see
-    docs/structures.md, has no stationary point and is reported so).
-    Derivatives: dω*/dp = −g_p/g_ω (implicit function theorem) and da*/dp = ∂a/∂p (envelope
-    theorem, ∂a/∂ω = 0 at a stationary peak).
+    docs/structures.md, has no stationary point and is reported so). Derivatives: as
+    `resonance_peak`'s.
     """
     omegas = jnp.asarray(omegas, dtype=jnp.float64)
-    frozen = _frozen(system)
+    # every array leaf cut from differentiation for the search itself
+    frozen = jax.tree.map(lambda v: jax.lax.stop_gradient(v) if eqx.is_array(v) else v, system)
     solver = optx.Dogleg(rtol=tol, atol=tol)
 
     def body(X, w):

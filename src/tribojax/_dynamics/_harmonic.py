@@ -16,10 +16,7 @@ Two routes:
   closed; [0, θ*] uses fixed-order Gauss–Legendre, so the result is jit/vmap/grad friendly. For
   Mindlin the substitution θ = θ*(1 − τ²) removes the (θ* − θ)^(3/2) endpoint singularity of the
   branch, which keeps the convergence exponential.
-* `harmonic_response`: any `AbstractFrictionElement`, driven in the time domain by
-  u = A·cos ωt from rest at u = 0 (t = −T/4), with the transient cycles discarded and the first
-  harmonic taken from the last cycle. Rate-independent elements step exactly with
-  `increment(state, du)`; others are integrated with classical RK4 at the exact drive velocity.
+* `harmonic_response`: any `AbstractFrictionElement`, driven in the time domain (its docstring).
 """
 
 from __future__ import annotations
@@ -73,12 +70,6 @@ def _coefficients(K_d, A0, A, omega, f_c, f_s) -> HarmonicCoefficients:
     )
 
 
-def _check_drive(A, omega):
-    A = check_range(A, "A", 0.0, unit="m")
-    omega = check_range(omega, "omega", 0.0, unit="rad/s")
-    return A, omega
-
-
 def harmonic_balance(
     element: AbstractHysteresisElement, A, omega=1.0, *, order: int | None = None
 ) -> HarmonicCoefficients:
@@ -100,7 +91,8 @@ def harmonic_balance(
             "harmonic_balance needs a Jenkins or Mindlin element; use harmonic_response for "
             f"other friction elements (got {type(element).__name__})"
         )
-    A, omega = _check_drive(A, omega)
+    A = check_range(A, "A", 0.0, unit="m")
+    omega = check_range(omega, "omega", 0.0, unit="rad/s")
     order = element.quadrature_order if order is None else int(order)
     x, w = (jnp.asarray(v) for v in np.polynomial.legendre.leggauss(order))
     t = 0.5 * (x + 1.0)  # nodes on [0, 1]
@@ -191,7 +183,8 @@ def harmonic_response(
     Reference: wu2015 Section 5.3 (first-harmonic balance).
     """
     ensure_x64()
-    A, omega = _check_drive(A, omega)
+    A = check_range(A, "A", 0.0, unit="m")
+    omega = check_range(omega, "omega", 0.0, unit="rad/s")
     if steps_per_cycle % 4:
         raise ValueError(f"steps_per_cycle = {steps_per_cycle} must be a multiple of 4")
     n_quarter = steps_per_cycle // 4

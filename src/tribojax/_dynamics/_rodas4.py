@@ -1,9 +1,8 @@
 """Rodas4, a Rosenbrock (linearly implicit) solver for diffrax.
 
 Rodas4 (Hairer & Wanner, Solving Ordinary Differential Equations II, 2nd ed., Sec IV.7, the
-coefficients of their RODAS code, ``ro4coe`` with METH = 1): L-stable, stiffly accurate, order 4
-with an embedded order-3 error estimate, 6 stages, dense output of order 3. With W = I/(γh) − J,
-J = ∂f/∂y(t₀, y₀) and f_t = ∂f/∂t(t₀, y₀), each stage solves
+coefficients of their RODAS code, ``ro4coe`` with METH = 1; order and stability: `Rodas4`).
+With W = I/(γh) − J, J = ∂f/∂y(t₀, y₀) and f_t = ∂f/∂t(t₀, y₀), each of the 6 stages solves
 
     W K_i = f(t₀ + α_i h, y₀ + Σ_{j<i} a_ij K_j) + Σ_{j<i} (c_ij/h) K_j + γ_i h f_t,
 

@@ -85,8 +85,7 @@ def _diffeqsolve(
     """ys (len(ts), n_state), result, stats of one solve."""
     z0, _ = ravel_pytree(element.initial_state())
     y0 = jnp.concatenate([jnp.zeros(2, z0.dtype), jnp.zeros_like(z0), jnp.zeros(1, z0.dtype)])
-    # per-component absolute tolerances: slip/deflection atol (m), velocity atol·1e3 (1/s),
-    # integral atol·0.1 s (the velocity's sets the accuracy: docs/slip.md)
+    # per-component absolute tolerances (simulate_slip's docstring, "Numerics")
     atols = jnp.concatenate(
         [jnp.array([atol, atol * 1e3]), jnp.full(z0.shape, atol), jnp.array([atol * 0.1])]
     )
@@ -158,29 +157,19 @@ def simulate_slip(
     (stage prescribed, reticle driven by friction alone, Δx = x_stage − x_reticle).
 
     Numerics. The problem is stiff (√(K_τ/m) ≈ 7e3–2e4 rad/s, C_τ/K_τ ≈ 50 µs, horizon 2.3 s) and
-    tiny (slips of nm). Default solver: `Rodas4` (Rosenbrock, L-stable, stiffly accurate, order
-    4; one exact 4×4 Jacobian and LU per step, no Newton iteration) with a PID controller (p 0.3,
-    i 0.4, step growth capped at 3x), per-component absolute tolerances (`atol` in m for Δx and z,
-    atol·1e3 for v in m/s, atol·0.1 for ∫Δx dt in m s), and steps stopped at the profile's kinks
-    (`jump_ts`; Rodas4 evaluates ∂f/∂t at the step start, which diffrax then places just after a
-    kink). The sgn(v) kink of the bristle law at v = 0 is crossed every half-period of the
-    transients and sits under the equilibria of the hold phases: the elements' smooth sign
-    v/√(v² + ε²), ε = 1e-12 m/s, makes the right-hand side C¹. `solver="kvaerno5"` selects
-    Kvaerno5 (ESDIRK, order 5) with a chord iteration re-evaluating the Jacobian at every stage
-    (optimistix `Chord`), atol 1e-16. The velocity tolerance, not `rtol`, sets the accuracy of the
-    phase averages; step counts, accuracy and cost of both solvers, and the choice of ε:
-    docs/slip.md, "Solver accuracy and cost".
+    tiny (slips of nm). Default solver: `Rodas4` with a PID controller (p 0.3, i 0.4, step growth
+    capped at 3x), per-component absolute tolerances (`atol` in m for Δx and z, atol·1e3 for v in
+    m/s, atol·0.1 for ∫Δx dt in m s), and steps stopped at the profile's kinks (`jump_ts`). The
+    elements' smooth sign (`velocity_scale`, ε = 1e-12 m/s) makes the right-hand side C¹ at v = 0.
+    The velocity tolerance, not `rtol`, sets the accuracy of the phase averages (docs/slip.md,
+    "Solver accuracy and cost", also for the step counts and cost of both solvers and for ε).
 
-    Derivatives (`adjoint`). With Rodas4 the default, and any diffrax adjoint passed, becomes
-    `ForwardJacobianAdjoint` (tribojax._dynamics._adjoint): the solve sits inside a
-    `jax.custom_jvp` whose rule is forward mode (`jax.jacfwd` through `diffrax.ForwardMode`) w.r.t.
-    the differentiated float leaves of `element`, `profile` and `mass` (and dys/dts = f for
-    `ts`); `jax.grad`/`jacrev` transpose that, so both directions give the same numbers (reverse
-    mode through diffrax would recompute the Rosenbrock steps and be wrong: see `Rodas4`). Cost:
-    one solve carrying as many tangents as differentiated scalars. Other solvers use the diffrax
-    adjoint given (default `RecursiveCheckpointAdjoint`; `jax.jacfwd` then needs
-    `adjoint=diffrax.ForwardMode()`), or `ForwardJacobianAdjoint()` if passed. Batches: `jax.vmap`
-    over loads steps all members together (the union of their steps).
+    Derivatives (`adjoint`). With Rodas4 the solve is differentiated by `ForwardJacobianAdjoint`:
+    forward mode w.r.t. the float leaves of `element`, `profile`, `mass` and `ts`, transposed for
+    `jax.grad`/`jacrev`, so both directions give the same numbers (reverse mode through diffrax
+    would be wrong: see `Rodas4`). Other solvers use the diffrax adjoint given (`jax.jacfwd` then
+    needs `adjoint=diffrax.ForwardMode()`). Batches: `jax.vmap` over loads steps all members
+    together (the union of their steps).
 
     Args:
         element: a friction element (its parameters may be traced; batch with jax.vmap).
@@ -255,10 +244,7 @@ def slip_phase_averages(
         T4 = ⟨Δx⟩[0.25,0.6] − Δx(0)         T5 = ⟨Δx⟩[0.73,1.5] − ⟨Δx⟩[0.25,0.6]
         T6 = ⟨Δx⟩[1.65,2.0] − ⟨Δx⟩[0.73,1.5]   T7 = Δx(2.3) − ⟨Δx⟩[1.65,2.0]
     (windows from `profile.windows()`, end at `t_end`). Returns [T4, T5, T6, T7] in m.
-    Other keywords go to `simulate_slip`. Derivatives w.r.t. the element's parameters: with the
-    default solver (Rodas4) `jax.jacfwd` and `jax.jacrev` both run forward mode (one solve with
-    four tangents for all four parameters); with `solver="kvaerno5"` use `jax.jacfwd` with
-    `adjoint=diffrax.ForwardMode()`.
+    Other keywords go to `simulate_slip`, whose "Derivatives" apply here too.
     """
     profile = TrapezoidProfile() if profile is None else profile
     w = profile.windows()

@@ -2,11 +2,8 @@
 
 A structure is M ẍ + C ẋ + K x + Σ f_contact(x history) = F(t) with N degrees of freedom (DOFs):
 M, C, K (N×N) in kg, N s/m, N/m; x in m. Each contact reads the displacement history of its DOFs
-over one period and returns the periodic force history it applies (N), resisting the motion:
-
-* `FrictionContact`: any `AbstractFrictionElement` between one DOF and the ground (or another
-  DOF); the element's relative displacement is x[dof] − x[ref_dof];
-* `DryFrictionContact2D`: an `ElasticDryFriction2D` at a tangential and a normal DOF.
+over one period and returns the periodic force history it applies (N), resisting the motion
+(`FrictionContact`, `DryFrictionContact2D`).
 
 Steady hysteresis: the history is run from the contact's unloaded state at x = 0 through
 `cycles` periods and the last is kept. For rate-independent elements one full period with slip

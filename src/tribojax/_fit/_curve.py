@@ -70,9 +70,7 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2
             velocity unit, β dimensionless).
         direction: +1 or −1 fits the points of that velocity sign alone; None fits both
             directions with the asymmetry T0.
-        max_steps: LM budget (the noise-floor LM); a curve whose points do not resolve the
-            Stribeck dip (driveNo2: no point below v_s) walks β towards a step for a few hundred
-            steps, each of microseconds.
+        max_steps: LM budget (the noise-floor LM, `_SOLVER`; a step costs microseconds).
     Returns:
         FitResult with names (F_c, F_s, v_s, beta, sigma2) [+ T0]; positive parameters fitted
         as logarithms, standard errors from the per-point scatter (inflated by the residual if

@@ -7,14 +7,10 @@ any mean asymmetry), is compared with the measured force. One parameter set may 
 several records at once and predicts others (`predict_history`). The figure of merit is the
 normalised RMS error NRMSE = rms(model − measured) / std(measured).
 
-Band tension (a band brake's load knob, `HysteresisLoop.band_tension`): by the capstan
-(Euler–Eytelwein) equation a band wrapped by an angle φ on a sliding drum carries
-T_tight = T_slack·e^{μφ}; with one end held at the set tension T₀ the friction force is
-T₀(e^{μφ} − 1) (or T₀(1 − e^{−μφ}) the other way), proportional to T₀ at fixed μ and φ.
-So a model's slip forces (`TENSION_SCALED`) are those at the fit's reference tension and scale
-with T/T_ref on a record at tension T; stiffnesses, the rate parameter v_s, the sharpness n and
-the offset f0 do not (assumed: the band's and the rig's elastic compliance and the clearance do
-not depend on the pretension, μ not on the pressure).
+Band tension (a band brake's load knob, `HysteresisLoop.band_tension`): by the capstan law the
+friction force is proportional to the set tension, so a model's slip forces (`TENSION_SCALED`)
+are those at the fit's reference tension and scale with T/T_ref on a record at tension T; the
+other parameters do not (the derivation and assumptions: docs/data.md, "Band tension").
 """
 
 from __future__ import annotations

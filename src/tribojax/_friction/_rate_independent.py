@@ -5,10 +5,8 @@ Each element is usable two ways:
 (a) as a steady hysteresis loop under u = A·cos θ (wu2015's phase convention, docs/reproduction.md):
     θ ∈ [0, π) is the falling branch, starting at u = +A from the loop's peak force; the rising
     branch follows from the loop's odd symmetry f(θ + π) = −f(θ);
-(b) as an `AbstractFrictionElement` in rate form, driven by any displacement history. Because the
-    elements are rate independent they also provide `increment(state, du)`: the exact state update
-    for a displacement step du without a reversal inside it, which `tribojax.drive` uses instead
-    of an ODE solver.
+(b) in rate form, driven by any displacement history, with the exact update `increment(state, du)`
+    of an `AbstractIncrementalElement`.
 
 Units: displacement m, force N, stiffness N/m. A0 = μN/K_d (m) is the critical amplitude.
 """

@@ -100,16 +100,6 @@ def write_json_atomic(path, data, *, exclusive: bool = False) -> None:
     write_text_atomic(path, text + "\n", exclusive=exclusive)
 
 
-def refuse_existing(targets) -> None:
-    """FileExistsError naming the first of `targets` that exists (a user file is not replaced)."""
-    existing = [str(p) for p in targets if Path(p).exists()]
-    if existing:
-        raise FileExistsError(
-            f"{existing[0]} exists; refusing to overwrite it (pass overwrite=True, or choose "
-            "another name)"
-        )
-
-
 # ---------------------------------------------------------------------------------------------
 # sidecars
 
@@ -211,8 +201,10 @@ def write_record_files(path, header, columns, sidecar: dict | None, *, overwrite
     targets = [path] + ([sidecar_path(path)] if sidecar is not None else [])
     if path.suffix.lower() != ".csv":
         raise ValueError(f"{path}: a record file must end in .csv (its sidecar is <stem>.json)")
-    if not overwrite:
-        refuse_existing(targets)
+    existing = [] if overwrite else [p for p in targets if p.exists()]
+    if existing:
+        raise FileExistsError(f"{existing[0]} exists; refusing to overwrite it (pass "
+                              "overwrite=True, or choose another name)")  # fmt: skip
     lines = [f"# {c}" for c in comment.splitlines()] + [",".join(header)]
     lines += [",".join(f"{v:.{digits}g}" for v in row) for row in zip(*columns)]
     if sidecar is not None:

@@ -2,11 +2,9 @@
 
 A loop record is a time series (t, u, f) of a contact under periodic tangential displacement
 (wu2015 Section 5: displacement from the vibrometer, force from the piezo sensor). On disk it is
-a CSV `time_s,displacement_m,force_N` (SI, `#` comment lines allowed) with a sidecar
-`<stem>.json` {"normal_load_N", "frequency_Hz", "noise_std_N" (optional)}, or the legacy
-`t_s,u_m,f_N` without one. Whole cycles are located from the upward mean-crossings of u
-(`cycle_starts`); the analysis (wu2015 Eq 6, K_eq, C_eq) and the fit of μN and K_d are
-`tribojax.analyse_loop` and `tribojax.fit_loop`.
+a CSV with a sidecar `<stem>.json` (`read_loop`, `write_loop`). Whole cycles are located from
+the upward mean-crossings of u (`cycle_starts`); the analysis (wu2015 Eq 6, K_eq, C_eq) and the
+fit of μN and K_d are `tribojax.analyse_loop` and `tribojax.fit_loop`.
 """
 
 from __future__ import annotations

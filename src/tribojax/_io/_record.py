@@ -36,10 +36,8 @@ class AbstractRecord(abc.ABC):
       local quadratics; such a record also sets `response_unit` and implements `series` and
       `resampled`;
     and has `source` (the file or folder it came from, "<array>" when built in memory) and a
-    length (`len`: its samples, or its points for a curve).
-
-    The concrete records are final: subclassing one raises TypeError (add a kind as a new
-    subclass of `AbstractRecord` instead).
+    length (`len`: its samples, or its points for a curve). The concrete records are final
+    (module docstring): subclassing one raises TypeError.
     """
 
     kind: ClassVar[str]
@@ -92,8 +90,7 @@ class AbstractRecord(abc.ABC):
         the source and the field."""
 
     def __len__(self) -> int:
-        """The number of samples (points, for a curve): the length of the series `_set_series`
-        checked."""
+        """The number of samples (points, for a curve)."""
         return self._length
 
     def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

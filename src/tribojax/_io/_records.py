@@ -66,7 +66,7 @@ def read_record(
     format: "slip" (`read_slip_run`), "loop" (`tribojax.read_loop`), "brfd" (the friction-damper
     JSON, `read_brfd`), "epos_steady" (a folder of EPOS steady-state exports → one
     `FrictionCurve`), "epos" (one EPOS export → `FrictionTransient`), "curve" (a friction-curve or
-    transient CSV with its units sidecar). Anything else: DataFileError listing these.
+    transient CSV with its units sidecar). Anything else: ValueError listing these.
     """
     if format is None:
         format = detect_format(path)

@@ -2,17 +2,7 @@
 
 A slip run is what the reticle rig of wang2022 (Section 4, Figure 9) measures: the stage
 acceleration a(t) and the slip Δx = x_stage − x_body of the body it carries, sampled at times t.
-On disk it is a CSV with the columns `time_s,stage_accel_m_s2,slip_m` (SI units, `#` comment
-lines allowed) and a sidecar `<stem>.json` next to it:
-
-    {"mass_kg": 0.321, "normal_load_N": 17.4, "noise_std_m": 2e-10}
-
-(`mass_kg` required; `normal_load_N` and `noise_std_m` optional; a "comment" string allowed; any
-other key is refused, so that a misspelt key is not silently ignored).
-
-Hysteresis loops are `tribojax.HysteresisLoop` records (`_io/_loop.py`); `tribojax.read_record`
-dispatches on the CSV header. Every loader error is a `DataFileError` naming the file, the line
-and the reason.
+On disk it is a CSV with a sidecar `<stem>.json` (`read_slip_run`, `write_slip_run`).
 """
 
 from __future__ import annotations

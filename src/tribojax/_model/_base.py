@@ -20,7 +20,7 @@ from .._fit._noise import ALPHA, noise_consistent, noise_estimate
 
 N_WINDOWS = 32  # windows of the noise test
 N_FOLD_BLOCKS = 16  # contiguous blocks of the default two-fold split, alternately assigned
-K_MAX = 12  # effect strengths in one fit, padded to this size (one compiled solve per record shape)
+K_MAX = 12
 """Most effect strengths in one model; fits are padded to this size so that one compiled solve
 serves every combination of effects on a record shape."""
 

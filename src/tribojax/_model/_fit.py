@@ -1,12 +1,6 @@
-"""The fit of a record model with its effects: the solver, start policy and statistics that
-`fit`, `predict` and `discover` share.
-
-Every fit minimises ‖(model − y)/scale‖² over x = [θ_b, s] through the one residual
-(`_residual.padded_residual`: strengths padded to `K_MAX`, one compiled solve per record shape).
-The solver is `LevenbergMarquardt.record` (the library's one LM); the statistics are
-`fit_statistics` (the one delta method) on the active columns; `heldout_residual` is the
-two-fold check, `fit_record` the model alone.
-"""
+"""The fit of a record model with its effects (`fit_model`), alone (`fit_record`) and held out
+(`heldout_residual`): the solver, start policy and statistics that `fit`, `predict` and
+`discover` share."""
 
 from __future__ import annotations
 
@@ -191,8 +185,8 @@ def heldout_residual(baseline, designs, x0, y=None, scale=1.0, effects=(),
     see it. None when the model has no folds, a fold's fit fails, or a parameter has less than
     `FOLD_SHARE_MIN` of its Jacobian energy at x0 (Σ (∂r/∂x)², where it has any) in either
     fold: that fold cannot determine it, so its fit keeps the start value, which saw the
-    held-out samples. Where the model is not finite (a solve ran out of steps) the check is
-    done again once with `baseline.more_steps()`."""
+    held-out samples (why at x0: docs/discovery.md, "Held-out evidence"). Where the model is not
+    finite (a solve ran out of steps) the check is done again once with `baseline.more_steps()`."""
     y = np.asarray(baseline.data().y if y is None else y, dtype=float)
     if baseline.folds() is None:  # no held-out check for this model
         return None
@@ -208,9 +202,6 @@ _NOT_FINITE = object()  # a held-out check where the model was not finite
 
 def _heldout(baseline, designs, x0, y, scale, effects, max_steps):
     folds = np.asarray(baseline.folds())
-    # a parameter one fold hardly sees keeps the start value (fitted on all samples) in that
-    # fold's fit, so its held-out prediction would not be one. Judged at the start, where both
-    # folds' fits begin (at a fold's own optimum the model may hardly depend on it)
     xp, args = _padded(baseline, designs, x0, y, scale)
     npar = len(baseline.param_names) + sum(d.k for d in designs)
     J = np.asarray(value_and_jacobian(padded_residual, xp, args, solver=SOLVER)[1])[: y.size, :npar]
@@ -266,8 +257,7 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
 
     thetas = list(baseline.starts() if starts is None else starts)
 
-    # the first start alone; when it is not at a minimum, the others side by side (read in
-    # order), each abandoned while above the first one's cost after `PROBE_STEPS` steps
+    # the first start alone; when it is not at a minimum, the others side by side, read in order
     def in_order():
         first = in_parallel([call(thetas[0])])[0]
         yield first

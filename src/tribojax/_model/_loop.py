@@ -3,11 +3,8 @@
 `LoopBaseline` is the Jenkins macroslip element (wu2015 Eq 1; `element="mindlin"`: the Mindlin
 microslip law, wu2015 Eq 2, as an Iwan bank) driven through the record's displacement from the
 first upward mean-crossing, μN and K_d fitted as logarithms, compared with the force from the
-first reversal on (`prepare_loop`). Its physics knobs (null 0) are those of `loop_force`:
-microslip weight w, normal-load slope β and curvature γ (μN ∝ N, K_d ∝ N^p, wu2015 Eq 5),
-viscous coefficient c/c_ref, backlash depth ε and gap ln(g/A), self-energizing exponent σ and
-direction asymmetry a of the slip force. `fit_loop(model="history")` and
-`discover` fit this one model.
+first reversal on (`prepare_loop`); its physics knobs are those of `loop_force` (module docstring
+of `_loop_force`). `fit_loop(model="history")` and `discover` fit this one model.
 
 Noise (when the sidecar gives none) and its AR(1) ρ come from differences between cycles
 (`cycle_noise`): the steady loop's misfit repeats every period T while the noise does not, so
@@ -54,8 +51,8 @@ LOOP_KNOBS = ("microslip", "load_slope", "viscous", "backlash", "log_gap", "load
 
 class LoopBaseline(AbstractBaseline):
     """Jenkins element (μN in N, K_d in N/m; θ = their logs) driven by a loop record's
-    displacement; knobs (w, β, c/c_ref, ε, ln(g/A), γ, p, σ, a, ln(shape − 1)) as in the module
-    docstring and `loop_force`'s."""
+    displacement; knobs (w, β, c/c_ref, ε, ln(g/A), γ, p, σ, a, ln(shape − 1)) as in
+    `loop_force`'s module docstring."""
 
     kind: ClassVar[str] = "loop"
     param_names: ClassVar[tuple[str, ...]] = ("mu_N", "K_d")

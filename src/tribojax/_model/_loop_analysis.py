@@ -1,11 +1,5 @@
-"""wu2015's loop analysis of a measured hysteresis loop.
-
-* whole cycles are located from the upward mean-crossings of u, and ω from their spacing;
-* the first harmonics of u and f over those cycles (linear least squares, exact for whole cycles)
-  give A and K_eq = F_c/A, C_eq = −F_s/(Aω) in the phase of u = A cos θ (wu2015 Section 5.3);
-* K_d by wu2015 Eq 6, (k1 + k2)/2, the mean of the initial loading and unloading slopes at the
-  reversal points;
-"""
+"""wu2015's loop analysis of a measured hysteresis loop (`analyse_loop`: ω, A, K_eq and C_eq from
+the first harmonics over whole cycles, wu2015 Section 5.3; K_d by wu2015 Eq 6)."""
 
 from __future__ import annotations
 

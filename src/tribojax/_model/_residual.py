@@ -1,11 +1,5 @@
-"""The one residual of every record-model fit, and the model evaluated at given values.
-
-`padded_residual` is (model − y)/scale over x = [θ_b, s] with the effect strengths s padded to
-`K_MAX` (inactive ones masked out of the model and held at 0): one module-level function, so one
-compiled solve serves the model alone and every combination of effects on one record shape.
-`Padded` carries what it needs (array leaves only); `pack_designs` turns the effects' designs
-into the knob base, gain and additive basis; `evaluate` computes the model's samples from them.
-"""
+"""The one residual of every record-model fit (`padded_residual`, its arguments `Padded`), and
+the model evaluated at given values (`evaluate`)."""
 
 from __future__ import annotations
 

@@ -1,11 +1,7 @@
-"""A fitted model as a value: the record model's kind and options, its physical parameters and the
-effects it carries, each by name with its physical strengths and fitted nuisance values.
-
-This is what `tribojax fit` and `tribojax discover` save ("fitted_model" in fit.json and
-discovery.json) and what `tribojax predict` loads (`tribojax.load_model`) to evaluate the model
-on a record it never saw. The values are physical (units in `units`), never the unconstrained θ
-or the unit-scaled strengths of one record's fit, so the model rebuilds on another record of the
-same kind (`tribojax.predict`).
+"""A fitted model as a value (`FittedModel`): what `tribojax fit` and `tribojax discover` save
+("fitted_model" in fit.json and discovery.json) and `tribojax predict` loads. Its values are
+physical (units in `units`), never one record's θ or unit-scaled strengths, so the model
+rebuilds on another record of the same kind.
 """
 
 from __future__ import annotations

@@ -12,17 +12,10 @@ Physics knobs of the baseline (null values in brackets), all inside one friction
     log10_v_s       [−5]: the Stribeck velocity scale (a nuisance, on a grid)
     load_coupling κ [0]:  normal load N(t) = N₀(1 + κ·a(t)/g), so F_s and K_τ scale by the
                           same factor (stage acceleration a, g = 9.8 m/s², wang2022 Eq 28)
-and four knobs of a mode term added to the reading (`vibration`): amplitudes mode_q, mode_qdot
-[0], mode_log_f (log f) and mode_logit_zeta (ζ = ZETA_MAX/(1 + e^−u): a lightly damped mode).
-The element (`AugmentedPreSlip`, `_slip_element.py`) carries the time as a second state
-(τ' = 1) so that it can read a(τ); the model alone runs the paper's `PreSlipLuGre`.
-
-Additive (measurement) effects, linear in their strengths:
-    sensor_drift     c₀ + c₁P₁(s) + c₂P₂(s) + c₃P₃(s), Legendre in s = scaled time ∈ [−1, 1]
-    position_error   ε·x_s(t) [+ ε₂·x_s(t)²], x_s = ∫∫a dt the stage travel from the record
-                     (fibre bending, Abbe/cosine errors: a reading error growing with travel)
-    vibration        A₁·q(t) + A₂·q̇(t)/ω, q the response of a damped oscillator
-                     q̈ + 2ζωq̇ + ω²q = −a(t) to the stage acceleration; ω, ζ on a grid
+and five knobs of a mode term added to the reading (`vibration`, `_mode`): amplitudes mode_q,
+mode_qdot [0], mode_log_f (log f), mode_logit_zeta (ζ = ZETA_MAX/(1 + e^−u): a lightly damped
+mode) and mode_static [1]. The element is `AugmentedPreSlip`; the model alone runs the paper's
+`PreSlipLuGre`. The additive (measurement) effects are `tribojax.discovery._slip_effects`'.
 """
 
 from __future__ import annotations
@@ -74,11 +67,8 @@ def stage_travel(t, accel):
 
 
 def slip_start(t, accel, slip, mass) -> np.ndarray:
-    """Start values (F_s, K_τ, C_τ) of the baseline: `tribojax.slip_run_start` as an array.
-
-    The one start heuristic of slip runs (the quasi-static limit of wang2022 Eq 27, searched on
-    F_s; C_τ from a damping ratio 0.1), under discovery's name.
-    """
+    """Start values (F_s in N, K_τ in N/m, C_τ in N s/m) of the baseline:
+    `tribojax.slip_run_start` (the quasi-static limit of wang2022 Eq 27) as an array."""
     s = slip_run_start(SlipRun(t=np.asarray(t, float), accel=np.asarray(accel, float),
                                slip=np.asarray(slip, float), mass=float(mass),
                                source="slip record"))  # fmt: skip

@@ -1,9 +1,6 @@
-"""The slip model's friction element with its knobs: wang2022's pre-slip element (Eq 27) with
-LuGre's viscous and Stribeck terms (Eq 25) and a normal load that follows the stage acceleration.
-
-The element the slip-run model's effects move (`SlipBaseline.element`); with every knob at its
-null it is `PreSlipLuGre` (the paper's element), which the model alone uses.
-"""
+"""The friction element the slip-run model's effects move (`SlipBaseline.element`): wang2022's
+pre-slip element (Eq 27) with LuGre's viscous and Stribeck terms (Eq 25) and a normal load that
+follows the stage acceleration; at its null, `PreSlipLuGre`."""
 
 from __future__ import annotations
 

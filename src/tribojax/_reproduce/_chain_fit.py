@@ -1,23 +1,15 @@
 """Full-chain fit of wang2022's measured reticle slips (Tables 4–7) through the whole model.
 
-Chain (all differentiable, float64):
-
-    (D, G, μ_t, σ_s)  --FractalContact, Eqs 5–24-->  F_s, K_τ, C_τ at Table 3's six loads (Eq 28)
-    (F_s, K_τ, C_τ, α) --PreSlipLuGre + slip ODE, Eq 27-->  phase slips T4…T7 (nm), 24 values
-
-and optimistix Levenberg–Marquardt fits the free parameters to the *measured* columns of
-Tables 4–7. The chain is `tribojax._chain` (one path shared with the reproduction, the
-sensitivities and discovery): the Table 1/2 reticle–chuck pair of `wang2022_table3_model` with D
-free (γ = 1.5, M = 1 fixed: G and M are exactly degenerate, see `calibrate_table3`),
-T = m·a_max = 0.321 N in T/P and m = 0.321 kg in Eq 24.
+optimistix Levenberg–Marquardt fits the free parameters of the chain `tribojax._chain`
+((D, G, μ_t, σ_s) → F_s, K_τ, C_τ at Table 3's six loads, Eqs 5–24; with α → phase slips T4…T7,
+Eq 27: 24 values) to the *measured* columns of Tables 4–7. The chain is the Table 1/2 pair of
+`wang2022_table3_model` with D free (γ = 1.5, M = 1 fixed: G and M are exactly degenerate, see
+`calibrate_table3`), T = m·a_max = 0.321 N in T/P and m = 0.321 kg in Eq 24.
 
 Uncertainty model (stated): every measured cell has the same *relative* uncertainty s, estimated
 from the fit (s² = RSS/(n − p)); residual_i = model_i/measured_i − 1. This is also the metric of
 the acceptance: the RMS relative residual over the 24 cells, computed the same way for the
 paper's own theoretical values. (T5 at 20 kPa is −0.47 nm measured; it weighs most.)
-
-Derivatives. Forward mode is the cheap direction for a handful of parameters (the slip ODE with
-`diffrax.ForwardMode()`; the contact through the custom JVP of `tribojax._chain`).
 
 Convergence. The slips come from an adaptive ODE solver (accurate to ~2e-4 here,
 `_chain.SLIP_ATOL`); near the optimum the misfit is flat to that level along the D–G valley.
@@ -125,17 +117,13 @@ def _report(rss, phys):
             print(line, file=sys.stderr, flush=True)
 
 
-def _announce(phys):
-    _PROGRESS["last"] = phys.tolist()  # the trial point, for messages if the chain raises
-
-
 def _residuals(theta, args, adjoint, shown=False):
     # ψ (`student_t_residuals`; identity at inv_nu = 0, s = 1) of (model − y)/σ·√w per cell, or of
     # (ln|model| − ln|y|)/σ·√w: the robust fit's σ, form, w or (ν, s) (one compiled solve for all)
     theta_full0, idx, mu_min_, y, sigma, sqrt_w, log_form, inv_nu, t_scale, loads = args
     phys = to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_min_)
-    if shown:  # host callbacks: a program holding them is not kept in the compilation cache
-        jax.debug.callback(_announce, jax.lax.stop_gradient(phys))
+    if shown:  # host callbacks (never cached); "last" names the trial point if the chain raises
+        jax.debug.callback(lambda p: _PROGRESS.update(last=p.tolist()), jax.lax.stop_gradient(phys))
     slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
     safe = jnp.where(slips == 0, 1.0, slips)  # double-where: ln|0| is not used
     d = jnp.where(log_form > 0.5, jnp.log(jnp.abs(safe)) - jnp.log(jnp.abs(y)), slips - y)
@@ -171,8 +159,8 @@ class ChainFit:
             counted when progress is shown; else LM steps + 1 (one evaluation per trial point:
             the count itself is a host callback, which would keep the fit out of the cache).
         start: the physical start.
-        gauss_newton_step: the Gauss–Newton step left at the end, max |δp|/std error; the fit
-            counts as converged only when LM stopped and this is below `GN_STEP_TOL`.
+        gauss_newton_step: the Gauss–Newton step left at the end, max |δp|/std error (module
+            docstring, Convergence).
     """
 
     fit: FitResult
@@ -282,12 +270,12 @@ def fit_measured_slips(
         target: (n, 4) phase slips in nm to fit (default: the measured Tables 4–7); all cells
             finite and non-zero, and more cells than free parameters.
         loads: the n normal loads, N (default Table 3's six).
-        jac: "fwd" (forward mode through the custom-JVP contact and diffrax ForwardMode) or
-            "bwd" (reverse mode).
+        jac: "fwd" (forward mode, the cheap direction for a few parameters: through the
+            custom-JVP contact and diffrax ForwardMode) or "bwd" (reverse mode).
         max_steps, rtol, atol: LM step budget and Cauchy tolerances (optimistix: both the step in
             θ and the change of every residual below atol + rtol·|value|). The defaults match
-            the chain's accuracy (slips to ~2e-4 relative, `_chain.SLIP_ATOL`); tighter ones make LM
-            wander along the flat D–G valley without lowering the misfit.
+            the chain's accuracy (module docstring, Convergence); tighter ones make LM wander
+            along the flat D–G valley without lowering the misfit.
         progress: True prints one line per residual evaluation to stderr (long fits); a
             callable receives each line instead.
         sigma: (n, 4) uncertainty shape per cell, nm (default: the target itself, i.e. relative
@@ -380,7 +368,6 @@ def fit_measured_slips(
     dpdth = np.diag(np.asarray(jax.jacfwd(transform)(jnp.asarray(fit.theta))))
     S = J / dpdth[None, :] * np.asarray(fit.values)[None, :]
     _, sv, vt = np.linalg.svd(S, full_matrices=False)
-    # the Gauss–Newton step still left, in standard errors (`least_squares_fit` checked it)
     gn_step = float(np.max(np.abs(np.asarray(gauss_newton_step(r, J)))))
     return ChainFit(
         fit=fit, parameters=dict(zip(PARAMETERS, phys.tolist())), free=free,

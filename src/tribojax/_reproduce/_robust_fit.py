@@ -8,25 +8,16 @@ error of ν degrees of freedom (ν = ∞: Gaussian) and scale s, in one of three
     mixed      y_i = model_i + s·σ_i·e_i          σ_i = √(y_i² + c²): relative above the floor
                                                   c (nm), absolute below; r_i = (y_i − model_i)/σ_i
 
-The log-likelihood of the slips (a density in nm) is
+The log-likelihood ℓ of the slips (a density in nm) is the Student-t one of
+`tribojax._reproduce._student_t` (Lange, Little & Taylor 1989, Eq 1) with σ_i = |y_i| for the
+relative shape (the Jacobian of the logarithm), 1 nm for the absolute one. The relative and
+absolute densities are proper; the mixed one takes σ_i at the measured values, which for ν < ∞
+leaves tails ∝ 1/|y| that do not normalise (its ℓ is then only indicative).
 
-    ℓ = Σ_i [ln Γ((ν+1)/2) − ln Γ(ν/2) − ½ ln(νπ) − ln(s σ_i) − (ν+1)/2 · ln(1 + r_i²/(ν s²))]
-
-(Lange, Little & Taylor 1989, J. Am. Stat. Assoc. 84, 881, Eq 1) with σ_i = |y_i| for the
-relative shape (the Jacobian of the logarithm), 1 nm for the absolute one; ν = ∞ gives the
-Gaussian Σ_i [−½ ln 2π − ln(s σ_i) − r_i²/(2s²)]. The relative and absolute densities are
-proper; the mixed one takes σ_i at the measured values, which for ν < ∞ leaves tails ∝ 1/|y|
-that do not normalise (its ℓ is then only indicative).
-
-Fit. For fixed ν the maximum of ℓ over θ and s is found by coordinate ascent
-(`student_t_ml`, which says why it needs fewer fits than EM): θ at fixed s by least squares on
-ψ_i = sign(r_i)·√((ν+1)·ln(1 + r_i²/(νs²))), whose sum of squares is −2ℓ up to terms in s
-(`fit_measured_slips(student_t=(ν, s))`: the one engine, the one compiled solve), then s at
-fixed θ exactly (the root of Σ u_i r_i²/s² = n, `t_scale`), until one round raises ℓ by less
-than `tol`. Its fixed point is EM's: the likelihood equations Σ u_i r_i ∂r_i/∂θ = 0 with
-u_i = (ν+1)/(ν + r_i²/s²) (Lange et al., Eqs 4–5). The reported chain is the least-squares fit
-weighted by u at the optimum (it stays put there), whose Jacobian gives the standard errors
-s²(JᵀUJ)⁻¹.
+Fit. For fixed ν, ℓ is maximised over θ and s by `student_t_ml` (θ by
+`fit_measured_slips(student_t=(ν, s))`: the one engine, the one compiled solve), which reaches
+EM's fixed point. The reported chain is the least-squares fit weighted by the EM weights u at
+the optimum (it stays put there), whose Jacobian gives the standard errors s²(JᵀUJ)⁻¹.
 
 Outliers. The standardized residual of a cell is z_i = r_i/(ŝ·√(1 − h_ii)), h the leverage of
 the weighted fit (hat matrix of √u·J) and ŝ = 1.4826·median|r_i| the robust standard deviation
@@ -282,11 +273,10 @@ def robust_fit_measured_slips(
             `tol` (nats) in one iteration.
         fit_kw: passed to `fit_measured_slips` (max_steps, rtol, atol, jac, progress).
     Returns:
-        RobustChainFit; its `chain` is the weighted least-squares fit with the EM weights at
-        the optimum (where that fit's normal equations are the likelihood equations: it stays
-        put, and its Jacobian √u·J gives the standard errors s²(JᵀUJ)⁻¹ and the leverages).
-        `result` is `RESULTS.not_converged` when `max_iterations` were used up, or the inner
-        fit's result when that failed. Never raises for non-convergence.
+        RobustChainFit; its `chain` is the EM-weighted fit at the optimum (module docstring,
+        Fit; its Jacobian √u·J also gives the leverages). `result` is `RESULTS.not_converged`
+        when `max_iterations` were used up, or the inner fit's result when that failed. Never
+        raises for non-convergence.
     """
     if not (nu > 0):
         raise ValueError(f"nu = {nu} is outside the allowed range (0, inf]")
@@ -295,7 +285,7 @@ def robust_fit_measured_slips(
     log = noise == "relative"
     kw = dict(free=tuple(free), target=y, loads=loads, **residual_form(y, noise, floor_nm),
               **fit_kw)  # fmt: skip
-    if initial is None:  # weighted by `initial_weights` if given (e.g. another fit's EM weights)
+    if initial is None:
         initial = fit_measured_slips(start, weights=initial_weights, **kw)
 
     def theta_step(scale, previous):

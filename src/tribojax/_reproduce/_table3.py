@@ -8,10 +8,8 @@ Two computations, side by side with the paper's values:
 (b) calibrated: G, μ_t and σ_s fitted by optimistix Levenberg–Marquardt to Table 3's F_s and
     K_τ (12 values, relative residuals, common scatter estimated from the fit), with M fixed.
 
-G and M are not separately identifiable, exactly: with D fixed they enter Eqs 5–13 (and hence every
-output) only through G^(2D-4)/M (Eq 5's bracket; Eq 8's M^(-1/2) G^(D-2)). A fit of both has a
-zero singular value; any M is matched by G·M^(1/(2D-4)). We therefore fix M (default 1) and report
-the equivalence line.
+G and M are exactly degenerate at fixed D (only G^(2D-4)/M enters Eqs 5–13; `equivalent_G`,
+docs/reproduction.md, Further facts), so M is fixed (default 1) and the equivalence is reported.
 
 Fixed in both: D = 2.8821, γ = 1.5, a = a' (truncated area), T/P = 0.321 N / F (the reticle's
 inertial load m·a_max over the normal load) and m = 0.321 kg in Eq 24 (see docs/reproduction.md;

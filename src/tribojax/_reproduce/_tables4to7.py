@@ -7,9 +7,8 @@ of `tribojax._chain`. Computed at α = 1 (the paper's value) and with α fitted 
 Levenberg–Marquardt to the paper's *theoretical* Tables 4 and 6 (12 values, relative residuals,
 α > 0 through α = e^θ, scatter estimated from the fit).
 
-Tables 5 and 7 are not fitted. A model that is symmetric under a → −a gives T5 ≈ −T7 and
-T4 ≈ −T6; the paper's own theory has T4 ≈ −T6 but T5 ≠ −T7 at 0.6–2 kPa (−10.00 vs +13.8 nm at
-0.6 kPa), which no symmetric model reproduces; those cells are reported, not tuned.
+Tables 5 and 7 are reported, not fitted: the paper's own theory breaks T5 ≈ −T7 at 0.6–2 kPa,
+which no model symmetric under a → −a reproduces (docs/reproduction.md, Symmetry limit).
 """
 
 from __future__ import annotations
@@ -25,7 +24,7 @@ from .._dynamics._slip import simulate_slip
 from .._export import cached_jit
 from .._fit._engine import FitResult, least_squares_fit
 from .._friction._lugre import PreSlipLuGre
-from .._plot import pyplot
+from .._plot import pyplot, save_figure
 from .._presets import WANG2022_RETICLE_MASS_KG
 from .._tables import wang2022_table
 from ._chain_fit import TABLES, measured_slips
@@ -142,10 +141,7 @@ def _figure10(alpha, ts):
 
 
 def print_tables4to7(result: dict, out=None) -> None:
-    """A compact on-screen table of `reproduce_tables4to7`'s output."""
-    import sys
-
-    out = sys.stdout if out is None else out
+    """A compact on-screen table of `reproduce_tables4to7`'s output (to `out`, default stdout)."""
     head = (
         f"{'table':>5} {'kPa':>5} | {'theory':>8} {'measured':>8} | {'a=1':>8} {'err':>6} | "
         f"{'a=fit':>8} {'err':>6}"
@@ -194,6 +190,5 @@ def plot_figure10(result: dict, path) -> bool:
     axes.flat[0].plot([], [], "k-", lw=3, alpha=0.6, label="measured phase means (Tables 4–7)")
     axes.flat[0].legend(fontsize=7)
     fig.suptitle("wang2022 Figure 10: reticle slip and contact deformation (Table 3 parameters)")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return True

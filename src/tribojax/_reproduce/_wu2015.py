@@ -1,13 +1,7 @@
 """wu2015's comparison: Jenkins and Mindlin K̄, C̄ against the paper's Eq 7, and its stiffness laws.
 
-* `wu2015_eq7` / `eq7_curves`: the paper's published linear fits of its measurements (Eq 7,
-  bundled as data/wu2015/eq7_fits.csv).
-* `wu2015_comparison`: K̄(Ā), C̄(Ā) of both elements against Eq 7 with the RMS difference per model
-  over Ā ∈ [0, 4.5], and the C̄ peak of each element.
-* `fractal_tangential_stiffness` (Eq 4, exponent corrected); Eq 5 (`wu2015_eq5_stiffness`) is a
-  preset in `tribojax._presets`.
-
 All K̄, C̄ are functions of Ā only, so the comparison uses a unit element (μN = 1 N, K_d = 1 N/m).
+Eq 5 (`wu2015_eq5_stiffness`) is a preset of `tribojax._contact._presets`, re-exported here.
 """
 
 from __future__ import annotations
@@ -23,7 +17,7 @@ from .._contact._presets import wu2015_eq5_stiffness as wu2015_eq5_stiffness  # 
 from .._dynamics._harmonic import harmonic_balance
 from .._export import cached_jit
 from .._friction._rate_independent import Jenkins, Mindlin
-from .._plot import pyplot
+from .._plot import pyplot, save_figure
 from .._tables import data_dir, read_table
 
 EQ7_COLUMNS = ("quantity", "A_bar_min", "A_bar_max", "slope", "intercept")
@@ -153,8 +147,7 @@ def plot_wu2015(comparison: dict, path) -> bool:
         )
     axes[0].legend(fontsize=8)
     fig.suptitle("wu2015: dimensionless equivalent stiffness and damping (Figs 18–19, 23–24)")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
     return True
 
 

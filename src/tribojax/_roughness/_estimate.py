@@ -17,12 +17,10 @@ after removing a straight line from windows of length ℓ, which is K G^(2D-4) c
 exact discrete constant c (the variance/RMS-vs-scale method; we read wang2022's "3D-RMS method"
 [44] as this, but its reference list is not in our copy, so that reading is unconfirmed).
 
-Each method fits a straight line in log-log over the scaling band chosen automatically (the
-widest window of at least `min_decades` whose residuals are within 1.5x of the most linear
-window's, + 0.01 for the PSD), reports the band, and an uncertainty: the regression standard
-error combined with the spread of D over the accepted windows. Estimation works on concrete NumPy
-data (the band choice is discrete); the model spectra `psd_model` and
-`structure_function_model` are JAX functions.
+Each method fits a straight line in log-log over a scaling band chosen automatically
+(`_choose_band`) and reports the band and an uncertainty: the regression standard error combined
+with the spread of D over the accepted windows. Estimation works on concrete NumPy data (the band
+choice is discrete); the model spectra `psd_model` and `structure_function_model` are JAX code.
 """
 
 from __future__ import annotations

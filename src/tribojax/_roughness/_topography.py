@@ -172,8 +172,7 @@ def _read_instrument(path: Path) -> Topography:
         raise DataFileError(f"{path}: the file states no length unit; read it with unit=")
     s = unit_scale(unit)
     sizes = t.physical_sizes
-    nx = z.shape[0]
-    dx = float(sizes[0]) / nx * s
+    dx = float(sizes[0]) / z.shape[0] * s
     if z.ndim == 1:
         return Topography(z * s, dx=dx, source=path.name)
     # SurfaceTopography stores maps as (nx, ny); tribojax uses (ny, nx), x along the last axis.

@@ -1,10 +1,7 @@
 """Discovery: find where a model and its data disagree, name the missing effect, add it (issue 6).
 
-Workflow (`discover`): fit a baseline; flag the stretches of the residual that the noise does not
-explain (`find_regions`: window χ² tests with an AR(1) correction, Bonferroni over windows); rank
-named candidate effects by Rao score tests built from forward-mode JAX Jacobians at the current
-fit; refit the best candidates and accept the one with the lowest ΔBIC below −10 (AR(1)-inflated);
-repeat greedily; `none` when nothing qualifies. `DiscoveryReport.as_dict()` is discovery.json.
+The workflow is `discover`'s docstring (and docs/discovery.md); `DiscoveryReport.as_dict()` is
+discovery.json.
 
 How to plug in (the contract; a loop or user module needs nothing else)
 -----------------------------------------------------------------------
@@ -60,9 +57,8 @@ Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration
 Loop side (`loop_baseline`: Jenkins, wu2015 Eq 1, driven by the measured displacement; effects
 `microslip`, `viscous_damping`, `normal_load_variation`, `backlash`, `force_offset`;
 `discover_loop`, `plot_loop_discovery`; hidden-effect loops `hidden_effect_loop` and wu2015 Eq 7
-stand-ins `eq7_standin_loop`): see `tribojax.discovery._loop`. Optional baseline hooks used
-there: `noise_model(r)` (σ̂, ρ̂ of the residual's noise) and `region_info(region)` (extra keys
-of a flagged region).
+stand-ins `eq7_standin_loop`): see `tribojax.discovery._loop`. Optional baseline hooks:
+`AbstractBaseline.noise_model`, `region_info`.
 
 Curve side (`curve_baseline`: Coulomb + linear viscous friction of a steady `FrictionCurve`, both
 directions, each point weighted by its standard error; effects `stribeck` (LuGre steady law),

@@ -1,10 +1,6 @@
 """Curve side of discovery: the effects of the friction-curve model (`tribojax._model._curve`:
-its baseline, knobs, noise and weighting are described there), `discover_curve` and its figure.
-
-Effects (registered for `default_effects("curve")`): `stribeck` and `viscous`, the friction
-law's effects written once for every record kind (`_friction_effects`: their curve forms are
-described there), and `asymmetry` (T0); each has a signed strength whose null is interior, so
-the Rao score test applies.
+its baseline, knobs, noise and weighting), registered for `default_effects("curve")` — `stribeck`
+and `viscous` (`_friction_effects`) and `asymmetry` — with `discover_curve` and its figure.
 """
 
 from __future__ import annotations

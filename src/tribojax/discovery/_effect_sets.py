@@ -53,15 +53,14 @@ PAIR_CANDIDATES = 3  # single refits, lowest cost first, combined in pairs by `p
 
 
 def pair_round(run, state, ranking, threshold, by_name):
-    """Two effects at once (issue 32), tried when no single candidate was added: a residual that
-    still holds a second effect's misfit is correlated by it, so a single refit's ΔBIC is
-    divided by an AR(1) inflation near its bound (docs/discovery.md, "Two effects at once").
-    The `PAIR_CANDIDATES` usable single refits of this round with the lowest cost are combined
-    in pairs, each fitted jointly from the better one's optimum with both effects' strengths. A
-    pair qualifies when its ΔBIC against the current model is below `threshold` and each of its
-    effects earns its place against the other's single refit (ΔBIC below `threshold` at the
-    pair's own AR(1) inflation); of those, by ΔBIC, the first that lowers the held-out excess
-    (`_generalises`) is returned as its refit, else None."""
+    """Two effects at once (issue 32), tried when no single candidate was added (why:
+    docs/discovery.md, "Two effects at once"). The `PAIR_CANDIDATES` usable single refits of this
+    round with the lowest cost are combined in pairs, each fitted jointly from the better one's
+    optimum with both effects' strengths. A pair qualifies when its ΔBIC against the current
+    model is below `threshold` and each of its effects earns its place against the other's
+    single refit (ΔBIC below `threshold` at the pair's own AR(1) inflation); of those, by ΔBIC,
+    the first that lowers the held-out excess (`_generalises`) is returned as its refit, else
+    None."""
     y, n, p = run.y, run.y.size, state.theta.size
     done = sorted((c for c in ranking.candidates
                    if c.refit is not None and c.refit[0].rss < state.rss),

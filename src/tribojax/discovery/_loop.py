@@ -1,19 +1,9 @@
-"""Loop side of discovery: the effects of the loop model (issue 6).
+"""Loop side of discovery: the effects of the loop model (issue 6), registered for
+`default_effects("loop")`, each described in its class.
 
 The model is `tribojax._model.LoopBaseline` (the Jenkins element driven through the record's
-measured displacement, wu2015 Eq 1; its knobs in `tribojax._model._loop_force.loop_force`:
-microslip weight w, wu2015 Eq 2; normal load N(u) = N0(1 + βu/A + γ(u/A)²) with μN ∝ N and
-K_d ∝ N^0.7616, wu2015 Eq 5; a viscous force c·u̇; a backlash of depth ε and gap g), the same
-model that `fit_loop(model="history")` fits; its noise model is `cycle_noise`.
-
-Effects (registered for `default_effects("loop")`, names as in the issues): `microslip`,
-`viscous_damping`, `normal_load_variation` (the friction law's effects written once for every
-record kind: `_friction_effects`), `backlash`, the band brake's `self_energizing` and
-`direction_asymmetry` (issue 30; default candidates only on a band brake's records,
-`LoopBaseline.band_brake`), and the measurement effect `force_offset`; each moves one knob (or
-the offset) with a signed strength, so the null is interior and the Rao score test applies.
-`backlash`'s gap g is not identified under the null: a grid of g/A seeds the score (Davies:
-the largest score, Bonferroni over the grid) and the refit starts.
+measured displacement, wu2015 Eq 1; its knobs and their physics: `tribojax._model._loop_force`),
+the same model that `fit_loop(model="history")` fits; its noise model is `cycle_noise`.
 
 Regions: the abscissa is the displacement u (m) and the segments are the branches (0 =
 "unloading", u falling; 1 = "loading", u rising); each flagged region also carries "branch",
@@ -98,18 +88,10 @@ _BAND = {
 
 class BandBrakeEffect(AbstractEffect):
     """An effect of a band brake's loop (`tribojax.BandBrake`), `name` one of `_BAND`'s: one
-    signed strength moving one knob of the loop model, a default candidate only on a band
-    brake's records (`LoopBaseline.band_brake`).
-
-    - `self_energizing`: the stick branch between the slip forces bends as
-      ψ_σ(q) = sign(q)·expm1(σ|q|)/expm1(σ) of the share q of the slip force (capstan law
-      T₀e^{μφ} with the wrapped angle φ growing with the share carried; `loop_force`). σ > 0:
-      the force rises exponentially towards slip and drops steeply just after a reversal.
-    - `direction_asymmetry`: slip forces that differ with the direction of sliding, μN(1 ± a)
-      (a band energized in one direction, `BandBrake`'s F₊ ≠ F₋); zero force stays at zero,
-      unlike `force_offset`.
-
-    Strength 0 is the null in both."""
+    signed strength (0 the null) moving one knob of the loop model, a default candidate only on
+    a band brake's records (`LoopBaseline.band_brake`). `self_energizing`: the capstan bend ψ_σ
+    of the stick branch; `direction_asymmetry`: slip forces μN(1 ± a), zero force kept at zero
+    (unlike `force_offset`); both in the module docstring of `tribojax._model._loop_force`."""
 
     name: str
     kind: ClassVar[str] = "loop"

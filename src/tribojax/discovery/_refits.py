@@ -14,10 +14,8 @@ from .._model import MAX_STEPS, effect_strengths, fit_model
 from .._parallel import in_parallel, speculatively
 from ._fitting import _columns, _delta_bic
 
-# Refits after a candidate of the round reached the noise (`refit_round`): `QUICK_STEPS` steps
-# per start, continued only within `QUICK_MARGIN` × that candidate's cost (`_refit`).
-QUICK_STEPS = 16
-QUICK_MARGIN = 2.0
+QUICK_STEPS = 16  # steps per start of a refit after a candidate of the round reached the noise
+QUICK_MARGIN = 2.0  # ... continued only within this factor of that candidate's cost (`_refit`)
 
 
 def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor=-np.inf):
@@ -59,9 +57,8 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
     def at_noise(fit):
         return fit.converged and fit.rss <= min(floor, state.rss)
 
-    # the Gauss–Newton start first, alone, then the design's starts side by side
-    # (`in_parallel`); in quick mode, where every start is short, all of them side by side.
-    # A Gauss–Newton start at the noise is kept alone (the other starts not run, or not read)
+    # the Gauss–Newton start first, alone, then the design's starts side by side (`in_parallel`);
+    # in quick mode, where every start is short, all of them side by side
     quick = target is not None
     fits = [] if quick else [f() for f in gauss_newton]
     if fits and at_noise(fits[0]):

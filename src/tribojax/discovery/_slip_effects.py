@@ -102,9 +102,8 @@ class Vibration(AbstractEffect):
 
     Additive A₁q_s + A₂q̇/ω (two signed amplitudes set the phase), q of q̈ + 2ζωq̇ + ω²q = −a(t)
     and q_s = q (the full response, `static` 1) or q + a/ω² (its dynamic part, `static` 0: the
-    quasi-static deflection −a/ω², in phase with a and so with the elastic slip itself, is
-    compensated, e.g. by the stage's feed-forward, and what is left rings after each jerk). q̇
-    is also the response to the jerk. Natural frequency and damping ratio seeded by a grid
+    quasi-static deflection −a/ω² compensated, e.g. by a feed-forward; `SlipBaseline._mode`);
+    q̇ is also the response to the jerk. Natural frequency and damping ratio seeded by a grid
     (default 40 frequencies between 3/T and 0.4 × the sampling rate, capped at 500 Hz,
     × ζ ∈ {0.01, 0.03, 0.1} × both forms) refined around the best grid point by golden-section
     searches on the score (log f within one grid step, then log ζ within a factor 3), then
