@@ -28,33 +28,15 @@ if TYPE_CHECKING:
     from ._chain import mu_min as chain_mu_min  # noqa: F401
     from ._chain import to_physical as chain_physical  # noqa: F401
     from ._chain import to_theta as chain_theta  # noqa: F401
-    from ._contact._asperity import (
-        REGIME_NAMES as REGIME_NAMES,
-    )
-    from ._contact._asperity import (
-        asperity_load as asperity_load,
-    )
-    from ._contact._asperity import (
-        asperity_regime as asperity_regime,
-    )
-    from ._contact._asperity import (
-        critical_areas as critical_areas,
-    )
-    from ._contact._contact import (
-        ContactParameters as ContactParameters,
-    )
-    from ._contact._contact import (
-        FractalContact as FractalContact,
-    )
-    from ._contact._contact import (
-        contact_parameters as contact_parameters,
-    )
-    from ._contact._materials import (
-        ContactPair as ContactPair,
-    )
-    from ._contact._materials import (
-        Material as Material,
-    )
+    from ._contact._asperity import REGIME_NAMES as REGIME_NAMES
+    from ._contact._asperity import asperity_load as asperity_load
+    from ._contact._asperity import asperity_regime as asperity_regime
+    from ._contact._asperity import critical_areas as critical_areas
+    from ._contact._contact import ContactParameters as ContactParameters
+    from ._contact._contact import FractalContact as FractalContact
+    from ._contact._contact import contact_parameters as contact_parameters
+    from ._contact._materials import ContactPair as ContactPair
+    from ._contact._materials import Material as Material
     from ._contact._presets import vacuum_to_load as vacuum_to_load
     from ._contact._presets import wang2022_chuck as wang2022_chuck
     from ._contact._presets import wang2022_pair as wang2022_pair

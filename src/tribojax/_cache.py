@@ -1,15 +1,11 @@
 """JAX's persistent compilation cache, on by default for tribojax's programs.
 
-A command pays tracing and XLA compilation in every new process; the persistent cache keeps the
-compiled programs on disk so that the second run of the same fit skips XLA compilation (tracing
-is still paid). Set when tribojax is first imported, and only if the user has not chosen a JAX
-cache themselves (`jax_compilation_cache_dir` or `JAX_COMPILATION_CACHE_DIR`).
-`TRIBOJAX_CACHE=off` (or 0/no/false) leaves JAX's settings alone; `TRIBOJAX_CACHE_DIR` chooses
-the folder (default: the platform's user cache folder, `cache_dir`). Programs that compile in
-`MIN_COMPILE_S` or more are kept: all of them (docs/performance.md, The compilation cache, has
-the folders and says why). Traced programs are kept beside it (`tribojax._export`). A program
-holding a host callback (an `equinox.error_if` that raises, `throw=True`) is never cached by
-jax 0.10: the fit engine traces its programs without one (`tribojax._checks.failures_as_nan`).
+Set when tribojax is first used, unless the user chose a JAX cache (`jax_compilation_cache_dir`
+or `JAX_COMPILATION_CACHE_DIR`). `TRIBOJAX_CACHE=off` (or 0/no/false) leaves JAX's settings
+alone; `TRIBOJAX_CACHE_DIR` chooses the folder (`cache_dir`). Every program is kept
+(`MIN_COMPILE_S`). docs/performance.md (The compilation cache) has the folders, the reasons and
+why a program with a host callback is never cached (`tribojax._checks.failures_as_nan`); traced
+programs are kept beside it (`tribojax._export`).
 """
 
 from __future__ import annotations

@@ -3,11 +3,9 @@
     (D, G, μ_t, σ_s)  --FractalContact, Eqs 5–24-->  F_s, K_τ, C_τ at the normal loads (Eq 28)
     (F_s, K_τ, C_τ, α) --PreSlipLuGre, Eq 27, slip ODE-->  phase slips T4…T7 (Tables 4–7)
 
-under the stage cycle `TrapezoidProfile(a_max)` (docs/reproduction.md). Used by the Table 3
-calibration, the Tables 4–7 reproduction and the full-chain fits (`tribojax._reproduce`), the
-surface fit (`tribojax._fit`), the sensitivities (`tribojax._sensitivity`) and discovery's table
-baseline. Also the one mapping between unconstrained fit coordinates θ and physical parameters
-(`to_physical`, `to_theta`).
+under the stage cycle `TrapezoidProfile(a_max)` (docs/reproduction.md; its users:
+docs/architecture.md, One of each). Also the one mapping between unconstrained fit coordinates θ
+and physical parameters (`to_physical`, `to_theta`).
 
 Derivatives of the contact at many loads. optimistix 0.1.0's forward linearisation of a residual
 that contains the contact's optimistix root find is rejected by lineax as non-finite. The contact
@@ -188,8 +186,7 @@ def lugre_phase_slips_nm(F_s, K_tau, C_tau, alpha, **kw):
 
 
 # --- the whole chain ----------------------------------------------------------------------------
-# Slip tolerances for the fit: atol 1e-15 m gives phase slips within ~2e-4 relative of a
-# 1e-17 reference at 0.6 and 20 kPa, in a third to a half of the time of the 1e-16 default.
+# Slip tolerances of the full-chain fit (docs/performance.md, The full-chain fit's slip tolerances)
 SLIP_ATOL = 1e-15
 SLIP_RTOL = 1e-6
 SLIP_MAX_STEPS = 40_000

@@ -16,12 +16,8 @@ import numpy as np
 from ._precision import ensure_x64
 
 # Failures as values (`failures_as_nan`; docs/performance.md, "Programs with a host callback"):
-# a thread-local JAX trace-context state, part of every jit cache key, under which checks traced
-# under jit make the checked value NaN instead of adding a host callback that raises. Checks
-# inside diffrax and lineax reach it through equinox's jitted check
-# (`_eqx_errors.branched_error_if_impl_jit`), wrapped once here to pass `on_error="nan"` while
-# the state is on. Internal APIs of jax 0.10 and equinox 0.13: if either is missing, the mode is
-# off (programs just are not cached).
+# a trace-context state, part of every jit cache key; diffrax's and lineax's checks reach it
+# through equinox's jitted check, wrapped here. Internal APIs: if missing, the mode is off.
 try:
     from jax._src.config import bool_state as _bool_state
 
@@ -43,19 +39,12 @@ if _NAN_MODE is not None:
     _eqx_errors.branched_error_if_impl_jit = _eqx_check
 
 
-def _on_error() -> str:
-    return "nan" if _NAN_MODE is not None and _NAN_MODE.value else "default"
-
-
 @contextlib.contextmanager
 def failures_as_nan():
     """Within this block (this thread), checks traced under jit return NaN on failure instead of
     raising: tribojax's own and those inside diffrax and lineax. For programs whose caller turns
     a non-finite result into a `RESULTS` value (the fit engine)."""
-    if _NAN_MODE is None:
-        yield
-        return
-    with _NAN_MODE(True):
+    with contextlib.nullcontext() if _NAN_MODE is None else _NAN_MODE(True):
         yield
 
 
@@ -96,14 +85,10 @@ def check_range(x, name: str, lo=None, hi=None, *, lo_open=True, hi_open=True, u
         bad = bad | ((x <= lo) if lo_open else (x < lo))
     if hi is not None:
         bad = bad | ((x >= hi) if hi_open else (x > hi))
-    if _is_concrete(x, bad):  # under a jit trace, ops on a constant x give a traced `bad`
-        bad_np = np.asarray(bad)
-        if bad_np.any():
-            value = np.asarray(x)[bad_np].ravel()[0]
-            raise ValueError(f"{name} = {value:g}{unit_s} is outside the allowed range {rng}")
-        return x
-    message = f"{name} is outside the allowed range {rng}{unit_s} (or NaN)"
-    return eqx.error_if(x, bad, message, on_error=_on_error())
+    if _is_concrete(x, bad) and np.asarray(bad).any():  # under jit a constant x gives a traced bad
+        value = np.asarray(x)[np.asarray(bad)].ravel()[0]
+        raise ValueError(f"{name} = {value:g}{unit_s} is outside the allowed range {rng}")
+    return fail_if(x, bad, f"{name} is outside the allowed range {rng}{unit_s} (or NaN)")
 
 
 def fail_if(x, bad, message: str):
@@ -115,7 +100,8 @@ def fail_if(x, bad, message: str):
         if np.asarray(bad).any():
             raise ValueError(message)
         return x
-    return eqx.error_if(x, bad, message, on_error=_on_error())
+    on_error = "nan" if _NAN_MODE is not None and _NAN_MODE.value else "default"
+    return eqx.error_if(x, bad, message, on_error=on_error)
 
 
 def runtime_message(exc: BaseException) -> str:

@@ -1,18 +1,12 @@
 """Traced programs kept on disk: `cached_jit`, `eqx.filter_jit` whose trace survives the process.
 
-JAX's persistent cache skips XLA compilation in a new process but not tracing and lowering,
-which are most of a fit's start-up (the forward-mode Jacobian of a diffrax solve). `cached_jit`
-exports the lowered program (`jax.export`, StableHLO) the first time a signature is met and
-stores it beside the compilation cache (`<cache folder>/../export`, `_cache.cache_dir`); a new
-process reads it back and only compiles it (a persistent-cache hit when warm).
-
-A stored program is used only under the same key (`_key`: everything its trace depends on). A
-signature that cannot be keyed stably (a closure, a user's own function or class), a program
-that cannot be exported (a host callback; it leaves an empty `.refused` marker) or a call under a
-trace runs through plain `eqx.filter_jit`. A truncated or half-written file is never used, and
-exporting, reading back and compiling hold one lock per process (`_LOWERING`); docs/performance.md
-(Stored traces) gives the key in full and the reasons. The function's outputs must be arrays in
-tuples, lists or dicts.
+JAX's persistent cache skips XLA compilation in a new process but not tracing and lowering.
+`cached_jit` exports the lowered program (`jax.export`, StableHLO) the first time a signature is
+met and stores it beside the compilation cache (`export_dir`); a new process reads it back and
+only compiles it. A stored program is used only under the same key (`_key`); a signature that
+cannot be keyed, a program that cannot be exported (it leaves an empty `.refused` marker) or a
+call under a trace runs through plain `eqx.filter_jit`. docs/performance.md (Stored traces) gives
+the key in full, the file checks, the lock (`_LOWERING`) and the reasons.
 """
 
 from __future__ import annotations

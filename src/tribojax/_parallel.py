@@ -1,8 +1,7 @@
 """Independent fits side by side: a fit is one compiled solve whose ODE steps run on one core,
-and JAX releases the GIL while it runs, so the further starts of a record model's fit, the two
-folds of a held-out check, the starts of a discovery refit, a candidate's seeds, the score's
-knob Jacobians and a held-out check needed later (`in_background`) can use the other cores.
-Results are the same numbers as one after another (each call is pure)."""
+and JAX releases the GIL while it runs, so independent fits (starts, held-out folds, refits,
+seeds; docs/architecture.md) can use the other cores. Results are the same numbers as one after
+another (each call is pure)."""
 
 from __future__ import annotations
 

@@ -1,19 +1,16 @@
-"""float64 switch.
+"""The float64 check, and the compilation cache set up at first use (`tribojax._cache`).
 
-tribojax works in float64 throughout: slips of a nanometre against stiffnesses of 1e8 N/m lose
-all their digits in float32. Importing `tribojax` therefore turns on `jax_enable_x64` (the one
-side effect of the import, documented in the README, with the compilation cache of
-`tribojax._cache`). If a user turns it off again, every model
-entry point refuses to run instead of silently computing in float32.
+Slips of a nanometre against stiffnesses of 1e8 N/m lose all their digits in float32. `import
+tribojax` turns `jax_enable_x64` on; a user who turns it off again is refused by every model
+entry point (`ensure_x64`) instead of computing in float32.
 """
 
 import jax
 
 from ._cache import enable_cache
 
-# x64 was switched on by `import tribojax` (tribojax/__init__.py); not again here, so that a user
-# who switched it off after that import is refused by `ensure_x64`, not silently overruled
-CACHE_DIR = enable_cache(jax.config)  # the persistent compilation cache (`tribojax._cache`)
+# x64 is not switched on again here: a user who switched it off is refused, not overruled
+CACHE_DIR = enable_cache(jax.config)
 
 
 def ensure_x64() -> None:

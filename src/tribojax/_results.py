@@ -1,10 +1,6 @@
 """Result codes: optimistix's `RESULTS` (itself lineax's plus the nonlinear-solver outcomes) and
-the outcomes of tribojax's fits.
-
-A fit reports one member (`FitResult.result`); `FitResult.converged` is `result ==
-RESULTS.successful` and `RESULTS[result]` is the message. Optimistix extends lineax's RESULTS the
-same way, so a code returned by `optimistix.least_squares` is promoted unchanged
-(`RESULTS.promote`).
+the outcomes of tribojax's fits. A fit reports one member (`FitResult.result`); a code returned
+by `optimistix.least_squares` is promoted unchanged (`RESULTS.promote`).
 """
 
 from __future__ import annotations

@@ -10,10 +10,8 @@ the relative change of y_i per relative change of p_j. The same formula is used 
 dimension D, so e_D is per *relative* change of D: +1 % of D = 2.8821 is +0.029, a large change of
 roughness; divide e_D by D for the change per unit D.
 
-Two chains, both `equinox.Module`s mapping a dict of scalar inputs to a dict of outputs:
-`ReticleChain` (contact and phase slips T4–T7, `tribojax._chain`'s path at one load; a_max enters
-twice, through the stage profile and through T = m·a_max in T/P) and `LoopChain` (the same
-contact, then wu2015's K̄, C̄ of a Jenkins or Mindlin element at a fixed amplitude).
+Two chains map a dict of scalar inputs to a dict of outputs: `ReticleChain` (contact and phase
+slips, `tribojax._chain`'s path at one load) and `LoopChain` (contact, then wu2015's K̄, C̄).
 """
 
 from __future__ import annotations
@@ -46,14 +44,6 @@ from ._presets import (
     WANG2022_TABLE1_D,
 )
 
-# The Table-3-calibrated point (tribojax._presets, M = 1) and wang2022's 4 kPa row.
-REFERENCE_POINT = {
-    "D": WANG2022_TABLE1_D,
-    "G": CALIBRATED_G_M,
-    "mu_t": CALIBRATED_MU_T,
-    "load": WANG2022_REFERENCE_LOAD_N,
-    "a_max": WANG2022_A_MAX,
-}
 # Fixed loop amplitude: about the largest measured phase slip of Tables 4–7 (43.9 nm, Table 6 at
 # 0.6 kPa); with Table 3's z_max = 33–44 nm this is Ā ≈ 1.1–1.5, Mindlin microslip.
 DEFAULT_AMPLITUDE = 50e-9  # m
@@ -335,11 +325,9 @@ def elasticities(fn, params: dict, *, mode: str = "fwd") -> Elasticities:
     return Elasticities(names, outputs, p, values, jac, jac * p[None, :] / values[:, None])
 
 
-_R = REFERENCE_POINT
-
-
 def slip_sensitivities(
-    D=_R["D"], G=_R["G"], mu_t=_R["mu_t"], load=_R["load"], a_max=_R["a_max"], **chain_kw
+    D=WANG2022_TABLE1_D, G=CALIBRATED_G_M, mu_t=CALIBRATED_MU_T, load=WANG2022_REFERENCE_LOAD_N,
+    a_max=WANG2022_A_MAX, **chain_kw
 ) -> Elasticities:
     """Elasticities of F_s, K_τ, C_τ, z_max and the phase slips T4–T7 (wang2022 Tables 3–7).
 
@@ -355,8 +343,8 @@ def slip_sensitivities(
 
 
 def hysteresis_sensitivities(
-    D=_R["D"], G=_R["G"], mu_t=_R["mu_t"], load=_R["load"], a_max=_R["a_max"],
-    A=DEFAULT_AMPLITUDE,
+    D=WANG2022_TABLE1_D, G=CALIBRATED_G_M, mu_t=CALIBRATED_MU_T, load=WANG2022_REFERENCE_LOAD_N,
+    a_max=WANG2022_A_MAX, A=DEFAULT_AMPLITUDE,
     *,
     element: str = "mindlin",
     **chain_kw,

@@ -1,13 +1,11 @@
 """Parameter sweeps: one model, many inputs, vmapped and sharded across devices (`jax.sharding`).
 
-`sweep(fn, batch)` evaluates `fn` on every member of a batch (a pytree of arrays with a common
-leading axis): it places the batch on a one-axis device mesh,
-`NamedSharding(Mesh(devices, ("batch",)), P("batch"))`, runs one jitted `jax.vmap` per device on
-the slice that device holds (dispatched asynchronously, so the devices run concurrently; the
-members are independent, so nothing is communicated) and assembles the outputs into global
-arrays with the same sharding (docs/architecture.md says why not one partitioned jit).
-The batch is padded to a multiple of the device count by repeating its last member (a valid
-input, so no check fires on padding) and the padding is cut off again.
+`sweep(fn, batch)` places the batch on a one-axis device mesh, `NamedSharding(Mesh(devices,
+("batch",)), P("batch"))`, runs one jitted `jax.vmap` per device on its slice (dispatched
+asynchronously; the members are independent, so nothing is communicated) and assembles global
+arrays with the same sharding (docs/architecture.md says why not one partitioned jit). The batch
+is padded to a multiple of the device count by repeating its last member (a valid input, so no
+check fires on padding) and the padding is cut off again.
 
 Several CPU devices for tests: `XLA_FLAGS=--xla_force_host_platform_device_count=N` set before JAX
 initialises. GPUs and multi-host setups use the same code through JAX's own runtime.
@@ -41,14 +39,6 @@ def product_grid(**axes) -> dict:
     return {k: g.ravel() for k, g in zip(arrays, grids)}
 
 
-def batch_sharding(devices=None) -> NamedSharding:
-    """The sharding of a batch's leading axis over `devices` (default: all of `jax.devices()`)."""
-    devices = jax.devices() if devices is None else list(devices)
-    if not devices:
-        raise ValueError("devices must name at least one device")
-    return NamedSharding(Mesh(np.array(devices), ("batch",)), P("batch"))
-
-
 @eqx.filter_jit
 def _vmapped(fn, batch):
     return jax.vmap(fn)(batch)
@@ -77,9 +67,11 @@ def sweep(fn, batch, *, devices=None):
     if n == 0 or any(x.ndim == 0 or x.shape[0] != n for x in leaves):
         shapes = [tuple(x.shape) for x in leaves]
         raise ValueError(f"every batch array needs the same non-zero leading length, got {shapes}")
-    sharding = batch_sharding(devices)
-    k = sharding.mesh.size
-    pad = (-n) % k
+    devices = jax.devices() if devices is None else list(devices)
+    if not devices:
+        raise ValueError("devices must name at least one device")
+    sharding = NamedSharding(Mesh(np.array(devices), ("batch",)), P("batch"))
+    pad = (-n) % len(devices)
 
     def place(x):
         x = jnp.asarray(x)

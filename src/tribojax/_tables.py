@@ -1,5 +1,4 @@
-"""Bundled published data and a validating CSV reader (below every other layer: the physics,
-`_presets` and the records of `_io` all read through it).
+"""Bundled published data and a validating CSV reader (the physics and `_io` read through it).
 
 Data live in the repository's top-level `data/` folder; wheels ship a copy as `tribojax/_data`
 (hatch force-include), so the loaders work from any working directory and from a non-editable

@@ -166,8 +166,7 @@ def fit_arguments(parser) -> None:
         "fits) or 'steady' (wu2015's steady-loop formula) fit --element; "
         "jenkins|mindlin|lugre|bouc_wen|band_brake drive that element (+ force offset) through "
         "the measured history, best: the first four, lowest BIC (default for a non-periodic "
-        "history); friction "
-        "curves: lugre (the steady law, default) or best",
+        "history); friction curves: lugre (the steady law, default) or best",
     )
     parser.add_argument("--from", dest="from_model", default=None, metavar="MODEL.json",
                         help="fit the model saved in a fit.json or discovery.json (with the "

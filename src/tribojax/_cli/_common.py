@@ -142,12 +142,11 @@ def refused_outputs(src, targets, *, force: bool) -> str | None:
 def claim_outputs(src, targets, *, force: bool):
     """Reserve the output files `targets` before a long computation; remove them on failure.
 
-    Checks (before any work): no target is the input `src` or its sidecar, the first target does
-    not exist (unless `force`), the folder can be created and written. A lock file beside the
-    first target keeps a second run with the same output from starting (CommandError naming it);
-    it is removed on exit. If the block raises, targets it created are removed (and the folder,
-    if it was made here and is left empty), so a failed run leaves no partial output. Write the
-    first target with `exclusive=not force`.
+    Checks (before any work) `refused_outputs` and that the folder can be created and written. A
+    lock file beside the first target keeps a second run with the same output from starting
+    (CommandError naming it); it is removed on exit. If the block raises, targets it created are
+    removed (and the folder, if it was made here and is left empty), so a failed run leaves no
+    partial output. Write the first target with `exclusive=not force`.
     """
     targets = [Path(t) for t in targets]
     why = refused_outputs(src, targets, force=force)
@@ -326,10 +325,10 @@ class _AboveProgress:
         return getattr(self._out, name)
 
 
-def progress(args, label: str, total: int | None = None, stream=None) -> Progress:
+def progress(args, label: str, total: int | None = None) -> Progress:
     """The progress display of a subcommand: off with `--quiet` (`args.quiet`) or when stderr is
     not a terminal."""
-    return Progress(label, total, quiet=bool(getattr(args, "quiet", False)), stream=stream)
+    return Progress(label, total, quiet=bool(getattr(args, "quiet", False)))
 
 
 def with_band_tension(record, value, path):

@@ -3,11 +3,8 @@
     tribojax contact --D 2.88 --G 4.36e-8 --load 3 10 [--json out.json]
     tribojax contact --topography profile.csv --unit um --load 5 [--method psd] [--band LO HI]
 
-D and G of a topography come from `estimate_fractal`. A measured surface that shows no clean
-power law over the searched band still gets an answer: the best band with 2 < D < 3 (of the chosen
-method, else of another) with its quality and a warning; `--band LO HI` fixes the band. A
-surface with no band of 2 < D < 3 at all (smoother than a fractal one) gets every method's D,
-band and quality with a warning, and no contact numbers (exit 0).
+D and G of a topography come from `estimate_fractal`; a surface without a clean scaling band:
+`surface_estimate` and `_no_fractal_band`.
 """
 
 from __future__ import annotations

@@ -1,17 +1,10 @@
 """`tribojax discover FILE.csv [--out DIR] [--force]`: the discovery workflow on a user record.
 
-The sidecar `<stem>.json` is read from beside the CSV. A slip run (time_s, stage_accel_m_s2,
-slip_m) goes to the pre-slip LuGre baseline; a hysteresis loop (time_s, displacement_m, force_N)
-to the loop baseline (`tribojax.discovery.loop_baseline`); a steady friction curve (a folder of EPOS
-steady-state exports, or a curve CSV) to the Coulomb + viscous curve baseline
-(`tribojax.discovery.curve_baseline`); the format is detected, or named by `--format`. Writes
-DIR/discovery.json (keys: effect, verdict, effects, excess_rmse_before, excess_rmse_after,
-heldout_excess_before, heldout_excess_after (the two-fold held-out excess), misfit,
-baseline_rmse, final_rmse, regions, candidates, fitted_model (what `tribojax predict` takes), ...)
-and DIR/discovery.png, and prints a summary. A long record is first reduced to at most
-`--max-samples` samples (default 5,000) by block local quadratics (`tribojax.decimate_record`;
-"decimation" in discovery.json says how, `--decimate off` keeps every sample); a loop of many
-cycles keeps only its first whole cycles that fit.
+The record (its format detected, or named by `--format`) goes to the baseline of its kind
+(`_DISCOVERY`: a slip run, a loop or history, a friction curve). Writes DIR/discovery.json
+(`DiscoveryReport.as_dict`, with "fitted_model" what `tribojax predict` takes, and "decimation":
+how `reduce_record` reduced a long record, a loop to its first whole cycles that fit) and
+DIR/discovery.png, and prints a summary.
 
 Exit codes: 0 done; 2 malformed input or refused output; 3 the baseline fit did not converge
 (discovery.json is still written, with "converged": false).
@@ -66,7 +59,6 @@ def run_discover(args) -> int:
             raise CommandError(f"{src}: discovery has no baseline for a {type(record).__name__} "
                                "yet; fit it with `tribojax fit`")  # fmt: skip
         make_baseline, plot = _DISCOVERY[record.kind]
-        # a long series is reduced; a curve (a few points) never is
         record, reduction = (reduce_record(record, args, whole_cycles=True) if record.reducible
                              else (record, None))  # fmt: skip
         if args.initial is not None and record.kind != "loop":

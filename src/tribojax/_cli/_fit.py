@@ -8,10 +8,8 @@
 
 The record type comes from the file (`tribojax.read_record`: CSV header, brfd JSON, EPOS export
 or a folder of them) or `--format`; measured records are fitted by `_fit_real`. Writes DIR/fit.json
-(parameters, standard errors, correlation, converged, steps, rms residual, number of data, what was
-fitted, the source file; "decimation": how a long record was reduced before the fit;
-"full_record": the fitted model's residuals on every original sample; "fitted_model": the model
-as `tribojax predict` takes it) and DIR/fit.png (data and model, residuals). Exit status: 0
+(`fit_summary`; "decimation" and "full_record": `_fit_reduced`; "fitted_model": the model as
+`tribojax predict` takes it) and DIR/fit.png (data and model, residuals). Exit status: 0
 converged, 1 not converged (fit.json still written, with "converged": false), 2 bad input
 (malformed file, fewer data than parameters, an output that exists or would overwrite the input).
 """
@@ -51,10 +49,7 @@ _NOT_FITTED = {
 
 
 def run_fit(args) -> int:
-    """Run `tribojax fit` with parsed `args`; the exit status (see the module docstring).
-
-    The destination is checked (and reserved against a concurrent run) before the fit.
-    """
+    """Run `tribojax fit` with parsed `args`; the exit status (see the module docstring)."""
     paths = [Path(f) for f in args.file]
     path = paths[0]
     out = Path(args.out) if args.out is not None else Path("tribojax-out") / f"fit-{path.stem}"
@@ -195,14 +190,14 @@ def _fit_from_model(full, args, start, note):
         raise CommandError(f"--from {args.from_model}: a {model.kind} model; --from takes a "
                            "slip, loop or curve model (a history: --model ELEMENT)")  # fmt: skip
     fit = refit(model, full, max_steps=args.max_steps or MAX_STEPS)
-    base = fit.model
-    x_name, x = RECORD_KINDS[model.kind].axis(base)
-    measured = np.asarray(base.data().y)
+    base, kind = fit.model, RECORD_KINDS[model.kind]
+    data = base.data()
+    x_name, x = kind.axis(base)
+    measured = np.asarray(data.y)
     resid = fit.prediction - measured
-    unit = RECORD_KINDS[model.kind].unit(base)
-    sigma = base.data().noise_std or float(fit.scale)
-    how = "the record's noise sd" if base.data().noise_std else "first-difference estimate"
-    d = fit_summary(fit, full, len(measured), resid, unit, sigma, how)
+    unit = kind.unit(base)
+    how = "the record's noise sd" if data.noise_std else "first-difference estimate"
+    d = fit_summary(fit, full, len(measured), resid, unit, data.noise_std or float(fit.scale), how)
     saved = fitted_model(fit, str(full.source))
     d.update(model=f"{model.kind} model from {args.from_model}"
              + (f" with {', '.join(e.name for e in saved.effects)}" if saved.effects else ""),
@@ -257,7 +252,7 @@ def _reduced_sigma_source(reduction, default):
     return f"decimation: {reduction.noise_source}, scaled to the reduced samples"
 
 
-def _fit_slip(run, args, start, reduction, note=None):
+def _fit_slip(run, args, start, reduction, note):
     if args.alpha in (None, "free"):
         alpha = None
     else:
@@ -280,7 +275,7 @@ def _fit_slip(run, args, start, reduction, note=None):
     return d, curves
 
 
-def _fit_loop(loop, args, start, reduction, note=None):
+def _fit_loop(loop, args, start, reduction, note):
     if len(loop.t) <= 2:
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
     steps = args.max_steps or MAX_STEPS

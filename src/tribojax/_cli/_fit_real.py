@@ -1,9 +1,5 @@
-"""`tribojax fit` on measured records: history fits of loops (`fit_history_record`, `--model`
-an element, or best: the lowest BIC = n·ln(RSS/n) + p·ln(n)) and friction-curve fits
-(`fit_curve_record`). Each returns the fit.json dictionary (with "model" the fitted model's name
-and "nrmse" = rms(residual)/std(measured)) and the plot curves; `fit_summary` is the part of that
-dictionary every record kind shares.
-"""
+"""`tribojax fit` on measured records: history fits of loops and friction-curve fits, each the
+fit.json dictionary and the plot curves; `fit_summary` is the part every record kind shares."""
 
 from __future__ import annotations
 

@@ -1,34 +1,7 @@
 """`tribojax frf CONFIG.toml --out DIR`: forced response of a structure with friction contacts.
 
-The configuration (TOML; all SI units):
-
-    [structure]                 # M (kg), C (N s/m), K (N/m): square matrices
-    M = [[1.0, 0.0], [0.0, 1.0]]
-    C = [[0.35, 0.0], [0.0, 2.0]]
-    K = [[12.0, 0.0], [0.0, 21.0]]
-
-    [[contact]]                 # any number; type jenkins | mindlin (dof, mu, N, K_d) or
-    type = "elastic2d"          # elastic2d (tangential_dof, normal_dof, k_t, k_n, mu, n0?)
-    tangential_dof = 0
-    normal_dof = 1
-    k_t = 5.0
-    k_n = 21.0
-    mu = 0.85
-
-    [excitation]                # static, cosine, sine (N), base (m): one entry per DOF
-    static = [0.0, 100.0]
-    cosine = [50.0, 5.0]
-
-    [harmonics]                 # H (0…H) or set = [0, 1, 3, …]; n_time (AFT samples)
-    H = 8
-
-    [range]                     # omega = [start, end] rad/s; max_points, ds_max
-    omega = [0.01, 6.0]
-
-Writes DIR/frf.csv (ω, first-harmonic amplitude of each DOF, stable), DIR/frf.json (the curve,
-result code and message, timings, the configuration) and DIR/frf.png. Exit status 0 on a
-completed continuation, 1 if it stopped early (outputs still written, result says why), 2 on
-bad input.
+The configuration (TOML, SI units: `SCHEMA`, and `NEEDS` per contact type), an example, the
+outputs and the exit status (2 on bad input): docs/cli.md, "`frf` configuration".
 """
 
 from __future__ import annotations

@@ -134,11 +134,10 @@ def _lugre_response(element, A, omega, K_d, A0):
 def _fit_loop(args) -> dict:
     """Read, analyse and fit the --loop file; the loop_fit.json content (printed summary)."""
     loop = read_loop(args.loop)
-    analysis = analyse_loop(loop)
+    a = analyse_loop(loop)
     fit = fit_loop(loop, args.element, model=args.fit_model)
-    result = {"loop": str(args.loop), "analysis": analysis.as_dict(),
+    result = {"loop": str(args.loop), "analysis": a.as_dict(),
               "fit": {**fit.as_dict(), "element": args.element, "model": args.fit_model}}
-    a = analysis
     print(f"loop: A = {a.A:.4g} m, muN = {a.mu_N:.4g} N, K_d (Eq 6) = {a.K_d:.4g} N/m, "
           f"K_eq = {a.K_eq:.4g} N/m, C_eq = {a.C_eq:.4g} N s/m")  # fmt: skip
     values = zip(fit.names, fit.values, fit.std_errors)

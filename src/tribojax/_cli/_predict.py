@@ -3,12 +3,10 @@
 MODEL is a fit.json or discovery.json (its "fitted_model": the record model with the effects
 discovery added, or a history fit's element) or a saved model; RECORD any record of the model's
 kind (`tribojax.read_record`; `--format` to name it). Nothing is refitted. Writes
-DIR/prediction.json ("nrmse" = rms(predicted − measured)/std(measured), "model", "record",
-"rms_error", "unit", "n_data", "columns"), DIR/prediction.csv (the sample axis, measured and
-predicted: `time_s,measured_N,predicted_N` for a loop or history, `time_s,measured_m,predicted_m`
-for a slip run) and DIR/prediction.png. Exit status: 0 done, 1 the model is not finite on the
-record, 2 bad input (a model file of another version or without a model, a record of another
-kind, an output that exists).
+DIR/prediction.json, DIR/prediction.csv (docs/fitting.md, "A fitted model as a value") and
+DIR/prediction.png. Exit status: 0 done, 1 the model is not finite on the record, 2 bad input
+(a model file of another version or without a model, a record of another kind, an output that
+exists).
 """
 
 from __future__ import annotations

@@ -76,9 +76,9 @@ def _reproduce_slip_tables(result: dict, out_dir: Path) -> None:
 def _reproduce_fit_measured(result: dict, out_dir: Path | None = None, bar=None) -> bool:
     """The full-chain fits to the measured Tables 4–7 into result["fit_measured"]: the plain
     relative least-squares fit and the robust Student-t fit ("loss", "flagged_cells",
-    "rms_relative_residual_unflagged", ..., and "robust"); True if both converged. One start
-    here; the studies are `python -m fitting.wang2022_slip` and `python -m fitting.wang2022_robust`.
-    No per-evaluation progress lines (docs/cli.md, "Progress")."""
+    "rms_relative_residual_unflagged", ..., and "robust"), one start each (the studies: the
+    "*_study" keys); True if both converged. No per-evaluation progress lines (docs/cli.md,
+    "Progress")."""
     print("wang2022 Tables 4-7 (measured): full-chain fit of D, G, mu_t (LM through diffrax) ...")
     fit = chain_fit.fit_measured_slips()
     block = fit.as_dict()
@@ -140,7 +140,7 @@ def _reproduce_fit_measured(result: dict, out_dir: Path | None = None, bar=None)
     )
     fig_path = None if out_dir is None else out_dir / "fit_measured.png"
     if fig_path and plot_fit_measured(fit.model_nm, robust.model_nm, robust.flagged, fig_path):
-        print(f"wrote {out_dir / 'fit_measured.png'}")
+        print(f"wrote {fig_path}")
     if not robust.converged:
         print(f"ERROR: the robust full-chain fit did not converge: {rd['result']} "
               f"({robust.chain.fit.message})", file=sys.stderr)  # fmt: skip

@@ -2,12 +2,7 @@
 
 Every per-asperity quantity of wang2022 is a power law c·a'^p in the truncated area a' (with a
 regime-dependent c and p), so each is carried here as a `PowerLaw` in log form. Regimes are
-indexed ELASTIC, EP1, EP2, PLASTIC (largest asperities first):
-
-    elastic   a' > a'_ec               (Eq 8)
-    ep1       a'_epc < a' <= a'_ec     (Eq 9, first elastic–plastic)
-    ep2       a'_pc  < a' <= a'_epc    (Eq 11, second elastic–plastic)
-    plastic   a' <= a'_pc              (Eq 13)
+indexed ELASTIC, EP1, EP2, PLASTIC, largest asperities first (split at a'_ec > a'_epc > a'_pc).
 """
 
 import math
@@ -150,8 +145,7 @@ def mindlin_factors(psi):
     ok = psi < 1.0
     one_minus = jnp.where(ok, 1.0 - psi, 1.0)  # double-where: keep the power's input positive
     l1m = jnp.log(one_minus)
-    c13, c23, c53 = jnp.exp(l1m / 3), jnp.exp(2 * l1m / 3), jnp.exp(5 * l1m / 3)
-    s_k = c13
+    s_k, c23, c53 = jnp.exp(l1m / 3), jnp.exp(2 * l1m / 3), jnp.exp(5 * l1m / 3)
     phi_d = 1.0 - c53 - (5.0 * psi / 6.0) * (1.0 + c23)
     phi_s = 0.6 - c23 + 0.4 * c53
     return s_k, phi_d, phi_s

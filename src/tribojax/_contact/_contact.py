@@ -165,10 +165,8 @@ class FractalContact(eqx.Module):
         surface:         `FractalSurface` (D, G, M, γ).
         pair:            `ContactPair` (E*, G', H, ν, σ_s).
         mu_t:            friction coefficient in Mindlin's law (Eq 17), > 0. Not published.
-        tangential_load: T in the ratio T/P of Eqs 18–22, N, >= 0. The paper never defines T/P;
-                         a fixed applied tangential load reproduces Table 3's trend, e.g. the
-                         inertial load m·a_max = 0.321 N of the reticle (docs/reproduction.md,
-                         "wang2022: misprints and corrections").
+        tangential_load: T in the ratio T/P of Eqs 18–22, N, >= 0; for Table 3 the reticle's
+                         inertial load m·a_max = 0.321 N (docs/reproduction.md, misprint 4).
         mass:            slider mass m in Eq 24, kg, > 0 (0.321 kg reticle in the paper).
         area:            "truncated" (a = a', default) or "real" (Eqs 10, 12, Hertz a'/2) for the
                          contact area in Eqs 14 and 18 (static).

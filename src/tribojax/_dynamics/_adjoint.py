@@ -7,12 +7,10 @@ applies it to the tangent. The rule is linear in the tangent, so `jax.grad` / `j
 transpose it: reverse mode never recomputes the solve, and jacrev and jacfwd give the same
 numbers. Why reverse mode must not recompute a Rosenbrock solve: see `Rodas4`.
 
-It is a wrapper that `simulate_slip` dispatches to, not a `diffrax.AbstractAdjoint`: diffrax's
-adjoints implement `loop(...)`, which receives the solver's internal state (the initial `State`,
-the `SaveAt`, the controller with its `jump_ts`) and must return diffrax's private `State`; a rule
-there would differentiate all of that (integer and solver-state leaves included) and depend on
-diffrax internals. The slip model needs derivatives w.r.t. the element, the profile, the mass and
-the save times only, which are the arguments of the solve function this wrapper is given.
+It wraps the solve function rather than being a `diffrax.AbstractAdjoint`, whose `loop(...)`
+takes and returns diffrax's private solver state (integer leaves, `SaveAt`, the controller's
+`jump_ts`), all of which a rule there would differentiate and depend on; the slip model needs
+derivatives w.r.t. the solve function's arguments only (element, profile, mass, save times).
 """
 
 from __future__ import annotations

@@ -1,15 +1,9 @@
 """Pseudo-arclength continuation of multi-harmonic-balance solutions, and `FrequencyResponse`.
 
-The branch z(s) = (X, λ) of solutions of R(X, λ) = 0 is followed in the arclength s of the scaled
-unknowns (X / x_ref, λ / |λ_end − λ₀|). Each step predicts z + Δs·t along the unit tangent t
-(the null vector of ∂R/∂z, oriented by the previous tangent) and corrects with Newton on
-[R(z) = 0, t·(z − z_pred) = 0] (Keller's pseudo-arclength condition), so turning points are passed
-without special treatment. The step Δs adapts to the Newton count (×1.5 for ≤ 3 steps, ×0.6 for
-> 6, halved on a failed corrector or when the tangent turns by more than 0.2 rad), capped at
-ds_max·max(1, ‖y‖∞) so that a high resonance peak takes steps relative to its size; the whole
-loop is one jitted `lax.while_loop`.
-
-The result is a `FrequencyResponse`; every point's stability comes from Hill's method (`_mhb`).
+The branch z(s) = (X, λ) of R(X, λ) = 0 is followed in the arclength s of the scaled unknowns
+(X / x_ref, λ / |λ_end − λ₀|): a step predicts along the unit tangent (the null vector of ∂R/∂z)
+and corrects by Newton with Keller's condition t·(z − z_pred) = 0, so turning points need no
+special treatment (step control: docs/structures.md). Stability: Hill's method (`_mhb`).
 """
 
 from __future__ import annotations
@@ -167,12 +161,10 @@ def _freq_res(y, w, args):
 
 def _param_res(y, p, args):
     make, omega, f_ref, x_ref = args
-    system = make(p)
-    X = y.reshape(system.n_dof, system.n_coef) * x_ref
-    return (system.residual(X, omega) / f_ref).reshape(-1)
+    return _freq_res(y, omega, (make(p), f_ref, x_ref))
 
 
-def _run(system_of, res, first, lam0, lam1, X0, omega0, extra, opts, stability, omega_of):
+def _run(system_of, res, first, lam0, lam1, X0, omega0, extra, opts, stability):
     ensure_x64()
     start = solve_hbm(first, omega0, X0)
     if not bool(start.converged):
@@ -196,7 +188,7 @@ def _run(system_of, res, first, lam0, lam1, X0, omega0, extra, opts, stability, 
         code = 1
     nd, nc = first.n_dof, first.n_coef
     X = np.asarray(Y[:n]).reshape(n, nd, nc) * float(x_ref)
-    omega = np.array([float(omega_of(p)) for p in lam_n])
+    omega = np.array(lam_n) if system_of is None else np.full(n, omega0)
     amp = np.hypot(X[..., first.index(1)], X[..., first.index(1, True)])
     mf = np.full(n, np.nan)
     if stability:
@@ -224,7 +216,7 @@ def frequency_response(system: FrictionSystem, omega_start, omega_end, *, X0=Non
                        ds_min=1e-6, ds_max=0.3, max_points: int = 400, max_newton: int = 12,
                        tol=1e-9, stability: bool = True) -> FrequencyResponse:  # fmt: skip
     """Forced response of `system` from ω = omega_start to omega_end (rad/s, > 0) by
-    pseudo-arclength continuation (the module docstring); the start solved by `solve_hbm` from X0.
+    pseudo-arclength continuation (docs/structures.md); the start solved by `solve_hbm` from X0.
 
     Steps ds, ds_min, ds_max are in the scaled arclength (x / x_ref with x_ref the larger of the
     static deflection F/K and the start amplitude; ω / |ω_end − ω_start|). A continuation that
@@ -234,8 +226,7 @@ def frequency_response(system: FrictionSystem, omega_start, omega_end, *, X0=Non
     if w0 <= 0 or w1 <= 0:
         raise ValueError(f"frequency range [{w0:g}, {w1:g}] rad/s must be > 0")
     opts = (ds, ds_min, ds_max, max_points, max_newton, tol)
-    return _run(None, _freq_res, system, w0, w1, X0, w0, (system,), opts, stability,
-                lambda p: p)  # fmt: skip
+    return _run(None, _freq_res, system, w0, w1, X0, w0, (system,), opts, stability)
 
 
 def parameter_response(make_system, p_start, p_end, omega, *, X0=None, ds=0.02, ds_min=1e-6,
@@ -252,5 +243,4 @@ def parameter_response(make_system, p_start, p_end, omega, *, X0=None, ds=0.02, 
     first = make_system(jnp.asarray(p0))
     opts = (ds, ds_min, ds_max, max_points, max_newton, tol)
     return _run(lambda p: make_system(jnp.asarray(p)), _param_res, first, p0, p1, X0,
-                float(omega), (make_system, float(omega)), opts, stability,
-                lambda p: omega)  # fmt: skip
+                float(omega), (make_system, float(omega)), opts, stability)  # fmt: skip

@@ -1,9 +1,7 @@
 """Differentiable design quantities of a friction-damped structure, and the 2-DOF benchmark.
 
-Every quantity is a JAX function of the `FrictionSystem` pytree (μ, N, K_d, M, C, K, forcing are
-leaves), so `jax.grad` / `equinox.filter_grad` give its derivatives. They follow from the implicit
-function theorem through the MHB solution (optimistix's implicit adjoint of `solve_hbm`):
-dX/dp = −(∂R/∂X)⁻¹ ∂R/∂p, never from unrolled Newton iterations.
+Every quantity is a JAX function of the `FrictionSystem` pytree, differentiable as `solve_hbm`
+(implicit function theorem, dX/dp = −(∂R/∂X)⁻¹ ∂R/∂p).
 """
 
 from __future__ import annotations
@@ -100,13 +98,11 @@ def peak_on_grid(system: FrictionSystem, omegas, dof: int = 0, *, tol: float = 1
     the largest amplitude, the root of g = ∂a/∂ω inside the two neighbouring grid points by
     `refine_steps` (static) steps of regula falsi with the Illinois modification (Dowell & Jarratt
     1971; bracketing, so it cannot leave the peak's interval; g by forward-mode implicit
-    differentiation of the MHB solution). Fixed work per system, so it vmaps over systems (each
-    solve's Newton loop still runs to its slowest lane: for hundreds of systems see
-    docs/structures.md). `result` is successful when every solve converged, g changes sign
-    across the interval, and the last Newton correction |g/g_ω| is <= tol·ω; otherwise
-    `nonlinear_divergence` (the best point is still returned; a peak on a kink of a(ω), see
-    docs/structures.md, has no stationary point and is reported so). Derivatives: as
-    `resonance_peak`'s.
+    differentiation of the MHB solution). Fixed work per system, so it vmaps over systems (for
+    hundreds of systems: docs/structures.md). `result` is successful when every solve converged,
+    g changes sign across the interval, and the last Newton correction |g/g_ω| is <= tol·ω;
+    otherwise `nonlinear_divergence` (the best point is still returned; a peak on a kink of a(ω)
+    has no stationary point: docs/structures.md). Derivatives: as `resonance_peak`'s.
     """
     omegas = jnp.asarray(omegas, dtype=jnp.float64)
     # every array leaf cut from differentiation for the search itself

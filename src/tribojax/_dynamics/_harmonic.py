@@ -8,15 +8,9 @@ docs/reproduction.md, "wu2015") defines
 
 with W = ∮ f du the energy dissipated per cycle. K̄ and C̄ depend on Ā = A/A0 only.
 
-Two routes:
-
-* `harmonic_balance`: quadrature of the closed steady loop of a Jenkins or Mindlin element. The
-  loop's odd symmetry halves the integral to the falling branch θ ∈ [0, π), which is split at the
-  branch point θ* (onset of gross slip). On [θ*, π] the force is −μN and the integrals are
-  closed; [0, θ*] uses fixed-order Gauss–Legendre, so the result is jit/vmap/grad friendly. For
-  Mindlin the substitution θ = θ*(1 − τ²) removes the (θ* − θ)^(3/2) endpoint singularity of the
-  branch, which keeps the convergence exponential.
-* `harmonic_response`: any `AbstractFrictionElement`, driven in the time domain (its docstring).
+Two routes: `harmonic_balance` integrates the closed steady loop of a Jenkins or Mindlin element
+over its falling branch (fixed-order Gauss–Legendre up to the onset of gross slip θ*, closed form
+beyond), so it is jit/vmap/grad friendly; `harmonic_response` drives any element in time.
 """
 
 from __future__ import annotations
@@ -98,7 +92,8 @@ def harmonic_balance(
     t = 0.5 * (x + 1.0)  # nodes on [0, 1]
     w = 0.5 * w
     theta_star = element.branch_angle(A)
-    if element.endpoint_singular:  # θ = θ*(1 − τ²), dθ = 2θ*τ dτ
+    # Mindlin: θ = θ*(1 − τ²), dθ = 2θ*τ dτ removes the (θ* − θ)^(3/2) endpoint singularity
+    if element.endpoint_singular:
         theta = theta_star * (1.0 - t**2)
         weights = 2.0 * theta_star * t * w
     else:

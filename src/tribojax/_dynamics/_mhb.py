@@ -9,11 +9,8 @@ equations of motion M ẍ + C ẋ + K x + f_c = F is
 
     R(X, ω) = M X (ωΔ)² + C X (ωΔ) + K X + F_c(X, ω) − F(ω) = 0
 
-(Galerkin projection on the harmonics; Krack & Gross 2019, Eq 2.13). F_c is evaluated by AFT: the
-inverse real FFT of X gives x at n_time equally spaced instants of one period, the contacts give
-their periodic force histories (steady hysteresis, see `_structure`), and the forward real FFT
-projects them back on the harmonics (Cameron & Griffin 1989). The residual is an ordinary JAX
-function, so Newton's Jacobian ∂R/∂X is JAX's (exact for the sampled AFT), not finite differences.
+(Galerkin projection; Krack & Gross 2019, Eq 2.13), with F_c by AFT at n_time instants of one
+period (the method: docs/structures.md); Newton's Jacobian ∂R/∂X is JAX's, exact for the AFT.
 
 Stability: Hill's method. A perturbation e^{λt}q(t) of the periodic solution gives the quadratic
 eigenvalue problem (J + λΔ₁ + λ²Δ₂) q = 0 with J = ∂R/∂X, Δ₁ = C ⊗ I + 2ω M ⊗ Δᵀ,

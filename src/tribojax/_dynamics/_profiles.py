@@ -67,23 +67,6 @@ class PiecewiseLinearProfile(AbstractProfile):
         return self.times
 
 
-MAX_STOPS = 64  # a sampled profile with more kinks than this is not stopped at each
-
-
-def kink_nodes(times, accelerations) -> np.ndarray:
-    """Mask of the samples where a sampled a(t)'s slope changes (the ends always included).
-
-    A change counts when it exceeds 1e-9 of max|a|/duration, so samples on a straight segment
-    (a sampled ramp or hold) are not kinks: for wang2022's trapezoid that is its 8 corners.
-    """
-    t, a = np.asarray(times, np.float64), np.asarray(accelerations, np.float64)
-    if t.size < 3:
-        return np.ones(t.size, bool)
-    slope = np.diff(a) / np.diff(t)
-    scale = max(float(np.max(np.abs(a))), 1e-300) / float(t[-1] - t[0])
-    return np.concatenate([[True], np.abs(np.diff(slope)) > 1e-9 * scale, [True]])
-
-
 class MeasuredProfile(AbstractProfile):
     """An acceleration interpolated linearly from a measured column (e.g. an accelerometer log).
 
@@ -106,16 +89,21 @@ class MeasuredProfile(AbstractProfile):
         self.stops = None if stops is None else as_f64(stops, "measured profile stops")
 
     @classmethod
-    def from_samples(cls, times, accelerations, *, max_stops: int = MAX_STOPS):
+    def from_samples(cls, times, accelerations, *, max_stops: int = 64):
         """The drive of a sampled record: linear between all samples, stopped at its kinks.
 
-        The solver stops at the samples where the slope changes (`kink_nodes`) when there are at
-        most `max_stops` of them, e.g. a sampled trapezoid; otherwise (noisy measured data, a
-        kink at every sample) it stops nowhere and the step controller handles the kinks.
+        The solver stops at the ends and the samples where the slope changes by more than 1e-9
+        of max|a|/duration (a sampled trapezoid: its 8 corners) when there are at most
+        `max_stops` of them; otherwise (noisy measured data, a kink at every sample) it stops
+        nowhere and the step controller handles the kinks.
         """
         t = np.asarray(times, np.float64)
         a = np.asarray(accelerations, np.float64)
-        kinks = kink_nodes(t, a)
+        kinks = np.ones(t.size, bool)
+        if t.size > 2:
+            slope = np.diff(a) / np.diff(t)
+            scale = max(float(np.max(np.abs(a))), 1e-300) / float(t[-1] - t[0])
+            kinks = np.concatenate([[True], np.abs(np.diff(slope)) > 1e-9 * scale, [True]])
         return cls(t, a, stops=t[kinks] if np.count_nonzero(kinks) <= max_stops else None)
 
     @classmethod
@@ -200,8 +188,7 @@ class TrapezoidProfile(AbstractProfile):
 
     def kinks(self):
         r, h, c = self.ramp, self.hold, self.cruise
-        steps = jnp.stack([self.t_start, r, h, r, c, r, h, r])
-        return jnp.cumsum(steps)
+        return jnp.cumsum(jnp.stack([self.t_start, r, h, r, c, r, h, r]))
 
     def acceleration(self, t):
         levels = self.a_max * jnp.array([0.0, 1.0, 1.0, 0.0, 0.0, -1.0, -1.0, 0.0])

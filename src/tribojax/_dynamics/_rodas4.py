@@ -45,7 +45,7 @@ _C = (
 _ALPHA = (0.0, 0.386, 0.21, 0.63, 1.0, 1.0)
 _GAMMAS = (0.25, -0.1043, 0.1035, -0.0362, 0.0, 0.0)
 _M = (*_A5, 1.0, 1.0)  # stiffly accurate: y₁ is the last stage's argument plus K₆
-# dense output y(θ) = y₀ + θ(Δy + (1 − θ)(k₁ + θ k₂)), k₁ = Σ d1_i K_i, k₂ = Σ d2_i K_i
+# dense output (`RodasInterpolation`): k₁ = Σ d1_i K_i, k₂ = Σ d2_i K_i
 _D1 = (10.12623508344586, -7.487995877610167, -34.80091861555747, -7.992771707568823,
        1.025137723295662, 0.0)  # fmt: skip
 _D2 = (-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386,
@@ -88,13 +88,10 @@ class Rodas4(dfx.AbstractAdaptiveSolver):
     the order holds with any step; ∂f/∂t is evaluated at the step start, so stop steps at kinks of
     a time-dependent forcing (`jump_ts`): diffrax then starts the next step just after the kink.
 
-    Reverse mode: each step's derivatives are exact, but `diffrax.RecursiveCheckpointAdjoint`
-    recomputes the forward steps in a separately compiled program. XLA contracts multiply-adds
-    differently there, so the recomputed steps differ in the last bits; Rodas4's increments are
-    whole steps (not converged Newton corrections, as in Kvaerno5), so those bits reach y and the
-    step-size controller, which then takes other steps than the forward pass did: a silently wrong
-    gradient (docs/slip.md). `simulate_slip` therefore differentiates Rodas4 by forward mode in
-    every direction (`ForwardJacobianAdjoint`).
+    Reverse mode: `diffrax.RecursiveCheckpointAdjoint` recomputes the steps with other rounding,
+    and the step-size controller then takes other steps than the forward pass: a silently wrong
+    gradient (docs/slip.md, why). `simulate_slip` therefore differentiates Rodas4 by forward mode
+    in every direction (`ForwardJacobianAdjoint`).
     """
 
     term_structure: ClassVar = dfx.AbstractTerm

@@ -238,13 +238,11 @@ def slip_phase_averages(
     throw=True,
     **kw,
 ) -> Array:
-    """wang2022's four phase slips (m), Tables 4–7, as docs/reproduction.md defines them.
+    """wang2022's four phase slips [T4, T5, T6, T7] (m), Tables 4–7 (docs/slip.md, "Phase values").
 
-    With ⟨Δx⟩_w the mean slip over a window (exact, from ∫Δx dt at the window ends):
-        T4 = ⟨Δx⟩[0.25,0.6] − Δx(0)         T5 = ⟨Δx⟩[0.73,1.5] − ⟨Δx⟩[0.25,0.6]
-        T6 = ⟨Δx⟩[1.65,2.0] − ⟨Δx⟩[0.73,1.5]   T7 = Δx(2.3) − ⟨Δx⟩[1.65,2.0]
-    (windows from `profile.windows()`, end at `t_end`). Returns [T4, T5, T6, T7] in m.
-    Other keywords go to `simulate_slip`, whose "Derivatives" apply here too.
+    The differences of consecutive mean slips ⟨Δx⟩ over `profile.windows()` (exact, from ∫Δx dt
+    at the window ends), from Δx(0) to Δx(t_end). Other keywords go to `simulate_slip`, whose
+    "Derivatives" apply here too.
     """
     profile = TrapezoidProfile() if profile is None else profile
     w = profile.windows()

@@ -1,10 +1,5 @@
 """Linear structures with friction contacts, for the multi-harmonic balance (`_mhb`).
 
-A structure is M ẍ + C ẋ + K x + Σ f_contact(x history) = F(t) with N degrees of freedom (DOFs):
-M, C, K (N×N) in kg, N s/m, N/m; x in m. Each contact reads the displacement history of its DOFs
-over one period and returns the periodic force history it applies (N), resisting the motion
-(`FrictionContact`, `DryFrictionContact2D`).
-
 Steady hysteresis: the history is run from the contact's unloaded state at x = 0 through
 `cycles` periods and the last is kept. For rate-independent elements one full period with slip
 forgets the start, so `cycles = 2` gives the exact periodic loop; in permanent stick the contact
@@ -100,7 +95,8 @@ class Excitation(eqx.Module):
 
 
 class AbstractContact(eqx.Module):
-    """A contact applying a periodic force history to some DOFs of a structure."""
+    """A contact applying a periodic force history to some DOFs of a structure, resisting the
+    motion (f_c in M ẍ + C ẋ + K x + f_c = F)."""
 
     @abc.abstractmethod
     def dofs(self) -> tuple[int, ...]:

@@ -8,10 +8,8 @@ fitted per direction (a curve's points of one velocity sign) or jointly over bot
 with a direction asymmetry T0, a constant force (torque) that adds to the friction in both
 directions (a load such as gravity on the driven mass, or a sensor offset): the friction
 magnitudes then differ by 2·T0 between the directions. Each point is weighted by the standard
-error of its mean (`FrictionCurve.friction_error`), so the reduced χ² says whether the law
-explains the points within their scatter (`least_squares_fit` inflates the standard errors when
-it does not). The LuGre dynamic parameters σ0 and σ1 are then fitted to a transient with the
-steady law held fixed (`fit_transient`).
+error of its mean (`FrictionCurve.friction_error`). The LuGre dynamic parameters σ0 and σ1 are
+then fitted to a transient with the steady law held fixed (`fit_transient`).
 """
 
 from __future__ import annotations
@@ -29,9 +27,7 @@ from ._engine import FitResult, least_squares_fit
 from ._measures import nrmse
 from ._solver import LevenbergMarquardt
 
-# Plain LM never stops on a curve whose points leave a parameter undetermined (driveNo2's
-# Stribeck dip: β walks towards a step, every late step rejected); the noise-floor LM stops when
-# the Gauss–Newton step left is below 0.05 standard errors in every parameter.
+# the noise-floor LM (docs/fitting.md, "Why some fit rules are set where they are")
 _SOLVER = LevenbergMarquardt.noise_floor(1e-10, 1e-12)
 
 STEADY_NAMES = ("F_c", "F_s", "v_s", "beta", "sigma2")
@@ -124,8 +120,7 @@ class _TransientResiduals(eqx.Module):
 
 
 def _transient_args(tr: FrictionTransient, p: dict, curve_error=None):
-    """The residuals' args; `p`: the steady law's parameters by name (F_c, F_s, v_s, beta,
-    sigma2 and the asymmetry T0, 0 if not fitted); the residuals set the law's σ0 and σ1."""
+    """The residuals' args from the steady law's parameters `p` by name (T0: 0 if absent)."""
     law = LuGre(1.0, 0.0, p["sigma2"], p["F_c"], p["F_s"], p["v_s"], 1.0, p["beta"])
     T0 = float(p.get("T0", 0.0))
     moving = jnp.asarray(np.flatnonzero(tr.velocity != 0.0))  # at rest the drive is off

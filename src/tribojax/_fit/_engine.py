@@ -1,11 +1,7 @@
 """The fit engine: optimistix least squares, then statistics from the Jacobian at the optimum.
 
-Parameters are fitted in unconstrained coordinates θ (log for positive quantities, etc.); a
-`transform` maps θ to the physical parameters, and the covariance is carried over by the delta
-method. Residuals should already be divided by their uncertainty; if `sigma_known` is False the
-common scale is estimated from the residual sum of squares (s² = RSS/(n - p)). A residual equal to
-`FAILED_RESIDUAL` marks a row where the model could not be evaluated. The outcome is a
-`tribojax.RESULTS` member.
+Parameters are fitted in unconstrained coordinates θ (log for positive quantities, etc.) and
+mapped to the physical ones by a `transform` (`least_squares_fit`, `fit_statistics`).
 """
 
 from __future__ import annotations
@@ -178,8 +174,7 @@ def fit_statistics(
     gives both, as the record models' fits pass: one compiled program instead of eager steps).
     With `sigma_known` and a χ² that `noise_consistent` rejects (or `noise_consistent` given
     False: a record model's full test) the stated noise is contradicted by the misfit:
-    `noise_consistent` is False and s² = RSS/(n − p) is used instead of 1. Directions of θ
-    with singular values ≤ `IDENTIFIABLE_RTOL` of the largest are listed in `unidentifiable`.
+    `noise_consistent` is False and s² = RSS/(n − p) is used instead of 1.
     """
     theta = np.asarray(theta, dtype=np.float64)
     r, J = np.asarray(r, dtype=np.float64), np.asarray(J, dtype=np.float64)
@@ -259,8 +254,7 @@ def _solve(residual_fn, theta0, args, solver, max_steps, jac, shared=MAX_STEPS, 
 
 @cached_jit
 def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac, budget):
-    # module-level and keyed by `residual_fn`'s identity, so a repeated fit with new data in
-    # `args` runs warm; outputs are plain arrays so the trace can be stored
+    # keyed by `residual_fn`'s identity (warm for new data in `args`); outputs are plain arrays
     options = dict(jac=jac) if budget is None else \
         dict(jac=jac, budget=budget[0], bar=budget[1], crawl=budget[2])  # fmt: skip
     sol = optx.least_squares(residual_fn, solver, theta0, args, options=options,
@@ -332,23 +326,17 @@ def least_squares_fit(
         transform: θ -> physical parameter vector (differentiable); None is the identity.
         sigma_known: residuals are in units of their standard deviation (else s² is estimated).
         rtol, atol, max_steps: the default solver's Cauchy tolerances and the step budget.
-        jac: how the solver differentiates the residuals, "bwd" or "fwd" (optimistix option).
-            "bwd" is the default because forward linearisation of a residual that contains an
-            optimistix root find (the contact load balance) makes lineax reject the Jacobian as
-            non-finite in optimistix 0.1.0, although jax.jacfwd of the same residual is finite (a
-            `jax.custom_jvp` around the root find avoids it, see `fit_measured_slips`).
+        jac: how the solver differentiates the residuals (optimistix option), "bwd" (the
+            default: docs/fitting.md, "Why some fit rules are set where they are") or "fwd".
         solver: an optimistix least-squares solver in place of LevenbergMarquardt(rtol, atol);
             `LevenbergMarquardt.noise_floor(...)` for residuals computed through an ODE solve.
         optimum_tol: if given, a successful stop counts only when the Gauss–Newton step still
             left is below this many standard errors in every parameter (else
             `RESULTS.short_of_optimum`): the check for the `step_tol` stop on rejected steps.
         progress: callable receiving one line per solver step (a solver with `report=True`).
-        bar: (probe, limit) for `LevenbergMarquardt`: after `probe` steps a cost ‖r‖² above
-            `limit` stops the fit (`nonlinear_max_steps_reached` with fewer steps than
-            `max_steps`): a start not yet below a cost reached elsewhere is abandoned.
-        crawl: a fraction f for `LevenbergMarquardt.record`: a solve whose cost fell by less
-            than f over the last `CRAWL_STEPS` steps while a Gauss–Newton step still promises
-            more than half of it stops the same way (0: off; the solver module's docstring).
+        bar, crawl: the `LevenbergMarquardt` stops `options["bar"]` ((probe, limit): after
+            `probe` steps a cost ‖r‖² above `limit` stops the fit) and `options["crawl"]` (a
+            fraction; 0: off) of the solver module's docstring.
         throw: raise `FitError` when the fit does not succeed (default: return it).
     The solve is compiled once per `residual_fn` object: pass a module-level function (data in
     `args`) and repeated fits run warm.

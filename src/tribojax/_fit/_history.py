@@ -110,7 +110,6 @@ def _records(loops, decimate: int, band_tension=None):
     """(t, u, f, std f, T/T_ref) of every `decimate`-th sample of each loop; T_ref is
     `band_tension` (N), else the first loop's. A loop without a tension among loops with one
     (or against a given reference) is refused, naming it and the field."""
-    loops = list(loops)
     for loop in loops:
         if not isinstance(loop, HysteresisLoop):
             raise ValueError(f"fit_history needs HysteresisLoop records, got {type(loop).__name__}")
@@ -189,17 +188,14 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         start: dict of start values (missing keys: from a Jenkins fit to the same records, which
             starts at the force's 2–98 % half range as the slip force and a stiffness 40 times
             its ratio to the displacement range).
-        n_starts: Bouc–Wen only, without a start for n: the sharpness n has separate local
-            optima (n < 1 soft, n ≫ 1 close to Jenkins); each value given is a start and the
-            lowest residual is kept (default one start, n = 2; `BOUC_WEN_STARTS` = (0.5, 2, 10)
-            for a thorough fit, three times the work).
-        decimate: keep every `decimate`-th sample (1: all).
-            Records with a `band_tension` (all or none): the slip forces fitted are those at
-            the first record's tension and scale with each record's (capstan law, module
-            docstring), so records at several tensions share one parameter set.
-        max_steps, rtol: the Levenberg–Marquardt budget and relative tolerance (atol 1e-3 rtol);
-            `LevenbergMarquardt.noise_floor` also stops when the step left is below 0.05
-            standard errors.
+        n_starts: Bouc–Wen only, without a start for n: each value given is a start of n and
+            the lowest residual is kept (default one start, n = 2; `BOUC_WEN_STARTS` for a
+            thorough fit, three times the work).
+        decimate: keep every `decimate`-th sample (1: all). Records with a `band_tension` (all
+            or none) share one parameter set, the slip forces at the first record's tension
+            (module docstring).
+        max_steps, rtol: the budget and relative tolerance (atol 1e-3 rtol) of
+            `LevenbergMarquardt.noise_floor`.
         throw: raise `tribojax.FitError` when the fit does not succeed (default: `.fit.result`
             says so).
     Returns:
@@ -267,12 +263,11 @@ MEASURED_START = ("jenkins", "band_brake")
 
 
 def predict_history(fit: HistoryFit, loop: HysteresisLoop, *, decimate=None, initial="rest"):
-    """(predicted force N, NRMSE) of a fitted model on another record, driven from rest.
+    """(predicted force N, NRMSE) of a fitted model on another record (`history_force`).
 
-    `decimate` defaults to the fit's. The NRMSE is rms(predicted − measured)/std(measured).
-    A fit with a band tension predicts a record at another tension with its slip forces scaled
-    by the ratio (capstan law, module docstring); the record must have one. `initial`: "rest"
-    (default) or "measured" (`INITIAL_STATES`).
+    `decimate` defaults to the fit's. A fit with a band tension scales its slip forces to the
+    record's tension (module docstring); the record must have one. `initial`: "rest" (default)
+    or "measured" (`INITIAL_STATES`).
     """
     dec = fit.decimate if decimate is None else int(decimate)
     return history_force(fit.model, fit.fit.values, loop, dec, fit.band_tension, initial)

@@ -6,10 +6,8 @@ damped-Newton descent and a trust region). Its configurations:
 - `LevenbergMarquardt(rtol, atol)`: optimistix's own Levenberg–Marquardt (QR solves, trust-region
   cutoffs 0.01/0.99), for smooth residuals (tables, closed forms).
 - `LevenbergMarquardt.noise_floor(rtol, atol)`: residuals through an adaptive ODE solve (slip-free
-  histories, curves, the wang2022 chain): textbook cutoffs 0.25/0.75 and the statistical stops
-  `step_tol` and `max_rejections` (below).
-- `LevenbergMarquardt.record(...)`: the fit of a record model with its effects (`fit_model`): a
-  trust radius in Gauss–Newton step lengths and the stops `gain_tol`, `noise_tol`.
+  histories, curves, the wang2022 chain).
+- `LevenbergMarquardt.record(...)`: the fit of a record model with its effects (`fit_model`).
 
 Stops (each off when None), besides optimistix's Cauchy test on `rtol`, `atol`:
 
@@ -158,9 +156,8 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
     @classmethod
     def noise_floor(cls, rtol, atol, max_rejections=6, step_tol=0.05, report=False):
         """For residuals through an adaptive ODE solve: textbook trust-region cutoffs (Nocedal &
-        Wright, Alg. 4.1: shrink below ρ = 0.25, grow above 0.75; with ODE residuals ρ rarely
-        exceeds optimistix's 0.99 and the region never grew), the `step_tol` and
-        `max_rejections` stops; with `report=True` each step is reported to
+        Wright, Alg. 4.1: shrink below ρ = 0.25, grow above 0.75; docs/fitting.md), the
+        `step_tol` and `max_rejections` stops; with `report=True` each step is reported to
         `least_squares_fit(progress=...)` (a host callback: the solve is then not kept in the
         compilation cache, hence off by default)."""
         return cls(rtol, atol, descent=optx.DampedNewtonDescent(),

@@ -26,13 +26,10 @@ SURFACE_NAMES = ("D", "G_m", "mu_t")
 
 
 def surface_contact_model(D, G, mu_t, *, sigma_s=CALIBRATED_SIGMA_S, M=CALIBRATED_M, throw=False):
-    """The wang2022 reticle/chuck contact with free D, G (m) and μ_t (wang2022 Sections 2–3).
-
-    `tribojax.wang2022_table3_model` (Table 2 pair with strength `sigma_s` Pa, γ = 1.5,
-    T = 0.321 N in T/P, m = 0.321 kg in Eq 24, a = a') with D free instead of Table 1's 2.8821.
-    Defaults: σ_s and M of the Table 3 calibration (docs/reproduction.md: G, μ_t, σ_s are strongly
-    correlated; σ_s is held fixed here, M is exactly degenerate with G).
-    """
+    """The wang2022 reticle/chuck contact with free D, G (m) and μ_t (wang2022 Sections 2–3):
+    `tribojax.wang2022_table3_model` with D free. Defaults: σ_s (Pa) and M of the Table 3
+    calibration (docs/reproduction.md: G, μ_t, σ_s are strongly correlated; σ_s is held fixed
+    here, M is exactly degenerate with G)."""
     return wang2022_table3_model(G, mu_t, sigma_s, M=M, D=D, throw=throw)
 
 

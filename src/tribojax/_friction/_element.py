@@ -1,10 +1,8 @@
 """The friction-element interface shared by slip (LuGre) and hysteresis (Jenkins, Mindlin).
 
-A friction element is the tangential law of one contact: an internal state (a bristle deflection,
-a stuck spring, a reversal point), how that state evolves with the relative velocity of the two
-surfaces, and the tangential force it transmits. Every element is written in rate form, so the same
-element can be driven by a diffrax ODE (a stage acceleration profile), by a prescribed displacement
-history, or by a harmonic displacement, and differentiated through either.
+An element is the tangential law of one contact in rate form (an internal state, its rate at a
+relative velocity, the force it transmits), so the same element can be driven by a diffrax ODE, a
+displacement history or a harmonic displacement, and differentiated through either.
 
 Sign convention (used by every element): the relative displacement u and velocity v = du/dt are
 those of the driving body with respect to the driven one (wang2022: Δx = x_stage − x_reticle), and

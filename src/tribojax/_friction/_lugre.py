@@ -62,7 +62,7 @@ def stribeck_curve(v, F_c, F_s, v_s, beta):
 
 
 class LuGre(AbstractFrictionElement):
-    """The LuGre friction law with Stribeck curve (wang2022 Eq 25).
+    """The LuGre law (Canudas de Wit et al.) with Stribeck curve and exponent α (wang2022 Eq 25).
 
         F_f  = σ0·z + σ1·dz/dt + σ2·v
         dz/dt = v·(1 − sgn(v)·σ0·z/g(v))^α
@@ -71,8 +71,6 @@ class LuGre(AbstractFrictionElement):
     With α = 1 this is the classical LuGre model; at constant v the deflection settles at
     z = sgn(v)·g(v)/σ0 and the force at g(v)·sgn(v) + σ2·v. The bracket is kept ≥ 0, which
     matters for non-integer α (docs/reproduction.md, Eq 27 note).
-
-    Reference: wang2022 Eq 25 (the LuGre model of Canudas de Wit et al. with the exponent α).
     """
 
     sigma0: Array  # bristle stiffness, N/m, > 0
@@ -159,8 +157,6 @@ class PreSlipLuGre(AbstractFrictionElement):
     this module (`velocity_scale`). The state is z (m). Build it from a contact-parameter record
     with `PreSlipLuGre.from_contact`. (The slip model's element with viscous, Stribeck and load
     coupling knobs is `tribojax.discovery.AugmentedPreSlip`.)
-
-    Reference: wang2022 Eqs 25–27.
     """
 
     F_s: Array  # maximum static friction, N, > 0
@@ -188,19 +184,16 @@ class PreSlipLuGre(AbstractFrictionElement):
         """Maximum tangential deformation F_s/K_τ, m (wang2022 Eq 26)."""
         return self.F_s / self.K_tau
 
-    def _zdot(self, z, v):
-        return bristle_rate(v, z / self.z_max, self.alpha, self.velocity_scale)  # Eq 27
-
     def initial_state(self):
         return jnp.zeros_like(self.K_tau)
 
     def state_rate(self, state, velocity):
         """dz/dt, m/s (wang2022 Eq 27, second line, with σ0 = K_τ)."""
-        return self._zdot(state, velocity)
+        return bristle_rate(velocity, state / self.z_max, self.alpha, self.velocity_scale)
 
     def force(self, state, velocity) -> Array:
         """F_f = K_τ z + C_τ dz/dt, N (wang2022 Eq 27, first line)."""
-        return self.K_tau * state + self.C_tau * self._zdot(state, velocity)
+        return self.K_tau * state + self.C_tau * self.state_rate(state, velocity)
 
     def steady_force(self, velocity: ArrayLike) -> Array:
         """The constant-velocity (macro-slip) limit F_s·sgn(v), N."""

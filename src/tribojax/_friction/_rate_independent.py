@@ -224,14 +224,13 @@ class Mindlin(AbstractHysteresisElement):
     curve from the last reversal). Steady loop, wu2015 Eq 2 in the simplified Koh form
     f = f* − 2μN[1 − (1 − (A − u)/(3A0))^(3/2)] on the falling branch, floored at −μN.
 
-    Correction to the printed Eq 2: the branches must start from the loop's peak force
-    f* = μN[1 − (1 − 2Ā/3)^(3/2)] (wu2015 defines f* but leaves it out of Eq 2). f* = μN in gross
-    slip (Ā ≥ 1.5, θ* = arccos(1 − 3/Ā)); for Ā < 1.5 the printed form (starting at μN) does not
-    close and gives negative damping (docs/reproduction.md).
+    Correction to the printed Eq 2 (docs/hysteresis.md): the branches start from the loop's peak
+    force f* = μN[1 − (1 − 2Ā/3)^(3/2)] (μN in gross slip, Ā ≥ 1.5, θ* = arccos(1 − 3/Ā)), so the
+    loop closes and its damping stays positive.
 
-    Rate form: an Iwan (parallel-Jenkins) discretisation of the virgin curve with `n_iwan`
-    elements (static), `IwanBank.mindlin` (see `mindlin_unit_bank`): all Masing branches are
-    interpolated (relative error ~1/n²). The state is the vector of the n spring deflections (m).
+    Rate form: the Iwan (parallel-Jenkins) discretisation `IwanBank.mindlin` of the virgin curve:
+    all Masing branches are interpolated (relative error ~1/n²). The state is the vector of the
+    n_iwan spring deflections (m).
 
     Fields: mu (—, > 0), N (normal load, N, > 0), K_d (initial tangential stiffness, N/m, > 0),
     n_iwan (number of Iwan elements of the rate form, static, >= 2).

@@ -3,8 +3,7 @@
 `_files` (atomic writes, sidecars, CSV headers) and `tribojax._tables` (the validating CSV reader,
 `DataFileError` and the bundled published tables, one layer below the physics) are used by the
 records `_slip_run` and `_loop`, which do not import each other; `_records` dispatches between
-them. Every record (`SlipRun`, `HysteresisLoop`, `FrictionCurve`, `FrictionTransient`) is a final
-subclass of `_record.AbstractRecord`. The table reader's names are re-exported here.
+them (every record is an `_record.AbstractRecord`). The table reader's names are re-exported here.
 """
 
 from .._tables import DataFileError as DataFileError

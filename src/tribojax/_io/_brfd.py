@@ -3,9 +3,8 @@
 The files (ARTS-Laboratory, "Dataset-Friction-Damper-with-Backlash", CC BY-SA 4.0) hold a JSON
 object whose key `data` is a matrix of rows `[time s, displacement in, friction force kip,
 velocity in/s, actuator force 1 lbf, actuator force 2 lbf]` sampled at 1024 Hz; the other keys
-name the units. A file `<f>Hz<T>lbtension<A>amplitude.json` is a (ramped) sinusoidal test at f Hz
-and amplitude A in, band tension T lbf; any other name (`earthquake_<name>_<T>lb.json`) is an
-arbitrary displacement history.
+name the units. The file name tells a (ramped) sinusoidal test from an arbitrary displacement
+history (`brfd_test`) and gives the band tension (`brfd_band_tension`).
 """
 
 from __future__ import annotations

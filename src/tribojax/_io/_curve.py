@@ -1,10 +1,7 @@
 """Steady friction curves and friction transients: records, the EPOS folder reader and files.
 
-A `FrictionCurve` is a set of steady operating points (velocity, friction, the scatter of each
-point); a `FrictionTransient` a time series of velocity and friction (a start–stop run). Units
-are carried with the record (a sidecar on disk): the screw-drive rig gives motor-side angular
-velocity (rad/s) and motor torque (N m). A folder of EPOS steady-state exports, one file per
-commanded speed, reads as one curve (`read_epos_steady`).
+Units are carried with the record (a sidecar on disk); a folder of EPOS steady-state exports,
+one file per commanded speed, reads as one curve (`read_epos_steady`).
 """
 
 from __future__ import annotations
@@ -127,12 +124,11 @@ def effective_samples(x) -> float:
 def read_epos_steady(folder) -> FrictionCurve:
     """One steady friction curve from a folder of EPOS steady-state exports (`*.csv`, one per
     commanded speed): each file gives one point, the means and scatters of its velocity (rad/s)
-    and torque (N m) samples, and the torque's `effective_samples` (the samples are correlated, so
-    the point's standard error is the batch-means one, not scatter/√count). The direction is the
-    measured velocity's sign (not the file name). Points are sorted by velocity. DataFileError
-    (naming the file and line) for a bad export, a file that is not one steady point (fewer
-    samples than its header announces, or a velocity that reverses: `_check_steady_point`), two
-    files with the same samples, or a folder without exports."""
+    and torque (N m) samples, and the torque's `effective_samples` (the samples are correlated).
+    The direction is the measured velocity's sign (not the file name). Points are sorted by
+    velocity. DataFileError (naming the file and line) for a bad export, a file that is not one
+    steady point (fewer samples than its header announces, or a velocity that reverses:
+    `_check_steady_point`), two files with the same samples, or a folder without exports."""
     folder = Path(folder)
     files = sorted(folder.glob("*.csv"))
     if not files:

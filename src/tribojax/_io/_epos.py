@@ -4,10 +4,8 @@ Format (Maxon EPOS Studio): a variable number of `Key:;value` header lines, a li
 (`;Velocity actual value averaged;Torque actual value averaged`), a units line `ms;rpm;%`, then one
 line per sample. Time ms → s, velocity rpm → rad/s, torque % of the motor's nominal torque → N m.
 
-A file re-saved by a spreadsheet is read as far as it can be: trailing empty fields (`;;`, `,,`)
-and quotes are dropped, a note typed into a spare column is ignored, and lines that look edited
-(a note; a value written with more decimals than its column's export format; a time off
-the header's sampling grid) are listed in `EposExport.flagged` and in one `DataFileWarning`.
+A spreadsheet's re-save is read as far as it can be (docs/data.md, "Your measurements");
+lines that look edited are listed in `EposExport.flagged` and in one `DataFileWarning`.
 """
 
 from __future__ import annotations
@@ -135,8 +133,7 @@ def _looks_edited(rows, texts, header) -> list[str]:
     """Lines whose values are written unlike the export writes them: more decimals than the
     column's usual count, or a time off the `Sampling period` grid (ms) of the header."""
     out = []
-    # the exporter writes each column with a fixed count of decimals, dropping trailing zeros
-    # ('-35' for -35.0): more decimals than the column's usual count is a hand edit
+    # the exporter drops trailing zeros ('-35' for -35.0), so only more decimals is an edit
     usual = [Counter(_decimals(t[c]) for t in texts).most_common(1)[0][0] for c in range(3)]
     try:
         period = float(header.get("Sampling period", "").split(";")[0])

@@ -40,12 +40,6 @@ def positive_or_none(value, name: str, source: str, unit: str, *, required=False
 # atomic writes
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
 def write_text_atomic(path, text: str, *, exclusive: bool = False) -> None:
     """Write `text` (UTF-8) to `path` via a temporary file, so a failure leaves no partial file.
 
@@ -61,7 +55,9 @@ def write_text_atomic(path, text: str, *, exclusive: bool = False) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
-        os.chmod(tmp, 0o666 & ~_umask())
+        mask = os.umask(0)  # the umask is read by setting it: put it back at once
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
         if exclusive:
             try:
                 os.link(tmp, path)

@@ -101,9 +101,8 @@ class HysteresisLoop(AbstractRecord):
         return cycle_starts(self.t, self.u) if self.periodic else None
 
 
-_LOOP_SIDECAR = {"normal_load_N": False, "frequency_Hz": True, "noise_std_N": False,
-                 "band_tension_N": False}  # fmt: skip
-# an arbitrary history ("drive": "history" in the sidecar) needs neither key
+_LOOP_SIDECAR = {key: name == "frequency" for name, (key, _) in _METADATA.items()}
+# an arbitrary history ("drive": "history" in the sidecar) needs no frequency
 _HISTORY_SIDECAR = {**_LOOP_SIDECAR, "frequency_Hz": False}
 LOOP_DRIVES = ("harmonic", "history")
 _LOOP_UNITS = dict(_METADATA.values())
@@ -178,9 +177,8 @@ def write_loop(
     side = None
     if not legacy:
         side = {} if loop.periodic else {"drive": "history"}
-        for name, (key, _) in _METADATA.items():
-            if getattr(loop, name) is not None:
-                side[key] = getattr(loop, name)
+        side.update({key: getattr(loop, name) for name, (key, _) in _METADATA.items()
+                     if getattr(loop, name) is not None})  # fmt: skip
     header = LOOP_COLUMNS if legacy else LOOP_FILE_COLUMNS
     write_record_files(path, header, (loop.t, loop.u, loop.f), side, overwrite=overwrite,
                        comment=comment)  # fmt: skip

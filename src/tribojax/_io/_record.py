@@ -9,8 +9,7 @@ interface, and each kind is a final (never subclassed) frozen dataclass:
     FrictionTransient  kind "friction_transient"  t, velocity, friction
 
 Code that treats the kinds differently (the command line, `decimate_record`) asks the record
-(`kind`, `description`, `reducible`, `series`, `resampled`, `cycle_times`) or looks its `kind` up
-in a table, never tests its class: a new kind is one new subclass, not a branch at every use.
+or looks its `kind` up in a table, never tests its class: a new kind is one new subclass.
 """
 
 from __future__ import annotations

@@ -90,19 +90,14 @@ class SlipRun(AbstractRecord):
 
     def resampled(self, t, drive, response, *, noise_std) -> SlipRun:
         """The run on new samples (t, accel, slip) with slip noise sd `noise_std`, still driven
-        by this run's full-resolution acceleration profile (`profile`): reducing the samples
-        must not smooth the drive (see `tribojax.decimate_record`)."""
+        by this run's full-resolution `profile` (the class docstring's `drive`)."""
         return dataclasses.replace(self, t=t, accel=drive, slip=response, noise_std=noise_std,
                                    drive=self.profile())  # fmt: skip
 
     def profile(self) -> MeasuredProfile:
-        """The run's drive: its stage acceleration a(t) (m/s²), linear between the samples.
-
-        The one definition used by `simulate_run`, `fit_slip_run` and discovery's slip baseline
-        (`MeasuredProfile.from_samples`): the solver stops at the samples where a(t)'s slope
-        changes when they are few (a sampled trapezoid: its 8 corners and the ends), and nowhere
-        for measured data that kink at every sample (the step controller handles those). A
-        record with a `drive` returns that instead.
+        """The run's drive: its stage acceleration a(t) (m/s²), `MeasuredProfile.from_samples`
+        (linear between the samples, stopped at its few kinks); a record with a `drive` returns
+        that instead. The one definition used by `simulate_run`, `fit_slip_run` and discovery.
         """
         if self.drive is not None:
             return self.drive
@@ -124,7 +119,14 @@ def read_slip_run(path) -> SlipRun:
     path = Path(path)
     table = read_table(path, columns=SLIP_COLUMNS)
     t = table["time_s"]
-    _check_time(path, t, "time_s")
+    if t[0] < 0:
+        raise DataFileError(f"{path}, line {data_line_number(path, 0)}: time_s = {t[0]:g} must "
+                            "be >= 0")  # fmt: skip
+    steps = np.flatnonzero(np.diff(t) <= 0)
+    if steps.size:
+        i = steps[0] + 1
+        raise DataFileError(f"{path}, line {data_line_number(path, i)}: time_s = {t[i]:g} does "
+                            f"not increase (previous row {t[i - 1]:g})")  # fmt: skip
     if len(t) < 2:
         raise DataFileError(f"{path}: a slip run needs at least 2 data rows, got {len(t)}")
     for column, name in (("stage_accel_m_s2", "accel"), ("slip_m", "slip")):
@@ -135,20 +137,6 @@ def read_slip_run(path) -> SlipRun:
     side = read_sidecar(path, _SLIP_SIDECAR, dict(_METADATA.values()))
     return SlipRun(t, table["stage_accel_m_s2"], table["slip_m"], source=str(path),
                    **{name: side[key] for name, (key, _) in _METADATA.items()})  # fmt: skip
-
-
-def _check_time(path, t, column):
-    if t[0] < 0:
-        raise DataFileError(
-            f"{path}, line {data_line_number(path, 0)}: {column} = {t[0]:g} must be >= 0"
-        )
-    steps = np.flatnonzero(np.diff(t) <= 0)
-    if steps.size:
-        i = steps[0] + 1
-        raise DataFileError(
-            f"{path}, line {data_line_number(path, i)}: {column} = {t[i]:g} does not increase "
-            f"(previous row {t[i - 1]:g})"
-        )
 
 
 def write_slip_run(run: SlipRun, path, *, overwrite: bool = False, comment: str = "") -> None:
@@ -212,11 +200,8 @@ def synthetic_slip_run(
 
 
 def simulate_run(element, run: SlipRun, **kw):
-    """The model's slip on the run's own times and acceleration (a `SlipSolution`).
-
-    Calls `simulate_slip(element, profile, run.mass, ts=run.t, t_end=run.t[-1], **kw)` from rest
-    at t = 0, driven by the run's own acceleration (`SlipRun.profile`). Keywords go to
-    `simulate_slip`.
-    """
+    """The model's slip on the run's own times (a `SlipSolution`): `simulate_slip` from rest at
+    t = 0, driven by `SlipRun.profile` unless a `profile` keyword is given; other keywords go to
+    `simulate_slip`."""
     profile = kw.pop("profile", None) or run.profile()
     return simulate_slip(element, profile, run.mass, ts=run.t, t_end=float(run.t[-1]), **kw)

@@ -105,16 +105,14 @@ def load_model(path) -> FittedModel:
         d = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(f"{path}: not a readable JSON file ({exc})") from None
+    saved, where = d, str(path)
     if isinstance(d, dict) and "format" not in d:
         if d.get(SAVED_KEY) is None:
             raise ValueError(f"{path}: no field '{SAVED_KEY}' (written by `tribojax fit` or "
                              "`discover` of this version for a slip run, loop, history or "
                              "friction curve; wu2015's steady-loop fit saves none)")  # fmt: skip
-        where = f"{path}: {SAVED_KEY}"
-        model = FittedModel.from_dict(d[SAVED_KEY], where)
-    else:
-        where = str(path)
-        model = FittedModel.from_dict(d, where)
+        saved, where = d[SAVED_KEY], f"{path}: {SAVED_KEY}"
+    model = FittedModel.from_dict(saved, where)
     if model.kind == "history":
         _check_history(model, where)
     return model
@@ -197,7 +195,7 @@ def _check_history(model, where) -> list:
     return names
 
 
-def _history(model, loop, initial="rest"):
+def _history(model, loop, initial):
     names = _check_history(model, "model")
     dec = int(model.options.get("decimate", 1))
     values = [model.parameters[n] for n in names]

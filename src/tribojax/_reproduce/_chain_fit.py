@@ -9,7 +9,7 @@ Eq 27: 24 values) to the *measured* columns of Tables 4–7. The chain is the Ta
 Uncertainty model (stated): every measured cell has the same *relative* uncertainty s, estimated
 from the fit (s² = RSS/(n − p)); residual_i = model_i/measured_i − 1. This is also the metric of
 the acceptance: the RMS relative residual over the 24 cells, computed the same way for the
-paper's own theoretical values. (T5 at 20 kPa is −0.47 nm measured; it weighs most.)
+paper's own theoretical values.
 
 Convergence. The slips come from an adaptive ODE solver (accurate to ~2e-4 here,
 `_chain.SLIP_ATOL`); near the optimum the misfit is flat to that level along the D–G valley.
@@ -18,9 +18,6 @@ is below 0.05 standard errors) or after six rejected steps in a row, and a fit c
 only if the Gauss–Newton step still left is below `GN_STEP_TOL` standard errors (else
 `RESULTS.short_of_optimum`). Rows where F_s <= m·a_max (the reticle would slide grossly, outside
 Eq 27's pre-sliding model) or the contact fails get the residual `FAILED_RESIDUAL` (LM backs off).
-
-Failures. If the compiled fit raises (an `equinox` runtime check inside the chain at a trial
-point), `fit_measured_slips` turns that into `ChainFitError` naming the trial point.
 """
 
 from __future__ import annotations
@@ -208,18 +205,17 @@ class ChainFit:
         f = self.fit
         resid = self.model_nm / self.target_nm - 1.0
         vac = wang2022_table(3)["vacuum_kPa"]
-        cells = []
-        for i in range(self.target_nm.shape[0]):
-            for j, n in enumerate(TABLES):
-                cells.append(
-                    {
-                        "table": n,
-                        "vacuum_kPa": float(vac[i]) if self.target_nm.shape[0] == len(vac) else i,
-                        "measured_nm": float(self.target_nm[i, j]),
-                        "model_nm": float(self.model_nm[i, j]),
-                        "rel_residual": float(resid[i, j]),
-                    }
-                )
+        cells = [
+            {
+                "table": n,
+                "vacuum_kPa": float(vac[i]) if self.target_nm.shape[0] == len(vac) else i,
+                "measured_nm": float(self.target_nm[i, j]),
+                "model_nm": float(self.model_nm[i, j]),
+                "rel_residual": float(resid[i, j]),
+            }
+            for i in range(self.target_nm.shape[0])
+            for j, n in enumerate(TABLES)
+        ]
         return {
             "parameters": dict(self.parameters),
             "free_parameters": list(self.free),
@@ -288,11 +284,12 @@ def fit_measured_slips(
             −log-likelihood at the scale s (`student_t_residuals`; `fit.residuals` are ψ).
     Returns:
         ChainFit; `result` a `tribojax.RESULTS` member, `converged` False (with `fit.message`)
-        when LM did not succeed or stopped short of the optimum (`RESULTS.short_of_optimum`:
-        Gauss–Newton step >= `GN_STEP_TOL` standard errors) — never raises for that.
+        when LM did not succeed or stopped short of the optimum (module docstring,
+        Convergence) — never raises for that.
     Raises:
         ValueError: bad input (names the parameter, value and allowed range).
-        ChainFitError: the compiled fit raised at a trial point (module docstring, Failures).
+        ChainFitError: an `equinox` runtime check inside the chain failed at a trial point
+            (the message names it).
     """
     free = tuple(free)
     bad = [n for n in free if n not in PARAMETERS]

@@ -19,11 +19,9 @@ Fit. For fixed ν, ℓ is maximised over θ and s by `student_t_ml` (θ by
 EM's fixed point. The reported chain is the least-squares fit weighted by the EM weights u at
 the optimum (it stays put there), whose Jacobian gives the standard errors s²(JᵀUJ)⁻¹.
 
-Outliers. The standardized residual of a cell is z_i = r_i/(ŝ·√(1 − h_ii)), h the leverage of
-the weighted fit (hat matrix of √u·J) and ŝ = 1.4826·median|r_i| the robust standard deviation
-of the residuals' Gaussian core (not the t scale s, which is smaller than that core's standard
-deviation for small ν). A cell is flagged when |z_i| exceeds the two-sided 5 % point of that
-core with a Bonferroni correction over the n cells, Φ⁻¹(1 − 0.025/n) (3.08 for 24 cells).
+Outliers. A cell is flagged when its `standardized_residuals` z_i (leverage from √u·J, scale
+`core_scale`, not the t scale s, which is smaller than the Gaussian core's standard deviation for
+small ν) exceeds `flag_threshold`, the Bonferroni 5 % point over the n cells (3.08 for 24 cells).
 """
 
 from __future__ import annotations

@@ -3,9 +3,8 @@
 Residuals r_i (in units of their noise shape) with a Student-t error of ν degrees of freedom and
 scale s have the log-likelihood ℓ = Σ_i [ln Γ((ν+1)/2) − ln Γ(ν/2) − ½ ln(νπ) − ln(s σ_i) −
 (ν+1)/2 · ln(1 + r_i²/(ν s²))] (Lange, Little & Taylor 1989, J. Am. Stat. Assoc. 84, 881, Eq 1;
-ν = inf: the Gaussian). Its maximum over the model parameters θ and s is found by coordinate
-ascent (`student_t_ml`): θ at fixed s by least squares on `student_t_residuals`, then s exactly
-(`t_scale`). `tribojax._reproduce._robust_fit` applies it to wang2022's measured slips.
+ν = inf: the Gaussian). `student_t_ml` maximises it over the model parameters θ and s;
+`tribojax._reproduce._robust_fit` applies it to wang2022's measured slips.
 """
 
 from __future__ import annotations
@@ -101,13 +100,10 @@ def t_scale(r, nu) -> float:
 def student_t_ml(theta_step, y, sigma, nu, first, *, max_iterations=40, tol=1e-3, log=False):
     """Student-t maximum likelihood around a least-squares model by coordinate ascent.
 
-    Each iteration maximises ℓ over θ at the current scale s — one least-squares fit of the
-    residuals ψ of `student_t_residuals`, whose sum of squares is −2ℓ up to terms in s — and
-    then over s at that θ (`t_scale`, exact). Both steps raise ℓ, and the two converge together
-    quickly: for a symmetric density the Fisher information of θ and s is block diagonal, so θ
-    hardly moves when s does. It reaches EM's fixed point (the same likelihood equations,
-    Lange et al. Eqs 4–5) in a few fits instead of EM's one weighted fit per step, which
-    converges linearly (docs/reproduction.md, robust fit).
+    Each iteration maximises ℓ over θ at the current scale s (one least-squares fit of
+    `student_t_residuals`) and then over s at that θ (`t_scale`, exact). It reaches EM's fixed
+    point (the same likelihood equations, Lange et al. Eqs 4–5) in fewer fits than EM
+    (docs/reproduction.md, robust fit, says why).
 
     Args:
         theta_step: (s, previous fit) -> (fit, model): the fit of θ at fixed scale s, started

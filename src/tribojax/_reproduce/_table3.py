@@ -1,19 +1,12 @@
 """Reproduction of wang2022 Table 3 (contact parameters of the reticle/chuck pair).
 
-Two computations, side by side with the paper's values:
-
-(a) published inputs: D, G of Table 1 (equivalent surface), the Table 2 pair with σ_s = 490 MPa
-    (the tabulated yield strength of the softer body), loads from Eq 28. M and μ_t are not
-    published; they are taken from (b) so that (a) and (b) differ only in G and σ_s.
-(b) calibrated: G, μ_t and σ_s fitted by optimistix Levenberg–Marquardt to Table 3's F_s and
-    K_τ (12 values, relative residuals, common scatter estimated from the fit), with M fixed.
-
-G and M are exactly degenerate at fixed D (only G^(2D-4)/M enters Eqs 5–13; `equivalent_G`,
-docs/reproduction.md, Further facts), so M is fixed (default 1) and the equivalence is reported.
-
-Fixed in both: D = 2.8821, γ = 1.5, a = a' (truncated area), T/P = 0.321 N / F (the reticle's
-inertial load m·a_max over the normal load) and m = 0.321 kg in Eq 24 (see docs/reproduction.md;
-the constants live in `tribojax._presets`, the θ ↔ physical mapping in `tribojax._chain`).
+Two computations, side by side with the paper's values: (a) from the published inputs (Tables 1
+and 2, σ_s = 490 MPa; M and μ_t, which are not published, from (b)) and (b) calibrated: G, μ_t
+and σ_s fitted by optimistix Levenberg–Marquardt to Table 3's F_s and K_τ (relative residuals)
+at fixed M, since G and M are exactly degenerate (`equivalent_G`). The settings both share
+(D, γ, a = a', T/P, the mass in Eq 24) are those of docs/reproduction.md, "wang2022: Table 3
+calibration"; the constants live in `tribojax._presets`, the θ ↔ physical mapping in
+`tribojax._chain`.
 """
 
 from __future__ import annotations

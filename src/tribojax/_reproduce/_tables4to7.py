@@ -1,14 +1,10 @@
 """Reproduction of wang2022 Tables 4–7 (mean reticle slip per phase of the stage cycle).
 
-Inputs: Table 3's published F_s, K_τ, C_τ at the six vacuum levels, the 0.321 kg reticle, and
-the stage profile of docs/reproduction.md (`TrapezoidProfile()`); the model is the pre-slip
-element of Eq 27 (`PreSlipLuGre`) in the two-body slip simulation: the element → observables half
-of `tribojax._chain`. Computed at α = 1 (the paper's value) and with α fitted by optimistix
-Levenberg–Marquardt to the paper's *theoretical* Tables 4 and 6 (12 values, relative residuals,
-α > 0 through α = e^θ, scatter estimated from the fit).
-
-Tables 5 and 7 are reported, not fitted: the paper's own theory breaks T5 ≈ −T7 at 0.6–2 kPa,
-which no model symmetric under a → −a reproduces (docs/reproduction.md, Symmetry limit).
+The pre-slip element of Eq 27 (`PreSlipLuGre`) with Table 3's published F_s, K_τ, C_τ in the
+two-body slip simulation (the element → observables half of `tribojax._chain`), at α = 1 (the
+paper's value) and at α fitted to the paper's theoretical Tables 4 and 6 (`fit_alpha`); Tables 5
+and 7 are reported, not fitted. Inputs, stage profile and the symmetry limit: docs/reproduction.md,
+"wang2022: Tables 4-7 (slip)".
 """
 
 from __future__ import annotations
@@ -55,7 +51,8 @@ def _alpha_residuals(theta, target):
 
 
 def fit_alpha(alpha0: float = 1.2) -> FitResult:
-    """α fitted to the paper's theoretical Tables 4 and 6 (relative residuals)."""
+    """α fitted by optimistix Levenberg–Marquardt to the paper's theoretical Tables 4 and 6 (12
+    values, relative residuals, α = e^θ > 0, scatter estimated from the fit)."""
     target = jnp.stack([jnp.asarray(wang2022_table(n)["theory_nm"]) for n in (4, 6)], axis=1)
 
     return least_squares_fit(
@@ -119,17 +116,6 @@ def reproduce_tables4to7(fit: FitResult | None = None) -> dict:
     }
 
 
-def figure10_curves(alpha=1.0, n_points=1151):
-    """Slip and bristle deflection (nm) against time for Table 3's six rows (Figure 10).
-
-    Returns (t in s, slip (6, n), z (6, n)).
-    """
-    ts = jnp.linspace(0.0, 2.3, n_points)
-    alpha = check_range(alpha, "alpha", 0.0)
-    slip, z = finite_result(_figure10, alpha, ts, what=f"wang2022 Figure 10 at alpha = {alpha}")
-    return np.asarray(ts), slip, z
-
-
 @cached_jit
 def _figure10(alpha, ts):
     def one(f, k, c):
@@ -173,7 +159,9 @@ def plot_figure10(result: dict, path) -> bool:
     plt = pyplot("figure")
     if plt is None:
         return False
-    t, slip, z = figure10_curves(1.0)
+    t = jnp.linspace(0.0, 2.3, 1151)
+    slip, z = finite_result(_figure10, jnp.float64(1.0), t,
+                            what="wang2022 Figure 10 at alpha = 1.0")  # fmt: skip
     vac = wang2022_table(3)["vacuum_kPa"]
     measured = measured_slips()
     windows = [(0.25, 0.6), (0.73, 1.5), (1.65, 2.0), (2.25, 2.3)]

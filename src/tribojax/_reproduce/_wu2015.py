@@ -1,7 +1,6 @@
 """wu2015's comparison: Jenkins and Mindlin K̄, C̄ against the paper's Eq 7, and its stiffness laws.
 
 All K̄, C̄ are functions of Ā only, so the comparison uses a unit element (μN = 1 N, K_d = 1 N/m).
-Eq 5 (`wu2015_eq5_stiffness`) is a preset of `tribojax._contact._presets`, re-exported here.
 """
 
 from __future__ import annotations
@@ -91,10 +90,9 @@ def cbar_peak(name: str) -> tuple[float, float]:
 
     Closed forms: Jenkins Ā = 2, C̄ = 1; Mindlin Ā = 2.4, C̄ = 5/6 (docs/reproduction.md).
     """
-    element = unit_element(name)
     grid = jnp.linspace(1.05, 6.0, 100)
-    _, C = finite_result(_curves, element, grid, what=f"K_bar, C_bar of {name}")
-    a, c = finite_result(_newton_peak, element, grid[int(np.argmax(C))],
+    _, C = dimensionless_curves(name, grid)
+    a, c = finite_result(_newton_peak, unit_element(name), grid[int(np.argmax(C))],
                          what=f"the C_bar peak of {name}")  # fmt: skip
     return float(a), float(c)
 
@@ -157,10 +155,8 @@ def fractal_tangential_stiffness(a_l, a_c, D, E_star, nu):
     K_d = 4(1−ν)E*D / (√(2π)(2−ν)(D−1)) · (a'_l^(D/2) a'_c^((1−D)/2) − a'_l^(1/2)): the stiffness
     of the elastic asperities, a'_c < a' ≤ a'_l, summed over the size distribution.
 
-    Misprint corrected: the printed exponent of a'_c is 1 − D/2; integrating the asperity
-    stiffness (∝ a'^(1/2)) over the distribution (∝ a'^(−D/2−1)) gives (1 − D)/2, which is also the
-    only exponent that makes K_d a force per length (the printed one gives negative stiffness in
-    SI units).
+    Misprint corrected: the exponent of a'_c is (1 − D)/2, not the printed 1 − D/2 (the asperity
+    stiffness ∝ a'^(1/2) integrated over the distribution ∝ a'^(−D/2−1); docs/reproduction.md).
 
     Args:
         a_l: largest truncated microcontact area a'_l, m², > 0 (from a load balance, which the

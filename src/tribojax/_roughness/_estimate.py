@@ -191,13 +191,8 @@ def _fit_line(x, y):
 
 
 def _choose_band(lx, ly, min_decades, band, slope_range, allowance=2e-4):
-    """Index windows [i, j) over log10 x; return the accepted windows, best first.
-
-    Candidates span at least `min_decades` and have a slope inside `slope_range` (2 < D < 3);
-    among them the widest whose rms residual is within 1.5x (+ `allowance`) of the most linear
-    one wins. The PSD's allowance is 0.01 (in log10), the other methods' 2e-4 (docs/surfaces.md,
-    "How the scaling band is chosen").
-    """
+    """Index windows [i, j) over log10 x; return the accepted windows, best first, by the rule of
+    docs/surfaces.md, "How the scaling band is chosen" (`slope_range`: 2 < D < 3)."""
     n = len(lx)
     if band is not None:
         sel = np.flatnonzero((lx >= np.log10(band[0]) - 1e-9) & (lx <= np.log10(band[1]) + 1e-9))
@@ -309,7 +304,6 @@ def estimate_fractal(
         log_const = math.log10(c_rms * K)
         log_scale = alpha * math.log10(dx)
     log10G = (yc - log_const - log_scale) / (2.0 * D - 4.0)
-    # uncertainty: regression error ⊕ spread over the accepted windows
     Ds = [3.0 - 0.5 * (_fit_line(lx[a:b], ly[a:b])[0][1] - shift) for a, b in wins[:20]]
     D_std = math.hypot(0.5 * math.sqrt(cov[1, 1]), float(np.std(Ds)))
     # dlog10G/dD at fixed fitted value yc: -(log10 G - xc)·2/(2D-4) (+ the constant's drift)

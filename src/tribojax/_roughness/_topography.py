@@ -10,7 +10,6 @@ MetroPro `.dat`, …) are handed to SurfaceTopography, an optional extra
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import equinox as eqx
@@ -74,7 +73,7 @@ class Topography(eqx.Module):
         return float(np.shape(self.heights)[-1] * self.dx)
 
 
-def validate(topo: Topography, *, min_points: int = MIN_POINTS) -> Topography:
+def validate(topo: Topography) -> None:
     """Refuse what no fractal analysis can use: NaNs, too few points, a flat surface."""
     z = np.asarray(topo.heights)
     name = topo.source or "topography"
@@ -84,15 +83,14 @@ def validate(topo: Topography, *, min_points: int = MIN_POINTS) -> Topography:
             f"{name}: {bad} of {z.size} heights are NaN or infinite (missing data); fill or crop "
             "them before estimating D and G"
         )
-    if z.shape[-1] < min_points:
+    if z.shape[-1] < MIN_POINTS:
         raise ValueError(
-            f"{name}: {z.shape[-1]} points along x is too short; at least {min_points} are needed "
+            f"{name}: {z.shape[-1]} points along x is too short; at least {MIN_POINTS} are needed "
             "for a scaling band of one decade"
         )
     span = float(np.ptp(z))
     if span <= 1e-12 * max(1.0, float(np.max(np.abs(z)))):
         raise ValueError(f"{name}: the surface is flat (height range {span:g} m); nothing to fit")
-    return topo
 
 
 def _read_plain(path: Path, dx, unit: str) -> Topography:
@@ -198,14 +196,13 @@ def _open_instrument(st, path: Path, fmt: str | None):
     (a misnamed file); the suffix reader's error when both fail."""
     try:
         return st.open_topography(str(path), format=fmt).topography()
-    except Exception:
+    except Exception as first:
         if fmt is None:
             raise
-        first = sys.exc_info()[1]
-    try:
-        return st.open_topography(str(path)).topography()
-    except Exception:
-        raise first from None
+        try:
+            return st.open_topography(str(path)).topography()
+        except Exception:
+            raise first from None
 
 
 def _unreadable(path: Path, fmt: str | None, err: Exception) -> str:
