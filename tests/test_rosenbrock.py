@@ -62,3 +62,77 @@ def test_stiff_prothero_robinson_one_big_step(lam):
     term = dfx.ODETerm(lambda t, y, a: -lam * (y - jnp.cos(t)) - jnp.sin(t))
     sol = dfx.diffeqsolve(term, tj.Rodas4(), 0.0, 0.1, 0.1, jnp.array([1.0]))
     assert abs(float(sol.ys[0, 0]) - np.cos(0.1)) < 1e-6
+
+
+def test_unrolled_lu_solves_like_lapack_with_pivoting():
+    from tribojax._dynamics._rodas4 import SMALL_N, _lu_small, _lu_solve_small
+
+    rng = np.random.default_rng(7)
+    for n in range(1, SMALL_N + 1):
+        for trial in range(10):
+            w = rng.normal(size=(n, n))
+            if n > 1 and trial % 2:
+                w[0, 0] = 1e-14  # a zero first pivot: only row exchanges solve this
+            b = rng.normal(size=n)
+            lu = _lu_small(jnp.asarray(w))
+            for trans, m in ((False, w), (True, w.T)):
+                want = np.linalg.solve(m, b)
+                got = np.asarray(_lu_solve_small(lu, jnp.asarray(b), trans=trans))
+                tol = 1e-14 * np.linalg.cond(m) * np.abs(want).max()
+                np.testing.assert_allclose(got, want, rtol=0, atol=tol)
+
+
+def test_system_above_the_unrolled_size_takes_lapack_and_is_accurate():
+    from tribojax._dynamics._rodas4 import SMALL_N
+
+    n = SMALL_N + 2  # a stiff diagonal chain y_i' = -k_i y_i: y_i = exp(-k_i t)
+    k = jnp.logspace(0, 3, n)
+    term = dfx.ODETerm(lambda t, y, a: -k * y)
+    sol = dfx.diffeqsolve(term, tj.Rodas4(), 0.0, 1.0, 1e-3, jnp.ones(n),
+                          stepsize_controller=dfx.PIDController(rtol=1e-9, atol=1e-12))  # fmt: skip
+    np.testing.assert_allclose(np.asarray(sol.ys[-1]), np.exp(-np.asarray(k)), rtol=1e-6,
+                               atol=1e-12)  # fmt: skip
+
+
+_ONE_KERNEL = r"""
+import json, os, sys
+import tribojax as tj
+import jax, jax.numpy as jnp
+el = lambda f: tj.PreSlipLuGre(f, 2.1478e7, 708.8274, 1.0)
+txt = jax.jit(lambda f: tj.simulate_slip(el(f)).slip).lower(0.7372).compile().as_text()
+p = [float(v) for v in tj.slip_phase_averages(el(0.7372))]
+import re
+step_loop = [line for line in txt.splitlines()  # diffrax's loop over the ODE steps
+             if re.search(r'outer-loop/(checkpointed-no-vjp/)?while"', line)]
+whole = any(" call(" in line and "xla_cpu_small_call" in line for line in step_loop)
+flags = os.environ.get("XLA_FLAGS", "")
+print(json.dumps(dict(flags=flags, whole=whole, lapack="lapack" in txt, phases=p)))
+"""
+
+
+def _one_kernel_probe(**env):
+    import json
+    import os
+    import subprocess
+    import sys
+
+    clean = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "TRIBOJAX_XLA_HOIST")}
+    out = subprocess.run([sys.executable, "-c", _ONE_KERNEL], capture_output=True, text=True,
+                         env={**clean, **env}, check=True)  # fmt: skip
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_opt_in_compiles_the_slip_solve_to_one_kernel_within_its_tolerance():
+    default = _one_kernel_probe()
+    assert default["flags"] == "" and default["lapack"] and not default["whole"]
+    hoisted = _one_kernel_probe(TRIBOJAX_XLA_HOIST="on")
+    assert tj._HOIST_FLAG in hoisted["flags"]
+    # diffrax's step loop moved into a call XLA:CPU compiles as one kernel, no LAPACK call left
+    # in it (docs/performance.md); by default LAPACK's LU keeps it a loop of kernels
+    assert hoisted["whole"] and not hoisted["lapack"]
+    # the same arithmetic in another order, whose rounding moves the adaptive steps: wang2022's
+    # phase slips agree within the solve's rtol 1e-6 (measured 3e-9 to 2e-7 relative)
+    np.testing.assert_allclose(hoisted["phases"], default["phases"], rtol=1e-6)
+    mine = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=1024"
+    user = _one_kernel_probe(XLA_FLAGS=mine, TRIBOJAX_XLA_HOIST="on")  # a user's own setting
+    assert user["flags"] == mine  # is left alone

@@ -24,6 +24,16 @@ if "jax" in sys.modules:  # already imported: switch it now (JAX reads the varia
 else:
     os.environ["JAX_ENABLE_X64"] = "1"
 
+# Opt-in (TRIBOJAX_XLA_HOIST=on): XLA:CPU then compiles every while loop free of library calls
+# into one kernel (its size limit raised from 1 kB), and Rodas4 factorises small systems without
+# LAPACK, so that a slip solve is one kernel: ~10x faster, other rounding, which moves chaotic fits
+# (docs/performance.md, "One kernel per solve"). Read by XLA when JAX's first backend starts; a
+# user's own `xla_backend_extra_options` is left alone.
+_HOIST_FLAG = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=1000000000"
+if "xla_backend_extra_options" not in os.environ.get("XLA_FLAGS", "") and \
+        os.environ.get("TRIBOJAX_XLA_HOIST", "").strip().lower() in ("on", "1", "yes", "true"):
+    os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {_HOIST_FLAG}".strip()
+
 if TYPE_CHECKING:
     from ._chain import mu_min as chain_mu_min  # noqa: F401
     from ._chain import to_physical as chain_physical  # noqa: F401

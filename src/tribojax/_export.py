@@ -51,7 +51,9 @@ def _environment() -> str:
             versions.append(f"{name}={metadata.version(name)}")
         except metadata.PackageNotFoundError:
             versions.append(f"{name}=?")
-    return f"{h.hexdigest()}|{'|'.join(versions)}|{jax.default_backend()}"
+    # XLA_FLAGS: Rodas4's LU follows the hoisting option (`_rodas4.unrolled_lu`)
+    flags = os.environ.get("XLA_FLAGS", "")
+    return f"{h.hexdigest()}|{'|'.join(versions)}|{jax.default_backend()}|{flags}"
 
 
 def _atom(x) -> str:

@@ -7,12 +7,16 @@ With W = I/(γh) − J, J = ∂f/∂y(t₀, y₀) and f_t = ∂f/∂t(t₀, y₀
     W K_i = f(t₀ + α_i h, y₀ + Σ_{j<i} a_ij K_j) + Σ_{j<i} (c_ij/h) K_j + γ_i h f_t,
 
 and y₁ = y₀ + Σ m_i K_i, error estimate Σ e_i K_i (here K₆). One Jacobian (`jax.jacfwd`), one
-∂f/∂t (`jax.jvp`), one LU and six triangular solves per step, no Newton iteration: for small
-stiff systems much cheaper per step than an ESDIRK (Kvaerno5) with a chord iteration.
+∂f/∂t (`jax.jvp`), one LU and six pairs of triangular solves per step, no Newton iteration: for
+small stiff systems much cheaper per step than an ESDIRK (Kvaerno5) with a chord iteration. Up to
+`SMALL_N` states, with TRIBOJAX_XLA_HOIST=on, the LU is unrolled array arithmetic rather than
+LAPACK, so that XLA:CPU can compile
+the whole solve into one kernel (`unrolled_lu`; docs/performance.md, "One kernel per solve").
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from typing import ClassVar
 
@@ -50,6 +54,58 @@ _D1 = (10.12623508344586, -7.487995877610167, -34.80091861555747, -7.99277170756
        1.025137723295662, 0.0)  # fmt: skip
 _D2 = (-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386,
        -6.594389125716872, 0.0)  # fmt: skip
+
+
+SMALL_N = 8  # states up to which W may be factorised by unrolled elimination (`_lu_small`)
+HOIST_OPTION = "xla_cpu_small_while_loop_byte_threshold"  # in XLA_FLAGS: loops as one kernel
+
+
+def unrolled_lu(n: int) -> bool:
+    """Whether Rodas4 factorises its n×n W by `_lu_small`: n ≤ `SMALL_N` and the process asks
+    XLA:CPU for whole-loop kernels (`HOIST_OPTION` in XLA_FLAGS, which `TRIBOJAX_XLA_HOIST=on`
+    sets). Otherwise LAPACK's getrf/trsm, the default: the other choice rounds differently."""
+    return n <= SMALL_N and HOIST_OPTION in os.environ.get("XLA_FLAGS", "")
+
+
+def _lu_small(w):
+    """LU of a small W with partial pivoting, unrolled into elementwise array ops: (LU, P) with
+    P W = L U (unit L below the diagonal of LU, U on and above it), P a permutation matrix.
+
+    No LAPACK call, so that XLA:CPU compiles the whole ODE loop into one kernel
+    (docs/performance.md, "One kernel per solve"); larger systems keep LAPACK's getrf and trsm.
+    """
+    n = w.shape[0]
+    rows = jnp.arange(n)
+    eye = jnp.eye(n, dtype=w.dtype)
+    a, perm = w, eye
+    for k in range(n - 1):
+        p = jnp.argmax(jnp.where(rows >= k, jnp.abs(a[:, k]), -1.0))
+        ek, ep = (rows == k).astype(w.dtype), (rows == p).astype(w.dtype)
+        swap = eye - jnp.outer(ek - ep, ek - ep)  # identity when p == k
+        a, perm = swap @ a, swap @ perm
+        below = rows > k
+        lk = jnp.where(below, a[:, k] / a[k, k], 0.0)
+        a = a - jnp.outer(lk, jnp.where(below, a[k, :], 0.0))
+        a = jnp.where((rows == k)[None, :] & below[:, None], lk[:, None], a)
+    return a, perm
+
+
+def _lu_solve_small(lu, b, trans=False):
+    """x with W x = b (or Wᵀ x = b) from `_lu_small`'s (LU, P), by unrolled substitution."""
+    a, perm = lu
+    n = a.shape[0]
+    u = (lambda i, j: a[j, i]) if trans else (lambda i, j: a[i, j])
+    rhs = b if trans else perm @ b
+    y: list = [None] * n
+    for i in range(n):  # L y = P b, or Uᵀ y = b
+        s = rhs[i] - sum((u(i, j) * y[j] for j in range(i)), jnp.zeros_like(rhs[i]))
+        y[i] = s / a[i, i] if trans else s
+    x: list = [None] * n
+    for i in reversed(range(n)):  # U x = y, or Lᵀ x = y
+        s = y[i] - sum((u(i, j) * x[j] for j in range(i + 1, n)), jnp.zeros_like(y[i]))
+        x[i] = s if trans else s / a[i, i]
+    x = jnp.stack(x)
+    return perm.T @ x if trans else x
 
 
 def _combine(coeffs, ks):
@@ -123,14 +179,19 @@ class Rodas4(dfx.AbstractAdaptiveSolver):
         # one LU of W per step (of W without its tangent); each solve is a custom_linear_solve, so
         # that forward mode gives dK = W⁻¹(d rhs − dW K) with the same LU instead of
         # differentiating the factorisation (as jnp.linalg.solve does)
-        lu = jax.scipy.linalg.lu_factor(jax.lax.stop_gradient(w))
+        if unrolled_lu(y0.shape[0]):
+            lu = _lu_small(jax.lax.stop_gradient(w))
+            lu_solve = _lu_solve_small
+        else:
+            lu = jax.scipy.linalg.lu_factor(jax.lax.stop_gradient(w))
+            lu_solve = jax.scipy.linalg.lu_solve
 
         def solve_w(b):
             return jax.lax.custom_linear_solve(
                 lambda x: w @ x,
                 b,
-                solve=lambda _, r: jax.scipy.linalg.lu_solve(lu, r),
-                transpose_solve=lambda _, r: jax.scipy.linalg.lu_solve(lu, r, trans=1),
+                solve=lambda _, r: lu_solve(lu, r),
+                transpose_solve=lambda _, r: lu_solve(lu, r, trans=True),
             )
 
         ks: list[Array] = []
