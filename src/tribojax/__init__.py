@@ -19,6 +19,8 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ._limits import XLA_HOIST_OPTION as _XLA_HOIST_OPTION
+
 if "jax" in sys.modules:  # already imported: switch it now (JAX reads the variable on import)
     sys.modules["jax"].config.update("jax_enable_x64", True)
 else:
@@ -29,7 +31,7 @@ else:
 # LAPACK, so that a slip solve is one kernel: ~10x faster, other rounding, which moves chaotic fits
 # (docs/performance.md, "One kernel per solve"). Read by XLA when JAX's first backend starts; a
 # user's own `xla_backend_extra_options` is left alone.
-_HOIST_FLAG = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=1000000000"
+_HOIST_FLAG = f"--xla_backend_extra_options={_XLA_HOIST_OPTION}=1000000000"
 if "xla_backend_extra_options" not in os.environ.get("XLA_FLAGS", "") and \
         os.environ.get("TRIBOJAX_XLA_HOIST", "").strip().lower() in ("on", "1", "yes", "true"):
     os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {_HOIST_FLAG}".strip()

@@ -10,8 +10,8 @@ and y₁ = y₀ + Σ m_i K_i, error estimate Σ e_i K_i (here K₆). One Jacobia
 ∂f/∂t (`jax.jvp`), one LU and six pairs of triangular solves per step, no Newton iteration: for
 small stiff systems much cheaper per step than an ESDIRK (Kvaerno5) with a chord iteration. Up to
 `SMALL_N` states, with TRIBOJAX_XLA_HOIST=on, the LU is unrolled array arithmetic rather than
-LAPACK, so that XLA:CPU can compile
-the whole solve into one kernel (`unrolled_lu`; docs/performance.md, "One kernel per solve").
+LAPACK, so that XLA:CPU can compile the whole solve into one kernel (`unrolled_lu`;
+docs/performance.md, "One kernel per solve").
 """
 
 from __future__ import annotations
@@ -25,6 +25,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
+
+from .._limits import XLA_HOIST_OPTION
 
 # Hairer & Wanner's RODAS, ro4coe (METH = 1): a_ij, c_ij (strictly lower), α_i, γ_i = Σ_j γ_ij.
 _GAMMA = 0.25
@@ -57,14 +59,14 @@ _D2 = (-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418
 
 
 SMALL_N = 8  # states up to which W may be factorised by unrolled elimination (`_lu_small`)
-HOIST_OPTION = "xla_cpu_small_while_loop_byte_threshold"  # in XLA_FLAGS: loops as one kernel
 
 
 def unrolled_lu(n: int) -> bool:
     """Whether Rodas4 factorises its n×n W by `_lu_small`: n ≤ `SMALL_N` and the process asks
-    XLA:CPU for whole-loop kernels (`HOIST_OPTION` in XLA_FLAGS, which `TRIBOJAX_XLA_HOIST=on`
-    sets). Otherwise LAPACK's getrf/trsm, the default: the other choice rounds differently."""
-    return n <= SMALL_N and HOIST_OPTION in os.environ.get("XLA_FLAGS", "")
+    XLA:CPU for whole-loop kernels (its loop-size option in XLA_FLAGS, which
+    `TRIBOJAX_XLA_HOIST=on` sets). Otherwise LAPACK's getrf/trsm, the default: the other choice
+    rounds differently."""
+    return n <= SMALL_N and XLA_HOIST_OPTION in os.environ.get("XLA_FLAGS", "")
 
 
 def _lu_small(w):
