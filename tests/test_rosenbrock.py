@@ -123,17 +123,35 @@ def _one_kernel_probe(code=_ONE_KERNEL, **env):
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def test_opt_in_compiles_the_slip_solve_to_one_kernel_within_its_tolerance():
-    default = _one_kernel_probe()
-    assert default["flags"] == "" and default["lapack"] and not default["whole"]
-    hoisted = _one_kernel_probe(TRIBOJAX_XLA_HOIST="on")
+def test_slip_solve_is_one_kernel_by_default_within_its_tolerance_of_lapack():
+    hoisted = _one_kernel_probe()
     assert tj._HOIST_FLAG in hoisted["flags"]
     # diffrax's step loop moved into a call XLA:CPU compiles as one kernel, no LAPACK call left
-    # in it (docs/performance.md); by default LAPACK's LU keeps it a loop of kernels
+    # in it (docs/performance.md); with the option off LAPACK's LU keeps it a loop of kernels
     assert hoisted["whole"] and not hoisted["lapack"]
+    lapack = _one_kernel_probe(TRIBOJAX_XLA_HOIST="off")
+    assert lapack["flags"] == "" and lapack["lapack"] and not lapack["whole"]
     # the same arithmetic in another order, whose rounding moves the adaptive steps: wang2022's
     # phase slips agree within the solve's rtol 1e-6 (measured 3e-9 to 2e-7 relative)
-    np.testing.assert_allclose(hoisted["phases"], default["phases"], rtol=1e-6)
+    np.testing.assert_allclose(hoisted["phases"], lapack["phases"], rtol=1e-6)
+
+
+def test_hoisting_flag_leaves_a_users_options_and_a_started_backend_alone():
     mine = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=1024"
-    flags = "import json, os, tribojax; print(json.dumps(os.environ['XLA_FLAGS']))"
-    assert _one_kernel_probe(flags, XLA_FLAGS=mine, TRIBOJAX_XLA_HOIST="on") == mine  # left alone
+    flags = "import json, os, tribojax; print(json.dumps(os.environ.get('XLA_FLAGS', '')))"
+    assert _one_kernel_probe(flags, XLA_FLAGS=mine) == mine
+    # a backend already running has read XLA_FLAGS: the flag would not act, and Rodas4 keeps LAPACK
+    late = ("import json, os, jax; jax.numpy.zeros(1).block_until_ready(); import tribojax; "
+            "from tribojax._dynamics._rodas4 import unrolled_lu; "
+            "print(json.dumps([os.environ.get('XLA_FLAGS', ''), unrolled_lu(4)]))")
+    assert _one_kernel_probe(late) == ["", False]
+
+
+def test_hoisting_setting_refuses_an_unknown_value():
+    import os
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", "import tribojax"], capture_output=True,
+                         text=True, env={**os.environ, "TRIBOJAX_XLA_HOIST": "maybe"})  # fmt: skip
+    assert out.returncode != 0 and "TRIBOJAX_XLA_HOIST = 'maybe'" in out.stderr

@@ -1,4 +1,5 @@
-"""Experiment (issue 32, stop 63): the opt-in one-kernel slip solve (`TRIBOJAX_XLA_HOIST=on`).
+"""Experiment (issue 32, stops 63–64): the one-kernel slip solve (opt-in at stop 63, the default
+since stop 64; `TRIBOJAX_XLA_HOIST=off` restores XLA's own loops and LAPACK's LU).
 
     python benchmarks/experiments/one_kernel.py compare     # stored rows: default vs opt-in
     python benchmarks/experiments/one_kernel.py eval        # one fit evaluation, both settings
@@ -7,9 +8,12 @@
 the project's study, `benchmarks/discovery_study.py --shard i/2`, and the blind records,
 `benchmarks/blind_study.py`, run at commit a141094's arithmetic with the option on) beside the
 default's stored rows (benchmarks/discovery_study.json, blind_study_after.jsonl,
-blind_pairs_after.jsonl) and prints both summaries and every record whose answer changed.
+blind_pairs_after.jsonl), and the study run in both settings on one machine at stop 64
+(`study_default_stop64.jsonl`, `study_hoisted_stop64.jsonl`), and prints both summaries and every
+record whose answer changed.
 `eval` times one residual-and-Jacobian evaluation of the baseline fit's first start on a
 5,001-sample Stribeck record (the LM step's cost), in a fresh process per setting, alternated.
+In the stored rows "default" is the LAPACK setting (today's `off`) and "opt-in" the one kernel.
 docs/performance.md ("One kernel per solve") has the figures and the reasons.
 """
 
@@ -56,6 +60,9 @@ def compare():
          blind_study.summarise),
         ("blind pairs", _rows(ROOT / "benchmarks/blind_pairs_after.jsonl"),
          _rows(HERE / "blind_pairs_hoisted.jsonl"), blind_study.summarise),
+        ("study, both settings on one machine (stop 64)",
+         _rows(HERE / "study_default_stop64.jsonl"), _rows(HERE / "study_hoisted_stop64.jsonl"),
+         discovery_study.summarise),
     ]  # fmt: skip
     for name, default, hoisted, summarise in pairs:
         by_label = {r["label"]: r for r in default}
@@ -66,7 +73,7 @@ def compare():
             lines = [x for x in table.splitlines() if x.startswith("- ") and "kPa" not in x]
             seconds = sum(r["seconds"] for r in rows)
             print(f"{tag}: {seconds:.0f} s of discovery")
-            if name == "study":
+            if name.startswith("study"):
                 for k, v in summarise(rows)[0].items():
                     print(f"  {k}: {v['success']}/{v['n']}")
             else:
@@ -82,9 +89,9 @@ def evaluate(rounds=3):
     import os
 
     base = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "TRIBOJAX_XLA_HOIST")}
-    out = {"default": [], "opt-in": []}
+    out = {"off": [], "one kernel": []}
     for _ in range(rounds):
-        for tag, env in (("default", {}), ("opt-in", {"TRIBOJAX_XLA_HOIST": "on"})):
+        for tag, env in (("off", {"TRIBOJAX_XLA_HOIST": "off"}), ("one kernel", {})):
             res = subprocess.run([sys.executable, "-c", _EVAL], env={**base, **env},
                                  capture_output=True, text=True, check=True)  # fmt: skip
             out[tag].append(json.loads(res.stdout.strip().splitlines()[-1]))

@@ -26,14 +26,23 @@ if "jax" in sys.modules:  # already imported: switch it now (JAX reads the varia
 else:
     os.environ["JAX_ENABLE_X64"] = "1"
 
-# Opt-in (TRIBOJAX_XLA_HOIST=on): XLA:CPU then compiles every while loop free of library calls
-# into one kernel (its size limit raised from 1 kB), and Rodas4 factorises small systems without
-# LAPACK, so that a slip solve is one kernel: ~10x faster, other rounding, which moves chaotic fits
-# (docs/performance.md, "One kernel per solve"). Read by XLA when JAX's first backend starts; a
-# user's own `xla_backend_extra_options` is left alone.
+# One kernel per slip solve, unless TRIBOJAX_XLA_HOIST=off: XLA:CPU compiles every while loop free
+# of library calls into one kernel (its size limit raised from 1 kB) and Rodas4 factorises small
+# systems without LAPACK (docs/performance.md, "One kernel per solve"). XLA reads the flag when
+# JAX's first backend starts: not set once one runs, nor beside a user's own extra options.
 _HOIST_FLAG = f"--xla_backend_extra_options={_XLA_HOIST_OPTION}=1000000000"
-if "xla_backend_extra_options" not in os.environ.get("XLA_FLAGS", "") and \
-        os.environ.get("TRIBOJAX_XLA_HOIST", "").strip().lower() in ("on", "1", "yes", "true"):
+
+
+def _backend_started() -> bool:
+    bridge = getattr(getattr(sys.modules.get("jax"), "_src", None), "xla_bridge", None)
+    return bool(bridge is not None and bridge.backends_are_initialized())
+
+
+_hoist = os.environ.get("TRIBOJAX_XLA_HOIST", "on").strip().lower() or "on"
+if _hoist not in ("on", "off", "1", "0", "yes", "no", "true", "false"):
+    raise ValueError(f"TRIBOJAX_XLA_HOIST = {_hoist!r}: allowed 'on' (the default) or 'off'")
+if _hoist in ("on", "1", "yes", "true") and not _backend_started() \
+        and "xla_backend_extra_options" not in os.environ.get("XLA_FLAGS", ""):
     os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {_HOIST_FLAG}".strip()
 
 if TYPE_CHECKING:

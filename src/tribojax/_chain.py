@@ -26,6 +26,7 @@ import numpy as np
 from ._checks import as_f64
 from ._contact._presets import wang2022_table3_model
 from ._dynamics._profiles import TrapezoidProfile
+from ._dynamics._rodas4 import Rodas4
 from ._dynamics._slip import slip_phase_averages
 from ._friction._lugre import PreSlipLuGre
 from ._presets import (
@@ -166,13 +167,19 @@ def chain_contact(params, loads=None):
 # --- element → observables ----------------------------------------------------------------------
 
 
+PAPER_SOLVER = Rodas4(lu="lapack")  # the wang2022 chain's slip solves (`phase_slips`)
+
+
 def phase_slips(element, *, a_max=WANG2022_A_MAX, profile=None, mass=WANG2022_RETICLE_MASS_KG,
                 **solver_kw):  # fmt: skip
     """[T4, T5, T6, T7] (m) of `element` under `TrapezoidProfile(a_max)` (wang2022 Tables 4–7).
 
-    `profile` replaces the stage profile; `solver_kw` go to `slip_phase_averages`.
+    `profile` replaces the stage profile; `solver_kw` go to `slip_phase_averages`. The solver
+    defaults to Rodas4 with LAPACK's LU (`PAPER_SOLVER`, docs/performance.md, "One kernel per
+    solve": the reproduction's measured-table fit stops on a ridge in the other rounding).
     """
     profile = TrapezoidProfile(a_max=a_max) if profile is None else profile
+    solver_kw.setdefault("solver", PAPER_SOLVER)
     return slip_phase_averages(element, profile, mass, **solver_kw)
 
 

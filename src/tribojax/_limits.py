@@ -34,4 +34,5 @@ SAMPLE_LIMITS = {"u": (1e3, "m"), "f": (1e9, "N"), "slip": (1.0, "m"), "accel": 
 
 XLA_HOIST_OPTION = "xla_cpu_small_while_loop_byte_threshold"
 """XLA:CPU's size limit for compiling a whole while loop as one kernel: raised in XLA_FLAGS by
-`TRIBOJAX_XLA_HOIST=on` (`tribojax/__init__.py`), read by `_rodas4.unrolled_lu`."""
+`import tribojax` unless `TRIBOJAX_XLA_HOIST=off` (`tribojax/__init__.py`), read by
+`_rodas4.unrolled_lu`."""

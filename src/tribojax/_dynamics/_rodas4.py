@@ -9,7 +9,7 @@ With W = I/(γh) − J, J = ∂f/∂y(t₀, y₀) and f_t = ∂f/∂t(t₀, y₀
 and y₁ = y₀ + Σ m_i K_i, error estimate Σ e_i K_i (here K₆). One Jacobian (`jax.jacfwd`), one
 ∂f/∂t (`jax.jvp`), one LU and six pairs of triangular solves per step, no Newton iteration: for
 small stiff systems much cheaper per step than an ESDIRK (Kvaerno5) with a chord iteration. Up to
-`SMALL_N` states, with TRIBOJAX_XLA_HOIST=on, the LU is unrolled array arithmetic rather than
+`SMALL_N` states, unless TRIBOJAX_XLA_HOIST=off, the LU is unrolled array arithmetic rather than
 LAPACK, so that XLA:CPU can compile the whole solve into one kernel (`unrolled_lu`;
 docs/performance.md, "One kernel per solve").
 """
@@ -21,6 +21,7 @@ from collections.abc import Callable
 from typing import ClassVar
 
 import diffrax as dfx
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -63,9 +64,9 @@ SMALL_N = 8  # states up to which W may be factorised by unrolled elimination (`
 
 def unrolled_lu(n: int) -> bool:
     """Whether Rodas4 factorises its n×n W by `_lu_small`: n ≤ `SMALL_N` and the process asks
-    XLA:CPU for whole-loop kernels (its loop-size option in XLA_FLAGS, which
-    `TRIBOJAX_XLA_HOIST=on` sets). Otherwise LAPACK's getrf/trsm, the default: the other choice
-    rounds differently."""
+    XLA:CPU for whole-loop kernels (its loop-size option in XLA_FLAGS, which `import tribojax`
+    sets unless `TRIBOJAX_XLA_HOIST=off`). Otherwise LAPACK's getrf/trsm, which rounds
+    differently."""
     return n <= SMALL_N and XLA_HOIST_OPTION in os.environ.get("XLA_FLAGS", "")
 
 
@@ -154,6 +155,12 @@ class Rodas4(dfx.AbstractAdaptiveSolver):
 
     term_structure: ClassVar = dfx.AbstractTerm
     interpolation_cls: ClassVar[Callable[..., RodasInterpolation]] = RodasInterpolation
+    lu: str = eqx.field(static=True, default="auto")
+    """W's factorisation: "auto" (`unrolled_lu`), "lapack" (LAPACK's getrf/trsm always)."""
+
+    def __check_init__(self):
+        if self.lu not in ("auto", "lapack"):
+            raise ValueError(f"lu = {self.lu!r}: allowed 'auto' or 'lapack'")
 
     def order(self, terms):
         return 4
@@ -181,7 +188,7 @@ class Rodas4(dfx.AbstractAdaptiveSolver):
         # one LU of W per step (of W without its tangent); each solve is a custom_linear_solve, so
         # that forward mode gives dK = W⁻¹(d rhs − dW K) with the same LU instead of
         # differentiating the factorisation (as jnp.linalg.solve does)
-        if unrolled_lu(y0.shape[0]):
+        if self.lu == "auto" and unrolled_lu(y0.shape[0]):
             lu = _lu_small(jax.lax.stop_gradient(w))
             lu_solve = _lu_solve_small
         else:
