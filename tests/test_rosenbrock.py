@@ -106,8 +106,11 @@ import re
 step_loop = [line for line in txt.splitlines()  # diffrax's loop over the ODE steps
              if re.search(r'outer-loop/(checkpointed-no-vjp/)?while"', line)]
 whole = any(" call(" in line and "xla_cpu_small_call" in line for line in step_loop)
+from tribojax._chain import phase_slips
+chain = jax.jit(lambda f: phase_slips(el(f))).lower(0.7372).compile().as_text()
 flags = os.environ.get("XLA_FLAGS", "")
-print(json.dumps(dict(flags=flags, whole=whole, lapack="lapack" in txt, phases=p)))
+print(json.dumps(dict(flags=flags, whole=whole, lapack="lapack" in txt, phases=p,
+                      chain_lapack="lapack" in chain)))
 """
 
 
@@ -131,6 +134,8 @@ def test_slip_solve_is_one_kernel_by_default_within_its_tolerance_of_lapack():
     assert hoisted["whole"] and not hoisted["lapack"]
     lapack = _one_kernel_probe(TRIBOJAX_XLA_HOIST="off")
     assert lapack["flags"] == "" and lapack["lapack"] and not lapack["whole"]
+    # the wang2022 chain keeps LAPACK's LU in both settings (`PAPER_SOLVER`)
+    assert hoisted["chain_lapack"] and lapack["chain_lapack"]
     # the same arithmetic in another order, whose rounding moves the adaptive steps: wang2022's
     # phase slips agree within the solve's rtol 1e-6 (measured 3e-9 to 2e-7 relative)
     np.testing.assert_allclose(hoisted["phases"], lapack["phases"], rtol=1e-6)
@@ -155,3 +160,8 @@ def test_hoisting_setting_refuses_an_unknown_value():
     out = subprocess.run([sys.executable, "-c", "import tribojax"], capture_output=True,
                          text=True, env={**os.environ, "TRIBOJAX_XLA_HOIST": "maybe"})  # fmt: skip
     assert out.returncode != 0 and "TRIBOJAX_XLA_HOIST = 'maybe'" in out.stderr
+
+
+def test_rodas4_refuses_an_unknown_factorisation():
+    with pytest.raises(ValueError, match="lu = 'qr'"):
+        tj.Rodas4(lu="qr")
