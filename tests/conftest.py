@@ -1,55 +1,23 @@
-"""Test configuration: float64 (via the tribojax import), strict rank promotion, and the
-persistent compilation cache in the build folder (shared by the workers, the CLI and notebook
-subprocesses; a clean clone starts it empty)."""
+"""Test configuration: float64, strict rank promotion, a compilation cache in `build/`, shared
+models, and a count of the XLA programs each run compiles (printed at the end)."""
 
 import os
 from pathlib import Path
 
-_BUILD = Path(__file__).resolve().parents[1] / "build"
-os.environ.setdefault("TRIBOJAX_CACHE_DIR", str(_BUILD / "jax-cache"))
+# the suite's own choice (the CLI and notebook subprocesses inherit it): one cache for the run
+os.environ.setdefault("TRIBOJAX_CACHE_DIR", str(Path(__file__).parents[1] / "build" / "jax-cache"))
 
 import jax  # noqa: E402
-import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 import tribojax as tj  # noqa: E402
-from tribojax import _checks  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_rank_promotion", "raise")
 
-# Checks traced under jit give NaN (tribojax's `failures_as_nan` mode) in every test except those
-# marked `raises_inside_jit`: a program with equinox's raising check holds a host callback, which
-# JAX 0.10's persistent cache never stores, so it was compiled again on every run (test_contact.py
-# 48 -> 19 s warm, test_slip.py 66 -> 35 s). The programs are the same but for the check; a NaN
-# cannot pass for a number in the assertions (`assert_allclose` below does not equate NaNs). The
-# tests of the raising path (errors inside jit, the CLI's messages) are marked and run as a user's.
-_NAN_MODE_ON = _checks._NAN_MODE is not None
-if _NAN_MODE_ON:
-    jax.config.update("tribojax_failures_as_nan", True)
-
-
-@pytest.fixture(autouse=True)
-def _raising_checks(request):
-    """Default (raising) checks for tests marked `raises_inside_jit`."""
-    if _NAN_MODE_ON and request.node.get_closest_marker("raises_inside_jit"):
-        with _checks._NAN_MODE(False):
-            yield
-    else:
-        yield
-
-
-_assert_allclose = np.testing.assert_allclose
-
-
-def _assert_allclose_no_nan(actual, desired, *args, equal_nan=False, **kw):
-    return _assert_allclose(actual, desired, *args, equal_nan=equal_nan, **kw)
-
-
-np.testing.assert_allclose = _assert_allclose_no_nan
-
 _C = tj.WANG2022_CALIBRATED  # the Table 3 calibration (tribojax's presets, one home)
 CALIBRATED = dict(D=_C["D"], G=_C["G_m"], M=_C["M"], mu_t=_C["mu_t"], sigma_s=_C["sigma_s_Pa"])
+TABLE3_LOADS = (3.6912, 4.9638, 6.7818, 9.5088, 12.2358, 21.3258)
 
 
 def make_model(
@@ -68,67 +36,50 @@ def model():
     return make_model()
 
 
-TABLE3_LOADS = (3.6912, 4.9638, 6.7818, 9.5088, 12.2358, 21.3258)
+# --- compiled programs, counted from JAX's monitoring events ----------------------------------
+_COUNTS = {"compiled": 0, "from_cache": 0}
+_DESELECTED = [0]  # every xdist worker collects (and deselects) the whole suite
 
 
-# --- scheduling over pytest-xdist workers (`--dist loadscope --no-loadscope-reorder`) -------------
-# A unit of work is a test file, so its module fixtures compute and compile once; files that compile
-# the same large programs (equal shapes) share a unit. Units are handed out heaviest first (seconds
-# measured on an idle 2-core machine) so that the workers finish together. The units are the
-# scheduler's scopes (`_UnitScheduling`): xdist's `xdist_group` marks do nothing under pytest 9
-# (xdist 3.8 renames `item._nodeid`, which pytest 9 no longer reads), which split test_docs.py
-# over both workers, so that the site build re-executed a notebook the other one was still running.
-SHARED_COMPILE = {
-    # discover() on 461-sample slip records: one ~60 s compile of the slip baseline and candidates
-    "test_discovery_verdict.py": "slip_discovery",
-    "test_cli_discover.py": "slip_discovery",
-}
-WEIGHT_S = {
-    "test_docs.py": 280, "test_fit_chain.py": 100, "slip_discovery": 95, "test_reproduce.py": 76,
-    "test_contact.py": 71, "test_slip.py": 56, "test_sensitivity.py": 53,
-    "test_discovery_slip.py": 51, "test_fit_user.py": 46, "test_fitting_studies.py": 26,
-    "test_mhb_excitation.py": 26, "test_mhb.py": 24, "test_discovery_loop.py": 24,
-    "test_cache.py": 26,
-}  # the rest: under 20 s each, in file order
+def _on_duration(event, duration, **_):
+    if event == "/jax/core/compile/backend_compile_duration":
+        _COUNTS["compiled"] += 1
 
 
-def _unit(nodeid: str) -> str:
-    name = nodeid.split("::")[0].rsplit("/", 1)[-1]
-    return SHARED_COMPILE.get(name, name)
+def _on_event(event, **_):
+    if event == "/jax/compilation_cache/cache_hits":
+        _COUNTS["from_cache"] += 1
 
 
-def pytest_collection_modifyitems(config, items):
-    items.sort(key=lambda item: -WEIGHT_S.get(_unit(item.nodeid), 0.0))  # stable: file order kept
+jax.monitoring.register_event_duration_secs_listener(_on_duration)
+jax.monitoring.register_event_listener(_on_event)
 
 
-@pytest.hookimpl(optionalhook=True)
-def pytest_xdist_make_scheduler(config, log):
-    if config.getvalue("dist") != "loadscope":
-        return None
-    from xdist.scheduler import LoadScopeScheduling
+def pytest_deselected(items):
+    _DESELECTED[0] += len(items)
 
-    class _UnitScheduling(LoadScopeScheduling):
-        def _split_scope(self, nodeid):
-            return _unit(nodeid)
 
-        def remove_node(self, node):
-            # xdist 3.8 puts every unit of a crashed worker back in the queue, finished ones too;
-            # a new worker handed a finished unit runs nothing, nothing asks for the next unit,
-            # and the session hangs (a crash near the end ate CI's 5,400 s at stop 41): only
-            # units with tests left go back
-            work = self.assigned_work.get(node, {})
-            for scope in [s for s, unit in work.items() if all(unit.values())]:
-                del work[scope]
-            return super().remove_node(node)
+def pytest_sessionfinish(session):
+    if hasattr(session.config, "workeroutput"):  # an xdist worker: report to the controller
+        session.config.workeroutput["xla_programs"] = dict(_COUNTS)
+        session.config.workeroutput["deselected"] = _DESELECTED[0]
 
-        def mark_test_pending(self, item):
-            # pytest-rerunfailures asks for the test a crashed worker was running once more
-            # (LoadScopeScheduling refuses); `remove_node` already queued it unless it ran
-            pending = [u for w in (self.workqueue, *self.assigned_work.values())
-                       for u in w.values() if u.get(item) is False]  # fmt: skip
-            if not pending:
-                self.workqueue.setdefault(self._split_scope(item), {})[item] = False
-                for node in self.assigned_work:
-                    self._reschedule(node)
 
-    return _UnitScheduling(config, log)
+def pytest_testnodedown(node, error):
+    output = getattr(node, "workeroutput", {})
+    for key, n in output.get("xla_programs", {}).items():
+        _COUNTS[key] += n
+    _DESELECTED[0] = max(_DESELECTED[0], output.get("deselected", 0))
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    # backend compilations (a persistent-cache hit is not one); in this process and its workers
+    terminalreporter.write_line(
+        f"XLA programs: {_COUNTS['compiled']} compiled, {_COUNTS['from_cache']} read from the "
+        "persistent cache (test processes; CLI and notebook subprocesses not counted)"
+    )
+    if config.getoption("markexpr") == "not slow":
+        terminalreporter.write_line(
+            f"fast tier: {_DESELECTED[0]} slow tests not run here; the second tier runs them "
+            "(README, 'python -m pytest -m slow'; .ci/run runs both tiers)"
+        )

@@ -98,6 +98,7 @@ def test_bad_parameter_names_itself():
         tj.BandBrake(**{**P, "gap_neg": -1e-3})
 
 
+@pytest.mark.slow
 def test_fit_history_identifies_it_and_predicts_another_drive():
     rng = np.random.default_rng(5)
     recs = []
@@ -119,6 +120,7 @@ def test_fit_history_identifies_it_and_predicts_another_drive():
     assert tj.predict_history(jenkins, held)[1] > 5 * nrmse
 
 
+@pytest.mark.slow
 def test_a_record_that_starts_loaded_is_predicted_from_its_first_force():
     el = tj.BandBrake(**P)
     for F in (-8e3, -1e3, 0.0, 150.0, 5e3, 11.9e3):  # inverse of the force law

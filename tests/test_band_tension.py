@@ -67,6 +67,7 @@ def fit30():
     return tj.fit_history(records, "jenkins")
 
 
+@pytest.mark.slow
 def test_fit_at_30_lb_predicts_36_lb_by_the_capstan_law(fit30):
     assert fit30.band_tension == pytest.approx(30 * LBF)
     mu_N, K_d, f0 = fit30.fit.values

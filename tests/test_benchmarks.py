@@ -43,6 +43,7 @@ def test_summary_table_prints_entries_without_a_baseline(capsys):
     assert "2" in text.splitlines()[1]
 
 
+@pytest.mark.slow
 def test_cold_start_probe_splits_a_command(tmp_path):
     cold = importlib.import_module("cold_start")
     argv = ["contact", "--D", "2.88", "--G", "4.36e-8", "--load", "5"]

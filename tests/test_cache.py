@@ -70,6 +70,7 @@ def _fit(env_extra, tmp_path):
     return json.loads(_python(_FIT, env_extra, tmp_path).stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 def test_fit_programs_are_cached_and_give_the_same_numbers(tmp_path):
     env = {"TRIBOJAX_CACHE_DIR": str(tmp_path / "cache")}
     first = _fit(env, tmp_path)
@@ -208,6 +209,7 @@ def test_stored_trace_key_names_everything_the_trace_depends_on():
     assert float(fn(x, 2.0, jnp.sin)[0]) == float(jnp.sin(1.0) * 2.0)
 
 
+@pytest.mark.slow
 def test_threads_meeting_new_programs_export_and_compile_one_at_a_time(tmp_path, monkeypatch):
     """Exporting, reading back and compiling a stored program build MLIR modules, which JAX does
     not support from several threads at once (jax #32354, #28551): `_export._LOWERING` makes

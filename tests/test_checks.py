@@ -12,9 +12,6 @@ import pytest
 import tribojax as tj
 from conftest import make_model
 
-# the checks themselves: raising inside jit, as a user's program does (conftest.py)
-pytestmark = pytest.mark.raises_inside_jit
-
 
 @pytest.mark.parametrize(
     "kwargs, pattern",

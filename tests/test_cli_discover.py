@@ -19,6 +19,7 @@ def record(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_discover_writes_contract_and_figure(record, tmp_path, capsys):
     out = tmp_path / "out"
     code = main(["discover", str(record), "--out", str(out)])

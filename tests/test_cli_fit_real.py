@@ -20,6 +20,7 @@ def test_fit_brfd_history_with_model(tmp_path, capsys):
     assert res["n_data"] == 3585 and res["converged"]
 
 
+@pytest.mark.slow
 def test_fit_epos_folder_as_one_curve(tmp_path, capsys):
     folder = tmp_path / "0.1kg"
     folder.mkdir()

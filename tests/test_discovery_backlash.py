@@ -92,6 +92,7 @@ def test_generator_and_model_agree():
     assert all(abs(np.log(gap / (q * A))) > 0.1 for q in GAP_GRID)  # off the grid
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("gap", GAPS)
 @pytest.mark.parametrize("backbone", ["jenkins", "tanh"])
 def test_backlash_named_first(backbone, gap):
@@ -117,6 +118,7 @@ def test_backlash_named_first(backbone, gap):
 _TANH_MISS = pytest.mark.xfail(strict=True, reason="a clearance added after the shaped microslip")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("backbone", "viscous", "named"), [
     ("jenkins", 0.0, ()), pytest.param("tanh", 0.0, ("microslip",), marks=_TANH_MISS),
     ("jenkins", 0.06, ("viscous_damping",)),

@@ -73,6 +73,7 @@ def test_candidates_on_a_band_brakes_records_only():
         assert applies["backlash"] and applies["force_offset"]
 
 
+@pytest.mark.slow
 def test_discovery_names_the_band_brake_and_its_model_predicts_another_drive():
     """A noisy 1 Hz sine loop of the NumPy band brake: discovery adds the capstan rise, the
     direction asymmetry and the clearance (all three parts of the device), with a and the gap
@@ -101,6 +102,7 @@ def test_discovery_names_the_band_brake_and_its_model_predicts_another_drive():
     assert found < 0.1 and found < 0.4 * tj.predict(jenkins, other).nrmse
 
 
+@pytest.mark.slow
 def test_cli_discover_takes_the_band_tension(tmp_path):
     """`tribojax discover LOOP.csv --band-tension 30lb`: the record is a band brake's, so its
     effects are candidates (a CSV loop carries no tension of its own); the saved model names
@@ -131,6 +133,7 @@ FROZEN = {  # the blind generator and its records as written (sha256)
 }
 
 
+@pytest.mark.slow
 def test_blind_band_brake_is_named_and_its_history_predicted():
     """Records of a band brake written blind (benchmarks/blind/band_brake_generator.py: a helper
     given only a physical description — a capstan band on a lever, a 4 mm clearance with a weak

@@ -49,6 +49,7 @@ def _curve_record(shape: str, seed=SEED, n_side=16) -> tj.FrictionCurve:
     return tj.FrictionCurve(v, f, err * np.sqrt(n), 0.01 * a, n, units, f"synthetic {shape}")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shape", ["stribeck", "asymmetry", "viscous"])
 def test_each_effect_is_named_first_where_present(shape):
     rep = discover_curve(_curve_record(shape), max_effects=2)
@@ -57,6 +58,7 @@ def test_each_effect_is_named_first_where_present(shape):
     assert rep.excess_rmse_after < 0.5 * rep.excess_rmse_before
 
 
+@pytest.mark.slow
 def test_stribeck_and_asymmetry_together_are_both_named():
     rep = discover_curve(_curve_record("stribeck+asymmetry"))
     assert set(rep.effects) == {"stribeck", "asymmetry"} and rep.verdict == "explained"

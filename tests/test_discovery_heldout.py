@@ -142,6 +142,7 @@ class BudgetDecay(DecayBaseline):
         return dataclasses.replace(self, budget=3 * self.budget)
 
 
+@pytest.mark.slow
 def test_heldout_check_is_done_again_once_with_more_steps_where_a_solve_ran_out():
     # the slip model's case: a point next to a refit's optimum ran out of ODE steps (blind s3011)
     rec = _record("clean")

@@ -238,6 +238,7 @@ def test_discovery_confusion_table():
     assert not failures, "\n".join(failures)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_clean_loops_give_none(seed):
     """Clean Jenkins records with the noise estimated: nothing named, nothing flagged."""
@@ -290,6 +291,7 @@ def test_cycle_noise_estimator_ignores_a_periodic_misfit():
     assert rho_hat == pytest.approx(rho, abs=0.1)
 
 
+@pytest.mark.slow
 def test_wu2015_standin_study_short(tmp_path):
     """fitting/wu2015_discovery.py, short form: Eq 7-like loops are not Jenkins loops; the
     missing effect named is microslip and the residual falls to about the noise."""
@@ -369,6 +371,7 @@ def test_microslip_bank_of_shape_p_interpolates_its_virgin_curve():
     np.testing.assert_allclose(np.asarray(dk), fd, rtol=1e-5, atol=1e-6)  # K_d units
 
 
+@pytest.mark.slow
 def test_microslip_shape_is_fitted_for_uniformly_spread_slip_limits(tmp_path):
     """The blind generator's s5013 (benchmarks/blind/: a 200-slider Iwan bank with slip limits
     uniform on (0, 2A0] and viscous damping, under a three-harmonic drive; examined while adding

@@ -12,6 +12,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import tribojax as tj
 import tribojax.discovery as disc
 
@@ -19,6 +21,7 @@ BLIND = Path(__file__).resolve().parents[1] / "benchmarks" / "blind"
 LABEL = "loop/normal_load_variation+backlash/sine/muN400N/s5014"
 
 
+@pytest.mark.slow
 def test_a_load_variation_and_a_clearance_are_named_together(tmp_path):
     subprocess.run([sys.executable, str(BLIND / "generate.py"), "--out", str(tmp_path), "--quiet",
                     "--only", LABEL], check=True)  # fmt: skip

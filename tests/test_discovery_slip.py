@@ -99,6 +99,7 @@ def test_slip_start_is_near_truth():
     assert F0 == pytest.approx(F, rel=0.25) and K0 == pytest.approx(K, rel=0.25)
 
 
+@pytest.mark.slow
 def test_predict_derivatives_match_finite_differences():
     run = syn.hidden_effect_run("clean", 0.0, 0.6, n=N_CI)
     b = disc.slip_baseline(run)
@@ -140,6 +141,7 @@ def test_bad_record_and_start():
         syn.hidden_effect_run("clean", 1e-10, load=3.3)
 
 
+@pytest.mark.slow
 def test_wang2022_table_baseline_is_the_published_model():
     """The table baseline of fitting/wang2022_discovery.py: its residuals are ln(measured/model)
     cell by cell at Table 3's parameters (α = 1). The study itself (short form: the flagged cell

@@ -52,6 +52,7 @@ def test_notebooks_exist():
 EXECUTED: set = set()  # notebooks executed by this process
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
 def test_notebook_runs(path):
     try:
@@ -111,6 +112,7 @@ def site(tmp_path_factory):
     return out, run, time.perf_counter() - t0
 
 
+@pytest.mark.slow
 def test_site_builds_strict(site, request):
     out, run, _ = site
     assert run.returncode == 0, f"mkdocs build --strict failed:\n{run.stderr[-6000:]}"
@@ -132,6 +134,7 @@ def test_site_builds_strict(site, request):
         assert "Traceback" not in html, nb.name
 
 
+@pytest.mark.slow
 def test_search_index_lists_the_pages(site):
     out, run, _ = site
     assert run.returncode == 0
@@ -198,6 +201,7 @@ def _blocks(ink_rows: np.ndarray, gap: int = 8) -> list[tuple[int, int]]:
     return list(zip(starts.tolist(), ends.tolist()))
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(CHROMIUM is None, reason="headless Chromium not installed (apt-get install "
                     "chromium)")  # fmt: skip
 def test_pages_render_their_figures_in_chromium(site, tmp_path):

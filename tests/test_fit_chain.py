@@ -73,6 +73,7 @@ def test_bad_input_is_refused(kwargs, match):
 # --- derivatives --------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_contact_custom_jvp_matches_finite_differences():
     p = jnp.asarray(P0)
     f = jax.jit(lambda p: fc.chain_contact(p, TWO_LOADS)[0])
@@ -104,6 +105,7 @@ def slip_derivatives():
     return f, J, g, np.asarray(w), eager
 
 
+@pytest.mark.slow
 def test_chain_jit_and_eager_agree(slip_derivatives):
     f, _, _, _, eager = slip_derivatives
     # eager evaluates the contact per load, jit fuses it: rounding differences ~1e-15 move the
@@ -115,6 +117,7 @@ def test_chain_jit_and_eager_agree(slip_derivatives):
     assert 10 < eager[0] < 100
 
 
+@pytest.mark.slow
 def test_chain_gradients_match_finite_differences(slip_derivatives):
     f, J, g, w, eager = slip_derivatives
     np.testing.assert_allclose(g, w @ J, rtol=1e-6)  # reverse (checkpointed) vs forward mode
@@ -152,6 +155,7 @@ def two_fits(synthetic):
     return [fc.fit_measured_slips(s, free=FREE, target=synthetic, loads=TWO_LOADS) for s in starts]
 
 
+@pytest.mark.slow
 def test_fit_recovers_known_parameters(two_fits):
     fit = two_fits[0]
     assert fit.converged, fit.fit.message
@@ -164,6 +168,7 @@ def test_fit_recovers_known_parameters(two_fits):
     assert np.all(fit.scaled_singular_values > 0)
 
 
+@pytest.mark.slow
 def test_distinct_starts_reach_the_same_optimum(two_fits):
     a, b = two_fits
     assert a.converged and b.converged
@@ -174,6 +179,7 @@ def test_distinct_starts_reach_the_same_optimum(two_fits):
     assert b.evaluations > 0 and b.wall_s < a.wall_s  # the second fit ran warm (compiled once)
 
 
+@pytest.mark.slow
 def test_report_keys(two_fits):
     d = two_fits[0].as_dict()
     for key in ("parameters", "std_errors", "correlation", "rms_relative_residual", "converged"):

@@ -35,6 +35,7 @@ def test_jenkins_recovered_from_numpy_stepping():
     assert h.nrmse == pytest.approx(50.0 / np.std(loop.f), rel=0.1)
 
 
+@pytest.mark.slow
 def test_bouc_wen_recovered_from_solve_ivp():
     t, u = _ramped_sine(n=2500)
     K, F, n = 2.0e6, 6.0e3, 1.5
@@ -61,6 +62,7 @@ FULL = os.environ.get("TRIBOJAX_FULL") == "1"
 long_form = [pytest.mark.slow, pytest.mark.skipif(not FULL, reason="long form: TRIBOJAX_FULL=1")]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "model",
     ["bouc_wen"] + [pytest.param(m, marks=long_form) for m in ("jenkins", "mindlin", "lugre")],

@@ -144,6 +144,7 @@ def test_a_start_with_a_cell_not_evaluated_ends_the_maximisation_at_once():
     assert fit is first and result == tj.RESULTS.model_failed_at_start and math.isnan(s)
 
 
+@pytest.mark.slow
 def test_a_robust_fit_whose_inner_fit_stops_short_says_so():
     # two LM steps per fit: the first fit stops on its budget, and the robust fit reports it
     f = tj.robust_fit_measured_slips(max_steps=2)

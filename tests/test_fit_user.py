@@ -37,6 +37,7 @@ def test_start_is_close_to_the_truth(run):
     assert 1 / 8 < start["C_tau"] / TRUTH["C_tau"] < 8
 
 
+@pytest.mark.slow
 def test_fit_slip_run_recovers_parameters(run):
     messages = []
     fit = tj.fit_slip_run(run, alpha=1.0, progress=messages.append)
@@ -53,6 +54,7 @@ def test_fit_slip_run_recovers_parameters(run):
     assert fit.result == tj.RESULTS.successful and fit.as_dict()["result"] == "successful"
 
 
+@pytest.mark.slow
 def test_fit_slip_run_with_free_alpha():
     run = short_run(7, alpha=1.2)
     fit = tj.fit_slip_run(run)
@@ -64,6 +66,7 @@ def test_fit_slip_run_with_free_alpha():
     assert fit.values[3] == pytest.approx(1.2, abs=0.1)
 
 
+@pytest.mark.slow
 def test_slip_fit_coverage_short_form(run):
     """8 seeds: each parameter within 2 se in ≥ 6/8 (binomial, p = 0.95: P(≤ 5 of 8) = 0.6 %).
 
@@ -132,6 +135,7 @@ def _loop_coverage(cls, seeds, A_bar=2.5):
 MU_LOOP, N_LOOP, KD_LOOP = 0.3, 2.94, 1.2e6
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cls", [tj.Jenkins, tj.Mindlin], ids=["jenkins", "mindlin"])
 def test_loop_fit_coverage(cls):
     """Cheap (one compilation per element), so always the long form. 100 seeds: coverage of

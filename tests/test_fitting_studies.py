@@ -6,6 +6,8 @@ import os
 import pytest
 from fitting import wang2022_table3
 
+pytestmark = pytest.mark.slow  # the second tier (tests/conftest.py)
+
 
 def test_table3_study_degeneracy(tmp_path):
     assert wang2022_table3.main(["--short", "--out", str(tmp_path)]) == 0

@@ -61,6 +61,7 @@ def test_loaded_state_carries_the_target_force(target):
     assert float(full[0]) == pytest.approx(np.clip(target, -slip, slip), abs=1e-6 * MU_N)
 
 
+@pytest.mark.slow
 def test_gradients_through_the_start_match_finite_differences():
     data = prepare_loop(_history(z0=-0.4 * A0), "measured")
 
@@ -80,6 +81,7 @@ def test_gradients_through_the_start_match_finite_differences():
     assert float(dz) == pytest.approx(1.0 / K_D, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_predict_starts_as_fitted_or_as_asked(tmp_path):
     from tribojax._cli._main import main
     from tribojax._io._loop import write_loop

@@ -99,6 +99,7 @@ def test_bad_loop_files_are_refused(tmp_path):
         tj.fit_loop(tj.HysteresisLoop(t, np.sin(2 * np.pi * t), np.zeros_like(t)), "lugre")
 
 
+@pytest.mark.slow
 def test_history_fit_handles_a_drifting_amplitude():
     """Driven through the measured history, the element fits a non-periodic record."""
     el = tj.Jenkins(MU, N, KD)

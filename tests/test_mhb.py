@@ -62,6 +62,7 @@ def _diffrax_amplitude(F, omega, N=1.0, K_d=100.0, periods=60):
 CASES = [(0.1, 13.5), (0.1, 14.2), (1.0, 11.5), (1.0, 12.5), (5.0, 9.8), (5.0, 10.3)]
 
 
+@pytest.mark.slow
 def test_sdof_jenkins_against_diffrax():
     Fs, ws = (jnp.array(v) for v in zip(*CASES))
     ref = np.asarray(jax.jit(jax.vmap(_diffrax_amplitude))(Fs, ws))
@@ -75,6 +76,7 @@ def test_sdof_jenkins_against_diffrax():
     assert ref[0] < 0.01 and 1.2 < ref[3] / 0.01 < 5 and ref[5] > 0.2  # the three regimes
 
 
+@pytest.mark.slow
 def test_continuation_passes_resonance_and_matches_time_stepping():
     system = sdof(F=0.5, H=5)
     fr = tj.frequency_response(system, 6.0, 18.0)

@@ -57,6 +57,7 @@ def _fd_check(f, q, rel_step, rtol):
     return g
 
 
+@pytest.mark.slow
 def test_amplitude_derivatives_from_the_surface():
     # CI form of the chain (D, G, μ, N) → K_d (wu2015 Eq 4) → Jenkins → MHB → amplitude at
     # ω = 10.8 rad/s (near the peak; IFT through the HBM solution), against central differences

@@ -43,6 +43,7 @@ def _jenkins_base_reference(B, omega, N=1.0, K_d=100.0):
     return _steady_amplitude(rhs, 3, omega, lambda t, s: s[0] - B * jnp.cos(omega * t))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("B, omega, slips", [(0.5 / 81.0, 9.0, False), (3.0 / 144.0, 12.0, True)])
 def test_base_excitation_against_absolute_coordinates(B, omega, slips):
     contact = tj.FrictionContact(tj.Jenkins(1.0, 1.0, 100.0), 0)
@@ -78,6 +79,7 @@ def _lugre_amplitude(F, omega, H, n_time):
     return float(system.amplitude(sol.X)[0])
 
 
+@pytest.mark.slow
 def test_lugre_contact_against_time_integration():
     # gross sliding: H = 7 within 2 %; near stick (sharp force reversals) the truncation error
     # falls with H (measured: 2.3 % at H = 7, 1.1 % at 15, 0.25 % at 31)
@@ -88,6 +90,7 @@ def test_lugre_contact_against_time_integration():
     assert err[1] < 0.6 * err[0] and err[1] < 0.015, err
 
 
+@pytest.mark.slow
 def test_normal_load_continuation_against_time_integration():
     # at ω = 11 rad/s (between the slip resonance 10 and the stick one √200): the amplitude falls
     # as the load rises from gross slip towards stick

@@ -38,6 +38,7 @@ def _record(seed=1):
     return tj.SlipRun(t, a, y, dr.MASS, noise_std=SIGMA)
 
 
+@pytest.mark.slow
 def test_mode_refit_reaches_the_noise_only_with_the_restarts():
     base = disc.slip_baseline(_record())
     state = fit_record(base)
@@ -60,6 +61,7 @@ def test_mode_refit_reaches_the_noise_only_with_the_restarts():
     assert nuisance["zeta"] == pytest.approx(ZETA, rel=0.2)
 
 
+@pytest.mark.slow
 def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeypatch):
     # fit_record: a start that converged at a minimum ends the starts and is kept; one that
     # stopped stationary with a Gauss–Newton gain of NOISE_TOL residual variances or more left

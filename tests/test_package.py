@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # the second tier (tests/conftest.py)
+
 REPO = Path(__file__).resolve().parents[1]
 
 

@@ -35,6 +35,7 @@ def backlash_report():
     return discover(loop_baseline(backlash_record("jenkins", GAPS[1], seed=11)), max_effects=2)
 
 
+@pytest.mark.slow
 def test_discovered_model_predicts_a_loop_at_another_amplitude(backlash_report, tmp_path):
     rep = backlash_report
     assert rep.effects == ("backlash",)

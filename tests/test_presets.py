@@ -93,6 +93,7 @@ def test_theta_mapping_round_trips():
         _chain.to_theta([3.0], ("D",), mu_min)
 
 
+@pytest.mark.slow
 def test_calibrated_point_matches_calibrate_table3():
     """The stored point is `calibrate_table3()` rounded to the digits it is written with.
 

@@ -13,6 +13,8 @@ from fitting.real_discovery_brfd import brfd_files, discover_brfd_test, physical
 
 import tribojax as tj
 
+pytestmark = pytest.mark.slow  # the second tier (tests/conftest.py)
+
 ROOT = Path(__file__).resolve().parents[1]
 BUNDLED = ROOT / "data" / "real" / "brfd" / "2Hz30lbtension0.5amplitude.csv"
 SHARED = ROOT.parent / "shared" / "data" / "real" / "brfd" / "0.25Hz30lbtension0.5amplitude.json"

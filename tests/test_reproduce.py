@@ -68,6 +68,7 @@ def test_distinct_starts_reach_the_same_optimum(fit, start):
     assert np.all(np.abs(other.values - fit.values) < 0.01 * fit.std_errors)
 
 
+@pytest.mark.slow
 def test_cli_writes_json_and_figure(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["reproduce", "--out", str(out)]) == 0

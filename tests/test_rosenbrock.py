@@ -31,6 +31,7 @@ def solve(dt0, controller=None, ts=(0.37, 1.0)):
     return np.asarray(sol.ys)
 
 
+@pytest.mark.slow
 def test_fourth_order_convergence_and_dense_output():
     errs = []
     for n in (10, 20, 40, 80):
@@ -64,6 +65,7 @@ def test_stiff_prothero_robinson_one_big_step(lam):
     assert abs(float(sol.ys[0, 0]) - np.cos(0.1)) < 1e-6
 
 
+@pytest.mark.slow
 def test_unrolled_lu_solves_like_lapack_with_pivoting():
     from tribojax._dynamics._rodas4 import SMALL_N, _lu_small, _lu_solve_small
 
@@ -126,6 +128,7 @@ def _one_kernel_probe(code=_ONE_KERNEL, **env):
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 def test_slip_solve_is_one_kernel_by_default_within_its_tolerance_of_lapack():
     hoisted = _one_kernel_probe()
     assert tj._HOIST_FLAG in hoisted["flags"]

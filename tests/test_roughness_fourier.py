@@ -31,6 +31,7 @@ def fourier_profile(D, seed, *, periodic=True, gaussian=False):
     return tj.Topography(z / z.std() * 1e-8, dx=DX, source=f"Fourier D={D} seed={seed}")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["psd", "structure", "rms"])
 def test_every_method_within_0p05_on_fourier_profiles(method):
     errors = []

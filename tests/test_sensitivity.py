@@ -126,6 +126,7 @@ def test_mindlin_small_amplitude_limit():
     assert row["K_bar"][-1] == pytest.approx(-abar / 6, rel=0.05)
 
 
+@pytest.mark.slow
 def test_slip_gradients_match_finite_differences():
     e = tj.slip_sensitivities(**REF)
     assert e.outputs == ("F_s", "K_tau", "C_tau", "z_max", "T4", "T5", "T6", "T7")
@@ -202,6 +203,7 @@ _SHARDED = textwrap.dedent(
 )
 
 
+@pytest.mark.slow
 def test_sweep_sharded_over_two_cpu_devices_equals_unsharded():
     env = {**os.environ, "XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
     run = subprocess.run(
@@ -217,6 +219,7 @@ def test_sweep_sharded_over_two_cpu_devices_equals_unsharded():
     assert res["odd_len"] == 7 and res["odd_err"] < 1e-15  # padded to 8, cut back to 7
 
 
+@pytest.mark.slow
 def test_sensitivity_study_short_form(tmp_path, capsys):
     from fitting import sensitivity
 

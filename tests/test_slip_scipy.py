@@ -55,6 +55,7 @@ def reference(F_s, K, C, alpha=1.0):
 CASES = [(0, "rodas4"), (2, "rodas4"), (5, "rodas4"), (2, "kvaerno5")]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "row,solver", CASES, ids=["0.6kPa", "4kPa", "20kPa", "4kPa-kvaerno5"]
 )  # fmt: skip

@@ -101,7 +101,6 @@ def test_jit_and_vmap():
     np.testing.assert_allclose(jax.jit(_f)(2.3, 1e-9), eager[0], rtol=1e-12)
 
 
-@pytest.mark.raises_inside_jit
 def test_bad_input():
     x = jnp.linspace(0, L, 8)
     with pytest.raises(ValueError, match="D = 3.1"):
