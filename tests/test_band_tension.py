@@ -121,6 +121,7 @@ def test_saved_model_keeps_the_reference_and_the_cli_takes_a_tension(fit30, tmp_
     assert out["model_band_tension_N"] == pytest.approx(30 * LBF)
 
 
+@pytest.mark.slow
 def test_cli_fits_several_records_together(tmp_path):
     for name, rec in (("a", _record(30, 15e-3, 1)), ("b", _record(30, 25e-3, 2)),
                       ("held", _record(36, 20e-3, 3))):  # fmt: skip

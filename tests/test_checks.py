@@ -179,6 +179,7 @@ def _compile_log(fn):
         log.setLevel(level)
 
 
+@pytest.mark.slow
 def test_eager_calls_compile_cacheable_programs_and_still_raise_the_checks_message():
     # issue 31: a library call made outside any trace compiles without host callbacks (JAX 0.10
     # never stores those), and a failure still reaches the user as the check's own message

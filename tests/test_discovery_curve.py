@@ -64,6 +64,7 @@ def test_stribeck_and_asymmetry_together_are_both_named():
     assert set(rep.effects) == {"stribeck", "asymmetry"} and rep.verdict == "explained"
 
 
+@pytest.mark.slow
 def test_strengths_recover_the_hidden_values():
     rep = discover_curve(_curve_record("asymmetry"), max_effects=1)
     t0 = rep.strengths["asymmetry"]["T0"]

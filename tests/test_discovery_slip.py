@@ -25,6 +25,7 @@ def _slip(element, profile=syn.HIDDEN_PROFILE):
     return np.asarray(tj.simulate_slip(element, profile, ts=TS).slip)
 
 
+@pytest.mark.slow
 def test_augmented_element_null_is_preslip_lugre():
     ref = _slip(tj.PreSlipLuGre(F, K, C))
     aug = _slip(ds.AugmentedPreSlip(F, K, C, 0.0, 0.0, 1e-6, 0.0, syn.HIDDEN_PROFILE))

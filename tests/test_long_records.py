@@ -100,6 +100,7 @@ def test_loop_fit_on_the_reduced_record_agrees_with_the_full_fit():
     assert fit.noise_consistent and abs(fit.reduced_chi2 - 1) < 5 * np.sqrt(2 / len(red.t))
 
 
+@pytest.mark.slow
 def test_cli_fit_states_the_reduction(tmp_path, capsys):
     src = tmp_path / "long.csv"
     tj.write_loop(_long_loop(), src)

@@ -133,6 +133,7 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
     assert mf.fit_record(base, starts[:2]).rss == pytest.approx(500.0)  # the first converged
 
 
+@pytest.mark.slow
 def test_a_start_stopped_early_says_whether_it_crawled_or_was_abandoned(monkeypatch):
     # the solver stops a start before its budget for two reasons (`fit_model`): its cost still
     # above `abandon_above` after PROBE_STEPS steps, or a crawl far from any minimum

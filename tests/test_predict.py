@@ -164,6 +164,7 @@ def test_cli_fit_then_predict(tmp_path, capsys):
     assert not (tmp_path / "p2").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("gap", "amplitude"), [(0.9e-3, 2.5e-3), (0.37e-3, 1.5e-3)])
 def test_refit_of_a_discovered_model_finds_another_gap(backlash_report, gap, amplitude):
     """The discovered model (clearance 1.13 mm at 2 mm) refitted, effects included, on loops of
