@@ -84,16 +84,23 @@ def test_contact_and_loop_gradients_match_finite_differences():
     params = {**REF, "A": 50e-9}
     e = tj.hysteresis_sensitivities(**params)
     assert e.outputs == ("F_s", "K_tau", "C_tau", "z_max", "A_bar", "K_bar", "C_bar")
+    # central differences, relative step 1e-5: truncation ~h²·e³ (e_D ≈ 33) stays below 1e-6,
+    # round-off ~1e-16/h ~ 1e-11; the Newton load balance is converged to 1e-13
+    fd = _fd_elasticities(eqx.filter_jit(chain), params, e.outputs, 1e-5)
+    np.testing.assert_allclose(e.elasticity, fd, rtol=2e-6, atol=2e-6)
+
+
+@pytest.mark.slow
+def test_jit_elasticities_match_eager_forward_mode():
+    chain = tj.LoopChain("mindlin")
+    params = {**REF, "A": 50e-9}
+    e = tj.hysteresis_sensitivities(**params)
     # jit (elasticities compiles the chain) against eager forward mode: same program, same numbers
     eager = jax.jacfwd(chain)(params)
     J = np.array([[float(eager[o][k]) for k in params] for o in e.outputs])
     np.testing.assert_allclose(e.jacobian, J, rtol=1e-12)
     values = chain(params)
     np.testing.assert_allclose(e.values, [float(values[o]) for o in e.outputs], rtol=1e-13)
-    # central differences, relative step 1e-5: truncation ~h²·e³ (e_D ≈ 33) stays below 1e-6,
-    # round-off ~1e-16/h ~ 1e-11; the Newton load balance is converged to 1e-13
-    fd = _fd_elasticities(eqx.filter_jit(chain), params, e.outputs, 1e-5)
-    np.testing.assert_allclose(e.elasticity, fd, rtol=2e-6, atol=2e-6)
 
 
 def test_elasticity_identities_of_the_contact_and_loop():

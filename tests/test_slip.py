@@ -47,13 +47,6 @@ def test_gradients_of_phase_averages_match_finite_differences():
 
     theta = jnp.array([ROW["F_s"], ROW["K_tau"], ROW["C_tau"], 1.2])
     J = np.asarray(jax.jit(jax.jacrev(phases))(theta))  # default adjoint
-    J_fwd = np.asarray(jax.jit(jax.jacfwd(phases))(theta))
-    # Rodas4's derivatives come from forward mode in both directions (simulate_slip's
-    # custom_jvp): reverse and forward agree to rounding (measured 2e-16 of the largest
-    # elasticity), which a recomputing reverse pass does not achieve (6e-3, see Rodas4)
-    elasticity = np.abs(J_fwd * np.asarray(theta)).max()
-    np.testing.assert_allclose(J * np.asarray(theta), J_fwd * np.asarray(theta),
-                               atol=1e-9 * elasticity)  # fmt: skip
     f = jax.jit(phases)
     for i in range(4):
         h = 1e-4 * float(theta[i])
@@ -65,6 +58,23 @@ def test_gradients_of_phase_averages_match_finite_differences():
         # the largest elasticity)
         np.testing.assert_allclose(J[:, i], fd, atol=2e-3 * scale.max())
     assert np.all(np.isfinite(J))
+
+
+@pytest.mark.slow
+def test_reverse_and_forward_phase_averages_agree_to_rounding():
+    def phases(theta):
+        el = tj.PreSlipLuGre(theta[0], theta[1], theta[2], theta[3])
+        return tj.slip_phase_averages(el, rtol=1e-8, atol=1e-18) * 1e9
+
+    theta = jnp.array([ROW["F_s"], ROW["K_tau"], ROW["C_tau"], 1.2])
+    J = np.asarray(jax.jit(jax.jacrev(phases))(theta))
+    J_fwd = np.asarray(jax.jit(jax.jacfwd(phases))(theta))
+    # Rodas4's derivatives come from forward mode in both directions (simulate_slip's
+    # custom_jvp): reverse and forward agree to rounding (measured 2e-16 of the largest
+    # elasticity), which a recomputing reverse pass does not achieve (6e-3, see Rodas4)
+    elasticity = np.abs(J_fwd * np.asarray(theta)).max()
+    np.testing.assert_allclose(J * np.asarray(theta), J_fwd * np.asarray(theta),
+                               atol=1e-9 * elasticity)  # fmt: skip
 
 
 @pytest.mark.slow
