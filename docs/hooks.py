@@ -7,7 +7,7 @@ docstring check.
   `mkdocs build` executes the notebook here, once, with nbclient. The test suite
   (`tests/test_docs.py`) executes each notebook as a test and stages it, so the build that
   follows executes nothing. A cell that raises fails the build, naming notebook and cell.
-- API reference. One page per area, generated from the names `tribojax/__init__.py` and
+- API reference. One page per area, generated from the names `tribojax/__init__.pyi` and
   `tribojax/discovery/__init__.py` re-export (`from .x import Name as Name`), each rendered by
   mkdocstrings.
 - Docstrings. A public name without a docstring is a warning, so `mkdocs build --strict` fails.
@@ -190,7 +190,7 @@ def reexports(init: Path) -> list[tuple[str, str]]:
 def public_names() -> dict[str, list[str]]:
     """Page name -> the dotted public names it documents."""
     pages = {page: [] for page, *_ in API_PAGES}
-    for name, module in reexports(PACKAGE / "__init__.py"):
+    for name, module in reexports(PACKAGE / "__init__.pyi"):
         top = module.split(".")[0]
         page = next((p for p, _, homes, _ in API_PAGES if top in homes), None)
         if page is None:

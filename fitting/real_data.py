@@ -84,7 +84,7 @@ def brfd_study(src: Path, short: bool, log, models=MODELS, prediction_only=False
         fits[name] = {}
         for model in models:
             t0 = time.perf_counter()
-            h = tj.fit_history(loop, model, decimate=DECIMATE, **_starts(model))
+            h = tj.fit_history(loop, model, decimate=DECIMATE, **_starts(model), throw=False)
             fits[name][model] = {**_summary(h), "seconds": time.perf_counter() - t0}
             log(f"{name:34s} {model:9s} NRMSE {h.nrmse:.3f} {h.fit.message[:40]}")
         p = {m: fits[name][m]["parameters"] for m in models}
@@ -186,7 +186,8 @@ def _predict(records, train, test, log, models=MODELS) -> list:
     rows = []
     for model in models:
         t0 = time.perf_counter()
-        h = tj.fit_history([records[n] for n in train], model, decimate=DECIMATE, **_starts(model))
+        h = tj.fit_history([records[n] for n in train], model, decimate=DECIMATE, **_starts(model),
+                           throw=False)  # fmt: skip
         seconds = time.perf_counter() - t0
         for name in train + test:
             force, nrmse = tj.predict_history(h, records[name])
@@ -206,16 +207,17 @@ def screwdrive_study(src: Path, log) -> dict:
         curve = tj.read_epos_steady(drive / "steady_state" / "0.096kg")
         res = {"points": len(curve.velocity), "units": curve.units}
         for label, sign in (("positive", 1), ("negative", -1)):
-            fit = tj.fit_steady_curve(curve, direction=sign)
+            fit = tj.fit_steady_curve(curve, direction=sign, throw=False)
             res[label] = fit.as_dict()
             log(f"{drive.name} {label}: " + _fmt(fit))
-        joint = tj.fit_steady_curve(curve)
+        joint = tj.fit_steady_curve(curve, throw=False)
         res["joint"] = joint.as_dict()
         log(f"{drive.name} joint: " + _fmt(joint))
         res["transients"] = {}
         for path in sorted((drive / "start_stop").glob("*.csv")):
             tr = tj.read_epos_transient(path)
-            dyn = tj.fit_transient(tr, joint, sigma=float(np.median(curve.friction_scatter)))
+            dyn = tj.fit_transient(tr, joint, sigma=float(np.median(curve.friction_scatter)),
+                                   throw=False)  # fmt: skip
             res["transients"][path.stem] = {**dyn.as_dict(), "nrmse": tj.transient_nrmse(dyn, tr)}
             log(f"{drive.name} start-stop {path.stem}: " + _fmt(dyn))
         out[drive.name] = res

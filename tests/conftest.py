@@ -1,11 +1,14 @@
-"""Test configuration: float64, strict rank promotion, a compilation cache in `build/`, shared
-models, and a count of the XLA programs each run compiles (printed at the end)."""
+"""Test configuration: float64, strict rank promotion, the suite's process choices (a compilation
+cache in `build/`, XLA's one-kernel loops as the CLI uses them), shared models, and a count of the
+XLA programs each run compiles (printed at the end)."""
 
 import os
 from pathlib import Path
 
-# the suite's own choice (the CLI and notebook subprocesses inherit it): one cache for the run
+# the suite's own choices (the CLI and notebook subprocesses inherit them): one cache for the run,
+# and, as the `tribojax` command sets for itself, failures inside diffrax/optimistix/lineax as NaN
 os.environ.setdefault("TRIBOJAX_CACHE_DIR", str(Path(__file__).parents[1] / "build" / "jax-cache"))
+os.environ.setdefault("EQX_ON_ERROR", "nan")
 
 import jax  # noqa: E402
 import pytest  # noqa: E402
@@ -14,6 +17,9 @@ import tribojax as tj  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
 jax.config.update("jax_numpy_rank_promotion", "raise")
+# the suite is an application: it makes the choices the `tribojax` command makes for itself
+tj.use_one_kernel()
+tj.use_compilation_cache(os.environ["TRIBOJAX_CACHE_DIR"])
 
 _C = tj.WANG2022_CALIBRATED  # the Table 3 calibration (tribojax's presets, one home)
 CALIBRATED = dict(D=_C["D"], G=_C["G_m"], M=_C["M"], mu_t=_C["mu_t"], sigma_s=_C["sigma_s_Pa"])

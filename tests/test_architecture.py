@@ -52,7 +52,7 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 #   else imports.
 LAYERS = (
     ("foundation", {"_precision", "_cache", "_export", "_checks", "_results", "_plot", "_tables",
-                    "_presets", "_limits", "_parallel"}),
+                    "_presets", "_limits", "_parallel", "_xla"}),
     ("physics", {"_contact", "_roughness", "_friction", "_dynamics"}),
     ("model chain", {"_chain"}),
     ("model analyses", {"_sweep", "_sensitivity"}),

@@ -1,9 +1,11 @@
-"""Start-up and the persistent compilation cache (issue 31), each in a fresh interpreter.
+"""Start-up and the persistent compilation cache, each in a fresh interpreter.
 
 - the fit engine's programs hold no host callback, so their traces are stored (`jax.export`) and
   JAX caches their compilation: a second process reads both from disk and gives the same numbers
   to the last digit; a corrupt stored trace is traced again, never used;
-- `TRIBOJAX_CACHE=off`, `TRIBOJAX_CACHE_DIR` and a user's own JAX cache folder are respected;
+- the cache is the application's choice (`use_compilation_cache`): off without it; with it,
+  `TRIBOJAX_CACHE=off`, `TRIBOJAX_CACHE_DIR`, a user's own JAX cache folder and minimum compile
+  time are respected, and everything stored stays inside the chosen folder;
 - an entry that cannot be read (truncated) is compiled again, never used;
 - `import tribojax` does not import JAX until a name is used, and still gives float64 arrays;
 - the dependency floors in pyproject.toml are met by what the suite runs with.
@@ -37,6 +39,7 @@ h = H(); h.setLevel(logging.DEBUG)
 log = logging.getLogger("jax._src.compiler"); log.addHandler(h); log.setLevel(logging.DEBUG)
 import tribojax as tj
 import jax
+tj.use_compilation_cache()
 import tribojax._export as E
 found = []
 _read = E._read
@@ -74,11 +77,11 @@ def _fit(env_extra, tmp_path):
 def test_fit_programs_are_cached_and_give_the_same_numbers(tmp_path):
     env = {"TRIBOJAX_CACHE_DIR": str(tmp_path / "cache")}
     first = _fit(env, tmp_path)
-    assert first["cache_dir"] == str(tmp_path / "cache")
+    assert first["cache_dir"] == str(tmp_path / "cache" / "jax")
     assert first["converged"] and first["read"] == 0 and first["missed"] >= 2, first
     # the engine's two programs (solve, value and Jacobian) are stored as traces and, compiled
     # from them (`jit_call`), in JAX's cache; no program of theirs holds a host callback
-    stored = sorted((tmp_path / "export").glob("*.jaxexp"))
+    stored = sorted((tmp_path / "cache" / "export").glob("*.jaxexp"))
     assert len(stored) == first["missed"], stored
     assert not [p for p in first["programs"] if p.startswith("jit_call ") and "callback" in p]
     second = _fit(env, tmp_path)
@@ -94,7 +97,7 @@ def test_fit_programs_are_cached_and_give_the_same_numbers(tmp_path):
     assert third["values"] == first["values"]
     assert stored[0].read_bytes() != bytes(blob)  # written again
     # a truncated compiled entry (a killed writer) is compiled again, with a warning, never used
-    compiled = [p for p in (tmp_path / "cache").iterdir() if p.name.startswith("jit_call")]
+    compiled = [p for p in (tmp_path / "cache" / "jax").iterdir() if p.name.startswith("jit_call")]
     for p in compiled:
         p.write_bytes(p.read_bytes()[: p.stat().st_size // 2])
     fourth = _fit(env, tmp_path)
@@ -102,14 +105,25 @@ def test_fit_programs_are_cached_and_give_the_same_numbers(tmp_path):
 
 
 def test_cache_settings_are_respected(tmp_path):
-    code = (
-        "import tribojax as tj, jax; tj.FractalSurface; print(jax.config.jax_compilation_cache_dir)"
-    )
-    off = _python(code, {"TRIBOJAX_CACHE": "off"}, tmp_path).stdout.split()[-1]
-    assert off == "None"
-    users = _python(code, {"JAX_COMPILATION_CACHE_DIR": str(tmp_path / "mine")}, tmp_path)
-    assert users.stdout.split()[-1] == str(tmp_path / "mine")  # the user's own folder stays
-    home = _python(code, {"XDG_CACHE_HOME": str(tmp_path / "xdg")}, tmp_path).stdout.split()[-1]
+    show = ("c = jax.config; print(c.jax_compilation_cache_dir, "
+            "c.jax_persistent_cache_min_compile_time_secs, E.export_dir())")  # fmt: skip
+    head = "import tribojax as tj, jax, tribojax._export as E; "
+    plain = f"{head}tj.FractalSurface(2.5, 1e-9, 1.0); {show}"
+    opt_in = f"{head}tj.use_compilation_cache(); {show}"
+    default_min = _python(f"import jax; {show.replace('E.export_dir()', '0')}", {}, tmp_path)
+    default_min = default_min.stdout.split()[1]
+    # without the opt-in, tribojax leaves JAX's cache settings as they were
+    assert _python(plain, {}, tmp_path).stdout.split() == ["None", default_min, "None"]
+    assert _python(opt_in, {"TRIBOJAX_CACHE": "off"}, tmp_path).stdout.split()[0] == "None"
+    chosen = _python(opt_in, {"TRIBOJAX_CACHE_DIR": str(tmp_path / "tjc")}, tmp_path)
+    assert chosen.stdout.split() == [str(tmp_path / "tjc" / "jax"), "0.0",
+                                     str(tmp_path / "tjc" / "export")]  # fmt: skip
+    users = _python(opt_in, {"JAX_COMPILATION_CACHE_DIR": str(tmp_path / "mine"),
+                             "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "5",
+                             "TRIBOJAX_CACHE_DIR": str(tmp_path / "tjc")}, tmp_path)  # fmt: skip
+    # the user's own JAX folder and threshold stay; tribojax's traces stay in its own folder
+    assert users.stdout.split() == [str(tmp_path / "mine"), "5.0", str(tmp_path / "tjc" / "export")]
+    home = _python(opt_in, {"XDG_CACHE_HOME": str(tmp_path / "xdg")}, tmp_path).stdout.split()[0]
     if sys.platform.startswith("linux"):
         assert home == str(tmp_path / "xdg" / "tribojax" / "jax")
 

@@ -87,7 +87,7 @@ def test_unrolled_lu_solves_like_lapack_with_pivoting():
 def test_system_above_the_unrolled_size_is_accurate():
     from tribojax._dynamics._rodas4 import SMALL_N
 
-    # above SMALL_N states Rodas4 keeps LAPACK's LU in either setting of TRIBOJAX_XLA_HOIST
+    # above SMALL_N states Rodas4's default factorisation is LAPACK's LU
     n = SMALL_N + 2  # a stiff diagonal chain y_i' = -k_i y_i: y_i = exp(-k_i t)
     k = jnp.logspace(0, 3, n)
     term = dfx.ODETerm(lambda t, y, a: -k * y)
@@ -100,6 +100,8 @@ def test_system_above_the_unrolled_size_is_accurate():
 _ONE_KERNEL = r"""
 import json, os, sys
 import tribojax as tj
+if os.environ.get("ONE_KERNEL") == "1":
+    tj.use_one_kernel()
 import jax, jax.numpy as jnp
 el = lambda f: tj.PreSlipLuGre(f, 2.1478e7, 708.8274, 1.0)
 txt = jax.jit(lambda f: tj.simulate_slip(el(f)).slip).lower(0.7372).compile().as_text()
@@ -129,40 +131,58 @@ def _one_kernel_probe(code=_ONE_KERNEL, **env):
 
 
 @pytest.mark.slow
-def test_slip_solve_is_one_kernel_by_default_within_its_tolerance_of_lapack():
-    hoisted = _one_kernel_probe()
-    assert tj._HOIST_FLAG in hoisted["flags"]
+def test_slip_solve_is_one_kernel_on_request_within_its_tolerance_of_xlas_loops():
+    from tribojax._xla import HOIST_FLAG
+
+    hoisted = _one_kernel_probe(ONE_KERNEL="1")
+    assert HOIST_FLAG in hoisted["flags"]
     # diffrax's step loop moved into a call XLA:CPU compiles as one kernel, no LAPACK call left
-    # in it (docs/performance.md); with the option off LAPACK's LU keeps it a loop of kernels
+    # in it (docs/performance.md)
     assert hoisted["whole"] and not hoisted["lapack"]
-    lapack = _one_kernel_probe(TRIBOJAX_XLA_HOIST="off")
-    assert lapack["flags"] == "" and lapack["lapack"] and not lapack["whole"]
-    # the wang2022 chain keeps LAPACK's LU in both settings (`PAPER_SOLVER`)
-    assert hoisted["chain_lapack"] and lapack["chain_lapack"]
-    # the same arithmetic in another order, whose rounding moves the adaptive steps: wang2022's
-    # phase slips agree within the solve's rtol 1e-6 (measured 3e-9 to 2e-7 relative)
-    np.testing.assert_allclose(hoisted["phases"], lapack["phases"], rtol=1e-6)
+    plain = _one_kernel_probe()
+    # without the option: XLA's own loop of kernels, the same unrolled LU (Rodas4.lu, not the
+    # environment, chooses the factorisation)
+    assert plain["flags"] == "" and not plain["whole"] and not plain["lapack"]
+    # the wang2022 chain keeps LAPACK's LU in both (`PAPER_SOLVER`)
+    assert hoisted["chain_lapack"] and plain["chain_lapack"]
+    # the same arithmetic fused differently, whose rounding moves the adaptive steps: wang2022's
+    # phase slips agree within the solve's rtol 1e-6
+    np.testing.assert_allclose(hoisted["phases"], plain["phases"], rtol=1e-6)
 
 
-def test_hoisting_flag_leaves_a_users_options_and_a_started_backend_alone():
-    mine = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=1024"
-    flags = "import json, os, tribojax; print(json.dumps(os.environ.get('XLA_FLAGS', '')))"
-    assert _one_kernel_probe(flags, XLA_FLAGS=mine) == mine
-    # a backend already running has read XLA_FLAGS: the flag would not act, and Rodas4 keeps LAPACK
-    late = ("import json, os, jax; jax.numpy.zeros(1).block_until_ready(); import tribojax; "
-            "from tribojax._dynamics._rodas4 import unrolled_lu; "
-            "print(json.dumps([os.environ.get('XLA_FLAGS', ''), unrolled_lu(4)]))")
-    assert _one_kernel_probe(late) == ["", False]
+def test_one_kernel_is_an_explicit_choice_that_leaves_a_users_options_alone():
+    show = ("import json, os, tribojax as tj; r = {}; r['after_import'] = os.environ.get("
+            "'XLA_FLAGS', ''); r['chosen'] = tj.use_one_kernel(); "
+            "r['flags'] = os.environ.get('XLA_FLAGS', ''); print(json.dumps(r))")  # fmt: skip
+    # importing tribojax writes no XLA option; asking for it does
+    out = _one_kernel_probe(show)
+    assert out["after_import"] == "" and out["chosen"] and "small_while_loop" in out["flags"]
+    # a user's own backend options stay: the flag cannot merge with them, so it is not set
+    mine = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=1024 "
+    mine2 = "--xla_backend_extra_options=xla_cpu_enable_fast_math=false"
+    out = _one_kernel_probe(show, XLA_FLAGS=mine2)
+    assert out == {"after_import": mine2, "chosen": False, "flags": mine2}
+    assert _one_kernel_probe(show, XLA_FLAGS=mine)["flags"] == mine  # already raised: kept
+    # a backend already running has read XLA_FLAGS: refused with the reason, nothing written;
+    # Rodas4's factorisation does not depend on any of it
+    late = ("import json, os, jax; jax.numpy.zeros(1).block_until_ready(); import tribojax as tj\n"
+            "try:\n    tj.use_one_kernel(); e = ''\nexcept RuntimeError as err:\n    e = str(err)\n"
+            "from tribojax._dynamics._rodas4 import unrolled_lu\n"
+            "print(json.dumps([os.environ.get('XLA_FLAGS', ''), e, unrolled_lu(4)]))")  # fmt: skip
+    flags, err, unrolled = _one_kernel_probe(late)
+    assert flags == "" and "backend has started" in err and unrolled
 
 
-def test_hoisting_setting_refuses_an_unknown_value():
+def test_cli_refuses_an_unknown_one_kernel_setting(tmp_path):
     import os
     import subprocess
     import sys
 
-    out = subprocess.run([sys.executable, "-c", "import tribojax"], capture_output=True,
-                         text=True, env={**os.environ, "TRIBOJAX_XLA_HOIST": "maybe"})  # fmt: skip
-    assert out.returncode != 0 and "TRIBOJAX_XLA_HOIST = 'maybe'" in out.stderr
+    cmd = [sys.executable, "-m", "tribojax._cli._main", "contact", "--D", "2.5", "--G", "1e-9",
+           "--load", "5"]  # fmt: skip
+    out = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path,
+                         env={**os.environ, "TRIBOJAX_XLA_HOIST": "maybe"})  # fmt: skip
+    assert out.returncode == 2 and "TRIBOJAX_XLA_HOIST = 'maybe'" in out.stderr
 
 
 def test_rodas4_refuses_an_unknown_factorisation():

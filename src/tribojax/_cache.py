@@ -1,11 +1,11 @@
-"""JAX's persistent compilation cache, on by default for tribojax's programs.
+"""JAX's persistent compilation cache and tribojax's stored traces, by explicit choice.
 
-Set when tribojax is first used, unless the user chose a JAX cache (`jax_compilation_cache_dir`
-or `JAX_COMPILATION_CACHE_DIR`). `TRIBOJAX_CACHE=off` (or 0/no/false) leaves JAX's settings
-alone; `TRIBOJAX_CACHE_DIR` chooses the folder (`cache_dir`). Every program is kept
-(`MIN_COMPILE_S`). docs/performance.md (The compilation cache) has the folders, the reasons and
-why a program with a host callback is never cached (`tribojax._checks.failures_as_nan`); traced
-programs are kept beside it (`tribojax._export`).
+Importing or calling tribojax configures no cache. An application opts in with
+`use_compilation_cache(folder)`; the `tribojax` command does so for its own process
+(`TRIBOJAX_CACHE_DIR`, `TRIBOJAX_CACHE=off`). Everything stored goes inside the chosen folder:
+`folder/jax` (JAX's compiled programs, unless the process already chose a JAX cache folder) and
+`folder/export` (tribojax's traced programs, `tribojax._export`). docs/performance.md (The
+compilation cache) has the reasons and why a program with a host callback is never cached.
 """
 
 from __future__ import annotations
@@ -14,13 +14,13 @@ import os
 import sys
 from pathlib import Path
 
-MIN_COMPILE_S = 0.0
 OFF = ("off", "0", "no", "false")
+_FOLDER: list[Path] = []  # the folder chosen by `use_compilation_cache` in this process
 
 
-def cache_dir() -> Path | None:
-    """The folder tribojax asks JAX to cache compiled programs in, or None when `TRIBOJAX_CACHE`
-    turns the cache off."""
+def default_cache_dir() -> Path | None:
+    """The folder the `tribojax` command caches in: `TRIBOJAX_CACHE_DIR`, else the platform's
+    user cache folder (`~/.cache/tribojax` on Linux); None when `TRIBOJAX_CACHE` is off."""
     if os.environ.get("TRIBOJAX_CACHE", "").strip().lower() in OFF:
         return None
     chosen = os.environ.get("TRIBOJAX_CACHE_DIR", "").strip()
@@ -28,30 +28,46 @@ def cache_dir() -> Path | None:
         return Path(chosen).expanduser()
     home = Path.home()
     if sys.platform == "darwin":
-        base = home / "Library" / "Caches" / "tribojax"
-    elif os.name == "nt":
-        local = Path(os.environ.get("LOCALAPPDATA", home / "AppData" / "Local"))
-        base = local / "tribojax" / "cache"
-    else:
-        base = Path(os.environ.get("XDG_CACHE_HOME", "") or home / ".cache") / "tribojax"
-    return base / "jax"
+        return home / "Library" / "Caches" / "tribojax"
+    if os.name == "nt":
+        return Path(os.environ.get("LOCALAPPDATA", home / "AppData" / "Local")) / "tribojax"
+    return Path(os.environ.get("XDG_CACHE_HOME", "") or home / ".cache") / "tribojax"
 
 
-def enable_cache(config) -> Path | None:
-    """Point `config` (`jax.config`) at `cache_dir()` unless the user set a JAX cache folder or
-    turned ours off; returns the folder in use by tribojax's setting (None if not set here).
-    A folder that cannot be created leaves the cache off."""
-    if config.jax_compilation_cache_dir or os.environ.get("JAX_COMPILATION_CACHE_DIR"):
-        return None
-    folder = cache_dir()
+def use_compilation_cache(folder=None) -> Path | None:
+    """Keep compiled programs and tribojax's traces on disk, so that a new process skips their
+    tracing and compilation. An explicit choice of the application (a script, a notebook, the
+    `tribojax` command); tribojax never makes it by itself.
+
+    Args:
+        folder: where to store them (default `default_cache_dir()`). JAX's programs go to
+            `folder/jax` unless this process already set `jax_compilation_cache_dir`, and then
+            JAX's minimum compile time for caching is set to 0 s unless
+            `JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS` is set; traces go to `folder/export`.
+
+    Returns:
+        The folder in use, or None when no folder is given and `TRIBOJAX_CACHE` is off, or the
+        folder cannot be created or written (the cache then stays off).
+    """
+    import jax
+
+    folder = default_cache_dir() if folder is None else Path(folder).expanduser()
     if folder is None:
         return None
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "jax").mkdir(parents=True, exist_ok=True)
     except OSError:
         return None
     if not os.access(folder, os.W_OK):
         return None
-    config.update("jax_compilation_cache_dir", str(folder))
-    config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_S)
+    if not (jax.config.jax_compilation_cache_dir or os.environ.get("JAX_COMPILATION_CACHE_DIR")):
+        jax.config.update("jax_compilation_cache_dir", str(folder / "jax"))
+        if "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS" not in os.environ:
+            jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    _FOLDER[:] = [folder]
     return folder
+
+
+def export_dir() -> Path | None:
+    """The folder of stored traces (`use_compilation_cache`), or None when none was chosen."""
+    return _FOLDER[0] / "export" if _FOLDER else None

@@ -6,46 +6,66 @@ the offending value and the allowed range. Traced values (inside jit/vmap/grad) 
 """
 
 import contextlib
+import contextvars
+import functools
+import os
 
 import equinox as eqx
-import equinox._errors as _eqx_errors
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ._precision import ensure_x64
 
-# Failures as values (`failures_as_nan`; docs/performance.md, "Programs with a host callback"):
-# a trace-context state, part of every jit cache key; diffrax's and lineax's checks reach it
-# through equinox's jitted check, wrapped here. Internal APIs: if missing, the mode is off.
-try:
-    from jax._src.config import bool_state as _bool_state
-
-    _NAN_MODE = _bool_state("tribojax_failures_as_nan", False,
-                            "tribojax: checks traced under jit give NaN instead of raising",
-                            include_in_jit_key=True, include_in_trace_context=True)  # fmt: skip
-    _EQX_JIT_CHECK = _eqx_errors.branched_error_if_impl_jit
-except (ImportError, AttributeError, TypeError):  # another jax or equinox: no NaN mode
-    _NAN_MODE = None
-
-
-if _NAN_MODE is not None:
-
-    def _eqx_check(x, pred, index, msgs, *, on_error):
-        if on_error == "default" and _NAN_MODE.value:
-            on_error = "nan"
-        return _EQX_JIT_CHECK(x, pred, index, msgs, on_error=on_error)
-
-    _eqx_errors.branched_error_if_impl_jit = _eqx_check
+# Failures as values (docs/performance.md, "Programs with a host callback"): while set, checks
+# traced by tribojax (`fail_if`) give NaN instead of a raising host callback. Read at trace time,
+# so every tribojax jit that may trace a check carries it in its cache key (`mode_jit`).
+_NAN_MODE = contextvars.ContextVar("tribojax_failures_as_nan", default=False)
 
 
 @contextlib.contextmanager
-def failures_as_nan():
-    """Within this block (this thread), checks traced under jit return NaN on failure instead of
-    raising: tribojax's own and those inside diffrax and lineax. For programs whose caller turns
-    a non-finite result into a `RESULTS` value (the fit engine)."""
-    with contextlib.nullcontext() if _NAN_MODE is None else _NAN_MODE(True):
+def failures_as_nan(on: bool = True):
+    """Within this block (this thread or task), tribojax's checks traced under jit return NaN on
+    failure instead of raising: for programs whose caller turns a non-finite result into a
+    `RESULTS` value or an exception at its boundary. Checks inside diffrax, optimistix and
+    lineax follow equinox's own `EQX_ON_ERROR` (the `tribojax` command sets it to `nan` for its
+    process; docs/performance.md)."""
+    token = _NAN_MODE.set(bool(on))
+    try:
         yield
+    finally:
+        _NAN_MODE.reset(token)
+
+
+def nan_mode() -> bool:
+    """Whether checks traced now give NaN (`failures_as_nan`)."""
+    return _NAN_MODE.get()
+
+
+def _on_error() -> str:
+    """How a check traced now reports a failure: NaN under `failures_as_nan`; else it raises with
+    its message, whatever `EQX_ON_ERROR` says for other libraries' checks, unless that asks for
+    a debugger or no checks ("breakpoint", "off")."""
+    if _NAN_MODE.get():
+        return "nan"
+    return "default" if os.environ.get("EQX_ON_ERROR") in ("breakpoint", "off") else "raise"
+
+
+def mode_jit(fn):
+    """`eqx.filter_jit(fn)` whose cache key holds `nan_mode()`: a trace made with failures as NaN
+    is never reused where checks must raise, and the reverse (`failures_as_nan`)."""
+
+    @eqx.filter_jit
+    def jitted(nan, *args, **kwargs):
+        with failures_as_nan(nan):
+            return fn(*args, **kwargs)
+
+    @functools.wraps(fn)
+    def call(*args, **kwargs):
+        return jitted(_NAN_MODE.get(), *args, **kwargs)
+
+    call.jitted = jitted
+    return call
 
 
 def _is_concrete(*xs) -> bool:
@@ -100,8 +120,7 @@ def fail_if(x, bad, message: str):
         if np.asarray(bad).any():
             raise ValueError(message)
         return x
-    on_error = "nan" if _NAN_MODE is not None and _NAN_MODE.value else "default"
-    return eqx.error_if(x, bad, message, on_error=on_error)
+    return eqx.error_if(x, bad, message, on_error=_on_error())
 
 
 def runtime_message(exc: BaseException) -> str:

@@ -23,9 +23,9 @@ from pathlib import Path
 import equinox as eqx
 import jax
 import numpy as np
-from jax._src import config as _jax_config
 
-from ._cache import cache_dir
+from ._cache import export_dir
+from ._checks import mode_jit, nan_mode
 
 MAGIC = b"tribojax-export-1\n"
 _PACKAGES = ("jax", "jaxlib", "equinox", "lineax", "optimistix", "diffrax", "numpy", "jaxtyping")
@@ -51,9 +51,7 @@ def _environment() -> str:
             versions.append(f"{name}={metadata.version(name)}")
         except metadata.PackageNotFoundError:
             versions.append(f"{name}=?")
-    # XLA_FLAGS: Rodas4's LU follows the hoisting option (`_rodas4.unrolled_lu`)
-    flags = os.environ.get("XLA_FLAGS", "")
-    return f"{h.hexdigest()}|{'|'.join(versions)}|{jax.default_backend()}|{flags}"
+    return f"{h.hexdigest()}|{'|'.join(versions)}|{jax.default_backend()}"
 
 
 def _atom(x) -> str:
@@ -119,14 +117,12 @@ def _structure(treedef) -> str:
     return f"{_atom(kind)}<{_atom(aux)}>({children})"
 
 
-def _trace_context() -> str:
-    parts = []
-    for v in _jax_config.trace_context():
-        try:
-            parts.append(_atom(v))
-        except _Unkeyable:
-            parts.append(type(v).__qualname__)  # the axis environment: empty outside a trace
-    return ";".join(parts)
+def _trace_context() -> tuple:
+    """What a trace depends on beyond its arguments: the settings that change how tribojax's code
+    traces, and failures as NaN (`tribojax._checks.failures_as_nan`)."""
+    c = jax.config
+    return (c.jax_enable_x64, c.jax_numpy_rank_promotion, c.jax_numpy_dtype_promotion,
+            c.jax_default_matmul_precision, nan_mode())  # fmt: skip
 
 
 def _key(fn, treedef, static, leaves) -> str | None:
@@ -135,19 +131,13 @@ def _key(fn, treedef, static, leaves) -> str | None:
     try:
         s_leaves, s_tree = jax.tree_util.tree_flatten(static)
         text = "\n".join([
-            f"{fn.__module__}.{fn.__qualname__}", _environment(), _trace_context(),
+            f"{fn.__module__}.{fn.__qualname__}", _environment(), repr(_trace_context()),
             _structure(treedef), _structure(s_tree), _atom(tuple(s_leaves)),
             ";".join(f"{x.dtype}{list(x.shape)}{getattr(x, 'weak_type', False)}" for x in leaves),
         ])  # fmt: skip
     except _Unkeyable:
         return None
     return hashlib.sha256(text.encode()).hexdigest()
-
-
-def export_dir() -> Path | None:
-    """The folder of stored programs (beside the compilation cache), or None when off."""
-    folder = cache_dir()
-    return None if folder is None else folder.parent / "export"
 
 
 def _read(path: Path):
@@ -227,7 +217,7 @@ def _program(fn, treedef, static, leaves, stem: Path):
 def cached_jit(fn):
     """`eqx.filter_jit(fn)` whose traced program is also stored on disk (see the module doc);
     `fn` must be a module-level function returning arrays in tuples, lists or dicts."""
-    jitted = eqx.filter_jit(fn)
+    jitted = mode_jit(fn)
     programs: dict = {}
     locks: dict = {}
     keys: dict = {}  # signature -> key: the key's hashing once per signature, not per call
@@ -242,7 +232,7 @@ def cached_jit(fn):
         # the signature as JAX's and equinox's own jit caches compare it (trace context,
         # structures and static values by equality, arrays by shape and dtype), and the folder
         s_leaves, s_tree = jax.tree_util.tree_flatten(static)
-        sig = (folder, _jax_config.trace_context(), treedef, s_tree,
+        sig = (folder, _trace_context(), treedef, s_tree,
                *((type(v), v) for v in s_leaves),
                *((x.shape, x.dtype, getattr(x, "weak_type", False)) for x in leaves))  # fmt: skip
         try:

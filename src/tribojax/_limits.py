@@ -32,7 +32,3 @@ DISCOVER_MAX_SAMPLES = 5_000
 # in mm into a metre column is not caught; one scaled by 1e300 is), refused naming where it is.
 SAMPLE_LIMITS = {"u": (1e3, "m"), "f": (1e9, "N"), "slip": (1.0, "m"), "accel": (1e4, "m/s²")}
 
-XLA_HOIST_OPTION = "xla_cpu_small_while_loop_byte_threshold"
-"""XLA:CPU's size limit for compiling a whole while loop as one kernel: raised in XLA_FLAGS by
-`import tribojax` unless `TRIBOJAX_XLA_HOIST=off` (`tribojax/__init__.py`), read by
-`_rodas4.unrolled_lu`."""

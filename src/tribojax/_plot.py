@@ -1,4 +1,8 @@
-"""The one optional-matplotlib guard: every figure of the package goes through `pyplot`."""
+"""The one optional-matplotlib guard: every figure of the package goes through `figure`.
+
+Figures are explicit `matplotlib.figure.Figure` objects, never pyplot ones: the user's backend
+and pyplot state (current figure, open-figure list) are untouched.
+"""
 
 from __future__ import annotations
 
@@ -8,29 +12,26 @@ from pathlib import Path
 MISSING = "matplotlib is not installed: {what} skipped (pip install 'tribojax[plot]')"
 
 
-def pyplot(what: str = "figure", *, files: bool = True):
-    """`matplotlib.pyplot`, or None after printing one standard message when it is missing.
+def figure(what: str = "figure", **kwargs):
+    """A new `matplotlib.figure.Figure(**kwargs)`, or None after printing one standard message
+    when matplotlib is missing. No pyplot: the figure is not registered with the user's backend.
 
     Args:
         what: what is skipped without matplotlib, for the message ("figure", "bar chart").
-        files: select the non-interactive Agg backend (the figure is only written to a file).
+        **kwargs: passed to `Figure` (figsize, constrained_layout, ...).
     """
     try:
-        import matplotlib
-
-        if files:
-            matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        import matplotlib  # first: the package itself says whether matplotlib is there
+        import matplotlib.figure
     except ImportError:
         print(MISSING.format(what=what))
         return None
-    return plt
+    return matplotlib.figure.Figure(**kwargs)
 
 
 def save_figure(fig, path, *, dpi: int = 120) -> None:
-    """Write `fig` to `path` (PNG) through a temporary file beside it, then close it."""
-    import matplotlib.pyplot as plt
-
+    """Write `fig` to `path` (PNG) through a temporary file beside it (its own `savefig`: Agg
+    for PNG, whatever the user's backend; pyplot is not involved)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp" + path.suffix)
@@ -39,4 +40,3 @@ def save_figure(fig, path, *, dpi: int = 120) -> None:
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
-        plt.close(fig)

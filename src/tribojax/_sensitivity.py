@@ -24,14 +24,14 @@ import jax
 import numpy as np
 
 from ._chain import phase_slips
-from ._checks import cacheable_call, check_range, fail_if
+from ._checks import cacheable_call, check_range, fail_if, mode_jit
 from ._contact._contact import ContactParameters
 from ._contact._materials import ContactPair
 from ._contact._presets import wang2022_pair, wang2022_table3_model
 from ._dynamics._harmonic import harmonic_balance
 from ._friction._lugre import PreSlipLuGre
 from ._friction._rate_independent import Jenkins, Mindlin
-from ._plot import pyplot, save_figure
+from ._plot import figure, save_figure
 from ._precision import ensure_x64
 from ._presets import (
     CALIBRATED_G_M,
@@ -246,15 +246,13 @@ class Elasticities:
         Writes a PNG at `path` if given. Returns the matplotlib Figure, or None (with a message)
         when matplotlib is not installed.
         """
-        plt = pyplot("bar chart", files=path is not None)
-        if plt is None:
-            return None
         n = len(self.outputs)
         cols = min(n, 4)
         rows = -(-n // cols)
-        fig, axes = plt.subplots(
-            rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False, constrained_layout=True
-        )
+        fig = figure("bar chart", figsize=(3.2 * cols, 2.6 * rows), constrained_layout=True)
+        if fig is None:
+            return None
+        axes = fig.subplots(rows, cols, squeeze=False)
         colours = [f"C{j}" for j in range(len(self.parameters))]
         for ax, name, e in zip(axes.flat, self.outputs, self.elasticity):
             ax.barh(self.parameters, e, color=colours)
@@ -270,7 +268,7 @@ class Elasticities:
         return fig
 
 
-@eqx.filter_jit
+@mode_jit
 def _value_and_jacobian(fn, params, mode):
     def both(p):
         y = fn(p)

@@ -13,14 +13,13 @@ initialises. GPUs and multi-host setups use the same code through JAX's own runt
 
 from __future__ import annotations
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from ._checks import as_f64, cacheable_call
+from ._checks import as_f64, cacheable_call, mode_jit
 from ._precision import ensure_x64
 
 
@@ -39,7 +38,7 @@ def product_grid(**axes) -> dict:
     return {k: g.ravel() for k, g in zip(arrays, grids)}
 
 
-@eqx.filter_jit
+@mode_jit
 def _vmapped(fn, batch):
     return jax.vmap(fn)(batch)
 

@@ -22,7 +22,7 @@ import equinox as eqx
 from .._checks import runtime_message
 from .._decimate import decimate_record
 from .._io._files import sidecar_path, write_json_atomic
-from .._plot import pyplot, save_figure
+from .._plot import figure, save_figure
 
 __all__ = [
     "BAD_INPUT",
@@ -381,15 +381,14 @@ def plot_model_and_residual(path, c: dict, title: str, resid_axes: tuple[str, st
                             labels=("data", "model"), title_size=None) -> bool:  # fmt: skip
     """The figure of `fit` and `predict`: data and model (`c`'s "x", "data", "model", "xlabel",
     "ylabel") over the residual ("resid_x", "resid"). False when matplotlib is missing."""
-    plt = pyplot("figure")
-    if plt is None:
+    fig = figure("figure", figsize=(7, 6), constrained_layout=True)
+    if fig is None:
         return False
-    fig, (ax, ar) = plt.subplots(2, 1, figsize=(7, 6), constrained_layout=True,
-                                 gridspec_kw=dict(height_ratios=[3, 1.3]))  # fmt: skip
+    ax, ar = fig.subplots(2, 1, gridspec_kw=dict(height_ratios=[3, 1.3]))
     ax.plot(c["x"], c["data"], "k.", ms=2, label=labels[0])
     ax.plot(c["x"], c["model"], "C3-", lw=1, label=labels[1])
     ax.set(xlabel=c["xlabel"], ylabel=c["ylabel"])
-    ax.set_title(title, fontsize=title_size or plt.rcParams["axes.titlesize"])
+    ax.set_title(title, **({"fontsize": title_size} if title_size else {}))  # default: rcParams
     ax.legend()
     ar.plot(c["resid_x"], c["resid"], "C0.", ms=2)
     ar.axhline(0, color="k", lw=0.5)

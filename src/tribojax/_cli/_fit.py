@@ -189,7 +189,7 @@ def _fit_from_model(full, args, start, note):
     if model.kind not in RECORD_KINDS:
         raise CommandError(f"--from {args.from_model}: a {model.kind} model; --from takes a "
                            "slip, loop or curve model (a history: --model ELEMENT)")  # fmt: skip
-    fit = refit(model, full, max_steps=args.max_steps or MAX_STEPS)
+    fit = refit(model, full, max_steps=args.max_steps or MAX_STEPS, throw=False)
     base, kind = fit.model, RECORD_KINDS[model.kind]
     data = base.data()
     x_name, x = kind.axis(base)
@@ -263,7 +263,8 @@ def _fit_slip(run, args, start, reduction, note):
     how = (_reduced_sigma_source(reduction, "sidecar noise_std_m") if run.noise_std is not None
            else "estimated from the residuals")  # fmt: skip
     steps = args.max_steps or MAX_STEPS
-    fit = fit_slip_run(run, alpha=alpha, max_steps=steps, start=start or None, progress=note)
+    fit = fit_slip_run(run, alpha=alpha, max_steps=steps, start=start or None, progress=note,
+                       throw=False)  # fmt: skip
     resid = fit.prediction - run.slip  # model − data, m
     d = fit_summary(fit, run, len(run), resid, "m", run.noise_std, how)
     d["model"] = "PreSlipLuGre (wang2022 Eq 27), slip at every sample"
@@ -280,7 +281,8 @@ def _fit_loop(loop, args, start, reduction, note):
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
     steps = args.max_steps or MAX_STEPS
     model = args.model or "history"
-    fit = fit_loop(loop, args.element, model=model, max_steps=steps, start=start or None)
+    fit = fit_loop(loop, args.element, model=model, max_steps=steps, start=start or None,
+                   throw=False)  # fmt: skip
     if fit.prediction is not None:  # the loop model: the samples from the first reversal on
         resid = fit.prediction - loop.f[-len(fit.prediction) :]
     else:

@@ -56,7 +56,7 @@ def fit_history_record(loops, model: str, max_steps: int | None, start: dict,
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
         steps = max_steps or MAX_STEPS
         fits[name] = fit_history(loops, name, start=given or None, max_steps=steps,
-                                 decimate=decimate)  # fmt: skip
+                                 decimate=decimate, throw=False)  # fmt: skip
     each = {k: [predict_history(h, lp) for lp in loops] for k, h in fits.items()}
     pred = {k: np.concatenate([force for force, _ in v]) for k, v in each.items()}
     f = np.concatenate([lp.f[::decimate] for lp in loops])
@@ -98,13 +98,13 @@ def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
     if model not in ("lugre", "best"):
         raise CommandError(f"--model {model} does not apply to a friction curve; use lugre or best")
     steps = {} if max_steps is None else {"max_steps": max_steps}
-    fit = fit_steady_curve(curve, **steps)
+    fit = fit_steady_curve(curve, throw=False, **steps)
     resid = fit.residuals * curve.friction_error
     unit = curve.units["friction_unit"]
     sigma = float(np.median(curve.friction_error))
     d = fit_summary(fit, curve, len(curve), resid, unit, sigma,
                     "per-point scatter / sqrt(samples)")  # fmt: skip
-    sides = {side: fit_steady_curve(curve, direction=sign, **steps).as_dict()
+    sides = {side: fit_steady_curve(curve, direction=sign, throw=False, **steps).as_dict()
              for side, sign in (("positive", 1), ("negative", -1))}
     d[SAVED_KEY] = fitted_model(fit, str(curve.source)).as_dict() if fit.converged else None
     d.update(model="lugre", nrmse=nrmse(resid, curve.friction),

@@ -23,7 +23,7 @@ from .._friction._elastic2d import ElasticDryFriction2D
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._config import read_config
 from .._io._files import write_text_atomic
-from .._plot import pyplot, save_figure
+from .._plot import figure, save_figure
 from .._tables import DataFileError
 from ._common import claim_outputs, error, progress, write_json_atomic
 
@@ -114,10 +114,10 @@ def run_frf(args) -> int:
 
 
 def _plot(fr, path) -> None:
-    plt = pyplot("frf.png")
-    if plt is None:
+    fig = figure("frf.png", figsize=(7, 4.5), constrained_layout=True)
+    if fig is None:
         return
-    fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+    ax = fig.subplots()
     for i in range(fr.amplitude.shape[1]):
         a = np.where(fr.stable, fr.amplitude[:, i], np.nan)
         ax.plot(fr.omega, a, f"C{i}-", label=f"DOF {i}")

@@ -27,7 +27,7 @@ from .._io._files import write_text_atomic
 from .._io._loop import read_loop
 from .._limits import SAMPLE_LIMITS
 from .._model import analyse_loop, fit_loop
-from .._plot import pyplot, save_figure
+from .._plot import figure, save_figure
 from .._reproduce._wu2015 import wu2015_eq5_stiffness
 from ._common import claim_outputs, error, write_json_atomic
 
@@ -135,7 +135,7 @@ def _fit_loop(args) -> dict:
     """Read, analyse and fit the --loop file; the loop_fit.json content (printed summary)."""
     loop = read_loop(args.loop)
     a = analyse_loop(loop)
-    fit = fit_loop(loop, args.element, model=args.fit_model)
+    fit = fit_loop(loop, args.element, model=args.fit_model, throw=False)
     result = {"loop": str(args.loop), "analysis": a.as_dict(),
               "fit": {**fit.as_dict(), "element": args.element, "model": args.fit_model}}
     print(f"loop: A = {a.A:.4g} m, muN = {a.mu_N:.4g} N, K_d (Eq 6) = {a.K_d:.4g} N/m, "
@@ -147,10 +147,10 @@ def _fit_loop(args) -> dict:
 
 
 def _plot(hb, element: str, path: Path) -> bool:
-    plt = pyplot("figure")
-    if plt is None:
+    fig = figure("figure", figsize=(6, 4), constrained_layout=True)
+    if fig is None:
         return False
-    fig, ax = plt.subplots(figsize=(6, 4), constrained_layout=True)
+    ax = fig.subplots()
     ax.plot(hb.A_bar, hb.K_bar, "C0-", label="K̄ = K_eq / K_d")
     ax.plot(hb.A_bar, hb.C_bar, "C3-", label="C̄ = πωC_eq / K_d")
     ax.set_xlabel("Ā = A / A0")

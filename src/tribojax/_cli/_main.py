@@ -67,12 +67,42 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv=None) -> int:
+HOIST_ON, HOIST_OFF = ("on", "1", "yes", "true"), ("off", "0", "no", "false")
+
+
+def configure_process() -> None:
+    """The choices the `tribojax` command makes for its own process (a library user makes them by
+    explicit calls): XLA:CPU's one-kernel loops (`tribojax.use_one_kernel`) unless
+    `TRIBOJAX_XLA_HOIST=off`, the compilation cache (`tribojax.use_compilation_cache`:
+    `TRIBOJAX_CACHE_DIR`, `TRIBOJAX_CACHE=off`), and failures inside diffrax, optimistix and
+    lineax as NaN (`EQX_ON_ERROR=nan` unless set: their programs then hold no host callback and
+    are cached; tribojax's own checks still raise with their message). docs/cli.md, "Environment".
+    """
+    if "equinox" not in sys.modules:  # equinox reads it once, on import
+        os.environ.setdefault("EQX_ON_ERROR", "nan")
+    from .._cache import use_compilation_cache
+    from .._xla import use_one_kernel
+
+    hoist = os.environ.get("TRIBOJAX_XLA_HOIST", "on").strip().lower() or "on"
+    if hoist not in HOIST_ON + HOIST_OFF:
+        raise ValueError(f"TRIBOJAX_XLA_HOIST = {hoist!r}: allowed 'on' (the default) or 'off'")
+    if hoist in HOIST_ON:
+        use_one_kernel()
+    use_compilation_cache()
+
+
+def main(argv=None, *, configure: bool = False) -> int:
     """`tribojax`: the exit status of the subcommand (0 done, 1 failed computation, 2 bad
-    input, 130 interrupted); errors are one line `tribojax <cmd>: error: ...`."""
+    input, 130 interrupted); errors are one line `tribojax <cmd>: error: ...`. `configure`: make
+    the command's process choices first (`configure_process`; the console script does)."""
     args = build_parser().parse_args(argv)
     debug = args.debug or args.debug_here
-    from .. import _precision  # noqa: F401  (float64 and the compilation cache first)
+    if configure:
+        try:
+            configure_process()
+        except ValueError as err:
+            print(f"tribojax {args.command}: error: {err}", file=sys.stderr)
+            return 2
     from ._common import run_command
 
     module, function = args.target.split(":")
@@ -83,7 +113,7 @@ def main(argv=None) -> int:
 def entry() -> NoReturn:
     """The console script: `main`, then an exit without the interpreter's teardown once the
     command is over (its files are closed and written); why: docs/cli.md, "Exit"."""
-    status = main()
+    status = main(configure=True)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(status)

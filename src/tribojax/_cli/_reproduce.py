@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 from .. import __version__
-from .._plot import pyplot, save_figure
+from .._plot import figure, save_figure
 from .._reproduce import _chain_fit as chain_fit
 from .._reproduce import _robust_fit as robust_fit
 from .._reproduce._fit_figure import plot_fit_measured
@@ -38,8 +38,8 @@ def _print_table3(rows) -> None:
 
 
 def _plot_table3(rows, path: Path) -> bool:
-    plt = pyplot("figure")
-    if plt is None:
+    fig = figure("figure", figsize=(10, 7.5), constrained_layout=True)
+    if fig is None:
         return False
     load = [r["load_N"] for r in rows]
     keys = [
@@ -48,7 +48,7 @@ def _plot_table3(rows, path: Path) -> bool:
         ("Ctau_Ns_per_m", "tangential damping C_τ (N s/m)"),
         ("zmax_nm", "max tangential deformation z_max (nm)"),
     ]
-    fig, axes = plt.subplots(2, 2, figsize=(10, 7.5), constrained_layout=True)
+    axes = fig.subplots(2, 2)
     for ax, (key, label) in zip(axes.flat, keys):
         ax.plot(load, [r["paper"][key] for r in rows], "ko", label="wang2022 Table 3")
         ax.plot(load, [r["calibrated"][key] for r in rows], "C0-", label="calibrated (G, μ_t, σ_s)")

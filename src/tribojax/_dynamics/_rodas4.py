@@ -9,14 +9,13 @@ With W = I/(γh) − J, J = ∂f/∂y(t₀, y₀) and f_t = ∂f/∂t(t₀, y₀
 and y₁ = y₀ + Σ m_i K_i, error estimate Σ e_i K_i (here K₆). One Jacobian (`jax.jacfwd`), one
 ∂f/∂t (`jax.jvp`), one LU and six pairs of triangular solves per step, no Newton iteration: for
 small stiff systems much cheaper per step than an ESDIRK (Kvaerno5) with a chord iteration. Up to
-`SMALL_N` states, unless TRIBOJAX_XLA_HOIST=off, the LU is unrolled array arithmetic rather than
-LAPACK, so that XLA:CPU can compile the whole solve into one kernel (`unrolled_lu`;
-docs/performance.md, "One kernel per solve").
+`SMALL_N` states the LU is by default unrolled array arithmetic rather than LAPACK, so that XLA:CPU
+can compile the whole solve into one kernel where the application asks for it (`Rodas4.lu`,
+`tribojax.use_one_kernel`; docs/performance.md, "One kernel per solve").
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from typing import ClassVar
 
@@ -26,8 +25,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
-
-from .._limits import XLA_HOIST_OPTION
 
 # Hairer & Wanner's RODAS, ro4coe (METH = 1): a_ij, c_ij (strictly lower), α_i, γ_i = Σ_j γ_ij.
 _GAMMA = 0.25
@@ -62,12 +59,11 @@ _D2 = (-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418
 SMALL_N = 8  # states up to which W may be factorised by unrolled elimination (`_lu_small`)
 
 
-def unrolled_lu(n: int) -> bool:
-    """Whether Rodas4 factorises its n×n W by `_lu_small`: n ≤ `SMALL_N` and the process asks
-    XLA:CPU for whole-loop kernels (its loop-size option in XLA_FLAGS, which `import tribojax`
-    sets unless `TRIBOJAX_XLA_HOIST=off`). Otherwise LAPACK's getrf/trsm, which rounds
-    differently."""
-    return n <= SMALL_N and XLA_HOIST_OPTION in os.environ.get("XLA_FLAGS", "")
+def unrolled_lu(n: int, lu: str = "auto") -> bool:
+    """Whether Rodas4 with factorisation `lu` factorises its n×n W by `_lu_small`: "unrolled",
+    or "auto" with n ≤ `SMALL_N`. Otherwise LAPACK's getrf/trsm, which rounds differently. Read
+    from the solver's field only: the numbers never depend on the environment."""
+    return lu == "unrolled" or (lu == "auto" and n <= SMALL_N)
 
 
 def _lu_small(w):
@@ -156,11 +152,13 @@ class Rodas4(dfx.AbstractAdaptiveSolver):
     term_structure: ClassVar = dfx.AbstractTerm
     interpolation_cls: ClassVar[Callable[..., RodasInterpolation]] = RodasInterpolation
     lu: str = eqx.field(static=True, default="auto")
-    """W's factorisation: "auto" (`unrolled_lu`), "lapack" (LAPACK's getrf/trsm always)."""
+    """W's factorisation: "auto" (unrolled up to `SMALL_N` states, else LAPACK), "unrolled"
+    (always), "lapack" (LAPACK's getrf/trsm always). The same in every process: the one-kernel
+    option (`tribojax.use_one_kernel`) changes speed, not this choice."""
 
     def __check_init__(self):
-        if self.lu not in ("auto", "lapack"):
-            raise ValueError(f"lu = {self.lu!r}: allowed 'auto' or 'lapack'")
+        if self.lu not in ("auto", "unrolled", "lapack"):
+            raise ValueError(f"lu = {self.lu!r}: allowed 'auto', 'unrolled' or 'lapack'")
 
     def order(self, terms):
         return 4
@@ -188,7 +186,7 @@ class Rodas4(dfx.AbstractAdaptiveSolver):
         # one LU of W per step (of W without its tangent); each solve is a custom_linear_solve, so
         # that forward mode gives dK = W⁻¹(d rhs − dW K) with the same LU instead of
         # differentiating the factorisation (as jnp.linalg.solve does)
-        if self.lu == "auto" and unrolled_lu(y0.shape[0]):
+        if unrolled_lu(y0.shape[0], self.lu):
             lu = _lu_small(jax.lax.stop_gradient(w))
             lu_solve = _lu_solve_small
         else:

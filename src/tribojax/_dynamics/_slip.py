@@ -21,7 +21,7 @@ import optimistix as optx
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array
 
-from .._checks import as_f64, cacheable_call, check_range, fail_if
+from .._checks import as_f64, cacheable_call, check_range, fail_if, mode_jit
 from .._friction._element import AbstractFrictionElement
 from .._presets import WANG2022_RETICLE_MASS_KG
 from ._adjoint import ForwardJacobianAdjoint
@@ -110,7 +110,7 @@ def _diffeqsolve(
     return sol.ys, (sol.result, jax.tree.map(jnp.asarray, sol.stats))
 
 
-@eqx.filter_jit
+@mode_jit
 def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjoint, dt0, solver):
     _, unravel = ravel_pytree(element.initial_state())
     cfg = (t_end, rtol, atol, max_steps, throw)

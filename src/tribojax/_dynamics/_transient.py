@@ -8,14 +8,14 @@ exact along the piecewise-linear displacement path. No harmonic balance, no FFT,
 
 from __future__ import annotations
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 
+from .._checks import mode_jit
 from ._mhb import FrictionSystem
 
 
-@eqx.filter_jit
+@mode_jit
 def integrate_steady(system: FrictionSystem, omega, periods: int = 100,
                      steps_per_period: int = 1024, x0=None, v0=None):  # fmt: skip
     """Integrate from (x0, v0) (default rest) over `periods` periods of ω (rad/s, static counts);

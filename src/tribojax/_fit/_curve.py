@@ -23,7 +23,7 @@ import numpy as np
 
 from .._friction._lugre import LuGre, stribeck_curve
 from .._io._curve import FrictionCurve, FrictionTransient
-from ._engine import FitResult, least_squares_fit
+from ._engine import FitResult, least_squares_fit, thrown
 from ._measures import nrmse
 from ._solver import LevenbergMarquardt
 
@@ -57,7 +57,8 @@ def _steady_start(v, f) -> np.ndarray:
     return np.log([F_c, F_s, v_s, 2.0, sigma2])
 
 
-def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2000) -> FitResult:
+def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2000,
+                     throw: bool = True) -> FitResult:  # fmt: skip
     """Fit the LuGre steady law to a friction curve (see the module docstring).
 
     Args:
@@ -67,6 +68,7 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2
         direction: +1 or −1 fits the points of that velocity sign alone; None fits both
             directions with the asymmetry T0.
         max_steps: LM budget (the noise-floor LM, `_SOLVER`; a step costs microseconds).
+        throw: raise `FitError` if the fit does not converge (False: return it flagged).
     Returns:
         FitResult with names (F_c, F_s, v_s, beta, sigma2) [+ T0]; positive parameters fitted
         as logarithms, standard errors from the per-point scatter (inflated by the residual if
@@ -96,9 +98,9 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2
 
     fit = least_squares_fit(_SteadyResiduals(joint), jnp.asarray(theta0), (v, f, err),
                             names=names, transform=tr, sigma_known=True, max_steps=max_steps,
-                            jac="fwd", solver=_SOLVER)  # fmt: skip
+                            jac="fwd", solver=_SOLVER, throw=False)  # fmt: skip
     fixed = {"direction": "both" if joint else int(direction), **c.units}
-    return dataclasses.replace(fit, fixed=fixed)
+    return thrown(dataclasses.replace(fit, fixed=fixed), throw)
 
 
 class _TransientResiduals(eqx.Module):
@@ -130,7 +132,7 @@ def _transient_args(tr: FrictionTransient, p: dict, curve_error=None):
 
 
 def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start=(1.0, 1e-3),
-                  max_steps: int = 300) -> FitResult:  # fmt: skip
+                  max_steps: int = 300, throw: bool = True) -> FitResult:  # fmt: skip
     """Fit LuGre's bristle stiffness σ0 and damping σ1 to a start–stop transient, the steady
     law (and asymmetry T0) fixed from `fit_steady_curve`.
 
@@ -139,6 +141,7 @@ def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start
     measured velocity is non-zero are fitted (the drive is switched off at rest and reads 0).
     sigma: the friction noise (default: the standard deviation of the moving samples' friction).
     start: (σ0, σ1) in the record's units (friction per angle or length, and per velocity).
+    throw: raise `FitError` if the fit does not converge (False: return it flagged).
     Returns FitResult with names (sigma0, sigma1), fitted as logarithms; the sampling of the
     record bounds what can be resolved (standard errors and `unidentifiable` say so).
     """
@@ -146,8 +149,9 @@ def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start
     fit = least_squares_fit(_TransientResiduals(), jnp.log(jnp.asarray(start)),
                             _transient_args(tr, law, sigma), names=("sigma0", "sigma1"),
                             transform=jnp.exp, sigma_known=sigma is not None,
-                            max_steps=max_steps, jac="fwd", solver=_SOLVER)  # fmt: skip
-    return dataclasses.replace(fit, fixed={"steady": law})
+                            max_steps=max_steps, jac="fwd", solver=_SOLVER,
+                            throw=False)  # fmt: skip
+    return thrown(dataclasses.replace(fit, fixed={"steady": law}), throw)
 
 
 def transient_nrmse(fit: FitResult, tr: FrictionTransient) -> float:

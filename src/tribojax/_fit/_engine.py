@@ -314,7 +314,7 @@ def least_squares_fit(
     progress=None,
     bar: tuple | None = None,
     crawl: float = 0.0,
-    throw: bool = False,
+    throw: bool = True,
 ) -> FitResult:
     """Fit θ minimising ½‖residual_fn(θ, args)‖² with an optimistix least-squares solver.
 
@@ -337,14 +337,15 @@ def least_squares_fit(
         bar, crawl: the `LevenbergMarquardt` stops `options["bar"]` ((probe, limit): after
             `probe` steps a cost ‖r‖² above `limit` stops the fit) and `options["crawl"]` (a
             fraction; 0: off) of the solver module's docstring.
-        throw: raise `FitError` when the fit does not succeed (default: return it).
+        throw: raise `FitError` when the fit does not succeed (the default, as
+            `optimistix.least_squares`); False returns the flagged `FitResult`.
     The solve is compiled once per `residual_fn` object: pass a module-level function (data in
     `args`) and repeated fits run warm.
 
     Returns:
         FitResult with `result` (`tribojax.RESULTS`): the solver's code, `model_failed` /
         `model_failed_at_start` if the returned residuals contain `FAILED_RESIDUAL`, or
-        `short_of_optimum`. Raises for non-convergence only with `throw=True`.
+        `short_of_optimum`. Raises `FitError` for non-convergence unless `throw=False`.
     """
     ensure_x64()
     theta0 = jnp.asarray(theta0, dtype=jnp.float64)

@@ -174,7 +174,7 @@ class HistoryFit:
 
 def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
                 max_steps: int = 300, rtol: float = 1e-8,
-                n_starts=(2.0,), throw: bool = False) -> HistoryFit:  # fmt: skip
+                n_starts=(2.0,), throw: bool = True) -> HistoryFit:  # fmt: skip
     """Fit one friction element (+ a force offset f0, N) to one or several measured histories.
 
     Args:
@@ -196,8 +196,8 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
             (module docstring).
         max_steps, rtol: the budget and relative tolerance (atol 1e-3 rtol) of
             `LevenbergMarquardt.noise_floor`.
-        throw: raise `tribojax.FitError` when the fit does not succeed (default: `.fit.result`
-            says so).
+        throw: raise `tribojax.FitError` when the fit does not succeed (default); False
+            returns it with `.fit.result` saying so.
     Returns:
         `HistoryFit`: parameters and standard errors (`least_squares_fit`, the noise scale
         estimated from the residuals; positive parameters fitted as logarithms) and the NRMSE.
@@ -211,7 +211,7 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
     init = _default_start(model, records)
     if model != "jenkins" and set(init) - set(start or {}):
         # the Jenkins fit (exact increments, fast) gives the slip force, stiffness and offset
-        mu_N, K_d, f0 = fit_history(loops, "jenkins", decimate=decimate).fit.values
+        mu_N, K_d, f0 = fit_history(loops, "jenkins", decimate=decimate, throw=False).fit.values
         init.update({k: v for k, v in _starts(mu_N, K_d, f0, records).items() if k in init})
     init.update(start or {})
     unknown = set(init) - {n for n, _ in spec}
@@ -227,7 +227,7 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
             fit = least_squares_fit(fn, theta, records, names=tuple(n for n, _ in spec),
                                     transform=tr, max_steps=max_steps, jac="fwd",
                                     solver=LevenbergMarquardt.noise_floor(rtol, 1e-3 * rtol),
-                                    optimum_tol=1.0)  # fmt: skip
+                                    optimum_tol=1.0, throw=False)  # fmt: skip
             if fit.result != RESULTS.short_of_optimum:
                 break
             theta = jnp.asarray(fit.theta)

@@ -20,7 +20,7 @@ from .._presets import (
     CALIBRATED_SIGMA_S,
     WANG2022_TABLE1_D,
 )
-from ._engine import FitResult, least_squares_fit
+from ._engine import FitResult, least_squares_fit, thrown
 
 SURFACE_NAMES = ("D", "G_m", "mu_t")
 
@@ -59,6 +59,7 @@ def fit_surface_from_runs(
     M=CALIBRATED_M,
     fits=None,
     progress=None,
+    throw: bool = True,
 ) -> FitResult:
     """Fit D, G (m) and μ_t jointly to slip runs at different normal loads (two-stage).
 
@@ -77,6 +78,7 @@ def fit_surface_from_runs(
         sigma_s, M: fixed strength (Pa) and number of ridges of the contact model.
         fits: stage-1 FitResults to reuse (one per run), else computed.
         progress: optional callable for progress lines.
+        throw: raise `FitError` if the fit does not converge (False: return it flagged).
     Returns:
         FitResult names ("D", "G_m", "mu_t"); `fixed` holds α, σ_s, M and the stage-1 values.
     Raises:
@@ -99,7 +101,7 @@ def fit_surface_from_runs(
         for i, run in enumerate(runs):
             if progress is not None:
                 progress(f"run {i + 1}/{len(runs)} ({run.source}, {run.normal_load:g} N)")
-            fits.append(fit_slip_run(run, alpha=alpha, progress=progress))
+            fits.append(fit_slip_run(run, alpha=alpha, progress=progress, throw=False))
     for run, fit in zip(runs, fits):
         if not fit.converged:
             raise ValueError(f"{run.source}: the slip fit did not converge ({fit.message})")
@@ -119,8 +121,8 @@ def fit_surface_from_runs(
     fit = least_squares_fit(_SurfaceResiduals(float(sigma_s), float(M)), theta0,
                             (loads, target, whiten, jnp.asarray(mu_min)), names=SURFACE_NAMES,
                             transform=lambda th: to_physical(th, SURFACE_NAMES, mu_min),
-                            sigma_known=True)  # fmt: skip
+                            sigma_known=True, throw=False)  # fmt: skip
     fixed = {"alpha": float(alpha), "sigma_s_Pa": float(sigma_s), "M": float(M),
              "loads_N": [float(x) for x in loads],
              "stage1": [dict(zip(f.names, f.values.tolist())) for f in fits]}  # fmt: skip
-    return dataclasses.replace(fit, fixed=fixed)
+    return thrown(dataclasses.replace(fit, fixed=fixed), throw)

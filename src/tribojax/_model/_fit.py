@@ -129,7 +129,8 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
                                 names=tuple(f"u{i}" for i in range(p + K_MAX)), jac="fwd",
                                 solver=SOLVER, max_steps=max_steps,
                                 bar=(min(PROBE_STEPS, max_steps), abandon_above),
-                                crawl=CRAWL_FRACTION if stop_crawl else 0.0)  # fmt: skip
+                                crawl=CRAWL_FRACTION if stop_crawl else 0.0,
+                                throw=False)  # fmt: skip
     except eqx.EquinoxRuntimeError as err:  # a check inside the model: not a trial rejection
         return failed(RESULTS.model_failed,
                       f"the model raised inside the fit: {runtime_message(err)[:300]}")

@@ -210,7 +210,7 @@ def cycle_noise(r, t, period, segment=None) -> tuple[float, float]:
 
 def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, window: float = 0.05,
              model: str = "steady", max_steps=None, start=None,
-             throw: bool = False) -> FitResult:  # fmt: skip
+             throw: bool = True) -> FitResult:  # fmt: skip
     """Least-squares fit of μN (N) and K_d (N/m) of a Jenkins or Mindlin element to a loop.
 
     model="history": the loop model `LoopBaseline` (the element driven through the measured
@@ -231,7 +231,7 @@ def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, wind
             `MAX_STEPS` of the loop model, the budget `discover` uses; 500 for "steady").
     Returns:
         FitResult with names ("mu_N", "K_d"); `result` (`tribojax.RESULTS`) says whether the fit
-        succeeded (with `throw=True` a failure raises `tribojax.FitError` instead).
+        succeeded (a failure raises `tribojax.FitError` instead unless `throw=False`).
     """
     if element not in _ELEMENTS:
         raise ValueError(f"element must be one of {sorted(_ELEMENTS)}, got {element!r}")
@@ -279,7 +279,7 @@ def _fit_steady(loop, cls, analysis, theta0, sigma, max_steps):
     return least_squares_fit(_SteadyResiduals(cls), jnp.asarray(theta0), args,
                              names=("mu_N", "K_d"), transform=jnp.exp,
                              sigma_known=sigma is not None, max_steps=max_steps,
-                             jac="fwd")  # fmt: skip
+                             jac="fwd", throw=False)  # fmt: skip
 
 
 def _steady_args(loop, analysis, scale):

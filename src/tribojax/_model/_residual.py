@@ -8,6 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._checks import mode_jit
 from .._export import cached_jit
 from ._base import K_MAX, AbstractBaseline
 
@@ -52,7 +53,7 @@ def _residual_and_jac(x, a: Padded):
     return r, jnp.concatenate([jnp.where(ok, J, 0.0), J_hold], axis=0)
 
 
-_traced_once = eqx.filter_jit(_residual_and_jac)
+_traced_once = mode_jit(_residual_and_jac)
 
 
 def _model_pass(x, a: Padded):

@@ -274,7 +274,7 @@ def slip_baseline(run, start=None, alpha=1.0) -> SlipBaseline:
 
 
 def fit_slip_run(run: SlipRun, *, alpha=None, start=None, sigma=None, max_steps: int = MAX_STEPS,
-                 progress=None, throw: bool = False):  # fmt: skip
+                 progress=None, throw: bool = True):  # fmt: skip
     """Fit F_s (N), K_τ (N/m), C_τ (N s/m) and, if `alpha` is None, α of the slip-run model.
 
     The model is `SlipBaseline` (wang2022 Eq 27, consistent reading, driven by the run's own
@@ -294,11 +294,11 @@ def fit_slip_run(run: SlipRun, *, alpha=None, start=None, sigma=None, max_steps:
             the first-difference estimate and the standard errors use the residual scale.
         max_steps: LM step budget (per start).
         progress: optional callable receiving one line per start and its outcome.
-        throw: raise `tribojax.FitError` (holding the FitResult) when the fit does not succeed.
+        throw: raise `tribojax.FitError` (holding the FitResult) when the fit does not succeed
+            (default); False returns it flagged.
     Returns:
         FitResult (names ("F_s", "K_tau", "C_tau"[, "alpha"]); `fixed` holds α when fixed) with
-        the fitted `model`, its `prediction` and `scale`. Raises for non-convergence only with
-        `throw=True`.
+        the fitted `model`, its `prediction` and `scale`.
     Raises:
         ValueError for fewer data than parameters, a bad α/σ/start, or a model that cannot be
         evaluated at any start.

@@ -155,13 +155,13 @@ def predict(model: FittedModel, record, *, initial: str | None = None) -> Predic
                       nrmse(err, measured), rms(err))  # fmt: skip
 
 
-def refit(model: FittedModel, record, *, max_steps: int = MAX_STEPS, throw: bool = False):
+def refit(model: FittedModel, record, *, max_steps: int = MAX_STEPS, throw: bool = True):
     """Fit a saved record model, effects included, to `record`, from its saved values: the model a
     discovery found on one record refitted on another (its parameters, the effects' strengths and
     their fitted nuisance values, e.g. a clearance's gap, all free). The residual unit and the
     statistics are those of `fit_record` (the record's noise sd, else the first-difference
     estimate). Returns the `FitResult` of `fit_model` (`fitted_model(result)` saves it);
-    `throw=True` raises `FitError` when it fails."""
+    it raises `FitError` when the fit fails, unless `throw=False`."""
     if model.kind not in RECORD_KINDS:
         raise ValueError(f"refit takes a record model (slip, loop, curve), not a {model.kind!r} "
                          "model (a history fit: tribojax.fit_history)")  # fmt: skip

@@ -342,7 +342,7 @@ def fit_measured_slips(
             atol=atol, max_steps=max_steps, jac=jac,
             solver=LevenbergMarquardt.noise_floor(float(rtol), float(atol),
                                                   report=bool(progress)),
-            optimum_tol=GN_STEP_TOL,
+            optimum_tol=GN_STEP_TOL, throw=False,
         )  # fmt: skip
     except RuntimeError as err:  # equinox runtime errors inside the compiled fit
         _PROGRESS["on"] = False

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._plot import pyplot, save_figure
+from .._plot import figure, save_figure
 from .._tables import wang2022_table
 from ._chain_fit import TABLES, measured_slips, paper_theory_slips, rms_relative
 
@@ -18,18 +18,19 @@ def plot_fit_measured(plain_nm, robust_nm, flagged, path=None, *, files=True):
         plain_nm, robust_nm: (6, 4) model slips (nm) of the two fits (`ChainFit.model_nm`,
             `RobustChainFit.model_nm`).
         flagged: (6, 4) bool, the robust fit's flagged cells.
-        path: PNG to write (the figure is then closed); files: non-interactive backend.
+        path: PNG to write. files: ignored (kept for old calls; the figure is a plain
+            `Figure`, the user's matplotlib backend is never changed).
     Returns:
         the figure, or None without matplotlib.
     """
-    plt = pyplot("fit_measured figure", files=files)
-    if plt is None:
+    fig = figure("fit_measured figure", figsize=(14, 3.8), constrained_layout=True)
+    if fig is None:
         return None
     vac = np.asarray(wang2022_table(3)["vacuum_kPa"])
     y, paper = measured_slips(), paper_theory_slips()
     plain_nm, robust_nm = np.asarray(plain_nm), np.asarray(robust_nm)
     flagged = np.asarray(flagged, dtype=bool)
-    fig, axes = plt.subplots(1, 4, figsize=(14, 3.8), sharex=True, constrained_layout=True)
+    axes = fig.subplots(1, 4, sharex=True)
     for j, (ax, n) in enumerate(zip(axes, TABLES)):
         ax.plot(vac, np.abs(y[:, j]), "ko", label="measured")
         ax.plot(vac, np.abs(paper[:, j]), "C7s--", mfc="none", label="paper theory")
@@ -41,9 +42,10 @@ def plot_fit_measured(plain_nm, robust_nm, flagged, path=None, *, files=True):
                     label="flagged")  # fmt: skip
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.yaxis.set_major_formatter(plt.FuncFormatter(lambda v, _: f"{v:g}"))
+        # a function is wrapped in a FuncFormatter by matplotlib
+        ax.yaxis.set_major_formatter(lambda v, _: f"{v:g}")
         ax.yaxis.set_minor_formatter(  # label 2 and 5 times a power of ten
-            plt.FuncFormatter(lambda v, _: f"{v:g}" if f"{v:e}"[0] in "25" else "")
+            lambda v, _: f"{v:g}" if f"{v:e}"[0] in "25" else ""
         )
         ax.set_title(f"Table {n} (T{n})")
         ax.set_xlabel("vacuum (kPa)")

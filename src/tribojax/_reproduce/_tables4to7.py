@@ -20,7 +20,7 @@ from .._dynamics._slip import simulate_slip
 from .._export import cached_jit
 from .._fit._engine import FitResult, least_squares_fit
 from .._friction._lugre import PreSlipLuGre
-from .._plot import pyplot, save_figure
+from .._plot import figure, save_figure
 from .._presets import WANG2022_RETICLE_MASS_KG
 from .._tables import wang2022_table
 from ._chain_fit import TABLES, measured_slips
@@ -65,6 +65,7 @@ def fit_alpha(alpha0: float = 1.2) -> FitResult:
         atol=1e-10,
         max_steps=50,
         jac="fwd",
+        throw=False,
     )
 
 
@@ -156,8 +157,8 @@ def plot_figure10(result: dict, path) -> bool:
     The measured phase values of Tables 4–7 are overlaid as window means, accumulated from
     Δx(0) = 0 (T4 gives the acceleration-window mean, T5 the cruise one, and so on).
     """
-    plt = pyplot("figure")
-    if plt is None:
+    fig = figure("figure", figsize=(13, 7), constrained_layout=True)
+    if fig is None:
         return False
     t = jnp.linspace(0.0, 2.3, 1151)
     slip, z = finite_result(_figure10, jnp.float64(1.0), t,
@@ -165,7 +166,7 @@ def plot_figure10(result: dict, path) -> bool:
     vac = wang2022_table(3)["vacuum_kPa"]
     measured = measured_slips()
     windows = [(0.25, 0.6), (0.73, 1.5), (1.65, 2.0), (2.25, 2.3)]
-    fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True, sharex=True)
+    axes = fig.subplots(2, 3, sharex=True)
     for i, ax in enumerate(axes.flat):
         ax.plot(t, slip[i], "C0-", label="slip Δx (model, α = 1)")
         ax.plot(t, z[i], "C1--", label="bristle deflection z")

@@ -16,7 +16,7 @@ from .._contact._presets import wu2015_eq5_stiffness as wu2015_eq5_stiffness  # 
 from .._dynamics._harmonic import harmonic_balance
 from .._export import cached_jit
 from .._friction._rate_independent import Jenkins, Mindlin
-from .._plot import pyplot, save_figure
+from .._plot import figure, save_figure
 from .._tables import data_dir, read_table
 
 EQ7_COLUMNS = ("quantity", "A_bar_min", "A_bar_max", "slope", "intercept")
@@ -125,11 +125,11 @@ def plot_wu2015(comparison: dict, path) -> bool:
 
     Returns False (and writes nothing) when matplotlib is missing.
     """
-    plt = pyplot("wu2015 figure")
-    if plt is None:
+    fig = figure("wu2015 figure", figsize=(10, 4), constrained_layout=True)
+    if fig is None:
         return False
     c = comparison["curves"]
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+    axes = fig.subplots(1, 2)
     for ax, q, label in zip(axes, "KC", ("K̄ = K_eq / K_d", "C̄ = πωC_eq / K_d")):
         ax.plot(c["A_bar"], c[f"jenkins_{q}"], "C0-", label="Jenkins (macroslip, Eq 1)")
         ax.plot(c["A_bar"], c[f"mindlin_{q}"], "C3-", label="Mindlin (microslip, Eq 2)")

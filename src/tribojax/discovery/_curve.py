@@ -11,7 +11,7 @@ import numpy as np
 
 from .._io._curve import FrictionCurve
 from .._model import curve_baseline, knob_design
-from .._plot import pyplot, save_figure
+from .._plot import figure, save_figure
 from ._core import AbstractEffect, default_effects, register_effect
 from ._discover import DiscoveryReport, discover
 from ._friction_effects import Stribeck, Viscous
@@ -52,15 +52,15 @@ def plot_curve_discovery(report: DiscoveryReport, curve: FrictionCurve, path) ->
     standard errors, the Coulomb + viscous baseline, the augmented model), and the residuals
     before and after in units of each point's standard error, flagged regions shaded. PNG at
     `path`; False (nothing written) without matplotlib."""
-    plt = pyplot("curve discovery figure")
-    if plt is None:
+    fig = figure("curve discovery figure", figsize=(12, 4.5), constrained_layout=True)
+    if fig is None:
         return False
     base = curve_baseline(curve)
     w = np.asarray(base.weight)
     v, f = np.asarray(base.v), np.asarray(base.f)
     err = float(base.sigma_bar) / w
     vu, fu = base.units
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
+    axes = fig.subplots(1, 2)
     ax = axes[0]
     label = " + ".join(report.effects) if report.effects else "none added"
     for sign, mk in ((1, "o"), (-1, "s")):

@@ -19,7 +19,7 @@ import numpy as np
 from .._io._loop import HysteresisLoop
 from .._model import EffectDesign, knob_design, loop_baseline
 from .._model._loop_force import MINDLIN_SHAPE
-from .._plot import pyplot
+from .._plot import figure, save_figure
 from ._core import AbstractEffect, register_effect
 from ._discover import DiscoveryReport, discover
 from ._friction_effects import LoadDependence, Viscous
@@ -143,12 +143,12 @@ def plot_loop_discovery(report: DiscoveryReport, path) -> bool:
     """Figure of a loop discovery: force against displacement (data, Jenkins baseline, augmented
     model), and the residuals before and after against sample number with the flagged regions
     shaded (one colour per branch). PNG at `path`; False (nothing written) without matplotlib."""
-    plt = pyplot("loop discovery figure")
-    if plt is None:
+    fig = figure("loop discovery figure", figsize=(12, 4.5), constrained_layout=True)
+    if fig is None:
         return False
     u, y = report.x * 1e6, report.y
     k = np.arange(y.size)
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
+    axes = fig.subplots(1, 2)
     ax = axes[0]
     ax.plot(u, y, ".", ms=2, color="0.5", label="data")
     ax.plot(u, report.baseline_y, "C0-", lw=1, label="baseline (Jenkins)")
@@ -168,6 +168,5 @@ def plot_loop_discovery(report: DiscoveryReport, path) -> bool:
            title="residuals; shaded: flagged (orange loading, green unloading)")  # fmt: skip
     ax.legend(fontsize=8)
     fig.suptitle(f"discovery: effect = {report.effect}")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return True

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._plot import pyplot, save_figure
+from .._plot import figure, save_figure
 
 
 def plot_discovery(report, path) -> bool:
@@ -14,12 +14,12 @@ def plot_discovery(report, path) -> bool:
     residuals before and after; flagged regions shaded. When the abscissa is not monotonic
     (loops), the bottom panel uses the sample index and the top panel marks flagged samples.
     """
-    plt = pyplot("discovery figure")
-    if plt is None:
+    fig = figure("discovery figure", figsize=(8, 6.5))
+    if fig is None:
         return False
     x, y = np.asarray(report.x), np.asarray(report.y)
     monotonic = bool(np.all(np.diff(x) > 0))
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=monotonic)
+    ax1, ax2 = fig.subplots(2, 1, sharex=monotonic)
     ax1.plot(x, y, ".", ms=2, color="0.4", label="data")
     ax1.plot(x, report.baseline_y, "-", lw=1, color="C0", label="baseline")
     label = "augmented: " + ", ".join(report.effects) if report.effects else "final (= baseline)"
@@ -54,11 +54,13 @@ def plot_correction(report, path) -> bool:
     final residual against the signal the correction is a function of, with the fitted linear
     spline. Writes `path` (PNG); False if matplotlib is missing or there is no correction."""
     corr = report.misfit.get("correction")
-    plt = pyplot("discovery correction figure")
-    if plt is None or not corr:
+    if not corr:
+        return False
+    fig = figure("discovery correction figure", figsize=(6.5, 4))
+    if fig is None:
         return False
     s = np.asarray(report.signals[corr["signal"]])
-    fig, ax = plt.subplots(figsize=(6.5, 4))
+    ax = fig.subplots()
     ax.plot(s, report.y - report.final_y, ".", ms=2, color="0.5", label="final residual")
     ax.plot(corr["knots"], corr["values"], "o-", color="C3", lw=1.5,
             label=f"linear-spline correction: closes {100 * corr['gap_closed']:.0f} % of the "
