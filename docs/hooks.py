@@ -87,9 +87,10 @@ API_PAGES = [
     (
         "reproduce",
         "Reproduction and presets",
-        ("_reproduce", "_presets", "_limits", "_results", "_sweep", "_chain"),
+        ("_reproduce", "_presets", "_limits", "_results", "_sweep", "_chain", "_cache", "_xla"),
         "The papers' constants, the reproduced tables, the fits of wang2022's measured slips, "
-        "result codes and sweeps.",
+        "result codes, sweeps, and the process choices an application makes (compilation "
+        "cache, one-kernel loops).",
     ),
 ]
 DISCOVERY_PAGE = ("discovery", "Discovery", "`tribojax.discovery`: baselines, named effects, "
@@ -104,7 +105,7 @@ def source_key(notebook: Path) -> str:
     stale."""
     h = hashlib.sha256(notebook.read_bytes())
     h.update(MPL_BACKEND.encode())
-    for path in sorted(PACKAGE.rglob("*.py")):
+    for path in sorted([*PACKAGE.rglob("*.py"), *PACKAGE.rglob("*.pyi")]):
         h.update(path.relative_to(PACKAGE).as_posix().encode())
         h.update(path.read_bytes())
     return h.hexdigest()

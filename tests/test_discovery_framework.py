@@ -295,7 +295,7 @@ def test_fit_shares_one_compiled_solve_across_effects():
 
     def size():  # stored programs and programs traced in this process
         solve = _engine._solve_jit
-        return len(solve.programs), solve.jitted._cached._cache_size()
+        return len(solve.programs), solve.jitted.jitted._cached._cache_size()
 
     base = _record("tone")
     y = np.asarray(base.y)

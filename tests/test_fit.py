@@ -8,6 +8,12 @@ import pytest
 import tribojax as tj
 
 
+def _solve_programs() -> int:
+    """The fit engine's solve programs: stored ones and those traced in this process."""
+    from tribojax._fit import _engine
+
+    return len(_engine._solve_jit.programs) + _engine._solve_jit.jitted.jitted._cached._cache_size()
+
 def test_power_law_fit_matches_ols_and_recovers_truth():
     # y = A x^b with 2 % multiplicative noise (seed 7); in logs this is linear least squares,
     # so the LM optimum and its standard errors must equal the closed-form OLS ones.
@@ -68,7 +74,8 @@ def test_non_convergence_is_reported():
     def residuals(theta, args):
         return jnp.array([jnp.exp(theta[0]) - 1e6, theta[0] * 1e-3])
 
-    fit = tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=2)
+    fit = tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=2,
+                               throw=False)  # fmt: skip
     assert not fit.converged and fit.message
 
 
@@ -95,15 +102,15 @@ def test_a_fit_stopped_by_max_steps_says_so():
     def residuals(theta, args):
         return jnp.array([jnp.exp(theta[0]) - 1e6, theta[0] * 1e-3])
 
-    fit = tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=1)
+    fit = tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=1,
+                               throw=False)  # fmt: skip
     assert fit.result == tj.RESULTS.nonlinear_max_steps_reached and not fit.converged
     assert "maximum number of steps" in fit.message and "max_steps = 1" in fit.message
     assert fit.as_dict()["result"] == "nonlinear_max_steps_reached"
     assert fit.as_dict()["converged"] is False
-    # throw=True: the same failure raised at the boundary, the FitResult inside the error
+    # by default (throw=True) the same failure is raised at the boundary, the FitResult inside
     with pytest.raises(tj.FitError, match="nonlinear_max_steps_reached") as err:
-        tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=1,
-                             throw=True)  # fmt: skip
+        tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=1)
     assert err.value.fit.result == tj.RESULTS.nonlinear_max_steps_reached
     ok = tj.least_squares_fit(residuals, jnp.array([13.0]), names=("a",), throw=True)
     assert ok.converged and ok.values[0] == pytest.approx(np.log(1e6), rel=1e-6)
@@ -115,7 +122,7 @@ def test_a_failed_model_evaluation_is_reported():
     def residuals(theta, args):  # the model cannot be evaluated anywhere
         return jnp.full(3, FAILED_RESIDUAL) + 0.0 * theta[0]
 
-    fit = tj.least_squares_fit(residuals, jnp.array([1.0]), names=("a",))
+    fit = tj.least_squares_fit(residuals, jnp.array([1.0]), names=("a",), throw=False)
     assert fit.result == tj.RESULTS.model_failed_at_start and not fit.converged
     assert "start values" in fit.message
 
@@ -173,6 +180,7 @@ def test_noise_floor_lm_stops_on_the_statistical_rule():
         jac="fwd",
         rtol=0.0,
         atol=0.0,
+        throw=False,
     )
     assert plain.result == tj.RESULTS.nonlinear_max_steps_reached
 
@@ -182,7 +190,7 @@ def test_a_jacobian_that_is_not_finite_is_a_failed_fit_not_a_crash():
     def residuals(theta, args):
         return jnp.array([theta[0] - 7.0, 0.0 * jnp.exp(jnp.exp(theta[0]))])
 
-    fit = tj.least_squares_fit(residuals, jnp.array([7.0]), names=("a",))
+    fit = tj.least_squares_fit(residuals, jnp.array([7.0]), names=("a",), throw=False)
     assert fit.result == tj.RESULTS.model_failed_at_start and not fit.converged
     assert np.all(np.isinf(fit.std_errors))
 
@@ -203,9 +211,10 @@ def test_step_budget_is_a_run_time_value_of_one_compiled_solve():
     solver = LevenbergMarquardt(1e-10, 1e-12)
     y0 = jnp.array([-1.2, 1.0])
     fits = {k: tj.least_squares_fit(_rosenbrock, y0, names=("a", "b"), solver=solver,
-                                    max_steps=k, jac="fwd") for k in (3, 100)}  # fmt: skip
-    def programs():  # stored programs and programs traced in this process
-        return len(_engine._solve_jit.programs) + _engine._solve_jit.jitted._cached._cache_size()
+                                    max_steps=k, jac="fwd", throw=False)
+            for k in (3, 100)}  # fmt: skip
+    def programs():
+        return _solve_programs()
 
     before = programs()
     for k, fit in fits.items():
@@ -231,7 +240,6 @@ def test_a_start_above_the_bar_after_its_probe_steps_is_abandoned():
     # the cost it holds after 3 steps stops it there (as `nonlinear_max_steps_reached`, fewer
     # steps than the budget); a limit it is below by then, or none, lets it converge, along
     # the same iterates, in the same compiled solve
-    from tribojax._fit import _engine
     from tribojax._fit._solver import LevenbergMarquardt
 
     solver = LevenbergMarquardt(1e-10, 1e-12)
@@ -239,20 +247,19 @@ def test_a_start_above_the_bar_after_its_probe_steps_is_abandoned():
 
     def fit(bar):
         return tj.least_squares_fit(_rosenbrock, y0, names=("a", "b"), solver=solver,
-                                    max_steps=100, jac="fwd", bar=bar)  # fmt: skip
+                                    max_steps=100, jac="fwd", bar=bar, throw=False)  # fmt: skip
 
     free = fit(None)
     three = tj.least_squares_fit(_rosenbrock, y0, names=("a", "b"), solver=solver, max_steps=3,
-                                 jac="fwd")  # fmt: skip
+                                 jac="fwd", throw=False)  # fmt: skip
     cost3 = float(three.residuals @ three.residuals)
-    before = len(_engine._solve_jit.programs) + _engine._solve_jit.jitted._cached._cache_size()
+    before = _solve_programs()
     cut = fit((3, 0.5 * cost3))
     assert cut.steps == 3 and cut.result == tj.RESULTS.nonlinear_max_steps_reached
     assert np.array_equal(cut.theta, three.theta)
     kept = fit((3, 2.0 * cost3))
     assert kept.converged and np.array_equal(kept.theta, free.theta) and kept.steps == free.steps
-    assert len(_engine._solve_jit.programs) + _engine._solve_jit.jitted._cached._cache_size() \
-        == before  # fmt: skip
+    assert _solve_programs() == before
 
 
 def _valley(th, args):
@@ -277,7 +284,7 @@ def test_a_solve_that_crawls_far_from_a_minimum_is_stopped():
     def fit(a, y0, crawl, max_steps=128):
         return tj.least_squares_fit(_valley, jnp.array(y0), args=(jnp.asarray(a),),
                                     names=("a", "b"), solver=solver, max_steps=max_steps,
-                                    jac="fwd", crawl=crawl)  # fmt: skip
+                                    jac="fwd", crawl=crawl, throw=False)  # fmt: skip
 
     def cost(f):
         return float(f.residuals @ f.residuals)

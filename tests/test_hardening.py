@@ -134,12 +134,12 @@ def test_identified_fit_reports_no_direction(tmp_path):
     assert d["identified"] and d["unidentifiable"] == [] and d["noise_consistent"] is None
 
 
-def test_a_failed_loop_fit_raises_only_when_asked(tmp_path):
+def test_a_failed_loop_fit_raises_unless_asked_not_to(tmp_path):
     loop = tj.read_loop(_loop(tmp_path))
-    fit = tj.fit_loop(loop, "jenkins", max_steps=1)
+    fit = tj.fit_loop(loop, "jenkins", max_steps=1, throw=False)
     assert not fit.converged and fit.result == tj.RESULTS.nonlinear_max_steps_reached
-    with pytest.raises(tj.FitError, match="max_steps = 1") as err:
-        tj.fit_loop(loop, "jenkins", max_steps=1, throw=True)
+    with pytest.raises(tj.FitError, match="max_steps = 1") as err:  # the default: it raises
+        tj.fit_loop(loop, "jenkins", max_steps=1)
     assert np.array_equal(err.value.fit.values, fit.values)
 
 

@@ -123,6 +123,23 @@ def fail_if(x, bad, message: str):
     return eqx.error_if(x, bad, message, on_error=_on_error())
 
 
+# failure codes of diffrax's, optimistix's and lineax's result enumerations (those that exist)
+_FAILURES = ("max_steps_reached", "singular", "breakdown", "divergence", "dt_min_reached",
+             "nonlinear_max_steps_reached", "nonlinear_divergence", "nonfinite_input")  # fmt: skip
+
+
+def check_result(x, result, enumeration, what: str):
+    """Attach the failure check of a solver's `result` (an item of `enumeration`, e.g.
+    `diffrax.RESULTS`) to `x`: raises "`what`: <the enumeration's message>" for a failure code,
+    or gives NaN under `failures_as_nan` (`fail_if`). For solvers run with `throw=False`, so that
+    how a failure surfaces is tribojax's choice, not `EQX_ON_ERROR`'s."""
+    for name in _FAILURES:
+        item = getattr(enumeration, name, None)
+        if item is not None:
+            x = fail_if(x, result == item, f"{what}: {enumeration[item]}")
+    return x
+
+
 def runtime_message(exc: BaseException) -> str:
     """The check's own message from an `equinox.error_if` failure raised inside jit (the text
     after the last "EquinoxRuntimeError:", without the trace and debugging hints), or the first

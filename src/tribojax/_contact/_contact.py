@@ -279,11 +279,11 @@ class FractalContact(eqx.Module):
         s, pair = self.surface, self.pair
         D = s.D
         psi = self.tangential_load / (self.mu_t * load)
-        psi = eqx.error_if(psi, psi >= 1.0, self._psi_message(load))
+        psi = fail_if(psi, psi >= 1.0, self._psi_message(load))
 
         log_al, ok = self.solve_load_balance(load)
         if throw:
-            log_al = eqx.error_if(log_al, ~ok, _NOT_CONVERGED)
+            log_al = fail_if(log_al, ~ok, _NOT_CONVERGED)
         log_ec, log_epc, log_pc = log_bounds = log_critical_areas(s, pair)
         bounds = _regime_bounds(*log_bounds)
         loads = load_laws(s, pair, log_ec)
@@ -313,7 +313,7 @@ class FractalContact(eqx.Module):
         W_s = 3.0 / 16.0 * mu2_g * phi_s * jnp.sum(e_parts)  # Eq 23
         all_plastic = log_al <= log_pc
         if throw:
-            K_tau = eqx.error_if(K_tau, all_plastic, _ALL_PLASTIC)
+            K_tau = fail_if(K_tau, all_plastic, _ALL_PLASTIC)
         # double-where: an all-plastic contact has K = W_s = 0; return zeros, not 0/0.
         safe_k = jnp.where(all_plastic, 1.0, K_tau)
         safe_ws = jnp.where(all_plastic, 1.0, W_s)

@@ -21,7 +21,7 @@ import optimistix as optx
 from jax.flatten_util import ravel_pytree
 from jaxtyping import Array
 
-from .._checks import as_f64, cacheable_call, check_range, fail_if, mode_jit
+from .._checks import as_f64, cacheable_call, check_range, check_result, fail_if, mode_jit
 from .._friction._element import AbstractFrictionElement
 from .._presets import WANG2022_RETICLE_MASS_KG
 from ._adjoint import ForwardJacobianAdjoint
@@ -104,7 +104,7 @@ def _diffeqsolve(
         saveat=dfx.SaveAt(ts=ts),
         stepsize_controller=controller,
         max_steps=max_steps,
-        throw=throw,
+        throw=False,  # a failure is checked by `_solve` (`check_result`), not by diffrax
         adjoint=adjoint,
     )
     return sol.ys, (sol.result, jax.tree.map(jnp.asarray, sol.stats))
@@ -129,6 +129,8 @@ def _solve(element, profile, mass, ts, t_end, rtol, atol, max_steps, throw, adjo
     dx, v, integral = ys[:, 0], ys[:, 1], ys[:, -1]
     z = jax.vmap(unravel)(ys[:, 2:-1])
     friction = jax.vmap(element.force)(z, v)
+    if throw:  # the solver's own message; NaN under `failures_as_nan`
+        dx = check_result(dx, result, dfx.RESULTS, "simulate_slip")
     return SlipSolution(ts, dx, z, friction, v, integral, result, stats)
 
 
