@@ -420,3 +420,39 @@ def test_contact_band_where_the_surface_is_smoother_than_fractal(tmp_path, capsy
     assert code == 0 and "Traceback" not in err and "over the given band" in err
     surface = json.loads(out.read_text())["surface"]
     assert surface["band"] == [1e-8, 1e-7] and surface["findings"][0].startswith("psd: D = 1.")
+
+
+def test_no_user_file_is_replaced_without_force_and_no_input_even_with_it(tmp_path, capsys):
+    # a user's own fit.png in --out (no fit.json there): refused without --force, unchanged
+    path, out = _loop(tmp_path), tmp_path / "out"
+    out.mkdir()
+    (out / "fit.png").write_bytes(b"the user's own figure")
+    assert main(["fit", str(path), "--out", str(out), "--element", "jenkins"]) == 2
+    assert "fit.png exists; refusing" in _one_error_line(capsys.readouterr().err, "fit")
+    assert (out / "fit.png").read_bytes() == b"the user's own figure"
+    assert not (out / "fit.json").exists()
+    # --force replaces the command's own files; the --from model is an input: never replaced
+    assert main(["fit", str(path), "--out", str(out), "--element", "jenkins", "--force"]) == 0
+    model = (out / "fit.json").read_bytes()
+    for cmd in ("fit", "discover"):
+        name = "fit.json" if cmd == "fit" else "discovery.json"
+        if cmd == "discover":
+            (out / name).write_bytes(model)
+        code = main([cmd, str(path), "--from", str(out / name), "--out", str(out), "--force"])
+        assert code == 2, cmd
+        assert "is an input file" in _one_error_line(capsys.readouterr().err, cmd)
+        assert (out / name).read_bytes() == model
+
+
+@pytest.mark.parametrize("value", ["0", "abc", "²", "-1"])
+def test_a_bad_fit_workers_setting_is_one_line_exit_2(tmp_path, value):
+    import subprocess
+    import sys
+
+    cmd = [sys.executable, "-m", "tribojax._cli._main", "contact", "--D", "2.5", "--G", "1e-9",
+           "--load", "5"]  # fmt: skip
+    out = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path,
+                         env={**os.environ, "TRIBOJAX_FIT_WORKERS": value})  # fmt: skip
+    assert out.returncode == 2, out.stderr[-2000:]
+    line = _one_error_line(out.stderr, "contact")
+    assert "TRIBOJAX_FIT_WORKERS" in line and repr(value) in line

@@ -116,30 +116,34 @@ def run_command(name: str, func, args, *, debug: bool = False) -> int:
             signal.signal(signal.SIGTERM, before)
 
 
-def refused_outputs(src, targets, *, force: bool) -> str | None:
+def refused_outputs(src, targets, *, force: bool, inputs=()) -> str | None:
     """Why the output files `targets` may not be written, or None if they may.
 
-    An output may never be the input record `src` or its sidecar; the first target (the result
-    JSON) is not replaced unless `force`.
+    An output may never be an input: the record `src`, its sidecar, or a file of `inputs` (a
+    `--from` model), with or without `force`. No existing target is replaced unless `force`
+    (which replaces only `targets`, the command's own file names).
     """
+    given = [(Path(p), Path(p)) for p in inputs if p is not None]
     if src is not None:
-        inputs = {Path(src).resolve(), sidecar_path(src).resolve()}
-        for target in targets:
-            if Path(target).resolve() in inputs:
-                return (
-                    f"{target} is an input file: writing it would overwrite the input {src}; "
-                    "choose another --out"
-                )
+        given += [(Path(src), Path(src)), (sidecar_path(src), Path(src))]
+    resolved = {p.resolve(): named for p, named in given}
+    for target in targets:
+        named = resolved.get(Path(target).resolve())
+        if named is not None:
+            return (f"{target} is an input file: writing it would overwrite the input {named}; "
+                    "choose another --out")  # fmt: skip
     first = Path(targets[0])
     if first.is_dir():
         return f"{first} is a folder; choose another output name"
-    if first.exists() and not force:
-        return f"{first} exists; refusing to overwrite it (use --force or another --out)"
+    if not force:
+        for target in map(Path, targets):
+            if target.exists():
+                return f"{target} exists; refusing to overwrite it (use --force or another --out)"
     return None
 
 
 @contextlib.contextmanager
-def claim_outputs(src, targets, *, force: bool):
+def claim_outputs(src, targets, *, force: bool, inputs=()):
     """Reserve the output files `targets` before a long computation; remove them on failure.
 
     Checks (before any work) `refused_outputs` and that the folder can be created and written. A
@@ -149,7 +153,7 @@ def claim_outputs(src, targets, *, force: bool):
     partial output. Write the first target with `exclusive=not force`.
     """
     targets = [Path(t) for t in targets]
-    why = refused_outputs(src, targets, force=force)
+    why = refused_outputs(src, targets, force=force, inputs=inputs)
     if why:
         raise CommandError(why)
     folder = targets[0].parent

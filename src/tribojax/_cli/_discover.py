@@ -53,7 +53,7 @@ def run_discover(args) -> int:
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
     start = load_model(args.from_model) if args.from_model else None
-    with claim_outputs(src, [target, figure], force=args.force):
+    with claim_outputs(src, [target, figure], force=args.force, inputs=[args.from_model]):
         record = with_band_tension(read_record(src, args.format), args.band_tension, src)
         if record.kind not in _DISCOVERY:
             raise CommandError(f"{src}: discovery has no baseline for a {type(record).__name__} "

@@ -56,7 +56,8 @@ def run_fit(args) -> int:
     if args.max_steps is not None and args.max_steps < 1:
         return error(f"--max-steps = {args.max_steps} must be at least 1")
     start = _parse_start(args.start)
-    with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force):
+    with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force,
+                       inputs=[args.from_model]):  # fmt: skip
         records = [with_band_tension(read_record(p, args.format), args.band_tension, p)
                    for p in paths]  # fmt: skip
         full = records[0]

@@ -80,6 +80,7 @@ def configure_process() -> None:
     """
     if "equinox" not in sys.modules:  # equinox reads it once, on import
         os.environ.setdefault("EQX_ON_ERROR", "nan")
+    from .. import _parallel  # noqa: F401  (TRIBOJAX_FIT_WORKERS checked now: exit 2, one line)
     from .._cache import use_compilation_cache
     from .._xla import use_one_kernel
 

@@ -1,4 +1,4 @@
-"""One model per record kind (issue 29): the record models that `fit`, `predict` and `discover`
+"""One model per record kind: the record models that `fit`, `predict` and `discover`
 share, the contract of their effects, and the one fit of a model with its effects."""
 
 from ._base import ALPHA as ALPHA

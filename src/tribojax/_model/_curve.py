@@ -1,4 +1,4 @@
-"""The friction-curve model: steady friction against velocity (a `FrictionCurve`, issue 15), the
+"""The friction-curve model: steady friction against velocity (a `FrictionCurve`), the
 record model that `discover` (its effects in `tribojax.discovery._curve`) and a saved steady-law
 fit (`tribojax.fitted_model`) share.
 

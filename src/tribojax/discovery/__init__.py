@@ -1,4 +1,4 @@
-"""Discovery: find where a model and its data disagree, name the missing effect, add it (issue 6).
+"""Discovery: find where a model and its data disagree, name the missing effect, add it.
 
 The workflow is `discover`'s docstring (and docs/discovery.md); `DiscoveryReport.as_dict()` is
 discovery.json.

@@ -53,7 +53,7 @@ PAIR_CANDIDATES = 3  # single refits, lowest cost first, combined in pairs by `p
 
 
 def pair_round(run, state, ranking, threshold, by_name):
-    """Two effects at once (issue 32), tried when no single candidate was added (why:
+    """Two effects at once, tried when no single candidate was added (why:
     docs/discovery.md, "Two effects at once"). The `PAIR_CANDIDATES` usable single refits of this
     round with the lowest cost are combined in pairs, each fitted jointly from the better one's
     optimum with both effects' strengths. A pair qualifies when its ΔBIC against the current

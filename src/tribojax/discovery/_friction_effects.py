@@ -1,4 +1,4 @@
-"""The effects of the friction law that several record models carry, each written once (issue 29):
+"""The effects of the friction law that several record models carry, each written once:
 `Stribeck` (velocity weakening), `Viscous` (a viscous term) and `LoadDependence` (a normal load
 that follows the drive). An instance names the record model it augments (`kind`); each kind's
 module registers its instance in its place in that kind's candidate order. What differs between

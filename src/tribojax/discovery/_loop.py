@@ -1,4 +1,4 @@
-"""Loop side of discovery: the effects of the loop model (issue 6), registered for
+"""Loop side of discovery: the effects of the loop model, registered for
 `default_effects("loop")`, each described in its class.
 
 The model is `tribojax._model.LoopBaseline` (the Jenkins element driven through the record's

@@ -279,7 +279,7 @@ def pick(run, state, accepted, threshold, may_move):
 
 
 def _generalises(run, state, new, c) -> bool:
-    """Does the refit `new` lower the held-out excess of the current model `state` (issue 32:
+    """Does the refit `new` lower the held-out excess of the current model `state` (
     an effect counts only if, fitted on one half of the record, it also lowers the misfit on
     the other)? True when the current model's held-out residual is unavailable."""
     before, after = run.heldout(state), run.heldout(new)

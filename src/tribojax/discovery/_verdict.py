@@ -18,12 +18,12 @@ approximation of mean(r²)/σ̂² − 1 with the estimator's own variance added 
 
 Excess misfit (beyond the noise): e = sqrt(max(mean(r²) − σ², 0)), output units.
 
-Held-out excess (issue 32): the same excess of the two-fold held-out residual
+Held-out excess: the same excess of the two-fold held-out residual
 (`tribojax._model.heldout_residual`: each fold of `folds()` predicted by the model fitted on the
 other fold alone), of the baseline (h₀) and of the final model with its effects' nuisance values
 fixed (h₁).
 
-Verdict (issues 14, 32): "none" when the baseline passes (nothing is added then); "explained"
+Verdict: "none" when the baseline passes (nothing is added then); "explained"
 when the added effects make the final residual pass, at least halve the held-out excess
 (h₁ ≤ h₀/2) and predict the samples they did not see nearly as well as those they fitted: the
 held-out gap √max(h₁² − e₁², 0) (e₁ the final in-sample excess) at most `HELDOUT_GAP` σ;
