@@ -274,3 +274,30 @@ def test_threads_meeting_new_programs_export_and_compile_one_at_a_time(tmp_path,
     for n, got in out.items():  # against the plain jit, outside the threads
         np.testing.assert_allclose(got, oscillator.jitted(*args(n)), rtol=1e-12, atol=1e-300)
     assert len(list(tmp_path.glob("*.jaxexp"))) == len(sizes)  # each program stored
+
+
+def test_a_stored_trace_filed_under_another_key_is_traced_again_and_rewritten(tmp_path,
+                                                                              monkeypatch):
+    import jax.numpy as jnp
+    import numpy as np
+
+    import tribojax._cache as C
+    from tribojax._model._modes import oscillator
+
+    monkeypatch.setattr(C, "_FOLDER", [tmp_path])  # a fresh folder of stored traces
+
+    def args(n):
+        return jnp.linspace(0.0, 0.05, n), jnp.linspace(1.0, -1.0, n), jnp.asarray([200.0]), \
+            jnp.asarray([0.1])  # fmt: skip
+
+    oscillator(*args(9))
+    (first,) = (tmp_path / "export").glob("*.jaxexp")
+    oscillator(*args(13))
+    (second,) = set((tmp_path / "export").glob("*.jaxexp")) - {first}
+    second.write_bytes(first.read_bytes())  # the 9-sample program filed under the 13's key
+    oscillator.programs.pop(second.stem)  # as a new process meets it
+    got = np.asarray(oscillator(*args(13)))
+    np.testing.assert_allclose(got, oscillator.jitted(*args(13)), rtol=1e-12, atol=1e-300)
+    assert second.read_bytes() != first.read_bytes()  # rewritten for its own key
+    oscillator.programs.pop(second.stem)
+    np.testing.assert_array_equal(oscillator(*args(13)), got)  # and read back from now on

@@ -456,3 +456,47 @@ def test_a_bad_fit_workers_setting_is_one_line_exit_2(tmp_path, value):
     assert out.returncode == 2, out.stderr[-2000:]
     line = _one_error_line(out.stderr, "contact")
     assert "TRIBOJAX_FIT_WORKERS" in line and repr(value) in line
+
+
+def test_deeply_nested_json_is_refused_naming_the_file(tmp_path, capsys):
+    # a sidecar and a model file nested 100,000 deep: exit 2 naming the file, no RecursionError
+    deep = "[" * 100_000 + "]" * 100_000
+    path = _loop(tmp_path)
+    side = path.with_suffix(".json")
+    original = side.read_text()
+    side.write_text(deep)
+    assert main(["fit", str(path), "--out", str(tmp_path / "o")]) == 2
+    line = _one_error_line(capsys.readouterr().err, "fit")
+    assert str(side) in line and "nested too deeply" in line
+    side.write_text(original)
+    model = tmp_path / "model.json"
+    model.write_text(deep)
+    assert main(["predict", str(model), str(path), "--out", str(tmp_path / "p")]) == 2
+    line = _one_error_line(capsys.readouterr().err, "predict")
+    assert str(model) in line and "nested too deeply" in line
+
+
+def test_a_model_file_with_a_byte_order_mark_is_read_and_utf32_named(tmp_path, capsys):
+    path, out = _loop(tmp_path), tmp_path / "out"
+    assert main(["fit", str(path), "--out", str(out), "--element", "jenkins"]) == 0
+    fit_json = out / "fit.json"
+    bom = tmp_path / "bom.json"
+    bom.write_bytes(b"\xef\xbb\xbf" + fit_json.read_bytes())
+    assert tj.load_model(bom).as_dict() == tj.load_model(fit_json).as_dict()
+    wide = tmp_path / "wide.json"
+    wide.write_bytes(fit_json.read_text().encode("utf-32"))  # with its byte-order mark
+    with pytest.raises(tj.DataFileError, match="UTF-32 text"):
+        tj.load_model(wide)
+
+
+def test_a_fit_that_is_not_a_result_saves_no_model_to_predict_with(tmp_path, capsys):
+    # a start whose slider never slips (μN far above the peak force): exit 1, "not a result",
+    # and fit.json carries no fitted_model, so predict refuses it naming why
+    path, out = _loop(tmp_path), tmp_path / "out"
+    assert main(["fit", str(path), "--out", str(out), "--element", "jenkins",
+                 "--start", "mu_N=50"]) == 1  # fmt: skip
+    assert "not a result" in _one_error_line(capsys.readouterr().err, "fit")
+    saved = json.loads((out / "fit.json").read_text())
+    assert saved["fitted_model"] is None and "do not determine" in saved["not_a_result"]
+    assert main(["predict", str(out / "fit.json"), str(path), "--out", str(tmp_path / "p")]) == 2
+    assert "fitted_model" in _one_error_line(capsys.readouterr().err, "predict")

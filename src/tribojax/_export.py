@@ -27,7 +27,7 @@ import numpy as np
 from ._cache import export_dir
 from ._checks import mode_jit, nan_mode
 
-MAGIC = b"tribojax-export-1\n"
+MAGIC = b"tribojax-export-2\n"  # then the key the file is stored under, a sha256, the payload
 _PACKAGES = ("jax", "jaxlib", "equinox", "lineax", "optimistix", "diffrax", "numpy", "jaxtyping")
 # code named in a key must be code the key versions: tribojax's (its source is hashed) or these
 # packages' (their versions); a user's own function or class is not keyed (its source may change)
@@ -141,15 +141,18 @@ def _key(fn, treedef, static, leaves) -> str | None:
 
 
 def _read(path: Path):
+    """The program stored at `path`, or None (a miss) for a file that is not one, is filed under
+    another key (its header names the key it was written for), or fails its checksum."""
     try:
         blob = path.read_bytes()
     except OSError:
         return None
-    head = len(MAGIC) + 32
-    if not blob.startswith(MAGIC) or len(blob) <= head:
+    start = MAGIC + path.stem.encode()
+    head = len(start) + 32
+    if not blob.startswith(start) or len(blob) <= head:
         return None
     payload = blob[head:]
-    if hashlib.sha256(payload).digest() != blob[len(MAGIC) : head]:
+    if hashlib.sha256(payload).digest() != blob[len(start) : head]:
         return None
     try:
         return jax.export.deserialize(bytearray(payload))
@@ -165,7 +168,8 @@ def _write(path: Path, exported) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
         with os.fdopen(fd, "wb") as f:
-            f.write(MAGIC + hashlib.sha256(payload).digest() + payload if payload else b"")
+            f.write(MAGIC + path.stem.encode() + hashlib.sha256(payload).digest() + payload
+                    if payload else b"")  # fmt: skip
         os.replace(tmp, path)
     except (OSError, ImportError):  # `flatbuffers` missing, or a read-only cache folder:
         pass  # the program is still used in this process
@@ -200,6 +204,13 @@ def _export(fn, treedef, static, leaves):
 _LOWERING = threading.RLock()
 
 
+def _matches(exported, leaves) -> bool:
+    """Whether a stored program takes exactly these arrays (shapes and dtypes)."""
+    avals = exported.in_avals
+    return len(avals) == len(leaves) and all(
+        a.shape == x.shape and a.dtype == x.dtype for a, x in zip(avals, leaves))
+
+
 def _program(fn, treedef, static, leaves, stem: Path):
     """The stored program at `stem` (read, or exported and written), compiled for `leaves`' shapes;
     None if refused. Holds `_LOWERING` throughout."""
@@ -208,6 +219,8 @@ def _program(fn, treedef, static, leaves, stem: Path):
         if refused.exists():
             return None
         exported = _read(path)
+        if exported is not None and not _matches(exported, leaves):
+            exported = None  # not this signature's program: traced again and rewritten
         if exported is None:
             exported = _export(fn, treedef, static, leaves)
             _write(path if exported is not None else refused, exported)

@@ -9,6 +9,7 @@ numbers; a first text column is allowed where declared.
 from __future__ import annotations
 
 import csv
+import json
 import math
 from importlib import resources
 from pathlib import Path
@@ -25,6 +26,20 @@ class DataFileWarning(UserWarning):
     message names the file and the lines."""
 
 
+def read_json(path):
+    """(the parsed JSON of `path`, its text): the one JSON reader of data, sidecar and model
+    files (`read_text`'s encodings). DataFileError naming the file, and the line, for text that
+    is not JSON or is nested too deeply to be a tribojax file."""
+    text = read_text(path)
+    try:
+        return json.loads(text), text
+    except json.JSONDecodeError as err:
+        raise DataFileError(f"{path}, line {err.lineno}: not valid JSON ({err.msg} at column "
+                            f"{err.colno}; a truncated file?)") from None  # fmt: skip
+    except RecursionError:
+        raise DataFileError(f"{path}: JSON nested too deeply to be a tribojax file") from None
+
+
 def read_text(path) -> str:
     """The text of a UTF-8 file (a leading byte-order mark is dropped); DataFileError naming the
     file, and the line of the first byte that is not UTF-8, when it cannot be read."""
@@ -32,6 +47,9 @@ def read_text(path) -> str:
     try:
         with open(path, "rb") as f:
             head = f.read(1 << 16)  # checked before the rest is read (a large binary file)
+            if head[:4] in (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff"):
+                raise DataFileError(f"{path}: UTF-32 text (byte-order mark); save the file as "
+                                    "UTF-8")  # fmt: skip
             if head[:2] in (b"\xff\xfe", b"\xfe\xff"):
                 raise DataFileError(f"{path}: UTF-16 text (byte-order mark); save the file as "
                                     "UTF-8")  # fmt: skip

@@ -76,6 +76,11 @@ def run_fit(args) -> int:
             else:
                 result, curves = fits(full, args, start, bar.note)
         result["wall_time_s"] = time.perf_counter() - t0
+        flat = {k for d in result.get("unidentifiable", []) for k, c in d["direction"].items()
+                if abs(c) > 1e-3}  # fmt: skip
+        if flat and result.get(SAVED_KEY) is not None:  # not a result: no model to predict with
+            result[SAVED_KEY] = None
+            result["not_a_result"] = f"the data do not determine {', '.join(sorted(flat))}"
         write_json_atomic(out / "fit.json", result, exclusive=not args.force)
         drew = plot_model_and_residual(out / "fit.png", curves,
                                        f"{Path(result['source']).name}: {result['model']}",
@@ -84,8 +89,6 @@ def run_fit(args) -> int:
     what = path if len(paths) == 1 else f"{len(paths)} records ({path.name}, ...)"
     print(f"{result['kind']} {what}: {result['n_data']} samples, fitted "
           f"{', '.join(result['fitted'])}")  # fmt: skip
-    flat = {k for d in result.get("unidentifiable", []) for k, c in d["direction"].items()
-            if abs(c) > 1e-3}  # fmt: skip
     for name in result["fitted"]:
         v, s = result["parameters"][name], result["std_errors"][name]
         print(f"  {name:6s} = {v:.6g} ± {math.inf if name in flat else s:.2g}")

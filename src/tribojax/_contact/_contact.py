@@ -222,10 +222,21 @@ class FractalContact(eqx.Module):
         return jnp.log(jnp.sum(_integrals(laws, _regime_bounds(*log_bounds), log_al, s.D)))
 
     def solve_load_balance(self, load):
-        """log a'_l such that the asperity loads sum to `load` (N); returns (log a'_l, ok).
-        Derivatives by the implicit function theorem (`_load_balance`)."""
-        log_bounds = log_critical_areas(self.surface, self.pair)
-        return _load_balance((self, log_bounds, jnp.log(load)), max_steps=self.max_steps)
+        """log a'_l such that the asperity loads sum to `load` (N); returns (log a'_l, ok)."""
+        s = self.surface
+        log_bounds = log_critical_areas(s, self.pair)
+        log_f = jnp.log(load)
+
+        def residual(log_al, args):
+            return self.log_total_load(log_al, log_bounds) - log_f
+
+        # All-plastic solution as the start; the true a'_l is never smaller (elastic and
+        # elastic–plastic asperities carry less than H·a').
+        y0 = jnp.log(load * (3.0 - s.D) / (self.pair.H * (s.D - 1.0)))
+        solver = optx.Newton(rtol=1e-13, atol=1e-13)
+        sol = optx.root_find(residual, solver, y0, max_steps=self.max_steps, throw=False)
+        ok = (sol.result == optx.RESULTS.successful) & jnp.isfinite(sol.value)
+        return sol.value, ok
 
     def __call__(self, load) -> ContactParameters:
         """Contact parameters at normal load `load` (N, > 0). wang2022 Eqs 5–26.
@@ -325,38 +336,6 @@ class FractalContact(eqx.Module):
         scalars = (load, F_s, K_tau, C_tau, z_max, a_l, a_ec, a_epc, a_pc, psi, W_d, W_s)
         values = jnp.concatenate([jnp.stack(scalars), load_parts / jnp.sum(load_parts)])
         return ContactParameters(values=values, flags=jnp.stack([ok, all_plastic]))
-
-
-def _balance_residual(log_al, args):
-    model, log_bounds, log_f = args
-    return model.log_total_load(log_al, log_bounds) - log_f
-
-
-@eqx.filter_custom_jvp
-def _load_balance(args, *, max_steps):
-    """Newton on the load balance (wang2022 Eqs 8-13, 15), from the all-plastic solution (the
-    true a'_l is never smaller: elastic and elastic-plastic asperities carry less than H·a')."""
-    model, _, log_f = args
-    s, H = model.surface, model.pair.H
-    y0 = jax.lax.stop_gradient(log_f + jnp.log((3.0 - s.D) / (H * (s.D - 1.0))))
-    sol = optx.root_find(_balance_residual, optx.Newton(rtol=1e-13, atol=1e-13), y0, args,
-                         max_steps=max_steps, throw=False)  # fmt: skip
-    return sol.value, (sol.result == optx.RESULTS.successful) & jnp.isfinite(sol.value)
-
-
-@_load_balance.def_jvp
-def _load_balance_jvp(primals, tangents, *, max_steps):
-    # implicit function theorem for the scalar root y(θ) of r(y, θ) = 0: dy = -(∂r/∂θ dθ) / ∂r/∂y
-    # (here, not optimistix's ImplicitAdjoint, whose linear solve holds a raising host callback)
-    (args,), (t_args,) = primals, tangents
-    y, ok = _load_balance(args, max_steps=max_steps)
-    dyn, static = eqx.partition(args, eqx.is_inexact_array)
-    t_dyn = jax.tree_util.tree_map(lambda x, t: jnp.zeros_like(x) if t is None else t, dyn,
-                                   eqx.filter(t_args, eqx.is_inexact_array, replace=None),
-                                   is_leaf=lambda x: x is None)  # fmt: skip
-    r_y = jax.grad(_balance_residual)(y, args)
-    _, r_t = jax.jvp(lambda d: _balance_residual(y, eqx.combine(d, static)), (dyn,), (t_dyn,))
-    return (y, ok), (-r_t / r_y, None)
 
 
 @mode_jit

@@ -9,14 +9,13 @@ history (`brfd_test`) and gives the band tension (`brfd_band_tension`).
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 
 import numpy as np
 
 from .._presets import INCH_M, KIP_N, LBF_N
-from .._tables import DataFileError, read_text
+from .._tables import DataFileError, read_json
 from ._loop import HysteresisLoop
 
 BRFD_UNITS = {"time units": "s", "displacement units": "in", "friction force units": "kip"}
@@ -78,14 +77,7 @@ def read_brfd(path, band_tension=None) -> HysteresisLoop:
     increase.
     """
     path = Path(path)
-    text = read_text(path)
-    try:
-        obj = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise DataFileError(
-            f"{path}, line {err.lineno}: not valid JSON ({err.msg} at column {err.colno}; "
-            "a truncated file?)"
-        ) from None
+    obj, text = read_json(path)
     if not isinstance(obj, dict) or "data" not in obj:
         raise DataFileError(f"{path}, line 1: expected a JSON object with a 'data' matrix")
     for key, unit in BRFD_UNITS.items():

@@ -8,13 +8,12 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import json
 from pathlib import Path
 from typing import ClassVar, final
 
 import numpy as np
 
-from .._tables import DataFileError, read_table, read_text
+from .._tables import DataFileError, read_json, read_table
 from ._epos import read_epos
 from ._files import csv_header, sidecar_path, write_record_files
 from ._record import AbstractRecord
@@ -188,11 +187,7 @@ def _read_units(path) -> dict:
     side = sidecar_path(path)
     if not side.is_file():
         raise DataFileError(f"{side}: sidecar not found; it must give {list(_UNIT_KEYS)}")
-    text = read_text(side)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise DataFileError(f"{side}, line {err.lineno}: not valid JSON ({err.msg})") from None
+    data, _ = read_json(side)
     if not isinstance(data, dict) or not all(isinstance(data.get(k), str) for k in _UNIT_KEYS):
         raise DataFileError(f"{side}, line 1: needs text values for {list(_UNIT_KEYS)}")
     return {k: data[k] for k in _UNIT_KEYS}

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .._limits import SAMPLE_LIMITS
-from .._tables import DataFileError, read_text
+from .._tables import DataFileError, read_json, read_text
 
 
 def positive_or_none(value, name: str, source: str, unit: str, *, required=False):
@@ -117,10 +117,9 @@ def sidecar_text(csv_path, key: str, allowed: tuple[str, ...]) -> str | None:
     side = sidecar_path(csv_path)
     if not side.is_file():
         return None
-    text = read_text(side)
     try:
-        data = json.loads(text)
-    except json.JSONDecodeError:
+        data, text = read_json(side)
+    except DataFileError:
         return None  # read_sidecar reports it
     if not isinstance(data, dict) or key not in data:
         return None
@@ -157,11 +156,7 @@ def read_sidecar(
             f"{side}: sidecar not found; {Path(csv_path).name} needs a JSON file beside it with "
             f"{need} (optional: {', '.join(k for k, req in schema.items() if not req)})"
         )
-    text = read_text(side)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise DataFileError(f"{side}, line {err.lineno}: not valid JSON ({err.msg})") from None
+    data, text = read_json(side)
     if not isinstance(data, dict):
         raise DataFileError(
             f"{side}, line 1: must be a JSON object {{...}}, got {type(data).__name__}"

@@ -4,7 +4,6 @@ model), `predict(model, record)` → `Prediction` (prediction.json, prediction.c
 from __future__ import annotations
 
 import dataclasses
-import json
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +21,7 @@ from .._model import (
     rebuild,
 )
 from .._model import fitted_model as record_model_of
+from .._tables import read_json
 from ..discovery import DiscoveryReport
 
 SAVED_KEY = "fitted_model"
@@ -101,10 +101,7 @@ def load_model(path) -> FittedModel:
     """The model saved in `path`: a fit.json or discovery.json (its "fitted_model") or a saved
     model itself. ValueError naming the file and the field that is missing or wrong."""
     path = Path(path)
-    try:
-        d = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: not a readable JSON file ({exc})") from None
+    d, _ = read_json(path)  # DataFileError naming the file
     saved, where = d, str(path)
     if isinstance(d, dict) and "format" not in d:
         if d.get(SAVED_KEY) is None:
