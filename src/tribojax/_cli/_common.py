@@ -117,12 +117,9 @@ def run_command(name: str, func, args, *, debug: bool = False) -> int:
 
 
 def refused_outputs(src, targets, *, force: bool, inputs=()) -> str | None:
-    """Why the output files `targets` may not be written, or None if they may.
-
-    An output may never be an input: the record `src`, its sidecar, or a file of `inputs` (a
-    `--from` model), with or without `force`. No existing target is replaced unless `force`
-    (which replaces only `targets`, the command's own file names).
-    """
+    """Why the output files `targets` may not be written, or None if they may: an output is
+    never an input (the record `src`, its sidecar, a file of `inputs` such as a `--from` model),
+    and no existing target is replaced unless `force` (which replaces only `targets`)."""
     given = [(Path(p), Path(p)) for p in inputs if p is not None]
     if src is not None:
         given += [(Path(src), Path(src)), (sidecar_path(src), Path(src))]
