@@ -500,3 +500,61 @@ def test_a_fit_that_is_not_a_result_saves_no_model_to_predict_with(tmp_path, cap
     assert saved["fitted_model"] is None and "do not determine" in saved["not_a_result"]
     assert main(["predict", str(out / "fit.json"), str(path), "--out", str(tmp_path / "p")]) == 2
     assert "fitted_model" in _one_error_line(capsys.readouterr().err, "predict")
+
+
+def test_a_record_given_twice_to_a_joint_fit_is_refused(tmp_path, capsys):
+    # the same path, the same file through "..", an identical copy: counted twice, the standard
+    # errors would shrink by √2 with no new data
+    path = _loop(tmp_path)
+    copy = tmp_path / "copy.csv"
+    copy.write_bytes(path.read_bytes())
+    copy.with_suffix(".json").write_bytes(path.with_suffix(".json").read_bytes())
+    (tmp_path / "sub").mkdir()
+    dotted = tmp_path / "sub" / ".." / path.name
+    for other in (path, dotted, copy):
+        out = tmp_path / f"out-{other.name}-{len(str(other))}"
+        assert main(["fit", str(path), str(other), "--model", "jenkins", "--out", str(out)]) == 2
+        assert "same samples" in _one_error_line(capsys.readouterr().err, "fit")
+    loop = tj.read_loop(path)
+    with pytest.raises(ValueError, match=r"loops\[1\].*same samples as loops\[0\]"):
+        tj.fit_history([loop, tj.read_loop(copy)], "jenkins")
+
+
+@pytest.mark.parametrize("column", ["displacement_m", "force_N"])
+def test_a_record_scaled_to_nothing_is_refused_with_file_line_and_value(tmp_path, capsys, column):
+    # displacement or force ×1e-300 (a unit error): exit 2 naming the file, the line and the
+    # value, not LAPACK's DLASCL lines, "SVD did not converge" or a ZeroDivisionError
+    path, source = tmp_path / "tiny.csv", _loop(tmp_path)
+    lines = source.read_text().splitlines()
+    header = lines[0].split(",")
+    k = header.index(column)
+    rows = [ln.split(",") for ln in lines[1:]]
+    for r in rows:
+        r[k] = repr(float(r[k]) * 1e-300)
+    path.write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    path.with_suffix(".json").write_bytes(source.with_suffix(".json").read_bytes())
+    assert main(["fit", str(path), "--out", str(tmp_path / "o")]) == 2
+    line = _one_error_line(capsys.readouterr().err, "fit")
+    assert f"{path}, line " in line and "largest value, below the plausible" in line
+
+
+def test_a_lock_whose_process_id_was_reused_is_taken_over(tmp_path, capsys):
+    import socket
+
+    from tribojax._cli._lock import lock_stamp
+
+    path, out = _loop(tmp_path), tmp_path / "out"
+    out.mkdir()
+    lock = out / ".fit.json.lock"
+    # a live process (this one) holding the lock as recorded: held, exit 2
+    lock.write_text(lock_stamp())
+    assert main(["fit", str(path), "--out", str(out), "--element", "jenkins"]) == 2
+    assert "another tribojax run" in _one_error_line(capsys.readouterr().err, "fit")
+    # the same process id, recorded with another start time: a dead run whose id was reused
+    pid, started, host = lock_stamp().split()
+    if started == "-":
+        pytest.skip("no process start times here (/proc)")
+    lock.write_text(f"{pid} {int(started) + 1} {socket.gethostname()}\n")
+    assert main(["fit", str(path), "--out", str(out), "--element", "jenkins"]) == 0
+    assert "taking over the lock" in capsys.readouterr().err
+    assert not lock.exists() and (out / "fit.json").exists()

@@ -31,4 +31,8 @@ DISCOVER_MAX_SAMPLES = 5_000
 # sums of squares overflow float64. A sample beyond them is a unit or export error (a value typed
 # in mm into a metre column is not caught; one scaled by 1e300 is), refused naming where it is.
 SAMPLE_LIMITS = {"u": (1e3, "m"), "f": (1e9, "N"), "slip": (1.0, "m"), "accel": (1e4, "m/s²")}
+# ... and the smallest largest-magnitude a record may have: a record whose every sample is below
+# these (a femtometre, a piconewton) is no measurement but a unit error (×1e-300), which would
+# otherwise reach the solvers as underflow.
+SAMPLE_FLOORS = {"u": 1e-15, "f": 1e-12, "slip": 1e-15, "accel": 1e-12}
 

@@ -162,9 +162,11 @@ def claim_outputs(src, targets, *, force: bool, inputs=()):
     except OSError as err:
         raise CommandError(f"cannot create the output folder {folder}: {err.strerror}") from None
     lock = folder / f".{targets[0].name}.lock"
-    fd = _take_lock(lock, targets[0], folder)
+    from ._lock import lock_stamp, take_lock  # (it imports this module's CommandError)
+
+    fd = take_lock(lock, targets[0], folder)
     with os.fdopen(fd, "w") as f:
-        f.write(f"{os.getpid()}\n")
+        f.write(lock_stamp())
     before = {t: t.exists() for t in targets}
     try:
         yield targets
@@ -178,41 +180,6 @@ def claim_outputs(src, targets, *, force: bool, inputs=()):
         lock.unlink(missing_ok=True)
         if created and not any(folder.iterdir()):
             folder.rmdir()  # a folder made for outputs that were not written
-
-
-def _lock_owner_dead(lock: Path) -> int | None:
-    """The PID written in `lock` when that process no longer runs on this machine, else None."""
-    try:
-        pid = int(lock.read_text().split()[0])
-    except (OSError, ValueError, IndexError):
-        return None  # unreadable or being written: treat as held
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return pid
-    except OSError:  # exists (another user's process): held
-        return None
-    return None
-
-
-def _take_lock(lock: Path, target: Path, folder: Path) -> int:
-    """Create `lock` exclusively; a lock whose owner process is dead (a run killed with
-    SIGKILL, or a crash) is taken over with a note."""
-    for attempt in range(2):
-        try:
-            return os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-        except FileExistsError:
-            pid = _lock_owner_dead(lock) if attempt == 0 else None
-            if pid is None:
-                raise CommandError(
-                    f"another tribojax run is writing {target} (lock file {lock}); wait for it, "
-                    "choose another --out, or delete the lock if no run is active"
-                ) from None
-            warn(f"taking over the lock {lock}: its run (process {pid}) is no longer running")
-            lock.unlink(missing_ok=True)
-        except OSError as err:
-            raise CommandError(f"cannot write into the folder {folder}: {err.strerror}") from None
-    raise AssertionError("unreachable")
 
 
 class Progress:

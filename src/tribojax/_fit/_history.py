@@ -172,6 +172,19 @@ class HistoryFit:
                 "band_tension_N": self.band_tension, **self.fit.as_dict()}  # fmt: skip
 
 
+def _refuse_repeats(loops) -> None:
+    """ValueError for a record given twice (the same samples): counted twice, it would shrink
+    the standard errors by √2 without any new information."""
+    seen: dict = {}
+    for i, lp in enumerate(loops):
+        key = (np.asarray(lp.u).tobytes(), np.asarray(lp.f).tobytes())
+        if key in seen:
+            where = f" ({lp.source})" if getattr(lp, "source", None) else ""
+            raise ValueError(f"loops[{i}]{where} has the same samples as loops[{seen[key]}]: give "
+                             "each record once (a repeat would count its data twice)")  # fmt: skip
+        seen[key] = i
+
+
 def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
                 max_steps: int = 300, rtol: float = 1e-8,
                 n_starts=(2.0,), throw: bool = True) -> HistoryFit:  # fmt: skip
@@ -206,6 +219,7 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
     decimate = int(check_range(decimate, "decimate", 1, None, lo_open=False))
     loops = [loops] if isinstance(loops, HysteresisLoop) else list(loops)
+    _refuse_repeats(loops)
     records = _records(loops, decimate)
     spec = HISTORY_MODELS[model]
     init = _default_start(model, records)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._limits import SAMPLE_LIMITS
+from .._limits import SAMPLE_FLOORS, SAMPLE_LIMITS
 from .._tables import DataFileError, read_json, read_text
 
 
@@ -227,12 +227,19 @@ def csv_header(path) -> tuple[str, ...]:
 
 
 def implausible(x, name: str) -> tuple[int, str] | None:
-    """(index, message) of the first sample of `x` beyond `SAMPLE_LIMITS[name]`, else None
+    """(index, message) of the first sample of `x` beyond `SAMPLE_LIMITS[name]`, or of its
+    largest when every sample is below `SAMPLE_FLOORS[name]` (all zero allowed); else None
     (`name`: the record's field, "u", "f", "slip" or "accel")."""
     limit, unit = SAMPLE_LIMITS[name]
-    big = np.flatnonzero(np.abs(np.asarray(x, dtype=float)) > limit)
-    if not big.size:
-        return None
-    i = int(big[0])
-    return i, (f"{x[i]:g} {unit} is outside the plausible range [-{limit:g}, {limit:g}] {unit} "
-               "(SI units: a unit or export error?)")
+    size = np.abs(np.asarray(x, dtype=float))
+    big = np.flatnonzero(size > limit)
+    if big.size:
+        i = int(big[0])
+        return i, (f"{x[i]:g} {unit} is outside the plausible range [-{limit:g}, {limit:g}] "
+                   f"{unit} (SI units: a unit or export error?)")  # fmt: skip
+    floor = SAMPLE_FLOORS[name]
+    if size.size and 0.0 < size.max() < floor:  # every sample tiny (all zero is allowed)
+        i = int(np.argmax(size))
+        return i, (f"{x[i]:g} {unit} is the record's largest value, below the plausible "
+                   f"{floor:g} {unit} (SI units: a unit or export error?)")  # fmt: skip
+    return None

@@ -1,0 +1,69 @@
+"""The output folder's lock: one tribojax run writes a result at a time.
+
+The lock file holds the writing process's id, its start time (Linux: `/proc/PID/stat`) and the
+host. A lock whose process no longer runs, or whose id now belongs to another process (started at
+another time: the id was reused), is taken over with a note; one from another host is held.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+from pathlib import Path
+
+from ._common import CommandError, warn
+
+
+def _start_time(pid: int) -> str:
+    """The start time of process `pid` in clock ticks since boot ("-" where unknown)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return "-"
+    return stat.rsplit(")", 1)[-1].split()[19]  # field 22, counted after the command name
+
+
+def lock_stamp() -> str:
+    """This process's line for a lock file."""
+    return f"{os.getpid()} {_start_time(os.getpid())} {socket.gethostname()}\n"
+
+
+def _stale(lock: Path) -> int | None:
+    """The PID of `lock`'s run when that run is over (its process gone, or its id reused by a
+    process started at another time), else None (held, unreadable, or another host's)."""
+    try:
+        pid_s, *rest = lock.read_text().split()
+        pid = int(pid_s)
+    except (OSError, ValueError):
+        return None  # unreadable or being written: treat as held
+    started, host = (rest + ["-", ""])[:2]
+    if host and host != socket.gethostname():
+        return None
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return pid
+    except OSError:  # exists (another user's process): held unless its id was reused
+        pass
+    now = _start_time(pid)
+    return pid if started != "-" and now != "-" and now != started else None
+
+
+def take_lock(lock: Path, target: Path, folder: Path) -> int:
+    """Create `lock` exclusively; a lock whose run is over (a run killed with SIGKILL, a crash,
+    its process id since reused) is taken over with a note."""
+    for attempt in range(2):
+        try:
+            return os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            pid = _stale(lock) if attempt == 0 else None
+            if pid is None:
+                raise CommandError(
+                    f"another tribojax run is writing {target} (lock file {lock}); wait for it, "
+                    "choose another --out, or delete the lock if no run is active"
+                ) from None
+            warn(f"taking over the lock {lock}: its run (process {pid}) is no longer running")
+            lock.unlink(missing_ok=True)
+        except OSError as err:
+            raise CommandError(f"cannot write into the folder {folder}: {err.strerror}") from None
+    raise AssertionError("unreachable")
