@@ -137,7 +137,9 @@ def test_a_record_that_starts_loaded_is_predicted_from_its_first_force():
     held = tj.HysteresisLoop(t, u, f + 40.0, periodic=False)
     t2, u2 = _drive(seed=2, amplitude=8e-3)
     fitted = tj.HysteresisLoop(t2, u2, _reference(u2, P) + 40.0, periodic=False)
-    fit = tj.fit_history(fitted, "band_brake")
+    # a noise-free record: the standard errors are ~0, so the step left is many of them and the
+    # fit says short_of_optimum (issue 68); its values are what this test uses
+    fit = tj.fit_history(fitted, "band_brake", throw=False)
     rest = tj.predict_history(fit, held)[1]
     measured = tj.predict_history(fit, held, initial="measured")[1]
     assert measured < 0.02 and rest > 5 * measured
