@@ -23,6 +23,7 @@ from .._checks import runtime_message
 from .._decimate import decimate_record
 from .._io._files import sidecar_path, write_json_atomic
 from .._plot import figure, save_figure
+from ._lock import LockHeld, lock_stamp, take_lock
 
 __all__ = [
     "BAD_INPUT",
@@ -162,9 +163,14 @@ def claim_outputs(src, targets, *, force: bool, inputs=()):
     except OSError as err:
         raise CommandError(f"cannot create the output folder {folder}: {err.strerror}") from None
     lock = folder / f".{targets[0].name}.lock"
-    from ._lock import lock_stamp, take_lock  # (it imports this module's CommandError)
-
-    fd = take_lock(lock, targets[0], folder)
+    try:
+        fd, note = take_lock(lock, targets[0])
+    except LockHeld as err:
+        raise CommandError(str(err)) from None
+    except OSError as err:
+        raise CommandError(f"cannot write into the folder {folder}: {err.strerror}") from None
+    if note:
+        warn(note)
     with os.fdopen(fd, "w") as f:
         f.write(lock_stamp())
     before = {t: t.exists() for t in targets}

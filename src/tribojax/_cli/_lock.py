@@ -11,8 +11,6 @@ import os
 import socket
 from pathlib import Path
 
-from ._common import CommandError, warn
-
 
 def _start_time(pid: int) -> str:
     """The start time of process `pid` in clock ticks since boot ("-" where unknown)."""
@@ -49,21 +47,25 @@ def _stale(lock: Path) -> int | None:
     return pid if started != "-" and now != "-" and now != started else None
 
 
-def take_lock(lock: Path, target: Path, folder: Path) -> int:
-    """Create `lock` exclusively; a lock whose run is over (a run killed with SIGKILL, a crash,
-    its process id since reused) is taken over with a note."""
+class LockHeld(Exception):
+    """Another run holds the lock (the message says which and what to do)."""
+
+
+def take_lock(lock: Path, target: Path) -> tuple[int, str | None]:
+    """Create `lock` exclusively: (its file descriptor, a note when a lock whose run is over — a
+    run killed with SIGKILL, a crash, its process id since reused — was taken over). LockHeld
+    while another run holds it; OSError when the folder cannot be written."""
+    note = None
     for attempt in range(2):
         try:
-            return os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            return os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644), note
         except FileExistsError:
             pid = _stale(lock) if attempt == 0 else None
             if pid is None:
-                raise CommandError(
+                raise LockHeld(
                     f"another tribojax run is writing {target} (lock file {lock}); wait for it, "
                     "choose another --out, or delete the lock if no run is active"
                 ) from None
-            warn(f"taking over the lock {lock}: its run (process {pid}) is no longer running")
+            note = f"taking over the lock {lock}: its run (process {pid}) is no longer running"
             lock.unlink(missing_ok=True)
-        except OSError as err:
-            raise CommandError(f"cannot write into the folder {folder}: {err.strerror}") from None
     raise AssertionError("unreachable")
