@@ -276,6 +276,7 @@ def test_threads_meeting_new_programs_export_and_compile_one_at_a_time(tmp_path,
     assert len(list(tmp_path.glob("*.jaxexp"))) == len(sizes)  # each program stored
 
 
+@pytest.mark.slow
 def test_a_stored_trace_filed_under_another_key_is_traced_again_and_rewritten(tmp_path,
                                                                               monkeypatch):
     import jax.numpy as jnp

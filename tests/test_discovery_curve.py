@@ -77,6 +77,7 @@ def test_strengths_recover_the_hidden_values():
     assert delta == pytest.approx(0.5, abs=0.08)
 
 
+@pytest.mark.slow
 def test_stribeck_velocity_lands_near_the_hidden_scale():
     rep = discover_curve(_curve_record("stribeck"), max_effects=1)
     st = rep.strengths["stribeck"]

@@ -325,6 +325,7 @@ def test_loop_file_round_trip_to_discovery_json(tmp_path):
         disc.discover_loop(np.zeros(10))
 
 
+@pytest.mark.slow
 def test_cli_discover_on_a_loop_file(tmp_path, capsys):
     """`tribojax discover LOOP.csv --out DIR`: the loop goes to the Jenkins baseline."""
     from tribojax._cli._main import main

@@ -33,6 +33,7 @@ def test_augmented_element_null_is_preslip_lugre():
     assert np.max(np.abs(aug - ref)) < 1e-5 * np.max(np.abs(ref))
 
 
+@pytest.mark.slow
 def test_augmented_element_matches_lugre_eq25():
     # σ2 and Stribeck as in tribojax.LuGre (wang2022 Eq 25, F_c = (1 − δ)F_s, β = 2)
     delta, vs, s2 = 0.15, 1e-6, 2 * C
