@@ -88,10 +88,8 @@ class First(logging.Handler):
         if not first:
             first.append(time.perf_counter())
 f = First(); f.setLevel(logging.DEBUG); logging.getLogger("jax._src.dispatch").addHandler(f)
-import inspect  # the console script's process choices (cache, one kernel) where main takes them
-kw = {"configure": True} if "configure" in inspect.signature(main).parameters else {}
 try:
-    code = main(**kw)
+    code = main(configure=True)  # the console script's process choices (cache, one kernel)
 except SystemExit as e:
     code = e.code
 # start-up: the imports and the record's reading, up to the end of the first traced program

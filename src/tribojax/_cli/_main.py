@@ -67,9 +67,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-HOIST_ON, HOIST_OFF = ("on", "1", "yes", "true"), ("off", "0", "no", "false")
-
-
 def configure_process() -> None:
     """The choices the `tribojax` command makes for its own process (a library user makes them by
     explicit calls): XLA:CPU's one-kernel loops (`tribojax.use_one_kernel`) unless
@@ -81,13 +78,13 @@ def configure_process() -> None:
     if "equinox" not in sys.modules:  # equinox reads it once, on import
         os.environ.setdefault("EQX_ON_ERROR", "nan")
     from .. import _parallel  # noqa: F401  (TRIBOJAX_FIT_WORKERS checked now: exit 2, one line)
-    from .._cache import use_compilation_cache
+    from .._cache import OFF, use_compilation_cache
     from .._xla import use_one_kernel
 
     hoist = os.environ.get("TRIBOJAX_XLA_HOIST", "on").strip().lower() or "on"
-    if hoist not in HOIST_ON + HOIST_OFF:
+    if hoist not in ("on", "1", "yes", "true", *OFF):
         raise ValueError(f"TRIBOJAX_XLA_HOIST = {hoist!r}: allowed 'on' (the default) or 'off'")
-    if hoist in HOIST_ON:
+    if hoist not in OFF:
         use_one_kernel()
     use_compilation_cache()
 
