@@ -46,8 +46,13 @@ def test_hysteresis_out_keeps_an_earlier_result_and_never_mixes_runs(tmp_path, c
     assert main(cmd) == 2
     assert "earlier result" in _err_line(capsys, "hysteresis")
     assert sorted(p.name for p in out.iterdir()) == ["loop_fit.json"]
+    # --force: a loop_fit.json the command did not write (a user's) is left as it is ...
     assert main([*cmd, "--force"]) == 0
-    # the earlier run's loop fit does not stay beside this run's files
+    assert "not written by tribojax hysteresis" in capsys.readouterr().err
+    assert (out / "loop_fit.json").read_text() == "{}"
+    # ... and an earlier run's loop fit does not stay beside this run's files
+    (out / "loop_fit.json").write_text('{"written_by": "tribojax hysteresis"}')
+    assert main([*cmd, "--force"]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["hysteresis.csv", "hysteresis.png"]
 
 

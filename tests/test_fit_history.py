@@ -1,6 +1,7 @@
 """History (time-domain) fits of friction elements: recovery on data made by independent code,
 and a fit of each model to a short excerpt of the measured friction-damper data."""
 
+import json
 import os
 from pathlib import Path
 
@@ -19,20 +20,57 @@ def _ramped_sine(n=3000, fs=1024.0, A=0.02, f=1.0):
     return t, A * ramp * np.sin(2 * np.pi * f * t)
 
 
-def test_jenkins_recovered_from_numpy_stepping():
+def _numpy_jenkins(F=8.0e3, K=3.0e6, f0=500.0, noise=50.0, seed=15, noise_std=None):
     t, u = _ramped_sine()
-    F, K, f0 = 8.0e3, 3.0e6, 500.0
     z, force = 0.0, np.zeros_like(u)
     for i in range(1, len(u)):  # elastic predictor, return to the slip limit: no tribojax code
         z = min(max(z + u[i] - u[i - 1], -F / K), F / K)
         force[i] = K * z
-    rng = np.random.default_rng(15)
-    loop = tj.HysteresisLoop(t, u, force + f0 + 50.0 * rng.standard_normal(len(u)))
+    rng = np.random.default_rng(seed)
+    return tj.HysteresisLoop(t, u, force + f0 + noise * rng.standard_normal(len(u)),
+                             noise_std=noise_std, frequency=1.0)  # fmt: skip
+
+
+def test_jenkins_recovered_from_numpy_stepping():
+    F, K, f0 = 8.0e3, 3.0e6, 500.0
+    loop = _numpy_jenkins(F, K, f0)
     h = tj.fit_history(loop, "jenkins")
     assert h.fit.converged
     for value, se, true in zip(h.fit.values, h.fit.std_errors, (F, K, f0)):
         assert abs(value - true) < 4 * se + 1e-9 * abs(true)
     assert h.nrmse == pytest.approx(50.0 / np.std(loop.f), rel=0.1)
+
+
+@pytest.mark.parametrize("stated, chi2, consistent", [
+    (50.0, 1.0, True),  # the noise the record states is its noise
+    (50.0 / 4.8, 4.8**2, False),  # a residual 4.8x the stated noise: contradicted
+    (None, 1.0, True),  # none stated: the first-difference estimate of the residual
+])  # fmt: skip
+def test_a_history_fit_judges_its_residual_by_the_one_noise_rule(stated, chi2, consistent):
+    # issue 72 row 7: the history route reported reduced chi2 = NRMSE² (~4e-4 here) whatever the
+    # record stated, and noise_consistent null
+    h = tj.fit_history(_numpy_jenkins(noise_std=stated), "jenkins")
+    assert h.fit.reduced_chi2 == pytest.approx(chi2, rel=0.1)
+    assert h.fit.noise_consistent is consistent
+    plain = tj.fit_history(_numpy_jenkins(), "jenkins")  # the same fit, the noise estimated
+    np.testing.assert_allclose(h.fit.values, plain.fit.values, rtol=1e-12)
+    # standard errors from the stated noise when the residual agrees with it, else from the
+    # residual: within the estimate's scatter of each other either way
+    np.testing.assert_allclose(h.fit.std_errors, plain.fit.std_errors, rtol=0.1)
+
+
+def test_the_history_route_of_the_command_uses_the_stated_noise(tmp_path, capsys):
+    # row 7 through `tribojax fit --model jenkins`: a sidecar noise 4.8x below the residual is
+    # contradicted (was: reduced chi2 ~4e-4, noise_consistent null)
+    from tribojax._cli._main import main
+
+    path, out = tmp_path / "loop.csv", tmp_path / "f"
+    tj.write_loop(_numpy_jenkins(noise_std=50.0 / 4.8), path)
+    assert main(["fit", str(path), "--model", "jenkins", "--out", str(out)]) == 0
+    d = json.loads((out / "fit.json").read_text())
+    assert d["reduced_chi2"] == pytest.approx(4.8**2, rel=0.1) and d["noise_consistent"] is False
+    assert d["sigma_source"] == "sidecar noise_std_N"
+    assert "contradict the stated noise" in capsys.readouterr().err
 
 
 @pytest.mark.slow

@@ -95,6 +95,11 @@ def test_bad_input_to_the_slip_fit(run):
     still = tj.SlipRun(run.t, np.zeros_like(run.t), run.slip, mass=0.321)
     with pytest.raises(ValueError, match="acceleration is zero throughout"):
         tj.slip_run_start(still)
+
+
+@pytest.mark.slow  # a program of its own (the step budget is a shape); the engine's own check of
+# the same message is in the fast tier (test_fit.py, test_a_fit_stopped_by_max_steps_says_so)
+def test_a_slip_fit_out_of_steps_says_so(run):
     # a start far off with a tiny step budget: not converged, said so (throw=False: no exception)
     fit = tj.fit_slip_run(run, alpha=1.0, start={"F_s": 2.0, "K_tau": 3e6, "C_tau": 3e4},
                           max_steps=2, throw=False)  # fmt: skip

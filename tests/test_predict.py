@@ -35,6 +35,16 @@ def backlash_report():
     return discover(loop_baseline(backlash_record("jenkins", GAPS[1], seed=11)), max_effects=2)
 
 
+@pytest.fixture(scope="module")
+def backlash_model():
+    """The model the 2 mm discovery finds (`backlash_report`, checked in the second tier: μN
+    499.9 N, K_d 2.0e6 N/m, full-depth clearance of 1.13 mm), written as the generator's values:
+    the start of the refits below, without the discovery's cost."""
+    effect = tj.SavedEffect("backlash", {"depth": 1.0}, {"gap_m": GAPS[1]})
+    return tj.FittedModel("loop", {"mu_N": F_S, "K_d": 2e6}, {"mu_N": "N", "K_d": "N/m"},
+                          {"element": "jenkins"}, (effect,))  # fmt: skip
+
+
 @pytest.mark.slow
 def test_discovered_model_predicts_a_loop_at_another_amplitude(backlash_report, tmp_path):
     rep = backlash_report
@@ -178,9 +188,9 @@ def test_refit_of_a_discovered_model_finds_another_gap(backlash_report, gap, amp
     assert np.sqrt(np.mean((fit.residuals * fit.scale) ** 2)) < 1.1 * NOISE
 
 
-def test_cli_fit_from_a_discovery_json(backlash_report, tmp_path, capsys):
+def test_cli_fit_from_a_discovery_json(backlash_model, tmp_path, capsys):
     disc = tmp_path / "discovery.json"
-    disc.write_text(json.dumps(backlash_report.as_dict()))
+    disc.write_text(json.dumps({"fitted_model": backlash_model.as_dict()}))
     held = tmp_path / "held.csv"
     tj.write_loop(_loop(2.5e-3, 22, gap=0.9e-3), held)
     out = tmp_path / "fit"
@@ -219,12 +229,12 @@ def test_steady_law_fit_is_the_curve_model_with_two_effects(tmp_path):
         model.parameters["F_c"], rel=1e-9)
 
 
-def test_discovery_continues_from_a_saved_model(backlash_report, tmp_path):
+def test_discovery_continues_from_a_saved_model(backlash_model, tmp_path):
     """`discover(..., start=model)`: the clearance found on one loop is refitted on another
     (another gap and amplitude) and the search goes on from there; "before" stays the
     baseline alone."""
     held = _loop(2.5e-3, 23, gap=0.9e-3)
-    rep = discover(loop_baseline(held), start=tj.fitted_model(backlash_report))
+    rep = discover(loop_baseline(held), start=backlash_model)
     assert rep.effects[0] == "backlash" and rep.verdict == "explained"
     assert rep.strengths["backlash"]["nuisance"]["gap_m"] == pytest.approx(0.9e-3, rel=0.02)
     assert rep.settings["start_model"]["effects"] == ["backlash"]
@@ -232,7 +242,7 @@ def test_discovery_continues_from_a_saved_model(backlash_report, tmp_path):
     assert rep.excess_rmse_before > 10 * NOISE
     # the CLI: --from a discovery.json; a model of another kind is refused by name
     disc, path = tmp_path / "discovery.json", tmp_path / "held.csv"
-    disc.write_text(json.dumps(backlash_report.as_dict()))
+    disc.write_text(json.dumps({"fitted_model": backlash_model.as_dict()}))
     tj.write_loop(held, path)
     assert main(["discover", str(path), "--from", str(disc), "--out", str(tmp_path / "d")]) == 0
     out = json.loads((tmp_path / "d" / "discovery.json").read_text())

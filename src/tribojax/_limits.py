@@ -36,3 +36,8 @@ SAMPLE_LIMITS = {"u": (1e3, "m"), "f": (1e9, "N"), "slip": (1.0, "m"), "accel": 
 # otherwise reach the solvers as underflow.
 SAMPLE_FLOORS = {"u": 1e-15, "f": 1e-12, "slip": 1e-15, "accel": 1e-12}
 
+
+# The largest magnitude of a saved model's value (a parameter or an effect's strength, in the units
+# the model file states): far beyond any contact (a stiffness of 10^20 N/m, a force of 10^20 N)
+# and far below where a prediction overflows float64. A value beyond it is refused by name.
+PARAMETER_LIMIT = 1e20

@@ -38,5 +38,7 @@ def save_figure(fig, path, *, dpi: int = 120) -> None:
     try:
         fig.savefig(tmp, dpi=dpi)
         os.replace(tmp, path)
+    except OSError as err:  # e.g. a full disk: name the file meant, not the temporary one
+        raise OSError(err.errno, err.strerror or str(err), str(path)) from err
     finally:
         tmp.unlink(missing_ok=True)

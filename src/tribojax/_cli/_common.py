@@ -171,8 +171,15 @@ def claim_outputs(src, targets, *, force: bool, inputs=()):
         raise CommandError(f"cannot write into the folder {folder}: {err.strerror}") from None
     if note:
         warn(note)
-    with os.fdopen(fd, "w") as f:
-        f.write(lock_stamp())
+    try:
+        os.write(fd, lock_stamp().encode())
+    except OSError as err:  # a full disk: no lock left behind
+        lock.unlink(missing_ok=True)
+        if created and not any(folder.iterdir()):
+            folder.rmdir()
+        raise CommandError(f"cannot write the lock file {lock}: {err.strerror}") from None
+    finally:
+        os.close(fd)
     before = {t: t.exists() for t in targets}
     try:
         yield targets

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .._io._record import extent_of
 from .._io._records import read_record
 from .._predict import load_model
 from ..discovery import (
@@ -77,6 +78,7 @@ def run_discover(args) -> int:
         data["source"] = str(src)
         if data["fitted_model"] is not None:
             data["fitted_model"]["source"] = str(src)
+            data["fitted_model"]["fitted_range"] = extent_of([record])
         data["decimation"] = reduction.as_dict() if reduction else None
         write_json_atomic(target, data, exclusive=not args.force)
         drew = plot(report, record, figure)

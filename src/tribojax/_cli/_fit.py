@@ -202,7 +202,7 @@ def _fit_from_model(full, args, start, note):
     unit = kind.unit(base)
     how = "the record's noise sd" if data.noise_std else "first-difference estimate"
     d = fit_summary(fit, full, len(measured), resid, unit, data.noise_std or float(fit.scale), how)
-    saved = fitted_model(fit, str(full.source))
+    saved = fitted_model(fit, str(full.source), [full])
     d.update(model=f"{model.kind} model from {args.from_model}"
              + (f" with {', '.join(e.name for e in saved.effects)}" if saved.effects else ""),
              nrmse=nrmse(resid, measured), start_model=model.as_dict(),
@@ -274,7 +274,7 @@ def _fit_slip(run, args, start, reduction, note):
     d["model"] = "PreSlipLuGre (wang2022 Eq 27), slip at every sample"
     d["nrmse"] = nrmse(resid, run.slip)
     d["mass_kg"] = run.mass
-    d[SAVED_KEY] = fitted_model(fit, str(run.source)).as_dict() if fit.converged else None
+    d[SAVED_KEY] = fitted_model(fit, str(run.source), [run]).as_dict() if fit.converged else None
     curves = dict(x=run.t, data=run.slip, model=run.slip + resid, xlabel="t (s)",
                   ylabel="slip Δx (m)", resid_x=run.t, resid=resid)  # fmt: skip
     return d, curves
@@ -302,7 +302,7 @@ def _fit_loop(loop, args, start, reduction, note):
     if loop.normal_load is not None:
         d["mu"] = float(fit.values[0] / loop.normal_load)
     if fit.model is not None and fit.converged:  # the loop model (not the steady formula)
-        d[SAVED_KEY] = fitted_model(fit, str(loop.source)).as_dict()
+        d[SAVED_KEY] = fitted_model(fit, str(loop.source), [loop]).as_dict()
     curves = dict(x=loop.u[-m:], data=loop.f[-m:], model=loop.f[-m:] + resid,
                   xlabel="displacement u (m)", ylabel="force f (N)", resid_x=loop.t[-m:],
                   resid=resid)  # fmt: skip

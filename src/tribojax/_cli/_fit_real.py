@@ -66,7 +66,12 @@ def fit_history_record(loops, model: str, max_steps: int | None, start: dict,
     best = min(scores, key=scores.get)
     h = fits[best]
     resid = pred[best] - f
-    d = fit_summary(h.fit, loops[0], n, resid, "N", None, "estimated from the residuals")
+    stated = [lp.noise_std for lp in loops]
+    if all(v is not None for v in stated):  # χ² against it (`fit_history`'s noise rule)
+        sigma, how = float(np.sqrt(np.mean(np.square(stated)))), "sidecar noise_std_N"
+    else:
+        sigma, how = None, "first-difference estimate of each record's residual"
+    d = fit_summary(h.fit, loops[0], n, resid, "N", sigma, how)
     source = "; ".join(str(lp.source) for lp in loops)
     d.update(model=best, nrmse=h.nrmse, route="history", bic=scores[best], decimate=decimate,
              normal_load_N=loops[0].normal_load, frequency_Hz=loops[0].frequency,
@@ -76,7 +81,7 @@ def fit_history_record(loops, model: str, max_steps: int | None, start: dict,
             {"source": str(lp.source), "n_data": int(lp.f[::decimate].size),
              "nrmse": float(e), "band_tension_N": lp.band_tension}
             for lp, (_, e) in zip(loops, each[best])])  # fmt: skip
-    d[SAVED_KEY] = fitted_model(h, source).as_dict() if h.fit.converged else None
+    d[SAVED_KEY] = fitted_model(h, source, loops).as_dict() if h.fit.converged else None
     if model == "best":
         d["selected_by"] = "bic"
         d["candidates"] = {k: {"nrmse": f.nrmse, "bic": scores[k], "converged": f.fit.converged,
@@ -106,7 +111,7 @@ def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
                     "per-point scatter / sqrt(samples)")  # fmt: skip
     sides = {side: fit_steady_curve(curve, direction=sign, throw=False, **steps).as_dict()
              for side, sign in (("positive", 1), ("negative", -1))}
-    d[SAVED_KEY] = fitted_model(fit, str(curve.source)).as_dict() if fit.converged else None
+    d[SAVED_KEY] = fitted_model(fit, str(curve.source), [curve]).as_dict() if fit.converged else None
     d.update(model="lugre", nrmse=nrmse(resid, curve.friction),
              route="steady law with direction asymmetry T0", units=curve.units,
              per_direction=sides)  # fmt: skip

@@ -29,7 +29,8 @@ from .._limits import SAMPLE_LIMITS
 from .._model import analyse_loop, fit_loop
 from .._plot import figure, save_figure
 from .._reproduce._wu2015 import wu2015_eq5_stiffness
-from ._common import claim_outputs, error, write_json_atomic
+from .._tables import read_json
+from ._common import claim_outputs, error, warn, write_json_atomic
 
 A_MIN_M = 1e-15  # the smallest amplitude worth a harmonic balance (a femtometre)
 
@@ -78,9 +79,13 @@ def run_hysteresis(args) -> int:
         return error(f"{out} holds an earlier result ({', '.join(p.name for p in earlier)}); "
                      "refusing to replace it (use --force or another --out)")  # fmt: skip
     with claim_outputs(args.loop, targets, force=True):
-        for p in earlier:  # --force: no file of the earlier run stays beside this run's
-            if p not in targets:
+        for p in earlier:  # --force: no file of an earlier run stays beside this run's
+            if p in targets:
+                continue
+            if _written_here(p):
                 p.unlink()
+            else:
+                warn(f"{p} was not written by tribojax hysteresis; left as it is")
         A = jnp.linspace(lo, hi, args.n)
         if args.element == "lugre":
             hb = _lugre_response(element, A, args.omega, K_d, A0)
@@ -136,7 +141,7 @@ def _fit_loop(args) -> dict:
     loop = read_loop(args.loop)
     a = analyse_loop(loop)
     fit = fit_loop(loop, args.element, model=args.fit_model, throw=False)
-    result = {"loop": str(args.loop), "analysis": a.as_dict(),
+    result = {"written_by": WRITER, "loop": str(args.loop), "analysis": a.as_dict(),
               "fit": {**fit.as_dict(), "element": args.element, "model": args.fit_model}}
     print(f"loop: A = {a.A:.4g} m, muN = {a.mu_N:.4g} N, K_d (Eq 6) = {a.K_d:.4g} N/m, "
           f"K_eq = {a.K_eq:.4g} N/m, C_eq = {a.C_eq:.4g} N s/m")  # fmt: skip
@@ -144,6 +149,18 @@ def _fit_loop(args) -> dict:
     print(f"fit ({args.element}): " + ", ".join(f"{n} = {v:.5g} ± {s:.2g}" for n, v, s in values)
           + f" (converged: {fit.converged}, {fit.steps} steps)")  # fmt: skip
     return result
+
+
+WRITER = "tribojax hysteresis"
+"""loop_fit.json's "written_by": `--force` removes an earlier loop fit only when it says so."""
+
+
+def _written_here(path: Path) -> bool:
+    try:
+        d, _ = read_json(path)
+    except (OSError, ValueError):
+        return False
+    return isinstance(d, dict) and d.get("written_by") == WRITER
 
 
 def _plot(hb, element: str, path: Path) -> bool:

@@ -11,6 +11,7 @@ exists).
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +19,7 @@ import numpy as np
 from .._io._files import write_text_atomic
 from .._io._records import read_record
 from .._predict import load_model, predict
+from .._predict._prediction import describe_beyond
 from ._common import (
     FAILED,
     CommandError,
@@ -25,6 +27,7 @@ from ._common import (
     error,
     plot_model_and_residual,
     refused_outputs,
+    warn,
     with_band_tension,
     write_json_atomic,
 )
@@ -41,7 +44,9 @@ def run_predict(args) -> int:
     model = load_model(model_path)
     with claim_outputs(src, targets, force=args.force):
         record = with_band_tension(read_record(src, args.format), args.band_tension, src)
-        pred = predict(model, record, initial=args.initial)
+        with warnings.catch_warnings():  # said below, once, as the command's warnings
+            warnings.simplefilter("ignore", UserWarning)
+            pred = predict(model, record, initial=args.initial)
         data = pred.as_dict()
         data["model_file"] = str(model_path)
         data["initial"] = args.initial or model.options.get("initial", "rest")
@@ -65,6 +70,11 @@ def run_predict(args) -> int:
         print(f"slip forces scaled by the band tension: {data['model_band_tension_N']:.4g} N "
               f"(fit) -> {record.band_tension:.4g} N (record)")
     print(f"wrote {targets[0]}, {targets[1].name}" + (f" and {targets[2].name}" if drew else ""))
-    if not np.all(np.isfinite(pred.predicted)):
+    for d in pred.extrapolation or ():
+        warn(describe_beyond(d))
+    if pred.extrapolation is None:
+        warn(f"{model_path} saves no fitted range (written before it was kept): whether the "
+             "record lies beyond the conditions it was fitted on is not known")  # fmt: skip
+    if not (np.all(np.isfinite(pred.predicted)) and np.isfinite(pred.nrmse)):
         return error("the model is not finite on this record", status=FAILED)
     return 0

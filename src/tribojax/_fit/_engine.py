@@ -196,7 +196,8 @@ def fit_statistics(
         A = (T @ vt[~tiny].T) / sv[~tiny][None, :]
         cov = scale2 * (A @ A.T)
         load = np.abs(T @ vt[tiny].T)
-        free = np.any(load > 1e-10 * np.linalg.norm(T, axis=1, keepdims=True), axis=1)
+        with np.errstate(over="ignore"):  # a row of ~1e300 (a start far off): its norm is inf
+            free = np.any(load > 1e-10 * np.linalg.norm(T, axis=1, keepdims=True), axis=1)
         cov[np.ix_(free, free)] = np.inf
         return cov
 

@@ -30,8 +30,9 @@ from .._friction._lugre import LuGre
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._loop import HysteresisLoop
 from .._results import RESULTS
-from ._engine import FitResult, least_squares_fit, thrown
+from ._engine import FitResult, fit_statistics, least_squares_fit, thrown
 from ._measures import nrmse
+from ._noise import noise_consistent, noise_estimate
 from ._solver import LevenbergMarquardt
 
 # parameters of each model: (name, positive?) — positive ones are fitted as logarithms
@@ -252,8 +253,43 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
         fit = min(fits, key=lambda f: float(np.sum(f.residuals**2)))
     else:
         fit = solve(init)
-    return HistoryFit(model, thrown(fit, throw), _nrmse(fit.residuals, records), decimate,
+    nrmse_all = _nrmse(fit.residuals, records)
+    fit = _noise_rule(fit, records, loops, tr)
+    return HistoryFit(model, thrown(fit, throw), nrmse_all, decimate,
                       loops[0].band_tension)  # fmt: skip
+
+
+def _noise_rule(fit: FitResult, records, loops, transform) -> FitResult:
+    """The fit's statistics under the one noise rule of every fit (`noise_consistent`): the
+    residual in units of each record's stated noise sd (`noise_std`, when every record states
+    one) or of its first-difference estimate (`noise_estimate`), its reduced χ² and the verdict
+    (χ², windows, Fisher's g; segments: the records). With stated noise consistent with the
+    residual the standard errors are those of the stated noise, else scaled by the residual.
+    The fit itself weights each record by its force's sd (unchanged)."""
+    r0 = np.asarray(fit.residuals, dtype=float)
+    if fit.jacobian is None or not np.all(np.isfinite(r0)):
+        return fit
+    sizes = [len(rec[2]) for rec in records]
+    seg = np.repeat(np.arange(len(records)), sizes)
+    std = np.repeat([rec[3] for rec in records], sizes)
+    r = r0 * std  # N
+    stated = all(lp.noise_std is not None for lp in loops)
+    try:
+        each = ([lp.noise_std for lp in loops] if stated
+                else [noise_estimate(r[seg == i])[0] for i in range(len(records))])  # fmt: skip
+        sigma = np.repeat(each, sizes)
+        z = r / sigma
+        _, rho = noise_estimate(z, seg)
+    except ValueError:  # records of a few samples: no estimate, the statistics as they were
+        return fit
+    if not np.all(np.isfinite(z)):
+        return fit
+    x = np.concatenate([np.asarray(rec[0]) for rec in records])
+    ok = noise_consistent(z, 1.0, rho, seg, x, len(fit.names), estimated=not stated)[0]
+    J = np.asarray(fit.jacobian) * (std / sigma)[:, None]
+    return fit_statistics(fit.theta, z, J, names=fit.names, transform=transform,
+                          sigma_known=stated, result=fit.result, steps=fit.steps,
+                          message=fit.message, noise_consistent=ok)  # fmt: skip
 
 
 def _nrmse(residuals, records) -> float:

@@ -63,6 +63,13 @@ class FrictionCurve(AbstractRecord):
         if set(self.units) != set(_UNIT_KEYS):
             raise ValueError(f"{self.source}: units must have the keys {list(_UNIT_KEYS)}")
 
+    def extent(self) -> dict:
+        """The range of |velocity| and the peak |friction|, in the curve's units
+        (`AbstractRecord.extent`)."""
+        v, f = np.abs(self.velocity), float(np.max(np.abs(self.friction)))
+        return {"velocity": (float(v.min()), float(v.max()), self.units["velocity_unit"]),
+                "friction": (f, f, self.units["friction_unit"])}
+
     @property
     def friction_error(self) -> np.ndarray:
         """Standard error of each mean friction, scatter/√samples (same unit as friction)."""

@@ -53,8 +53,11 @@ def write_text_atomic(path, text: str, *, exclusive: bool = False) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
+        try:
+            with os.fdopen(fd, "w", encoding="utf-8") as f:
+                f.write(text)
+        except OSError as err:  # e.g. a full disk: the error names the file meant
+            raise OSError(err.errno, err.strerror or str(err), str(path)) from err
         mask = os.umask(0)  # the umask is read by setting it: put it back at once
         os.umask(mask)
         os.chmod(tmp, 0o666 & ~mask)

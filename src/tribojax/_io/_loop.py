@@ -28,7 +28,7 @@ from ._files import (
     sidecar_text,
     write_record_files,
 )
-from ._record import AbstractRecord
+from ._record import AbstractRecord, metadata_extent
 
 LOOP_COLUMNS = ("t_s", "u_m", "f_N")  # the legacy format, no sidecar needed
 LOOP_FILE_COLUMNS = ("time_s", "displacement_m", "force_N")
@@ -95,6 +95,15 @@ class HysteresisLoop(AbstractRecord):
     def resampled(self, t, drive, response, *, noise_std) -> HysteresisLoop:
         """The loop on new samples (t, u, f) with force noise sd `noise_std`."""
         return dataclasses.replace(self, t=t, u=drive, f=response, noise_std=noise_std)
+
+    def extent(self) -> dict:
+        """The displacement amplitude (half the peak-to-peak, m), peak |force| (N) and peak
+        |velocity| (m/s), and the normal load and band tension (N) when known
+        (`AbstractRecord.extent`)."""
+        amp = 0.5 * float(np.ptp(self.u))
+        f, v = float(np.max(np.abs(self.f))), float(np.max(np.abs(np.diff(self.u) / np.diff(self.t))))
+        return {"amplitude": (amp, amp, "m"), "force": (f, f, "N"), "velocity": (v, v, "m/s"),
+                **metadata_extent(self, ("normal_load", "band_tension"))}  # fmt: skip
 
     def cycle_times(self) -> np.ndarray | None:
         """`cycle_starts(t, u)` for a periodic loop; None for an arbitrary history."""
@@ -167,10 +176,16 @@ def write_loop(
     With `frequency` set, the format `time_s,displacement_m,force_N` plus a sidecar
     `<stem>.json` (an arbitrary history, `periodic=False`, always takes this format, with
     `"drive": "history"` in its sidecar); otherwise (or with legacy=True) the legacy
-    `t_s,u_m,f_N` without one. Refuses (FileExistsError) if a target exists, unless
-    `overwrite=True`.
+    `t_s,u_m,f_N` without one (by default a ValueError when the loop states metadata that
+    format cannot keep: a noise sd, normal load or band tension). Refuses (FileExistsError) if
+    a target exists, unless `overwrite=True`.
     """
     has_meta = not loop.periodic or loop.frequency is not None
+    lost = [name for name in _METADATA if getattr(loop, name) is not None]
+    if legacy is None and not has_meta and lost:  # never drop silently what the loop states
+        raise ValueError(f"write_loop: the legacy t_s,u_m,f_N format cannot keep {lost}; give "
+                         "the loop its drive frequency (frequency=, Hz) for the format with a "
+                         "sidecar, or legacy=True to drop them")  # fmt: skip
     legacy = (not has_meta) if legacy is None else bool(legacy)
     if not legacy and not has_meta:
         raise ValueError("the time_s,displacement_m,force_N format needs the loop's frequency")

@@ -103,7 +103,33 @@ class AbstractRecord(abc.ABC):
         response's noise sd `noise_std`; the other fields kept (`reducible` records)."""
         raise ValueError(f"{self.source}: {self.description} is not a drive/response series")
 
+    def extent(self) -> dict:
+        """The conditions the record spans, {quantity: (min, max, unit)} (e.g. a loop's
+        amplitude, force, velocity, normal load): what a model fitted on it has seen
+        (`FittedModel.fitted_range`; `tribojax.predict` says where a record lies beyond it).
+        Default: none."""
+        return {}
+
     def cycle_times(self) -> np.ndarray | None:
         """Times of the upward mean-crossings of the drive (the starts of whole cycles) for a
         periodic record; None for a record without cycles."""
         return None
+
+
+def extent_of(records) -> dict:
+    """The conditions `records` span together: per quantity of their `extent` with one unit,
+    [min, max] over the records and its unit ({quantity: {"min", "max", "unit"}})."""
+    out: dict = {}
+    for rec in records:
+        for name, (lo, hi, unit) in rec.extent().items():
+            have = out.setdefault(name, {"min": float(lo), "max": float(hi), "unit": unit})
+            if have["unit"] == unit:
+                have["min"], have["max"] = min(have["min"], float(lo)), max(have["max"], float(hi))
+    return out
+
+
+def metadata_extent(record, names) -> dict:
+    """{name: (value, value, "N")} for each set metadata force `names` of `record` (a normal
+    load, a band tension)."""
+    values = {n: getattr(record, n, None) for n in names}
+    return {n: (float(v), float(v), "N") for n, v in values.items() if v is not None}

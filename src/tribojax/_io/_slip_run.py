@@ -25,7 +25,7 @@ from ._files import (
     read_sidecar,
     write_record_files,
 )
-from ._record import AbstractRecord
+from ._record import AbstractRecord, metadata_extent
 
 SLIP_COLUMNS = ("time_s", "stage_accel_m_s2", "slip_m")
 
@@ -93,6 +93,13 @@ class SlipRun(AbstractRecord):
         by this run's full-resolution `profile` (the class docstring's `drive`)."""
         return dataclasses.replace(self, t=t, accel=drive, slip=response, noise_std=noise_std,
                                    drive=self.profile())  # fmt: skip
+
+    def extent(self) -> dict:
+        """The stage acceleration's peak |a| (m/s²), the drive force m·|a| it asks of the
+        contact (N) and the normal load (N) when known (`AbstractRecord.extent`)."""
+        a = float(np.max(np.abs(self.accel)))
+        return {"acceleration": (a, a, "m/s²"), "drive_force": (self.mass * a, self.mass * a, "N"),
+                **metadata_extent(self, ("normal_load",))}  # fmt: skip
 
     def profile(self) -> MeasuredProfile:
         """The run's drive: its stage acceleration a(t) (m/s²), `MeasuredProfile.from_samples`

@@ -42,6 +42,7 @@ from ._residual import padded_args as padded_args
 from ._residual import padded_residual as padded_residual
 from ._saved import FittedModel as FittedModel
 from ._saved import SavedEffect as SavedEffect
+from ._saved import check_values as check_values
 from ._saved import effect_strengths as effect_strengths
 from ._saved import fitted_model as fitted_model
 from ._slip import KNOBS as KNOBS

@@ -143,6 +143,13 @@ class AbstractBaseline(eqx.Module):
         raise NotImplementedError(f"{type(self).__name__} does not define theta_of: it cannot "
                                   "be rebuilt from saved parameters")
 
+    def param_ranges(self) -> tuple:
+        """The open interval (lo, hi) of each physical parameter (the order of `param_names`):
+        the domain of `physical`, e.g. (0, inf) for one it takes the log of. A saved model with a
+        value outside is refused by name (`tribojax.load_model`, `tribojax.predict`). Default:
+        every real number."""
+        return ((-np.inf, np.inf),) * len(self.param_names)
+
     def options(self) -> dict:
         """How the model is built on a record beyond the record itself (saved with a fitted
         model, `tribojax.FittedModel.options`), e.g. a held bristle exponent; default none."""

@@ -70,6 +70,10 @@ class CurveBaseline(AbstractBaseline):
     def param_units(self):
         return self.unit_of_params
 
+    def param_ranges(self):
+        """F_c > 0 (θ₀ is its log), σ2 any real (`physical`)."""
+        return ((0.0, np.inf), (-np.inf, np.inf))
+
     def knob_null(self):
         return np.array([0.0, np.log10(float(self.v_ref) / 10.0), np.log(BETA_START), 0.0, 0.0])
 

@@ -95,6 +95,10 @@ class LoopBaseline(AbstractBaseline):
     def theta_of(self, values):
         return np.log(np.asarray(values, dtype=float))
 
+    def param_ranges(self):
+        """μN and K_d > 0 (θ is their log)."""
+        return ((0.0, np.inf), (0.0, np.inf))
+
     def options(self):
         if self.record.loaded:  # a model fitted from a loaded start predicts from one
             return {"element": self.element, "initial": "measured"}

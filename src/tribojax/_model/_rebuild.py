@@ -21,7 +21,7 @@ from ._curve import curve_baseline
 from ._effects import default_effects
 from ._fit import MAX_STEPS, fit_model, record_scale
 from ._loop import loop_baseline
-from ._saved import FittedModel
+from ._saved import FittedModel, check_values
 from ._slip import slip_baseline
 
 
@@ -67,19 +67,27 @@ def rebuild(model: FittedModel, record):
 
 def on_baseline(model: FittedModel, baseline):
     """(θ, designs, strengths) of `model` on a baseline of its kind (built on any record)."""
+    at = model.origin or "model"
     if baseline.kind != model.kind:
-        raise ValueError(f"model: a {model.kind} model, not a {baseline.kind} model")
+        raise ValueError(f"{at}: a {model.kind} model, not a {baseline.kind} model")
     missing = [n for n in baseline.param_names if n not in model.parameters]
     if missing:
-        raise ValueError(f"model: field 'parameters' lacks {missing} of the {model.kind} model")
+        raise ValueError(f"{at}: field 'parameters' lacks {missing} of the {model.kind} model")
+    check_values(model, baseline.param_names, baseline.param_units, baseline.param_ranges(),
+                 at)
     theta = baseline.theta_of([model.parameters[n] for n in baseline.param_names])
     registry = {e.name: e for e in default_effects(baseline.kind)}
     designs, strengths = [], []
     for saved in model.effects:
         if saved.name not in registry:
-            raise ValueError(f"model: effect {saved.name!r} is not a {model.kind} effect; known: "
+            raise ValueError(f"{at}: effect {saved.name!r} is not a {model.kind} effect; known: "
                              f"{sorted(registry)}")  # fmt: skip
         d, s = _design(registry[saved.name], baseline, saved)
+        for sn, su in zip(d.strength_names, d.strength_units):
+            stated = model.units.get(f"{saved.name}.{sn}")
+            if stated is not None and stated != su:
+                raise ValueError(f"{at}: field 'units.{saved.name}.{sn}' is {stated!r}; on this "
+                                 f"record the effect's {sn} is in {su!r}")  # fmt: skip
         designs.append(d)
         strengths.extend(s)
     return theta, tuple(designs), np.asarray(strengths, dtype=float)

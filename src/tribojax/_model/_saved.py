@@ -11,6 +11,9 @@ import math
 
 import numpy as np
 
+from .._io._record import extent_of
+from .._limits import PARAMETER_LIMIT
+
 MODEL_FORMAT = "tribojax.fitted_model/1"
 """The version of the saved-model layout; a file of another version is refused by name."""
 
@@ -35,7 +38,9 @@ class FittedModel:
     """A fitted model: `kind` (one of `KINDS`), `options` (how its model is built on a record,
     e.g. {"alpha": 1.0} for a slip run, {"element": "jenkins"} for a loop), `parameters` and their
     `units` (physical), `effects` (`SavedEffect`s in the order they were added) and `source`
-    (the record it was fitted to). `as_dict()` is the saved form, `from_dict` reads it back."""
+    (the record it was fitted to), `fitted_range` (the conditions of the records it was fitted on,
+    {quantity: {"min", "max", "unit"}}, `extent_of`; empty when not known). `as_dict()` is the saved form, `from_dict` reads it back;
+    `origin` (not saved) is where it was read from, named by the errors it meets."""
 
     kind: str
     parameters: dict
@@ -43,6 +48,8 @@ class FittedModel:
     options: dict = dataclasses.field(default_factory=dict)
     effects: tuple = ()
     source: str = ""
+    fitted_range: dict = dataclasses.field(default_factory=dict)
+    origin: str = dataclasses.field(default="", compare=False, repr=False)
 
     def as_dict(self) -> dict:
         return {
@@ -53,6 +60,7 @@ class FittedModel:
             "units": dict(self.units),
             "effects": [dataclasses.asdict(e) for e in self.effects],
             "source": self.source,
+            "fitted_range": {k: dict(v) for k, v in self.fitted_range.items()},
         }
 
     @classmethod
@@ -80,7 +88,40 @@ class FittedModel:
         if not isinstance(options, dict):
             raise ValueError(f"{where}: field 'options' must be an object")
         units, source = dict(d.get("units") or {}), str(d.get("source", ""))
-        return cls(kind, params, units, dict(options), tuple(effects), source)
+        ranges = d.get("fitted_range") or {}
+        if not isinstance(ranges, dict):
+            raise ValueError(f"{where}: field 'fitted_range' must be an object")
+        fitted = {}
+        for name, r in ranges.items():
+            at = f"{where}: field 'fitted_range.{name}'"
+            if not isinstance(r, dict) or not isinstance(r.get("unit"), str):
+                raise ValueError(f"{at}: expected an object with 'min', 'max' and 'unit'")
+            lims = _numbers({k: r.get(k) for k in ("min", "max")}, at)
+            fitted[str(name)] = {**lims, "unit": r["unit"]}
+        return cls(kind, params, units, dict(options), tuple(effects), source, fitted, where)
+
+
+def check_values(model: FittedModel, names, units, ranges, where: str = "model") -> None:
+    """Refuse a saved model whose parameter `names` lie outside their open `ranges` (lo, hi) or
+    beyond ±`PARAMETER_LIMIT`, or whose stated units differ from `units` (the model's on this
+    record); likewise every effect strength's magnitude. ValueError naming the field, its value
+    and the allowed range."""
+    for name, unit, (lo, hi) in zip(names, units, ranges):
+        v, top = model.parameters[name], min(hi, PARAMETER_LIMIT)
+        if not (lo < v < hi and abs(v) <= PARAMETER_LIMIT):
+            shown = f"{v:g} {unit}".rstrip()
+            low = f"{lo:g}" if lo > -PARAMETER_LIMIT else f"{-PARAMETER_LIMIT:g}"
+            raise ValueError(f"{where}: field 'parameters.{name}' = {shown} is outside the "
+                             f"allowed range ({low}, {top:g}{')' if hi <= top else ']'}")
+        stated = model.units.get(name)
+        if stated is not None and stated != unit:
+            raise ValueError(f"{where}: field 'units.{name}' is {stated!r}; the {model.kind} "
+                             f"model on this record has {name} in {unit!r}")  # fmt: skip
+    for e in model.effects:
+        for k, v in {**e.strengths, **e.nuisance}.items():
+            if abs(v) > PARAMETER_LIMIT:
+                raise ValueError(f"{where}: effect {e.name!r}: {k} = {v:g} is outside the "
+                                 f"allowed range [{-PARAMETER_LIMIT:g}, {PARAMETER_LIMIT:g}]")
 
 
 def _numbers(d, where) -> dict:
@@ -121,10 +162,10 @@ def effect_strengths(fit) -> dict:
     return out
 
 
-def fitted_model(fit, source: str = "") -> FittedModel:
+def fitted_model(fit, source: str = "", records=()) -> FittedModel:
     """The `FittedModel` of a record-model fit (`fit_record`, `fit_slip_run`, `fit_loop(model=
     "history")`, or a discovery state): its baseline's kind and options, physical parameters
-    and effects."""
+    and effects, and the conditions of the fitted `records` (`fitted_range`)."""
     base = fit.model
     if base is None:
         raise ValueError("fitted_model needs the fit of a record model (FitResult.model is None: "
@@ -138,4 +179,5 @@ def fitted_model(fit, source: str = "") -> FittedModel:
         nuisance = st.pop("nuisance")
         effects.append(SavedEffect(name, {k: v["value"] for k, v in st.items()}, nuisance))
         units.update({f"{name}.{k}": v["unit"] for k, v in st.items()})
-    return FittedModel(base.kind, params, units, base.options(), tuple(effects), str(source))
+    return FittedModel(base.kind, params, units, base.options(), tuple(effects), str(source),
+                       extent_of(records))  # fmt: skip

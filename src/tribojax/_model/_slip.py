@@ -104,6 +104,10 @@ class SlipBaseline(AbstractBaseline):
     def param_units(self):
         return ("N", "N/m", "N s/m", "")[: 4 if self.free_alpha else 3]
 
+    def param_ranges(self):
+        """F_s below the bound `f_max`, K_τ, C_τ (and α) > 0 (`physical`)."""
+        return ((0.0, float(self.f_max)),) + ((0.0, np.inf),) * (len(self.param_names) - 1)
+
     def knob_null(self):
         return np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0, np.log(50.0), 0.0, 1.0])
 

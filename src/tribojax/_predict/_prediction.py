@@ -4,6 +4,7 @@ model), `predict(model, record)` → `Prediction` (prediction.json, prediction.c
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -11,11 +12,13 @@ import numpy as np
 from .._fit._engine import FitResult, thrown
 from .._fit._history import HISTORY_MODELS, HISTORY_UNITS, HistoryFit, history_force
 from .._fit._measures import nrmse, rms
+from .._io._record import extent_of
 from .._model import (
     MAX_STEPS,
     RECORD_KINDS,
     FittedModel,
     SavedEffect,
+    check_values,
     evaluate,
     fit_saved,
     rebuild,
@@ -32,7 +35,9 @@ SAVED_KEY = "fitted_model"
 class Prediction:
     """A fitted model evaluated on a record: the sample axis `x` (named `x_name`, e.g. time_s),
     `measured` and `predicted` (output `unit`), their NRMSE = rms(predicted − measured) /
-    std(measured) and rms error, the `model` and the `record` (its source)."""
+    std(measured) and rms error, the `model` and the `record` (its source); `extrapolation`:
+    the record's conditions beyond the model's `fitted_range` (`beyond`; [] none, None when the
+    model saved no range)."""
 
     model: FittedModel
     record: str
@@ -43,6 +48,7 @@ class Prediction:
     unit: str
     nrmse: float
     rms_error: float
+    extrapolation: list | None = None
 
     def columns(self) -> tuple[str, str, str]:
         """The CSV header: the axis, measured_<unit>, predicted_<unit>."""
@@ -53,19 +59,28 @@ class Prediction:
         """The prediction.json contract: "nrmse", "model", "record" (plus extra keys)."""
         return {"nrmse": self.nrmse, "model": self.model.as_dict(), "record": self.record,
                 "rms_error": self.rms_error, "unit": self.unit, "n_data": int(self.x.size),
+                "extrapolation": self.extrapolation,
                 "columns": list(self.columns()),
                 "what": "nrmse = rms(predicted - measured) / std(measured)"}  # fmt: skip
 
 
-def fitted_model(result, source: str = "") -> FittedModel:
+def fitted_model(result, source: str = "", records=()) -> FittedModel:
     """The `FittedModel` of a fit: a record-model `FitResult` (`fit_slip_run`, `fit_loop(model=
     "history")`, `fit_record`), a steady-law fit of both directions (`fit_steady_curve`: the
     curve model with its `stribeck` and `asymmetry` effects), a `HistoryFit` (`fit_history`) or
-    a `DiscoveryReport` (its final model: the baseline and the effects discovery added)."""
+    a `DiscoveryReport` (its final model: the baseline and the effects discovery added).
+    `records`: the records it was fitted on; their conditions are saved as the model's
+    `fitted_range`, which `predict` compares a record with (none given: no range is saved and
+    `predict` cannot say when it extrapolates)."""
+    model = _fitted_model(result, source)
+    return dataclasses.replace(model, fitted_range=extent_of(records)) if records else model
+
+
+def _fitted_model(result, source) -> FittedModel:
     if isinstance(result, DiscoveryReport):
         if result.fitted is None:
             raise ValueError("the discovery's baseline fit failed: it has no model to save")
-        return result.fitted
+        return dataclasses.replace(result.fitted, source=source or result.fitted.source)
     if isinstance(result, HistoryFit):
         names = [n for n, _ in HISTORY_MODELS[result.model]]
         params = dict(zip(names, np.asarray(result.fit.values, float).tolist()))
@@ -148,8 +163,42 @@ def predict(model: FittedModel, record, *, initial: str | None = None) -> Predic
         measured, unit = rk.measured(baseline), rk.unit(baseline)
         predicted = rk.output(baseline, evaluate(baseline, theta, designs, s))
     err = predicted - measured
+    far = beyond(model.fitted_range, record.extent()) if model.fitted_range else None
+    for d in far or ():
+        warnings.warn(describe_beyond(d), UserWarning, stacklevel=2)
     return Prediction(model, source, x_name, np.asarray(x), measured, predicted, unit,
-                      nrmse(err, measured), rms(err))  # fmt: skip
+                      nrmse(err, measured), rms(err), far)  # fmt: skip
+
+
+EXTRAPOLATION_MARGIN = 1.25
+"""A record's condition is beyond a model's fitted range when it lies more than this factor
+outside it (above max × 1.25 or below min / 1.25): a prediction there extrapolates."""
+
+
+def beyond(fitted_range: dict, extent: dict, margin: float = EXTRAPOLATION_MARGIN) -> list:
+    """The conditions of a record (`extent`, `AbstractRecord.extent`) outside a model's
+    `fitted_range` by more than `margin`: [{"quantity", "record_min", "record_max",
+    "fitted_min", "fitted_max", "unit"}]; a quantity either lacks, or in other units, is
+    skipped."""
+    out = []
+    for name, (lo, hi, unit) in extent.items():
+        r = fitted_range.get(name)
+        if r is None or r["unit"] != unit:
+            continue
+        if hi > r["max"] * margin or lo < r["min"] / margin:
+            out.append({"quantity": name, "record_min": float(lo), "record_max": float(hi),
+                        "fitted_min": r["min"], "fitted_max": r["max"], "unit": unit})
+    return out
+
+
+def describe_beyond(d: dict) -> str:
+    """One line for an entry of `beyond`."""
+    def span(lo, hi):
+        return f"{lo:.3g}" if lo == hi else f"{lo:.3g} to {hi:.3g}"
+
+    return (f"extrapolation: the record's {d['quantity'].replace('_', ' ')} "
+            f"({span(d['record_min'], d['record_max'])} {d['unit']}) lies outside the fitted "
+            f"range ({span(d['fitted_min'], d['fitted_max'])} {d['unit']})")
 
 
 def refit(model: FittedModel, record, *, max_steps: int = MAX_STEPS, throw: bool = True):
@@ -185,6 +234,9 @@ def _check_history(model, where) -> list:
     missing = [n for n in names if n not in model.parameters]
     if missing:
         raise ValueError(f"{where}: field 'parameters' lacks {missing} of the {element} model")
+    check_values(model, names, [HISTORY_UNITS[n] for n in names],
+                 [(0.0, np.inf) if positive else (-np.inf, np.inf)
+                  for _, positive in HISTORY_MODELS[element]], where)  # fmt: skip
     tension = model.options.get("band_tension_N")
     if tension is not None and not (isinstance(tension, int | float) and tension > 0):
         raise ValueError(f"{where}: field 'options.band_tension_N' is {tension!r}; a tension > 0 "
