@@ -3,9 +3,11 @@ two runs' files mixed, no folder left stuck after a kill (issue 33, items 4 and 
 
 import json
 import os
+import signal
 import subprocess
 import sys
 import textwrap
+import time
 
 import numpy as np
 import pytest
@@ -163,3 +165,48 @@ def test_unreadable_files_are_named_with_the_reason(tmp_path, capsys, name, data
     line = _err_line(capsys, "fit")
     assert expect in line and name in line, line
     assert not (tmp_path / "o").exists()
+
+
+def test_ctrl_c_during_start_up_is_one_line_and_130(capsys, monkeypatch):
+    # issue 72 row 10: an interrupt before the subcommand runs (JAX's import) was a 10-14-line
+    # KeyboardInterrupt traceback and exit -2
+    from tribojax._cli import _main
+
+    def interrupted():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(_main, "configure_process", interrupted)
+    assert _main.console(CONTACT) == 130
+    assert capsys.readouterr().err == "tribojax contact: interrupted (Ctrl-C)\n"
+
+
+def test_an_interrupt_swallowed_by_a_callback_still_ends_the_run_130(capsys, monkeypatch):
+    # ... and one landing in a garbage-collection callback ("Exception ignored in
+    # _xla_gc_callback") was lost: the run went on and exited 0
+    import gc
+
+    from tribojax._cli import _main
+
+    class Collected:
+        def __del__(self):
+            signal.raise_signal(signal.SIGINT)  # Python cannot raise it here: "ignored"
+
+    def configure():
+        Collected()
+        gc.collect()
+
+    monkeypatch.setattr(_main, "configure_process", configure)
+    assert _main.console(CONTACT) == 130
+    err = capsys.readouterr().err
+    assert err == "tribojax contact: interrupted (Ctrl-C)\n", err
+    assert signal.getsignal(signal.SIGINT) is not _main._on_signal  # the handler put back
+
+
+def test_a_real_ctrl_c_at_start_up(tmp_path):
+    code = "import sys; from tribojax._cli import entry; sys.argv[0] = 'tribojax'; entry()"
+    proc = subprocess.Popen([sys.executable, "-c", code, *CONTACT], stderr=subprocess.PIPE,
+                            text=True)  # fmt: skip
+    time.sleep(0.6)  # importing JAX
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and err == "tribojax contact: interrupted (Ctrl-C)\n", err

@@ -20,7 +20,8 @@ def _ramped_sine(n=3000, fs=1024.0, A=0.02, f=1.0):
     return t, A * ramp * np.sin(2 * np.pi * f * t)
 
 
-def _numpy_jenkins(F=8.0e3, K=3.0e6, f0=500.0, noise=50.0, seed=15, noise_std=None):
+def _numpy_jenkins(F=8.0e3, K=3.0e6, f0=500.0, noise=50.0, seed=15, noise_std=None,
+                   frequency=1.0):  # fmt: skip
     t, u = _ramped_sine()
     z, force = 0.0, np.zeros_like(u)
     for i in range(1, len(u)):  # elastic predictor, return to the slip limit: no tribojax code
@@ -28,7 +29,7 @@ def _numpy_jenkins(F=8.0e3, K=3.0e6, f0=500.0, noise=50.0, seed=15, noise_std=No
         force[i] = K * z
     rng = np.random.default_rng(seed)
     return tj.HysteresisLoop(t, u, force + f0 + noise * rng.standard_normal(len(u)),
-                             noise_std=noise_std, frequency=1.0)  # fmt: skip
+                             noise_std=noise_std, frequency=frequency)  # fmt: skip
 
 
 def test_jenkins_recovered_from_numpy_stepping():
@@ -118,3 +119,26 @@ def test_fit_measured_damper_excerpt(model):
     assert 0.1 < h.nrmse < 0.5  # backlash and rig oscillation are not in these models
     pred, nrmse = tj.predict_history(h, loop)
     assert nrmse == pytest.approx(h.nrmse, rel=1e-6) and pred.shape == loop.f[::2].shape
+
+
+def test_a_joint_fit_of_records_far_apart_is_refused_unless_asked(tmp_path, capsys):
+    # issue 72 row 8: records whose force scales are 10^4 apart (a unit slip: kN logged as N)
+    # were fitted together without a word, the small one worse than a constant
+    from tribojax._cli._main import main
+
+    big = _numpy_jenkins()
+    small = _numpy_jenkins(F=0.8, K=300.0, f0=0.05, noise=0.005, seed=16)
+    with pytest.raises(ValueError, match=r"loops\[0\].*1e\+04 times that of loops\[1\]"):
+        tj.fit_history([big, small], "jenkins")
+    paths = [tmp_path / "big.csv", tmp_path / "small.csv"]
+    for loop, path in zip((big, small), paths):
+        tj.write_loop(loop, path)
+    cmd = ["fit", *map(str, paths), "--model", "jenkins", "--out", str(tmp_path / "f")]
+    assert main(cmd) == 2
+    assert "--mixed-scales" in capsys.readouterr().err
+    # asked: fitted, and the record the joint model fits worse than a constant is named
+    assert main([*cmd, "--mixed-scales"]) in (0, 1)
+    d = json.loads((tmp_path / "f" / "fit.json").read_text())
+    worse = [r["source"] for r in d["records"] if r["nrmse"] >= 1.0]
+    err = capsys.readouterr().err
+    assert worse and all(f"{w}: NRMSE" in err and "worse than its mean" in err for w in worse)

@@ -23,6 +23,7 @@ import tribojax as tj  # noqa: E402
 from tribojax._cli import _fit as cli_fit  # noqa: E402
 from tribojax._cli._main import main  # noqa: E402
 from tribojax._io._records import read_record  # noqa: E402
+from tribojax._limits import SAMPLE_FLOORS  # noqa: E402
 from tribojax._tables import read_table  # noqa: E402
 
 FAST = settings(max_examples=30, deadline=None,
@@ -41,6 +42,9 @@ def slip_runs(draw):
     # any float64 within the plausible ranges (SAMPLE_LIMITS: beyond them a record is refused)
     accel = np.array(draw(st.lists(st.floats(-1e4, 1e4), min_size=n, max_size=n)))
     slip = np.array(draw(st.lists(st.floats(-1.0, 1.0), min_size=n, max_size=n)))
+    for x, name in ((accel, "accel"), (slip, "slip")):  # a record, not a unit error (×1e-300)
+        if np.max(np.abs(x)) < SAMPLE_FLOORS[name]:
+            x[draw(st.integers(0, n - 1))] = SAMPLE_FLOORS[name]
     mass = draw(st.floats(1e-6, 1e6))
     noise = draw(st.none() | st.floats(1e-15, 1.0))
     return tj.SlipRun(t, accel, slip, mass=mass, noise_std=noise)

@@ -4,6 +4,9 @@ This module imports nothing, so `tribojax --help` and argument errors are answer
 importing JAX; each name's one home is here, and the modules that use it import it from here.
 """
 
+INTERRUPTED = 130
+"""The command line's exit status after Ctrl-C or SIGTERM (128 + SIGINT)."""
+
 RECORD_FORMATS = ("slip", "loop", "brfd", "epos_steady", "epos", "curve")
 """The record formats `tribojax.read_record` reads (`format=`; detected when None)."""
 
@@ -41,3 +44,8 @@ SAMPLE_FLOORS = {"u": 1e-15, "f": 1e-12, "slip": 1e-15, "accel": 1e-12}
 # the model file states): far beyond any contact (a stiffness of 10^20 N/m, a force of 10^20 N)
 # and far below where a prediction overflows float64. A value beyond it is refused by name.
 PARAMETER_LIMIT = 1e20
+
+# The largest ratio of two records' force scales (sd of the force, at one band tension) that a
+# joint fit takes without being asked: beyond it the small record weighs nothing in the fit (two
+# orders of magnitude: a unit error, or records of another device).
+JOINT_SCALE_RATIO = 100.0

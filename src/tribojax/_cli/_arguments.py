@@ -168,6 +168,9 @@ def fit_arguments(parser) -> None:
         "the measured history, best: the first four, lowest BIC (default for a non-periodic "
         "history); friction curves: lugre (the steady law, default) or best",
     )
+    parser.add_argument("--mixed-scales", action="store_true",
+                        help="several records: fit them together even when their force scales "
+                        "differ by more than 100x (refused otherwise)")  # fmt: skip
     parser.add_argument("--from", dest="from_model", default=None, metavar="MODEL.json",
                         help="fit the model saved in a fit.json or discovery.json (with the "
                         "effects discovery added) to this record, from its saved "

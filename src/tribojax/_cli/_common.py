@@ -22,6 +22,7 @@ import equinox as eqx
 from .._checks import runtime_message
 from .._decimate import decimate_record
 from .._io._files import sidecar_path, write_json_atomic
+from .._limits import INTERRUPTED
 from .._plot import figure, save_figure
 from ._lock import LockHeld, lock_stamp, take_lock
 
@@ -46,7 +47,6 @@ __all__ = [
 
 BAD_INPUT = 2  # malformed input, a parameter out of range or a refused output
 FAILED = 1  # the computation failed (did not converge, the model could not be evaluated)
-INTERRUPTED = 130  # Ctrl-C (128 + SIGINT)
 
 _PROG = ["tribojax"]  # "tribojax <cmd>" of the running subcommand, for messages
 

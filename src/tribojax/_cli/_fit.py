@@ -72,7 +72,8 @@ def run_fit(args) -> int:
         with progress(args, "fit") as bar:
             if len(records) > 1:  # one element's parameters (+ f0) for all of them
                 result, curves = fit_history_record(records, args.model or "best", args.max_steps,
-                                                    start, decimate_factor(args) or 1)  # fmt: skip
+                                                    start, decimate_factor(args) or 1,
+                                                    args.mixed_scales)  # fmt: skip
             else:
                 result, curves = fits(full, args, start, bar.note)
         result["wall_time_s"] = time.perf_counter() - t0
@@ -137,6 +138,10 @@ def uncertainty_warnings(result: dict) -> list[str]:
             f"the residuals contradict the stated noise (reduced chi2 = "
             f"{result['reduced_chi2']:.3g}): standard errors are scaled by the residual"
         )
+    for r in result.get("records", []):
+        if r["nrmse"] >= 1.0:
+            out.append(f"{r['source']}: NRMSE {r['nrmse']:.3g} — the joint model fits this "
+                       "record worse than its mean force would (a constant)")  # fmt: skip
     for d in result.get("unidentifiable", []):
         combo = " ".join(f"{v:+.3g}*{k}" for k, v in d["direction"].items() if abs(v) > 1e-3)
         out.append(

@@ -44,7 +44,7 @@ def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:
 
 
 def fit_history_record(loops, model: str, max_steps: int | None, start: dict,
-                       decimate: int = 1):  # fmt: skip
+                       decimate: int = 1, mixed_scales: bool = False):  # fmt: skip
     """Fit `model` (or every element for "best", chosen by the lowest BIC) through the
     displacement history of a loop or of several loops together (one parameter set), on every
     `decimate`-th sample, with at most `max_steps` LM steps (None: `MAX_STEPS`) from the
@@ -56,7 +56,8 @@ def fit_history_record(loops, model: str, max_steps: int | None, start: dict,
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
         steps = max_steps or MAX_STEPS
         fits[name] = fit_history(loops, name, start=given or None, max_steps=steps,
-                                 decimate=decimate, throw=False)  # fmt: skip
+                                 decimate=decimate, mixed_scales=mixed_scales,
+                                 throw=False)  # fmt: skip
     each = {k: [predict_history(h, lp) for lp in loops] for k, h in fits.items()}
     pred = {k: np.concatenate([force for force, _ in v]) for k, v in each.items()}
     f = np.concatenate([lp.f[::decimate] for lp in loops])
@@ -111,7 +112,8 @@ def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
                     "per-point scatter / sqrt(samples)")  # fmt: skip
     sides = {side: fit_steady_curve(curve, direction=sign, throw=False, **steps).as_dict()
              for side, sign in (("positive", 1), ("negative", -1))}
-    d[SAVED_KEY] = fitted_model(fit, str(curve.source), [curve]).as_dict() if fit.converged else None
+    saved = fitted_model(fit, str(curve.source), [curve]) if fit.converged else None
+    d[SAVED_KEY] = None if saved is None else saved.as_dict()
     d.update(model="lugre", nrmse=nrmse(resid, curve.friction),
              route="steady law with direction asymmetry T0", units=curve.units,
              per_direction=sides)  # fmt: skip

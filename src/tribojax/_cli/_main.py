@@ -6,9 +6,11 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 from typing import NoReturn
 
+from .._limits import INTERRUPTED
 from . import _arguments as A
 
 __all__ = ["SUBCOMMANDS", "build_parser", "main"]
@@ -105,14 +107,72 @@ def main(argv=None, *, configure: bool = False) -> int:
 
     module, function = args.target.split(":")
     run = getattr(importlib.import_module(f"{__package__}.{module}"), function)
+    if _CONSOLE[0]:  # the imports are over: from here an interrupt raises (`console`)
+        _RAISE[0] = True
+        if _INTERRUPTS:
+            raise KeyboardInterrupt
     return run_command(args.command, run, args, debug=debug)
 
 
+_INTERRUPTS: list = []  # Ctrl-C received by the console script's process
+_CONSOLE = [False]  # `console` is running `main`
+# whether an interrupt raises KeyboardInterrupt where it lands: not during the imports (raised
+# inside JAX's C++ module initialisation it aborts the process) nor after the command is over
+_RAISE = [False]
+
+
+def _on_signal(signum, frame):
+    _INTERRUPTS.append(signum)
+    if _RAISE[0]:
+        raise KeyboardInterrupt
+
+
+def _interrupted(argv) -> int:
+    name = " ".join(["tribojax", *[a for a in (argv or sys.argv[1:])[:1] if a[:1] != "-"]])
+    print(f"{name}: interrupted (Ctrl-C)", file=sys.stderr)
+    return INTERRUPTED
+
+
+def console(argv=None, *, restore: bool = True) -> int:
+    """The console script's run of `main` (the exit status): Ctrl-C (SIGINT) anywhere — during
+    the imports (recorded, raised once they are over), the computation, or after the outputs are
+    written — is exit 130 with one line.
+    An interrupt Python cannot raise where it lands (inside a garbage-collection callback of
+    JAX: "Exception ignored in ...") is still remembered and ends the run with 130, its
+    traceback not shown. `restore`: put the previous SIGINT handler back (else the handler
+    stays, recording only, until the process ends: `entry`)."""
+    before = signal.signal(signal.SIGINT, _on_signal)
+    hook = sys.unraisablehook
+
+    def quiet(u):  # an interrupt that landed in a callback: said once, below
+        if not isinstance(u.exc_value, KeyboardInterrupt):
+            hook(u)
+
+    sys.unraisablehook = quiet
+    _INTERRUPTS.clear()
+    _CONSOLE[0], _RAISE[0] = True, False
+    try:
+        status = main(argv, configure=True)
+    except KeyboardInterrupt:  # before the subcommand's own handler (imports, start-up)
+        status = None
+    finally:
+        _CONSOLE[0], _RAISE[0] = False, False
+        if restore:
+            signal.signal(signal.SIGINT, before)
+            sys.unraisablehook = hook
+    if status is None or (_INTERRUPTS and status != INTERRUPTED):
+        status = _interrupted(argv)
+    return status
+
+
 def entry() -> NoReturn:
-    """The console script: `main`, then an exit without the interpreter's teardown once the
-    command is over (its files are closed and written); why: docs/cli.md, "Exit"."""
-    status = main(configure=True)
+    """The console script: `console`, then an exit without the interpreter's teardown once the
+    command is over (its files are closed and written); why: docs/cli.md, "Exit". An interrupt
+    after the command is over still ends the process with 130."""
+    status = console(restore=False)
     sys.stdout.flush()
+    if _INTERRUPTS and status != INTERRUPTED:
+        status = _interrupted(None)
     sys.stderr.flush()
     os._exit(status)
 

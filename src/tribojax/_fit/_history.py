@@ -29,6 +29,7 @@ from .._friction._bouc_wen import BoucWen
 from .._friction._lugre import LuGre
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._loop import HysteresisLoop
+from .._limits import JOINT_SCALE_RATIO
 from .._results import RESULTS
 from ._engine import FitResult, fit_statistics, least_squares_fit, thrown
 from ._measures import nrmse
@@ -186,9 +187,23 @@ def _refuse_repeats(loops) -> None:
         seen[key] = i
 
 
+def _refuse_mixed_scales(loops, records) -> None:
+    """ValueError when two records' force scales (sd of the force over the band-tension ratio)
+    differ by more than `JOINT_SCALE_RATIO`."""
+    scales = [rec[3] / rec[4] for rec in records]
+    hi, lo = int(np.argmax(scales)), int(np.argmin(scales))
+    if scales[lo] > 0 and scales[hi] / scales[lo] > JOINT_SCALE_RATIO:
+        raise ValueError(
+            f"loops[{hi}] ({loops[hi].source}) has a force sd of {scales[hi]:.3g} N, "
+            f"{scales[hi] / scales[lo]:.3g} times that of loops[{lo}] ({loops[lo].source}, "
+            f"{scales[lo]:.3g} N): records more than {JOINT_SCALE_RATIO:g}x apart are not fitted "
+            "together unless asked (mixed_scales=True; tribojax fit --mixed-scales)")
+
+
 def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
                 max_steps: int = 300, rtol: float = 1e-8,
-                n_starts=(2.0,), throw: bool = True) -> HistoryFit:  # fmt: skip
+                n_starts=(2.0,), mixed_scales: bool = False,
+                throw: bool = True) -> HistoryFit:  # fmt: skip
     """Fit one friction element (+ a force offset f0, N) to one or several measured histories.
 
     Args:
@@ -210,6 +225,10 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
             (module docstring).
         max_steps, rtol: the budget and relative tolerance (atol 1e-3 rtol) of
             `LevenbergMarquardt.noise_floor`.
+        mixed_scales: fit records whose force scales (sd of the force, at the reference band
+            tension) differ by more than `JOINT_SCALE_RATIO` (100x) together; refused otherwise
+            (ValueError naming both): each record is weighted by its own scale, and a record
+            that far from the others is a unit error or another device.
         throw: raise `tribojax.FitError` when the fit does not succeed (default); False
             returns it with `.fit.result` saying so.
     Returns:
@@ -222,11 +241,14 @@ def fit_history(loops, model: str = "jenkins", *, start=None, decimate: int = 1,
     loops = [loops] if isinstance(loops, HysteresisLoop) else list(loops)
     _refuse_repeats(loops)
     records = _records(loops, decimate)
+    if not mixed_scales:
+        _refuse_mixed_scales(loops, records)
     spec = HISTORY_MODELS[model]
     init = _default_start(model, records)
     if model != "jenkins" and set(init) - set(start or {}):
         # the Jenkins fit (exact increments, fast) gives the slip force, stiffness and offset
-        mu_N, K_d, f0 = fit_history(loops, "jenkins", decimate=decimate, throw=False).fit.values
+        mu_N, K_d, f0 = fit_history(loops, "jenkins", decimate=decimate, mixed_scales=True,
+                                    throw=False).fit.values
         init.update({k: v for k, v in _starts(mu_N, K_d, f0, records).items() if k in init})
     init.update(start or {})
     unknown = set(init) - {n for n, _ in spec}

@@ -101,7 +101,8 @@ class HysteresisLoop(AbstractRecord):
         |velocity| (m/s), and the normal load and band tension (N) when known
         (`AbstractRecord.extent`)."""
         amp = 0.5 * float(np.ptp(self.u))
-        f, v = float(np.max(np.abs(self.f))), float(np.max(np.abs(np.diff(self.u) / np.diff(self.t))))
+        f = float(np.max(np.abs(self.f)))
+        v = float(np.max(np.abs(np.diff(self.u) / np.diff(self.t))))
         return {"amplitude": (amp, amp, "m"), "force": (f, f, "N"), "velocity": (v, v, "m/s"),
                 **metadata_extent(self, ("normal_load", "band_tension"))}  # fmt: skip
 

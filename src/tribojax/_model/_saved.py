@@ -38,9 +38,10 @@ class FittedModel:
     """A fitted model: `kind` (one of `KINDS`), `options` (how its model is built on a record,
     e.g. {"alpha": 1.0} for a slip run, {"element": "jenkins"} for a loop), `parameters` and their
     `units` (physical), `effects` (`SavedEffect`s in the order they were added) and `source`
-    (the record it was fitted to), `fitted_range` (the conditions of the records it was fitted on,
-    {quantity: {"min", "max", "unit"}}, `extent_of`; empty when not known). `as_dict()` is the saved form, `from_dict` reads it back;
-    `origin` (not saved) is where it was read from, named by the errors it meets."""
+    (the record it was fitted to), `fitted_range` (the conditions of the records it was fitted
+    on, {quantity: {"min", "max", "unit"}}, `extent_of`; empty when not known). `as_dict()` is
+    the saved form, `from_dict` reads it back; `origin` (not saved) is where it was read from,
+    named by the errors it meets."""
 
     kind: str
     parameters: dict
