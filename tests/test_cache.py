@@ -302,3 +302,60 @@ def test_a_stored_trace_filed_under_another_key_is_traced_again_and_rewritten(tm
     assert second.read_bytes() != first.read_bytes()  # rewritten for its own key
     oscillator.programs.pop(second.stem)
     np.testing.assert_array_equal(oscillator(*args(13)), got)  # and read back from now on
+
+
+def test_unreadable_compilation_cache_entries_are_removed(tmp_path):
+    # issue 72 row 13: JAX warns on every read of a corrupted entry and never rewrites it
+    from jax._src.compilation_cache import compress_executable
+
+    from tribojax._cache import repair_compilation_cache
+
+    good, bad = tmp_path / "jit_good-abc-cache", tmp_path / "jit_bad-def-cache"
+    good.write_bytes(compress_executable(b"\0\0\0\1" + b"an executable" * 10))
+    bad.write_bytes(compress_executable(b"\0\0\0\1" + b"an executable" * 10)[:-7])  # truncated
+    (tmp_path / "jit_bad-def-atime").write_bytes(b"\0" * 8)
+    assert repair_compilation_cache(tmp_path) == [bad]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["jit_good-abc-cache"]
+    assert repair_compilation_cache(tmp_path) == []
+    assert repair_compilation_cache(tmp_path / "absent") == []
+
+
+def test_the_command_repairs_the_cache_once_and_says_so(capsys, monkeypatch):
+    import warnings
+
+    import tribojax._cache as cache
+    from tribojax._cli import _main
+
+    def configure():  # JAX's warnings while reading two damaged entries
+        for name in ("jit_a", "jit_b"):
+            warnings.warn(f"{cache.READ_ERROR} for '{name}': XlaRuntimeError: corrupted")
+
+    monkeypatch.setattr(_main, "configure_process", configure)
+    monkeypatch.setattr(cache, "repair_compilation_cache", lambda: [Path("x"), Path("y")])
+    assert _main.console(["contact", "--D", "2.5", "--G", "1e-9", "--load", "5"]) == 0
+    err = capsys.readouterr().err
+    assert cache.READ_ERROR not in err
+    assert "2 compiled programs could not be read from the cache; removed 2 unreadable" in err
+
+
+@pytest.mark.slow
+def test_a_corrupted_cache_is_repaired_by_the_next_run(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k != "EQX_ON_ERROR"}
+    env["TRIBOJAX_CACHE_DIR"] = str(tmp_path / "c")
+    code = "import sys; from tribojax._cli import entry; sys.argv[0] = 'tribojax'; entry()"
+    cmd = [sys.executable, "-c", code, "hysteresis", "--n", "4", "--out", str(tmp_path / "h"),
+           "--force"]  # fmt: skip
+
+    def run():
+        out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+        assert out.returncode == 0, out.stderr[-2000:]
+        return out.stderr
+
+    run()
+    entries = sorted((tmp_path / "c" / "jax").glob("*-cache"))
+    assert entries
+    for e in entries:
+        e.write_bytes(b"not a program" * 10)
+    err = run()
+    assert "Error reading" not in err and f"removed {len(entries)} unreadable entries" in err
+    assert run() == ""  # stored again, read back without a word

@@ -458,6 +458,20 @@ def test_a_bad_fit_workers_setting_is_one_line_exit_2(tmp_path, value):
     assert "TRIBOJAX_FIT_WORKERS" in line and repr(value) in line
 
 
+def test_a_bad_equinox_error_setting_is_one_line_exit_2(tmp_path):
+    # the command reads EQX_ON_ERROR for equinox (its default: nan); a bad value was equinox's
+    # import-time traceback
+    import subprocess
+    import sys
+
+    cmd = [sys.executable, "-m", "tribojax._cli._main", "contact", "--D", "2.5", "--G", "1e-9",
+           "--load", "5"]  # fmt: skip
+    out = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path,
+                         env={**os.environ, "EQX_ON_ERROR": "maybe"})  # fmt: skip
+    assert out.returncode == 2, out.stderr[-2000:]
+    assert "EQX_ON_ERROR = 'maybe'" in _one_error_line(out.stderr, "contact")
+
+
 def test_deeply_nested_json_is_refused_naming_the_file(tmp_path, capsys):
     # a sidecar and a model file nested 100,000 deep: exit 2 naming the file, no RecursionError
     deep = "[" * 100_000 + "]" * 100_000

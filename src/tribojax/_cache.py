@@ -15,6 +15,9 @@ import sys
 from pathlib import Path
 
 OFF = ("off", "0", "no", "false")
+READ_ERROR = "Error reading persistent compilation cache entry"
+"""The start of JAX's warning for a cache entry it cannot read (it compiles the program again
+but never rewrites the entry: the warning comes back on every run until the entry goes)."""
 _FOLDER: list[Path] = []  # the folder chosen by `use_compilation_cache` in this process
 
 
@@ -71,3 +74,34 @@ def use_compilation_cache(folder=None) -> Path | None:
 def export_dir() -> Path | None:
     """The folder of stored traces (`use_compilation_cache`), or None when none was chosen."""
     return _FOLDER[0] / "export" if _FOLDER else None
+
+
+def repair_compilation_cache(folder=None) -> list[Path]:
+    """Remove the entries of JAX's compilation cache in `folder` (default: the folder this
+    process uses, `jax_compilation_cache_dir`) that cannot be read back: a truncated or
+    corrupted file fails its compression's checksum. JAX warns on every read of such an entry
+    and never replaces it; once removed, the program is stored again the next time it is
+    compiled. Returns the entries removed. The `tribojax` command calls it after a run in
+    which JAX reported an unreadable entry."""
+    import jax
+
+    try:
+        from jax._src.compilation_cache import decompress_executable  # (private: may move)
+    except ImportError:
+        return []
+    folder = folder if folder is not None else jax.config.jax_compilation_cache_dir
+    if not folder or not Path(folder).is_dir():
+        return []
+    removed = []
+    for entry in sorted(Path(folder).glob("*-cache")):
+        try:
+            ok = len(decompress_executable(entry.read_bytes())) > 8
+        except OSError:
+            continue  # unreadable for another reason (permissions): not ours to delete
+        except Exception:  # noqa: BLE001  (zstd and zlib raise their own errors)
+            ok = False
+        if not ok:
+            entry.unlink(missing_ok=True)
+            entry.with_name(entry.name[: -len("-cache")] + "-atime").unlink(missing_ok=True)
+            removed.append(entry)
+    return removed

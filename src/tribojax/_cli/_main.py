@@ -8,8 +8,10 @@ import importlib
 import os
 import signal
 import sys
+import warnings
 from typing import NoReturn
 
+from .._cache import READ_ERROR
 from .._limits import INTERRUPTED
 from . import _arguments as A
 
@@ -79,6 +81,10 @@ def configure_process() -> None:
     """
     if "equinox" not in sys.modules:  # equinox reads it once, on import
         os.environ.setdefault("EQX_ON_ERROR", "nan")
+        given = os.environ["EQX_ON_ERROR"]
+        if given not in ("raise", "breakpoint", "nan", "off"):  # equinox's traceback otherwise
+            raise ValueError(f"EQX_ON_ERROR = {given!r}: allowed 'raise', 'breakpoint', 'nan' "
+                             "(the command's default) or 'off'")  # fmt: skip
     from .. import _parallel  # noqa: F401  (TRIBOJAX_FIT_WORKERS checked now: exit 2, one line)
     from .._cache import OFF, use_compilation_cache
     from .._xla import use_one_kernel
@@ -149,6 +155,15 @@ def console(argv=None, *, restore: bool = True) -> int:
             hook(u)
 
     sys.unraisablehook = quiet
+    shown, unreadable = warnings.showwarning, []
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if str(message).startswith(READ_ERROR):  # repaired below, said once
+            unreadable.append(message)
+        else:
+            shown(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = show
     _INTERRUPTS.clear()
     _CONSOLE[0], _RAISE[0] = True, False
     try:
@@ -157,9 +172,17 @@ def console(argv=None, *, restore: bool = True) -> int:
         status = None
     finally:
         _CONSOLE[0], _RAISE[0] = False, False
+        warnings.showwarning = shown
         if restore:
             signal.signal(signal.SIGINT, before)
             sys.unraisablehook = hook
+    if unreadable:
+        from .._cache import repair_compilation_cache
+
+        gone = repair_compilation_cache()
+        print(f"tribojax: {len(unreadable)} compiled programs could not be read from the cache; "
+              f"removed {len(gone)} unreadable entries (stored again when next compiled)",
+              file=sys.stderr)  # fmt: skip
     if status is None or (_INTERRUPTS and status != INTERRUPTED):
         status = _interrupted(argv)
     return status
