@@ -63,7 +63,7 @@ LAYERS = (
     ("discovery", {"discovery"}),
     ("prediction", {"_predict"}),
     ("public API", {""}),
-    ("command line", {"_cli"}),
+    ("command line", {"_cli", "__main__"}),
 )
 LAYER_OF = {unit: (i, name) for i, (name, units) in enumerate(LAYERS) for unit in units}
 

@@ -68,10 +68,34 @@ def test_a_lock_left_by_a_dead_run_is_taken_over(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "taking over the lock" in err and f"process {dead.stdout.strip()}" in err
     assert sorted(p.name for p in out.iterdir()) == ["r.json"]
-    # a live owner (this process) still keeps a second run out
-    (out / ".s.json.lock").write_text(f"{os.getpid()}\n")
+    # a live owner (this process, stamped as a run stamps it) still keeps a second run out
+    from tribojax._cli._lock import lock_stamp
+
+    (out / ".s.json.lock").write_text(lock_stamp())
     assert main([*CONTACT, "--json", str(out / "s.json")]) == 2
     assert "another tribojax run is writing" in _err_line(capsys, "contact")
+
+
+def test_a_bare_or_empty_lock_of_no_run_is_taken_over(tmp_path, capsys):
+    # issue 72 probe: a lock holding only the id of a live process that is not a tribojax run
+    # (an older stamp, or written by hand), or an empty one left by a writer killed before it
+    # wrote its stamp, blocked the folder forever
+    out = tmp_path / "c"
+    out.mkdir()
+    sleeper = subprocess.Popen(["sleep", "60"])
+    try:
+        (out / ".r.json.lock").write_text(f"{sleeper.pid}\n")
+        assert main([*CONTACT, "--json", str(out / "r.json")]) == 0
+        assert f"process {sleeper.pid}" in capsys.readouterr().err
+    finally:
+        sleeper.kill()
+        sleeper.wait()
+    empty = out / ".s.json.lock"
+    empty.write_text("")
+    assert main([*CONTACT, "--json", str(out / "s.json")]) == 2  # a writer may be stamping it
+    os.utime(empty, (time.time() - 60, time.time() - 60))
+    assert main([*CONTACT, "--json", str(out / "s.json")]) == 0
+    assert "no process recorded" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("sig", ["SIGTERM", "SIGINT"])

@@ -186,3 +186,26 @@ def test_a_joint_fit_spans_its_records():
     assert span["amplitude"] == {"min": min(amps), "max": max(amps), "unit": "m"}
     assert span["normal_load"] == {"min": N, "max": 2 * N, "unit": "N"}
 
+
+
+def test_a_model_not_finite_on_the_record_writes_nothing(saved, tmp_path, capsys):
+    # a value inside its range whose prediction is not finite (μN = 5e-324: K_d·u/μN overflows)
+    record, fit = saved
+    model = _edited(tmp_path, fit, parameters__mu_N=5e-324)
+    out = tmp_path / "p"
+    assert main(["predict", str(model), str(record), "--out", str(out)]) == 1
+    assert "not finite on this record (no file written)" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_key_given_twice_is_refused_naming_it(saved, tmp_path, capsys):
+    # which of two values is meant cannot be told: JSON parsers keep the last one silently
+    record, fit = saved
+    text = json.dumps(fit).replace('"K_d": ', '"K_d": 1.0, "K_d": ', 1)
+    model = tmp_path / "twice.json"
+    model.write_text(text)
+    assert main(["predict", str(model), str(record), "--out", str(tmp_path / "p")]) == 2
+    assert "the key 'K_d' appears twice" in capsys.readouterr().err
+    assert main(["fit", str(record), "--start", "mu_N=1", "mu_N=2", "--out",
+                 str(tmp_path / "f")]) == 2  # fmt: skip
+    assert "mu_N is given twice" in capsys.readouterr().err

@@ -26,13 +26,29 @@ class DataFileWarning(UserWarning):
     message names the file and the lines."""
 
 
+class _DuplicateKey(ValueError):
+    pass
+
+
+def _unique_keys(pairs) -> dict:
+    out = {}
+    for key, value in pairs:
+        if key in out:
+            raise _DuplicateKey(key)
+        out[key] = value
+    return out
+
+
 def read_json(path):
     """(the parsed JSON of `path`, its text): the one JSON reader of data, sidecar and model
     files (`read_text`'s encodings). DataFileError naming the file, and the line, for text that
-    is not JSON or is nested too deeply to be a tribojax file."""
+    is not JSON, is nested too deeply to be a tribojax file, or repeats a key in one object."""
     text = read_text(path)
     try:
-        return json.loads(text), text
+        return json.loads(text, object_pairs_hook=_unique_keys), text
+    except _DuplicateKey as err:
+        raise DataFileError(f"{path}: the key {err.args[0]!r} appears twice in one object (which "
+                            "value is meant?)") from None  # fmt: skip
     except json.JSONDecodeError as err:
         raise DataFileError(f"{path}, line {err.lineno}: not valid JSON ({err.msg} at column "
                             f"{err.colno}; a truncated file?)") from None  # fmt: skip

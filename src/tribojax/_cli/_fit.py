@@ -119,6 +119,8 @@ def _parse_start(items) -> dict:
     start = {}
     for item in items or ():
         name, sep, value = item.partition("=")
+        if sep and name.strip() in start:
+            raise CommandError(f"--start {item!r}: {name.strip()} is given twice")
         try:
             start[name.strip()] = float(value)
         except ValueError:
@@ -130,6 +132,11 @@ def _parse_start(items) -> dict:
     return start
 
 
+HARDLY_EXPLAINED = 0.9
+"""A record of a joint fit with an NRMSE at or above this (the model explains under 19 % of its
+variance) is named in a warning."""
+
+
 def uncertainty_warnings(result: dict) -> list[str]:
     """Warnings for a fit result whose noise or identifiability is in doubt."""
     out = []
@@ -139,9 +146,10 @@ def uncertainty_warnings(result: dict) -> list[str]:
             f"{result['reduced_chi2']:.3g}): standard errors are scaled by the residual"
         )
     for r in result.get("records", []):
-        if r["nrmse"] >= 1.0:
-            out.append(f"{r['source']}: NRMSE {r['nrmse']:.3g} — the joint model fits this "
-                       "record worse than its mean force would (a constant)")  # fmt: skip
+        if r["nrmse"] >= HARDLY_EXPLAINED:
+            than = "worse than" if r["nrmse"] >= 1.0 else "hardly better than"
+            out.append(f"{r['source']}: NRMSE {r['nrmse']:.5g} — the joint model fits this "
+                       f"record {than} its mean force would (a constant: NRMSE 1)")  # fmt: skip
     for d in result.get("unidentifiable", []):
         combo = " ".join(f"{v:+.3g}*{k}" for k, v in d["direction"].items() if abs(v) > 1e-3)
         out.append(

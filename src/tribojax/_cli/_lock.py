@@ -2,13 +2,16 @@
 
 The lock file holds the writing process's id, its start time (Linux: `/proc/PID/stat`) and the
 host. A lock whose process no longer runs, or whose id now belongs to another process (started at
-another time: the id was reused), is taken over with a note; one from another host is held.
+another time: the id was reused), is taken over with a note; one from another host is held. A
+bare process id (no start time) is taken over when that process is not a tribojax run, an
+empty or unreadable stamp when older than `WRITE_GRACE_S`.
 """
 
 from __future__ import annotations
 
 import os
 import socket
+import time
 from pathlib import Path
 
 
@@ -32,8 +35,12 @@ def _stale(lock: Path) -> int | None:
     try:
         pid_s, *rest = lock.read_text().split()
         pid = int(pid_s)
-    except (OSError, ValueError):
-        return None  # unreadable or being written: treat as held
+    except OSError:
+        return None  # unreadable: treat as held
+    except ValueError:  # empty or not a stamp: being written now, or left by a killed writer
+        return 0 if _age(lock) > WRITE_GRACE_S else None
+    if not rest and not _is_tribojax(pid):  # a bare process id (an older stamp, by hand)
+        return pid
     started, host = (rest + ["-", ""])[:2]
     if host and host != socket.gethostname():
         return None
@@ -45,6 +52,26 @@ def _stale(lock: Path) -> int | None:
         pass
     now = _start_time(pid)
     return pid if started != "-" and now != "-" and now != started else None
+
+
+WRITE_GRACE_S = 10.0
+"""A lock without a stamp older than this (s) was left by a writer killed before it wrote one."""
+
+
+def _age(lock: Path) -> float:
+    try:
+        return time.time() - lock.stat().st_mtime
+    except OSError:
+        return 0.0
+
+
+def _is_tribojax(pid: int) -> bool:
+    """Whether process `pid` may be a tribojax run (its command line names tribojax; True where
+    it cannot be read)."""
+    try:
+        return b"tribojax" in Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return True
 
 
 class LockHeld(Exception):
@@ -66,6 +93,7 @@ def take_lock(lock: Path, target: Path) -> tuple[int, str | None]:
                     f"another tribojax run is writing {target} (lock file {lock}); wait for it, "
                     "choose another --out, or delete the lock if no run is active"
                 ) from None
-            note = f"taking over the lock {lock}: its run (process {pid}) is no longer running"
+            who = f"(process {pid})" if pid else "(no process recorded)"
+            note = f"taking over the lock {lock}: its run {who} is no longer running"
             lock.unlink(missing_ok=True)
     raise AssertionError("unreachable")

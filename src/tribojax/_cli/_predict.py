@@ -24,7 +24,6 @@ from ._common import (
     FAILED,
     CommandError,
     claim_outputs,
-    error,
     plot_model_and_residual,
     refused_outputs,
     warn,
@@ -47,6 +46,9 @@ def run_predict(args) -> int:
         with warnings.catch_warnings():  # said below, once, as the command's warnings
             warnings.simplefilter("ignore", UserWarning)
             pred = predict(model, record, initial=args.initial)
+        if not (np.all(np.isfinite(pred.predicted)) and np.isfinite(pred.nrmse)):
+            raise CommandError("the model is not finite on this record (no file written)",
+                               status=FAILED)  # fmt: skip
         data = pred.as_dict()
         data["model_file"] = str(model_path)
         data["initial"] = args.initial or model.options.get("initial", "rest")
@@ -75,6 +77,4 @@ def run_predict(args) -> int:
     if pred.extrapolation is None:
         warn(f"{model_path} saves no fitted range (written before it was kept): whether the "
              "record lies beyond the conditions it was fitted on is not known")  # fmt: skip
-    if not (np.all(np.isfinite(pred.predicted)) and np.isfinite(pred.nrmse)):
-        return error("the model is not finite on this record", status=FAILED)
     return 0

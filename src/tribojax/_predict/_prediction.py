@@ -119,6 +119,10 @@ def load_model(path) -> FittedModel:
     d, _ = read_json(path)  # DataFileError naming the file
     saved, where = d, str(path)
     if isinstance(d, dict) and "format" not in d:
+        if SAVED_KEY in d and d[SAVED_KEY] is None:
+            why = d.get("not_a_result") or d.get("message") or "the fit did not succeed"
+            raise ValueError(f"{path}: field '{SAVED_KEY}' is null: the fit saved no model "
+                             f"({why})")  # fmt: skip
         if d.get(SAVED_KEY) is None:
             raise ValueError(f"{path}: no field '{SAVED_KEY}' (written by `tribojax fit` or "
                              "`discover` of this version for a slip run, loop, history or "

@@ -11,7 +11,6 @@ from .._fit._engine import value_and_jacobian
 from .._fit._measures import delta_bic
 from .._fit._noise import ar1_inflation
 from .._model import K_MAX, SOLVER, EffectDesign, pack_designs, padded_args, padded_residual
-from .._parallel import in_parallel
 
 
 def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
@@ -55,16 +54,17 @@ def _knob_key(knobs):
 
 
 def prefetch_columns(baseline, state, designs, knob_cache: dict) -> None:
-    """Fill `knob_cache` with the knob Jacobians that `_columns` of `designs` will need,
-    computed side by side (`in_parallel`; e.g. one per Stribeck grid v_s)."""
+    """Fill `knob_cache` with the knob Jacobians that `_columns` of `designs` will need (e.g.
+    one per Stribeck grid v_s), one after another: two of these programs executed side by side
+    on a slip run of 5,000 samples never returned (XLA:CPU, jax 0.10.2, 2 cores, failures as
+    NaN: every thread waiting, none computing; docs/performance.md)."""
     p = len(baseline.param_names)
     todo = {}
     for d in designs:
         knobs = _design_knobs(baseline, state, d)
         if knobs is not None and _knob_key(knobs) not in knob_cache:
             todo[_knob_key(knobs)] = knobs
-    results = in_parallel([lambda k=k: _knob_jacobian(baseline, state.theta[:p], k)
-                           for k in todo.values()])  # fmt: skip
+    results = [_knob_jacobian(baseline, state.theta[:p], k) for k in todo.values()]
     knob_cache.update(zip(todo, results))
 
 
