@@ -45,6 +45,7 @@ def test_jenkins_recovered_from_numpy_stepping():
 @pytest.mark.parametrize("stated, chi2, consistent", [
     (50.0, 1.0, True),  # the noise the record states is its noise
     (50.0 / 4.8, 4.8**2, False),  # a residual 4.8x the stated noise: contradicted
+    (50.0 * 5, 1 / 25, False),  # 5x below it: an overstated noise (errors 5x too large)
     (None, 1.0, True),  # none stated: the first-difference estimate of the residual
 ])  # fmt: skip
 def test_a_history_fit_judges_its_residual_by_the_one_noise_rule(stated, chi2, consistent):
@@ -56,8 +57,10 @@ def test_a_history_fit_judges_its_residual_by_the_one_noise_rule(stated, chi2, c
     plain = tj.fit_history(_numpy_jenkins(), "jenkins")  # the same fit, the noise estimated
     np.testing.assert_allclose(h.fit.values, plain.fit.values, rtol=1e-12)
     # standard errors from the stated noise when the residual agrees with it, else from the
-    # residual: within the estimate's scatter of each other either way
-    np.testing.assert_allclose(h.fit.std_errors, plain.fit.std_errors, rtol=0.1)
+    # residual (within the estimate's scatter of each other), but never below the stated
+    # noise's: an overstated noise keeps its larger errors (and says so)
+    ratio = max(1.0, np.sqrt(1.0 / chi2))
+    np.testing.assert_allclose(h.fit.std_errors, ratio * plain.fit.std_errors, rtol=0.1)
 
 
 def test_the_history_route_of_the_command_uses_the_stated_noise(tmp_path, capsys):

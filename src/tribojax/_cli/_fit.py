@@ -140,7 +140,13 @@ variance) is named in a warning."""
 def uncertainty_warnings(result: dict) -> list[str]:
     """Warnings for a fit result whose noise or identifiability is in doubt."""
     out = []
-    if result.get("noise_consistent") is False:
+    if result.get("noise_consistent") is False and result["reduced_chi2"] < 1.0:
+        out.append(
+            f"the residuals are far below the stated noise (reduced chi2 = "
+            f"{result['reduced_chi2']:.3g}): it is overstated, and the standard errors it gives "
+            "are too large"
+        )
+    elif result.get("noise_consistent") is False:
         out.append(
             f"the residuals contradict the stated noise (reduced chi2 = "
             f"{result['reduced_chi2']:.3g}): standard errors are scaled by the residual"

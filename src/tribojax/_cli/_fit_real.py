@@ -35,7 +35,12 @@ def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:
         sigma_source=sigma_source,
         message=fit.message,
     )
-    if fit.noise_consistent is False:
+    if fit.noise_consistent is False and fit.reduced_chi2 < 1.0:
+        d["uncertainty_model"] = (
+            f"the residuals are far below the stated noise ({sigma_source}; reduced chi2 = "
+            f"{fit.reduced_chi2:.4g}): the standard errors, from the stated noise, are too large"
+        )
+    elif fit.noise_consistent is False:
         d["uncertainty_model"] = (
             f"the stated noise ({sigma_source}) is contradicted by the residuals (reduced chi2 = "
             f"{fit.reduced_chi2:.4g}): standard errors are scaled by sqrt(reduced chi2)"

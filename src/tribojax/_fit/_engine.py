@@ -19,6 +19,7 @@ from .._export import cached_jit
 from .._limits import MAX_STEPS
 from .._precision import ensure_x64
 from .._results import RESULTS, result_code, result_from_code, result_name
+from ._noise import ALPHA, chi2_sf
 from ._noise import noise_consistent as _noise_test
 from ._solver import _PROGRESS, FAILED_RESIDUAL, LevenbergMarquardt, gauss_newton_step
 
@@ -151,6 +152,10 @@ class FitResult:
         }
 
 
+OVERSTATED = 0.5
+"""A reduced χ² below this, and significantly so, contradicts a stated noise from below."""
+
+
 def fit_statistics(
     theta,
     r,
@@ -174,7 +179,9 @@ def fit_statistics(
     gives both, as the record models' fits pass: one compiled program instead of eager steps).
     With `sigma_known` and a χ² that `noise_consistent` rejects (or `noise_consistent` given
     False: a record model's full test) the stated noise is contradicted by the misfit:
-    `noise_consistent` is False and s² = RSS/(n − p) is used instead of 1.
+    `noise_consistent` is False and s² = RSS/(n − p) is used instead of 1. A residual far below
+    the stated noise (reduced χ² under `OVERSTATED` and in χ²'s lower α/3 tail: an overstated
+    noise) also gives `noise_consistent` False, with the stated noise's (too large) errors kept.
     """
     theta = np.asarray(theta, dtype=np.float64)
     r, J = np.asarray(r, dtype=np.float64), np.asarray(J, dtype=np.float64)
@@ -187,7 +194,12 @@ def fit_statistics(
     consistent = noise_consistent
     if consistent is None and sigma_known:  # the χ² part of the one noise test
         consistent = _noise_test(r, 1.0, n_params=p)[0]
+    # a residual far below the stated noise contradicts it too (its errors are too large); they
+    # are kept, not scaled down by the residual (a noiseless record would get zero errors)
+    overstated = bool(consistent and sigma_known and chi2 < OVERSTATED and n > p
+                      and 1.0 - chi2_sf(float(r @ r), n - p) < ALPHA / 3)  # fmt: skip
     scale2 = 1.0 if sigma_known and consistent else chi2
+    consistent = False if overstated else consistent
 
     def delta(T):
         # T·V·S⁻¹ over the determined directions; a parameter that moves along an undetermined
