@@ -40,14 +40,19 @@ def test_symmetric_cycle_and_load_ordering():
     assert np.all(np.diff(p[:, 0]) < 0)  # slip falls with the vacuum level (Table 4's trend)
 
 
-def test_gradients_of_phase_averages_match_finite_differences():
-    def phases(theta, **kw):
-        el = tj.PreSlipLuGre(theta[0], theta[1], theta[2], theta[3])
-        return tj.slip_phase_averages(el, rtol=1e-8, atol=1e-18, **kw) * 1e9
+def _phases(theta, **kw):
+    """wang2022's phase averages (nm) of the element (F_s, K_τ, C_τ, α) = θ."""
+    el = tj.PreSlipLuGre(theta[0], theta[1], theta[2], theta[3])
+    return tj.slip_phase_averages(el, rtol=1e-8, atol=1e-18, **kw) * 1e9
 
+
+_phases_jit = jax.jit(_phases)  # one program for the tests below
+
+
+def test_gradients_of_phase_averages_match_finite_differences():
+    phases, f = _phases, _phases_jit
     theta = jnp.array([ROW["F_s"], ROW["K_tau"], ROW["C_tau"], 1.2])
     J = np.asarray(jax.jit(jax.jacrev(phases))(theta))  # default adjoint
-    f = jax.jit(phases)
     for i in range(4):
         h = 1e-4 * float(theta[i])
         e = jnp.zeros(4).at[i].set(h)
@@ -104,19 +109,14 @@ def test_derivatives_wrt_mass_profile_and_save_times():
 
 
 def test_jit_and_vmap_invariance():
-    els = jax.vmap(lambda f: tj.PreSlipLuGre(f, ROW["K_tau"], ROW["C_tau"]))(jnp.array([0.6, 0.9]))
-    batched = np.asarray(jax.vmap(lambda e: tj.slip_phase_averages(e))(els))
-    loop = [np.asarray(tj.slip_phase_averages(tj.PreSlipLuGre(f, ROW["K_tau"], ROW["C_tau"])))
-            for f in (0.6, 0.9)]  # fmt: skip
+    thetas = jnp.array([[f, ROW["K_tau"], ROW["C_tau"], 1.0] for f in (0.6, 0.9)])
+    batched = np.asarray(jax.vmap(_phases)(thetas))
+    loop = [np.asarray(_phases(theta)) for theta in thetas]
     # vmapped adaptive stepping takes the union of the steps: agreement to the tolerance
     np.testing.assert_allclose(batched, np.stack(loop), rtol=1e-5)
-    el = tj.PreSlipLuGre(**ROW)
-    jitted = jax.jit(lambda e: tj.slip_phase_averages(e))(el)
     # an outer jit changes XLA's fusion and rounding; the adaptive steps then differ, so the
     # results agree to the solver tolerance (measured 2e-6), not to rounding
-    np.testing.assert_allclose(
-        np.asarray(jitted), np.asarray(tj.slip_phase_averages(el)), rtol=1e-5
-    )
+    np.testing.assert_allclose(np.asarray(_phases_jit(thetas[0])), loop[0], rtol=1e-5)
 
 
 @pytest.mark.slow
