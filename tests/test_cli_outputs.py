@@ -227,10 +227,14 @@ def test_an_interrupt_swallowed_by_a_callback_still_ends_the_run_130(capsys, mon
 
 
 def test_a_real_ctrl_c_at_start_up(tmp_path):
-    code = "import sys; from tribojax._cli import entry; sys.argv[0] = 'tribojax'; entry()"
-    proc = subprocess.Popen([sys.executable, "-c", code, *CONTACT], stderr=subprocess.PIPE,
-                            text=True)  # fmt: skip
-    time.sleep(0.6)  # importing JAX
+    # "ready" once the console script's module is imported (its handler is installed next);
+    # the interrupt then lands while the command imports JAX (~1-2 s)
+    code = ("import sys; from tribojax._cli import entry; print('ready', flush=True); "
+            "sys.argv[0] = 'tribojax'; entry()")  # fmt: skip
+    proc = subprocess.Popen([sys.executable, "-c", code, *CONTACT], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    assert proc.stdout.readline() == "ready\n"
+    time.sleep(0.2)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130 and err == "tribojax contact: interrupted (Ctrl-C)\n", err
