@@ -112,6 +112,7 @@ from ._model import fit_loop as fit_loop
 from ._model import fit_slip_run as fit_slip_run
 from ._model import loop_residuals as loop_residuals
 from ._model import slip_run_start as slip_run_start
+from ._predict import ExtrapolationWarning as ExtrapolationWarning
 from ._predict import Prediction as Prediction
 from ._predict import fitted_model as fitted_model
 from ._predict import load_model as load_model

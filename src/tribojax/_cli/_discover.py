@@ -14,9 +14,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .._io._record import extent_of
 from .._io._records import read_record
-from .._predict import load_model
+from .._predict import fitted_model, load_model
 from ..discovery import (
     curve_baseline,
     discover,
@@ -76,9 +75,8 @@ def run_discover(args) -> int:
             raise ValueError(f"{src}: {exc}") from exc
         data = report.as_dict()
         data["source"] = str(src)
-        if data["fitted_model"] is not None:
-            data["fitted_model"]["source"] = str(src)
-            data["fitted_model"]["fitted_range"] = extent_of([record])
+        if report.fitted is not None:  # named by the file, with the record's conditions
+            data["fitted_model"] = fitted_model(report, str(src), [record]).as_dict()
         data["decimation"] = reduction.as_dict() if reduction else None
         write_json_atomic(target, data, exclusive=not args.force)
         drew = plot(report, record, figure)

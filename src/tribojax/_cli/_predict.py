@@ -18,7 +18,7 @@ import numpy as np
 
 from .._io._files import write_text_atomic
 from .._io._records import read_record
-from .._predict import load_model, predict
+from .._predict import ExtrapolationWarning, load_model, predict
 from .._predict._prediction import describe_beyond
 from ._common import (
     FAILED,
@@ -44,7 +44,7 @@ def run_predict(args) -> int:
     with claim_outputs(src, targets, force=args.force):
         record = with_band_tension(read_record(src, args.format), args.band_tension, src)
         with warnings.catch_warnings():  # said below, once, as the command's warnings
-            warnings.simplefilter("ignore", UserWarning)
+            warnings.simplefilter("ignore", ExtrapolationWarning)
             pred = predict(model, record, initial=args.initial)
         if not (np.all(np.isfinite(pred.predicted)) and np.isfinite(pred.nrmse)):
             raise CommandError("the model is not finite on this record (no file written)",

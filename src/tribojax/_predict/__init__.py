@@ -3,6 +3,7 @@ never saw (`tribojax predict`)."""
 
 from .._model import RECORD_KINDS as RECORD_KINDS
 from ._prediction import SAVED_KEY as SAVED_KEY
+from ._prediction import ExtrapolationWarning as ExtrapolationWarning
 from ._prediction import Prediction as Prediction
 from ._prediction import fitted_model as fitted_model
 from ._prediction import load_model as load_model

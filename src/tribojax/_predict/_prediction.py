@@ -31,6 +31,11 @@ SAVED_KEY = "fitted_model"
 """The key of the saved model in fit.json and discovery.json."""
 
 
+class ExtrapolationWarning(UserWarning):
+    """`predict` on a record whose conditions lie beyond the model's fitted range (`beyond`);
+    the same entries are in `Prediction.extrapolation`."""
+
+
 @dataclasses.dataclass(frozen=True)
 class Prediction:
     """A fitted model evaluated on a record: the sample axis `x` (named `x_name`, e.g. time_s),
@@ -169,7 +174,7 @@ def predict(model: FittedModel, record, *, initial: str | None = None) -> Predic
     err = predicted - measured
     far = beyond(model.fitted_range, record.extent()) if model.fitted_range else None
     for d in far or ():
-        warnings.warn(describe_beyond(d), UserWarning, stacklevel=2)
+        warnings.warn(describe_beyond(d), ExtrapolationWarning, stacklevel=2)
     return Prediction(model, source, x_name, np.asarray(x), measured, predicted, unit,
                       nrmse(err, measured), rms(err), far)  # fmt: skip
 
