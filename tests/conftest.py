@@ -42,6 +42,18 @@ def model():
     return make_model()
 
 
+@pytest.fixture
+def storable_programs():
+    """For tests of values under jit/vmap/grad: the programs they trace hold tribojax's checks as
+    NaN (`failures_as_nan`) instead of raising host callbacks, so JAX's persistent cache keeps
+    them (a warm run does not compile them again); a failed check shows as a NaN that the test's
+    assertions catch. The raising checks under jit are tested on their own (test_checks.py)."""
+    from tribojax._checks import failures_as_nan
+
+    with failures_as_nan():
+        yield
+
+
 # --- compiled programs, counted from JAX's monitoring events ----------------------------------
 _COUNTS = {"compiled": 0, "from_cache": 0}
 _DESELECTED = [0]  # every xdist worker collects (and deselects) the whole suite

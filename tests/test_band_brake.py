@@ -70,6 +70,7 @@ def test_force_law_pieces():
     assert float(el.force(lo)) == pytest.approx(-P["F_neg"], rel=1e-12)
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_jit_vmap_and_gradients_against_finite_differences():
     _, u = _drive(n=301, seed=1)
     u = jnp.asarray(u)

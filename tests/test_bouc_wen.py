@@ -49,6 +49,7 @@ def test_sharp_limit_is_jenkins_and_slip_force_is_F_y():
     assert np.max(bw) == pytest.approx(F_Y, rel=1e-3)
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_grad_matches_finite_differences_and_jit_agrees():
     t = jnp.linspace(0.0, 1.0, 1001)
     u = A * jnp.sin(OMEGA * t)

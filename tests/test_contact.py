@@ -32,6 +32,10 @@ _grad = jax.jit(jax.grad(lambda p, F, w: _outputs(p, F) @ w, argnums=(0, 1)))
 _UNIT = np.eye(len(OUTPUTS))
 
 
+# no error paths here (test_checks.py): every program is traced with the checks as NaN
+pytestmark = pytest.mark.usefixtures("storable_programs")
+
+
 def test_load_balance_and_shares(model):
     out = jax.vmap(model)(jnp.asarray(TABLE3_LOADS))
     total = jax.vmap(lambda la: jnp.exp(model.log_total_load(la)))(jnp.log(out.a_l))

@@ -49,6 +49,7 @@ def test_model_reproduces_each_generator(effect, Ab):
     assert err < tol
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_effects_vanish_at_their_null_and_are_differentiable():
     base = disc.loop_baseline(hidden_effect_loop("none", 0.0, 2.0, 0))
     theta = jnp.log(jnp.array([MUN, KD]))

@@ -73,6 +73,7 @@ def test_constant_velocity_step_is_exact():
         )
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_constant_velocity_step_grad_and_jit():
     import jax
     import jax.numpy as jnp

@@ -71,6 +71,7 @@ def test_mindlin_kbar_against_scipy_quad():
     np.testing.assert_allclose(out.K_bar, [kbar(a) for a in Ab], rtol=0, atol=1e-10)
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_limits_peaks_and_energy():
     small = jnp.asarray([1e-3, 1e-2]) * A0
     m = _batch(MINDLIN, small)
@@ -109,6 +110,7 @@ _jr = jax.jit(jax.jacrev(_params), static_argnums=1)
 
 @pytest.mark.parametrize("cls", [tj.Jenkins, tj.Mindlin], ids=["jenkins", "mindlin"])
 @pytest.mark.parametrize("Ab", [0.5, 0.999, 1.001, 1.499, 1.501, 2.0, 4.0])
+@pytest.mark.usefixtures("storable_programs")
 def test_gradients_match_central_differences(cls, Ab):
     x = np.array([MU, N, KD, Ab * A0])
     J = np.asarray(_jf(jnp.asarray(x), cls))
@@ -134,6 +136,7 @@ def test_gradients_finite_at_branch_onsets(cls):
         assert np.isfinite(g)
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_jit_vmap_and_grad_under_vmap():
     A = jnp.asarray([0.3, 1.0, 1.5, 2.7]) * A0
     hb = jax.jit(tj.harmonic_balance)

@@ -131,6 +131,7 @@ def test_harmonic_response_rk4_route_matches_maxwell_oracle():
 
 
 @pytest.mark.parametrize("el", ELEMENTS, ids=IDS)
+@pytest.mark.usefixtures("storable_programs")
 def test_harmonic_response_matches_quadrature(el):
     A = jnp.asarray([0.6, 1.3, 2.4, 4.0]) * A0
     route = jax.jit(jax.vmap(lambda a: tj.harmonic_response(el, a, 100.0)))(A)

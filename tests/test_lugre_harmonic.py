@@ -74,6 +74,7 @@ def test_lugre_limits():
         assert float(response(abar * Z_MAX).W) > 0
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_lugre_harmonic_gradient_and_vmap():
     def c_eq(F_s):
         element = tj.PreSlipLuGre(F_s, K_TAU, C_TAU, 1.0)

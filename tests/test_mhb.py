@@ -19,6 +19,7 @@ def sdof(N=1.0, F=0.5, H=7, K_d=100.0, n_time=None):
 
 
 @pytest.mark.parametrize("element", [tj.Jenkins(0.3, 10.0, 1e3), tj.Mindlin(0.3, 10.0, 1e3)])
+@pytest.mark.usefixtures("storable_programs")
 def test_single_harmonic_aft_equals_harmonic_balance(element):
     # H = {1}: the AFT's first harmonic of the element's steady loop is K_eq·A and −C_eq·A·ω of
     # the quadrature route `harmonic_balance` (no FFT there), stick to gross slip
@@ -93,6 +94,7 @@ def test_continuation_passes_resonance_and_matches_time_stepping():
     assert d["result"] == "successful" and len(d["omega"]) == len(d["stable"])
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_hill_exponents_of_a_linear_structure():
     # no contact: x = e^{λt}, λ = −ζω_n ± iω_d; Hill's method gives Re λ = −C/(2M) exactly
     for C in (1.0, -0.4):
@@ -110,6 +112,7 @@ def test_hill_exponents_of_a_linear_structure():
         assert np.all(np.minimum(dist(lam.imag - w_d), dist(lam.imag + w_d)) < 1e-9)
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_amplitude_gradients_by_implicit_function_theorem():
     def amp(p):
         N, mu, K_d, k = p

@@ -49,6 +49,7 @@ def _steady_amplitude(omega, x0, v0, periods=40):
     return np.hypot(2 * np.mean(sol.y[0] * np.cos(th)), 2 * np.mean(sol.y[0] * np.sin(th)))
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_continuation_passes_the_folds_of_a_duffing_response():
     # harmonics 1 and 3 of a symmetric cubic; n_time = 16 is alias-free for x³ (harmonics <= 9)
     spring = CubicSpring(jnp.asarray(K3), 0)

@@ -79,6 +79,7 @@ def test_chain_bad_input_names_the_parameter():
         tj.LoopChain("iwan")
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_contact_and_loop_gradients_match_finite_differences():
     chain = tj.LoopChain("mindlin")
     params = {**REF, "A": 50e-9}
@@ -123,6 +124,7 @@ def test_elasticity_identities_of_the_contact_and_loop():
         np.testing.assert_allclose(row[name], ratio * row["A_bar"], rtol=1e-10, atol=1e-12)
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_mindlin_small_amplitude_limit():
     # wu2015 Eq 2 at small Ā: K̄ ≈ 1 − Ā/6, C̄ ≈ 2Ā/9 (docs/reproduction.md), so ∂lnC̄/∂lnA → 1 and
     # ∂lnK̄/∂lnA → −Ā/6; at A = 0.5 nm, Ā ≈ 0.014 and the next order is ~Ā

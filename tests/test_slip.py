@@ -12,6 +12,7 @@ ROW = dict(F_s=0.7372, K_tau=2.1478e7, C_tau=708.8274)  # wang2022 Table 3, 2 kP
 
 
 @pytest.mark.parametrize("F_s", [3.21, 6.42])
+@pytest.mark.usefixtures("storable_programs")
 def test_steady_acceleration_slip_matches_quasistatic_limit(F_s):
     # alpha = 1, a = const: z = m a / K and dz/dx = 1 - z/z_max give
     # slip = -z_max ln(1 - m a / F_s); m a / F_s = 0.1 and 0.05 here (at 0.321 the ratchet
@@ -49,6 +50,7 @@ def _phases(theta, **kw):
 _phases_jit = jax.jit(_phases)  # one program for the tests below
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_gradients_of_phase_averages_match_finite_differences():
     phases, f = _phases, _phases_jit
     theta = jnp.array([ROW["F_s"], ROW["K_tau"], ROW["C_tau"], 1.2])
@@ -108,6 +110,7 @@ def test_derivatives_wrt_mass_profile_and_save_times():
     assert np.all(np.abs(jf[:2, 0]) > 0) and np.all(np.abs(jf[:2, 1]) > 0)
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_jit_and_vmap_invariance():
     thetas = jnp.array([[f, ROW["K_tau"], ROW["C_tau"], 1.0] for f in (0.6, 0.9)])
     batched = np.asarray(jax.vmap(_phases)(thetas))

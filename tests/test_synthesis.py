@@ -84,6 +84,7 @@ def _f(D, G):
     return jnp.sum(tj.yk_heights(KEY, D, G, x, L=L, M=3, n_max=10) ** 2)
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_gradients_match_finite_differences():
     D, G = 2.6, 2e-9
     gD, gG = jax.grad(_f, argnums=(0, 1))(D, G)
@@ -94,6 +95,7 @@ def test_gradients_match_finite_differences():
     np.testing.assert_allclose(gG, fdG, rtol=1e-6)
 
 
+@pytest.mark.usefixtures("storable_programs")
 def test_jit_and_vmap():
     Ds = jnp.array([2.3, 2.6, 2.9])
     eager = jnp.stack([_f(D, 1e-9) for D in Ds])
