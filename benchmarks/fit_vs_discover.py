@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import re
 import shutil
@@ -68,6 +69,16 @@ LOOP_SPECS = (
     dlr.LoopRecordSpec("clean", "-", "high", False, 2032),
 )
 COMMAND_TIMEOUT_S = 1800
+CURVE = ROOT.parent / "shared/data/real/screwdrive/driveNo1/steady_state/0.096kg"
+
+
+@dataclasses.dataclass(frozen=True)
+class MeasuredCurve:
+    """A measured friction curve (a folder the `epos_steady` reader takes), compared as is."""
+
+    label: str
+    path: Path
+    kind: str = "curve"
 
 
 @contextlib.contextmanager
@@ -125,14 +136,15 @@ def _reduced(data) -> int | None:
 
 
 def compare(spec, path: Path, n_file: int, work: Path, decimate: str) -> dict:
-    """Run both commands on `path` and compare the fit with discover's baseline fit."""
-    loop = getattr(spec, "kind", "slip") == "loop"
+    """Run both commands on `path` (with `--decimate` unless it is "default": no options) and
+    compare the fit with discover's baseline fit; for a loop also `tj.fit_loop(tj.read_loop(path))`
+    (Python's defaults) with the command's fit."""
+    kind = getattr(spec, "kind", "slip")
+    loop = kind == "loop"
     d1, d2 = work / f"{path.stem}_fit", work / f"{path.stem}_discover"
-    fit_args = ["fit", str(path), "--out", str(d1), "--decimate", decimate]
-    if not loop:
-        fit_args += ["--alpha", "1"]
-    fit = run_command(fit_args, d1, "fit.json")
-    disc = run_command(["discover", str(path), "--out", str(d2), "--decimate", decimate],
+    options = [] if decimate == "default" else ["--decimate", decimate]
+    fit = run_command(["fit", str(path), "--out", str(d1), *options], d1, "fit.json")
+    disc = run_command(["discover", str(path), "--out", str(d2), *options],
                        d2, "discovery.json")  # fmt: skip
     fj, dj = fit["json"] or {}, disc["json"] or {}
     base = dj.get("baseline_fit") or {}
@@ -147,8 +159,14 @@ def compare(spec, path: Path, n_file: int, work: Path, decimate: str) -> dict:
                         "discover_se": s_disc.get(name), "abs_diff": diff,
                         "diff_over_se": diff / se if se > 0 else None}  # fmt: skip
     misfit = dj.get("misfit") or {}
+    python = None
+    if loop and p_fit:  # Python's defaults on the same file
+        py = tj.fit_loop(tj.read_loop(path), throw=False)
+        python = {name: {"python": float(v), "cli": p_fit[name],
+                         "relative_diff": abs(float(v) / p_fit[name] - 1.0)}
+                  for name, v in zip(py.names, py.values)}  # fmt: skip
     return {
-        "label": spec.label, "kind": "loop" if loop else "slip", "file": path.name,
+        "label": spec.label, "kind": kind, "file": path.name, "python_fit_loop": python,
         "samples_in_file": n_file, "decimate": decimate,
         "parameters": params,
         "only_in_fit": sorted(set(p_fit) - set(p_disc)),
@@ -218,7 +236,12 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default="benchmarks-out/fit_vs_discover.json", help="JSON written")
     ap.add_argument("--quick", action="store_true", help="one slip run and one loop")
-    ap.add_argument("--decimate", default="4", help="--decimate of both commands (default 4)")
+    ap.add_argument("--decimate", default="default",
+                    help="--decimate of both commands (default: none given, as a new user runs "
+                    "them)")  # fmt: skip
+    ap.add_argument("--curve", default=str(CURVE),
+                    help="a measured friction curve compared too (default the screw drive's "
+                    "0.096 kg steady-state folder; skipped when absent)")  # fmt: skip
     ap.add_argument(
         "--oversample",
         type=int,
@@ -230,6 +253,10 @@ def main(argv=None) -> int:
                     "folder, removed)")  # fmt: skip
     args = ap.parse_args(argv)
     specs = [*SLIP_SPECS[:1], *LOOP_SPECS[:1]] if args.quick else [*SLIP_SPECS, *LOOP_SPECS]
+    curve = Path(args.curve)
+    if curve.exists():
+        specs.append(MeasuredCurve(f"measured curve {curve.parent.parent.name}/{curve.name}",
+                                   curve))  # fmt: skip
     tmp = None
     if args.workdir:
         work = Path(args.workdir)
@@ -242,7 +269,9 @@ def main(argv=None) -> int:
     try:
         for spec in specs:
             try:
-                path, n = write_record(spec, work, args.oversample)
+                path, n = ((spec.path, len(tj.read_record(spec.path)))
+                           if isinstance(spec, MeasuredCurve)
+                           else write_record(spec, work, args.oversample))  # fmt: skip
                 row = compare(spec, path, n, work, args.decimate)
             except Exception as exc:  # a measurement: record and go on
                 row = {"label": spec.label, "error": f"{type(exc).__name__}: {exc}"}
@@ -260,6 +289,10 @@ def main(argv=None) -> int:
     text = table(ok_rows)
     print()
     print(text)
+    for r in ok_rows:
+        for name, c in (r.get("python_fit_loop") or {}).items():
+            print(f"{r['label']}: tj.fit_loop {name} = {c['python']:.8g}, CLI {c['cli']:.8g} "
+                  f"(relative difference {c['relative_diff']:.1e})")  # fmt: skip
     res = {"what": "tribojax fit vs tribojax discover's baseline fit on the same records",
            "tribojax_module": str(Path(tj.__file__).resolve().parent),
            "tribojax_executable": _tribojax(), "decimate": args.decimate,

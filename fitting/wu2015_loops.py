@@ -48,7 +48,7 @@ def run(conditions=None, elements=("jenkins", "mindlin"), A_bars=A_BARS) -> dict
                     normal_load=N,
                 )
                 t0 = time.perf_counter()
-                fit = tj.fit_loop(loop, name, throw=False)
+                fit = tj.fit_loop(loop, name, model="steady", throw=False)
                 a = tj.analyse_loop(loop)
                 mu_N, kd = (float(v) for v in fit.values)
                 Ab_fit = a.A * kd / mu_N

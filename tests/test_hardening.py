@@ -129,17 +129,17 @@ def test_unidentifiable_direction_is_reported():
 
 
 def test_identified_fit_reports_no_direction(tmp_path):
-    fit = tj.fit_loop(tj.read_loop(_loop(tmp_path)), "jenkins")
+    fit = tj.fit_loop(tj.read_loop(_loop(tmp_path)), "jenkins", model="steady")
     d = fit.as_dict()
     assert d["identified"] and d["unidentifiable"] == [] and d["noise_consistent"] is None
 
 
 def test_a_failed_loop_fit_raises_unless_asked_not_to(tmp_path):
     loop = tj.read_loop(_loop(tmp_path))
-    fit = tj.fit_loop(loop, "jenkins", max_steps=1, throw=False)
+    fit = tj.fit_loop(loop, "jenkins", max_steps=1, throw=False, model="steady")
     assert not fit.converged and fit.result == tj.RESULTS.nonlinear_max_steps_reached
     with pytest.raises(tj.FitError, match="max_steps = 1") as err:  # the default: it raises
-        tj.fit_loop(loop, "jenkins", max_steps=1)
+        tj.fit_loop(loop, "jenkins", max_steps=1, model="steady")
     assert np.array_equal(err.value.fit.values, fit.values)
 
 

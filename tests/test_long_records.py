@@ -91,7 +91,7 @@ def test_loop_fit_on_the_reduced_record_agrees_with_the_full_fit():
     loop = _long_loop()
     red, info = tj.decimate_record(loop, max_samples=500)
     assert info.factor == 8  # 256 reduced samples per cycle at least (not ceil(6657/500) = 14)
-    full, fit = tj.fit_loop(loop), tj.fit_loop(red)
+    full, fit = tj.fit_loop(loop, model="steady"), tj.fit_loop(red, model="steady")
     # the reduced estimate = the full one + independent scatter of sd √(σ_red² − σ_full²)
     spread = np.sqrt(fit.std_errors**2 - full.std_errors**2)
     assert np.all(np.abs(fit.values - full.values) < 2.5 * spread)

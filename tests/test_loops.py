@@ -40,7 +40,7 @@ def test_fit_recovers_parameters_from_noisy_loops(cls):
     el = cls(MU, N, KD)
     sigma = 0.01 * MUN  # 1 % force noise
     loop = tj.synthetic_loop(el, 2.5 * A0, OMEGA, cycles=3, noise=sigma, seed=2024)
-    fit = tj.fit_loop(loop, cls.__name__.lower(), sigma=sigma)
+    fit = tj.fit_loop(loop, cls.__name__.lower(), sigma=sigma, model="steady")
     assert fit.converged and fit.names == ("mu_N", "K_d")
     truth = np.array([MUN, KD])
     z = (fit.values - truth) / fit.std_errors

@@ -223,7 +223,7 @@ def test_steady_law_fit_is_the_curve_model_with_two_effects(tmp_path):
     # and the CLI saves it: fit.json of a curve is a model file
     path = tmp_path / "curve.csv"
     tj.write_friction_curve(curve, path)
-    assert main(["fit", str(path), "--out", str(tmp_path / "f")]) == 0
+    assert main(["fit", str(path), "--out", str(tmp_path / "f"), "--model", "lugre"]) == 0
     saved = tj.load_model(tmp_path / "f" / "fit.json")
     assert saved.kind == "curve" and saved.parameters["F_c"] == pytest.approx(
         model.parameters["F_c"], rel=1e-9)

@@ -34,7 +34,7 @@ if sys.argv[2] == "full":
     slip = tj.simulate_slip(tj.PreSlipLuGre(1.1, 2.0e7, 150.0, 1.0))
     loop = tj.synthetic_loop(tj.Jenkins(0.3, 10.0, 1.0e6), 6e-6, 2 * np.pi * 10.0, cycles=3,
                              samples_per_cycle=120)
-    fit = tj.fit_loop(loop, "jenkins")
+    fit = tj.fit_loop(loop, "jenkins", model="steady")
     ok += [bool(slip.ok), bool(fit.converged), tj.plot_wu2015(tj.wu2015_comparison(), sys.argv[1])]
 after = dict(env=dict(os.environ), config={k: repr(v) for k, v in jax.config.values.items()},
              backend=matplotlib.get_backend(), eqx=equinox_functions())

@@ -14,7 +14,6 @@ from .. import _presets as P
 from .._limits import (
     DECIMATION_MAX_SAMPLES,
     DEVICE_MODELS,
-    DISCOVER_MAX_SAMPLES,
     ELEMENT_MODELS,
     MAX_STEPS,
     RECORD_FORMATS,
@@ -143,7 +142,8 @@ def fit_arguments(parser) -> None:
     parser.add_argument(
         "--alpha",
         default=None,
-        help="slip runs: 'free' (default) to fit the bristle exponent α, or a fixed value",
+        help="slip runs: the bristle exponent α held at this value (default 1, the paper's law "
+        "and discover's baseline) or 'free' to fit it",
     )
     parser.add_argument(
         "--start",
@@ -160,13 +160,14 @@ def fit_arguments(parser) -> None:
     )
     parser.add_argument(
         "--model",
-        choices=("steady", "history", *ELEMENT_MODELS, *DEVICE_MODELS, "best"),
+        choices=("record", "steady", "history", *ELEMENT_MODELS, *DEVICE_MODELS, "best"),
         default=None,
         help="loops: 'history' (default for a periodic loop: the loop model that discover also "
         "fits) or 'steady' (wu2015's steady-loop formula) fit --element; "
         "jenkins|mindlin|lugre|bouc_wen|band_brake drive that element (+ force offset) through "
         "the measured history, best: the first four, lowest BIC (default for a non-periodic "
-        "history); friction curves: lugre (the steady law, default) or best",
+        "history); friction curves: record (Coulomb + viscous, the model discover starts from; "
+        "default) or lugre (the steady law with a direction asymmetry; best: the same)",
     )
     parser.add_argument("--mixed-scales", action="store_true",
                         help="several records: fit them together even when their force scales "
@@ -197,7 +198,7 @@ def discover_arguments(parser) -> None:
     parser.add_argument("--from", dest="from_model", default=None, metavar="MODEL.json",
                         help="start from the model saved in a discovery.json or fit.json (its "
                         "effects refitted on this record), and look for more")  # fmt: skip
-    add_decimation_arguments(parser, DISCOVER_MAX_SAMPLES)
+    add_decimation_arguments(parser)
     _band_tension_argument(parser)  # a band brake's record: its effects become candidates
     parser.add_argument("--initial", choices=("rest", "measured"), default=None,
                         help="loops and histories: the element starts at rest (default) or in "

@@ -1,9 +1,9 @@
 """`tribojax fit FILE.csv`: fit a friction model to a user's slip run or hysteresis loop.
 
-    tribojax fit run.csv [--out DIR] [--alpha free|VALUE]          # PreSlipLuGre F_s, K_τ, C_τ, α
+    tribojax fit run.csv [--out DIR] [--alpha VALUE|free]  # PreSlipLuGre F_s, K_τ, C_τ (α = 1)
     tribojax fit loop.csv [--out DIR] [--element jenkins|mindlin]  # μN and K_d (loop model)
     tribojax fit RECORD --model jenkins|mindlin|lugre|bouc_wen|best  # through the history
-    tribojax fit DRIVE/steady_state/0.096kg [--format epos_steady]   # LuGre steady law
+    tribojax fit DRIVE/steady_state/0.096kg [--model lugre]   # Coulomb + viscous (LuGre steady law)
     tribojax fit RECORD --from DIR/discovery.json  # a saved model + its effects, refitted
 
 The record type comes from the file (`tribojax.read_record`: CSV header, brfd JSON, EPOS export
@@ -25,7 +25,15 @@ import numpy as np
 from .._fit._measures import nrmse, rms
 from .._io._records import read_record
 from .._limits import MAX_STEPS
-from .._model import evaluate, fit_loop, fit_slip_run, loop_residuals, slip_baseline
+from .._model import (
+    curve_baseline,
+    evaluate,
+    fit_loop,
+    fit_record,
+    fit_slip_run,
+    loop_residuals,
+    slip_baseline,
+)
 from .._predict import RECORD_KINDS, SAVED_KEY, fitted_model, load_model, refit
 from ._common import (
     FAILED,
@@ -63,6 +71,8 @@ def run_fit(args) -> int:
         full = records[0]
         if full.kind in _NOT_FITTED:
             return error(f"{path} is {full.description}: {_NOT_FITTED[full.kind]}")
+        if args.model == "record" and full.kind == "loop":  # a loop's record model
+            args.model = "history"
         if args.alpha is not None and full.kind != "slip_run":
             return error(f"--alpha is for slip runs; {path} is {full.description}")
         if len(records) > 1:
@@ -194,8 +204,17 @@ def _fit_loop_record(loop, args, start, note):
 
 
 def _fit_curve_record(curve, args, start, note):
-    """A friction curve (a few points, never reduced): the LuGre steady law."""
-    return fit_curve_record(curve, args.model or "lugre", args.max_steps)
+    """A friction curve (a few points, never reduced): by default its record model, Coulomb +
+    viscous friction (`curve_baseline`, the baseline `discover` fits); `--model lugre`: the
+    LuGre steady law with a direction asymmetry."""
+    if args.model in (None, "record"):
+        if start:
+            raise CommandError("--start does not apply to a friction curve's record model (its "
+                               "start is the linear least-squares fit)")  # fmt: skip
+        fit = fit_record(curve_baseline(curve), max_steps=args.max_steps or MAX_STEPS)
+        return _record_model_result(fit, curve, "Coulomb + viscous friction (the curve's "
+                                    "record model)", units=curve.units)  # fmt: skip
+    return fit_curve_record(curve, args.model, args.max_steps)
 
 
 # the fit of each record kind (those in _NOT_FITTED excepted)
@@ -213,19 +232,27 @@ def _fit_from_model(full, args, start, note):
         raise CommandError(f"--from {args.from_model}: a {model.kind} model; --from takes a "
                            "slip, loop or curve model (a history: --model ELEMENT)")  # fmt: skip
     fit = refit(model, full, max_steps=args.max_steps or MAX_STEPS, throw=False)
-    base, kind = fit.model, RECORD_KINDS[model.kind]
+    return _record_model_result(fit, full, f"{model.kind} model from {args.from_model}",
+                                start_model=model.as_dict())  # fmt: skip
+
+
+def _record_model_result(fit, full, label, **extra):
+    """fit.json and the plot curves of a fit of the record's model (with any effects): the
+    residuals in the model's output unit (a curve's weighted friction)."""
+    base = fit.model
+    kind = RECORD_KINDS[base.kind]
     data = base.data()
     x_name, x = kind.axis(base)
     measured = np.asarray(data.y)
     resid = fit.prediction - measured
     unit = kind.unit(base)
-    how = "the record's noise sd" if data.noise_std else "first-difference estimate"
-    d = fit_summary(fit, full, len(measured), resid, unit, data.noise_std or float(fit.scale), how)
+    how = "the record's noise sd" if data.noise_std else "estimated from the residuals"
+    d = fit_summary(fit, full, len(measured), resid, unit, data.noise_std or None, how)
     saved = fitted_model(fit, str(full.source), [full])
-    d.update(model=f"{model.kind} model from {args.from_model}"
-             + (f" with {', '.join(e.name for e in saved.effects)}" if saved.effects else ""),
-             nrmse=nrmse(resid, measured), start_model=model.as_dict(),
-             fitted_model=saved.as_dict() if fit.converged else None)  # fmt: skip
+    d.update(model=label + (f" with {', '.join(e.name for e in saved.effects)}"
+                            if saved.effects else ""),
+             nrmse=nrmse(resid, measured), fitted_model=saved.as_dict() if fit.converged else None,
+             **extra)  # fmt: skip
     curves = dict(x=x, data=measured, model=fit.prediction, xlabel=x_name, ylabel=unit,
                   resid_x=x, resid=resid)  # fmt: skip
     return d, curves
@@ -234,7 +261,8 @@ def _fit_from_model(full, args, start, note):
 def _fit_reduced(full, args, start, note, fit, full_residuals):
     """`fit` on the record reduced as `--decimate` asks; after a reduction, the fitted model's
     residuals on every original sample (`full_residuals`) in "full_record"."""
-    record, reduction = reduce_record(full, args)
+    # as `discover` reduces it (a loop: its first whole cycles that fit): the same samples
+    record, reduction = reduce_record(full, args, whole_cycles=full.kind == "loop")
     result, curves = fit(record, args, start, reduction, note)
     result["decimation"] = reduction.as_dict()
     if reduction.factor > 1:
@@ -276,7 +304,9 @@ def _reduced_sigma_source(reduction, default):
 
 
 def _fit_slip(run, args, start, reduction, note):
-    if args.alpha in (None, "free"):
+    if args.alpha is None:  # the paper's law, as discover's baseline
+        alpha = 1.0
+    elif args.alpha == "free":
         alpha = None
     else:
         try:

@@ -19,8 +19,10 @@ HISTORY_CHOICES = (*ELEMENT_MODELS, *DEVICE_MODELS)
 
 def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:
     """The fit.json entries of a fit of `record` (its kind and source) on `n_data` data with
-    residuals `resid` (model − data, `unit`) and noise sd `sigma` (from `sigma_source`; None:
-    estimated from the residuals, sqrt(RSS/(n_data − parameters)))."""
+    residuals `resid` (model − data, `unit`) and noise sd `sigma` (from `sigma_source`). "sigma"
+    has one meaning on every path: the noise sd the standard errors stand on, the stated one, or
+    when none is stated the residual's, sqrt(RSS/(n_data − parameters)) (what `discover` reports
+    as its estimated noise, within the estimators' difference)."""
     if sigma is None:
         sigma = float(np.sqrt(np.sum(resid**2) / max(n_data - len(fit.names), 1)))
     d = fit.as_dict()

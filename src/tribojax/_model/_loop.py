@@ -213,14 +213,15 @@ def cycle_noise(r, t, period, segment=None) -> tuple[float, float]:
 
 
 def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, window: float = 0.05,
-             model: str = "steady", max_steps=None, start=None,
+             model: str = "history", max_steps=None, start=None,
              throw: bool = True) -> FitResult:  # fmt: skip
     """Least-squares fit of μN (N) and K_d (N/m) of a Jenkins or Mindlin element to a loop.
 
-    model="history": the loop model `LoopBaseline` (the element driven through the measured
-    displacement from rest at the first upward mean-crossing of u; the samples before the first
-    reversal after it, the virgin loading, are not fitted), the same model, residual and solver
-    as `discover`'s loop baseline (`fit_record`). Works for any history.
+    model="history" (default, as `tribojax fit`): the loop model `LoopBaseline` (the element
+    driven through the measured displacement from rest at the first upward mean-crossing of u;
+    the samples before the first reversal after it, the virgin loading, are not fitted), the
+    same model, residual and solver as `discover`'s loop baseline (`fit_record`). Works for any
+    history.
     model="steady": wu2015's steady loop (Eq 1 or 2) at the measured u, on the branch given by
     the phase of u's first harmonic, amplitude A = half the peak-to-peak u (a periodic record).
 

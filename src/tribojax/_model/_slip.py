@@ -277,21 +277,23 @@ def slip_baseline(run, start=None, alpha=1.0) -> SlipBaseline:
     )
 
 
-def fit_slip_run(run: SlipRun, *, alpha=None, start=None, sigma=None, max_steps: int = MAX_STEPS,
+def fit_slip_run(run: SlipRun, *, alpha=1.0, start=None, sigma=None, max_steps: int = MAX_STEPS,
                  progress=None, throw: bool = True):  # fmt: skip
-    """Fit F_s (N), K_τ (N/m), C_τ (N s/m) and, if `alpha` is None, α of the slip-run model.
+    """Fit F_s (N), K_τ (N/m), C_τ (N s/m) and, if `alpha` is None, α of the slip-run model
+    (by default α = 1, as `tribojax fit` and `discover`'s baseline).
 
     The model is `SlipBaseline` (wang2022 Eq 27, consistent reading, driven by the run's own
     sampled acceleration from rest), the same model, residual, transforms, starts and solver as
-    `discover`'s baseline (`fit_record`): with `alpha=1` and the same samples both give the same
-    parameters. Residuals (model − measured slip)/σ at every sample; parameters as logarithms
+    `discover`'s baseline (`fit_record`): with the default `alpha=1` and the same samples both
+    give the same parameters. Residuals (model − measured slip)/σ at every sample; parameters as logarithms
     (F_s below a soft cap of 100·m·max|a|); starts from `slip_run_start` (the quasi-static limit)
     with C_τ × (1, 0.1, 10) in turn until one converges; standard errors by the delta method;
     `noise_consistent` from `SlipBaseline.noise_test`.
 
     Args:
         run: the slip run.
-        alpha: fixed bristle exponent (> 0), or None to fit it (start 1).
+        alpha: fixed bristle exponent (> 0; default 1, wang2022's law), or None to fit it
+            (start 1).
         start: dict of start values (keys F_s, K_tau, C_tau[, alpha]); missing keys from
             `slip_run_start(run)`; a given C_tau is the only C_τ start.
         sigma: slip noise sd (m); default the run's `noise_std`; if neither, the residual unit is
