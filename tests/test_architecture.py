@@ -44,7 +44,10 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 # - model chain: wang2022's one path parameters → contact → element → phase slips (`_chain`);
 # - model analyses: sweeps and sensitivities of the model, which need no records;
 # - records: user records and files (`_io`);
-# - fits: the one least-squares engine and the fits of records, record models (`_model`);
+# - fit engine: the one least-squares engine, its solver, noise model and measures, and the fits
+#   of models that are not record models (a steady friction law, a history element) (`_fit`);
+# - record models: the one model of each record kind, its fit, saved models, and the fits built on
+#   them (a surface from slip runs at several loads) (`_model`), strictly above the engine;
 # - record reduction (`_decimate`), which states its noise with the fit's noise model;
 # - paper studies: the reproduced tables and the fits of wang2022's measured slips (`_reproduce`);
 # - discovery; prediction with saved models (`_predict`: rebuilds a model with its discovered
@@ -57,7 +60,8 @@ LAYERS = (
     ("model chain", {"_chain"}),
     ("model analyses", {"_sweep", "_sensitivity"}),
     ("records", {"_io"}),
-    ("fits", {"_fit", "_model"}),
+    ("fit engine", {"_fit"}),
+    ("record models", {"_model"}),
     ("record reduction", {"_decimate"}),
     ("paper studies", {"_reproduce"}),
     ("discovery", {"discovery"}),

@@ -16,8 +16,8 @@ from scipy.optimize import brentq
 
 import tribojax as tj
 from tribojax._model import LoopSpec, loop_force
+from tribojax._model._effects_loop import GAP_GRID
 from tribojax.discovery import discover, loop_baseline
-from tribojax.discovery._loop import GAP_GRID
 
 F_S, K, A, F_HZ, NOISE = 500.0, 2.0e6, 2.0e-3, 3.0, 5.0
 GAPS = (0.37e-3, 1.13e-3)

@@ -223,7 +223,7 @@ def test_each_friction_law_effect_is_one_module_for_every_record_kind():
     """Stribeck, viscous and load dependence are written once (issue 29): the candidates of
     slip runs, curves, loops and tables are instances of the same three classes, under the names
     each kind's reports use; a kind an effect has no form for is refused, naming the allowed."""
-    from tribojax.discovery._friction_effects import LoadDependence, Stribeck, Viscous
+    from tribojax._model._effects_friction import LoadDependence, Stribeck, Viscous
 
     lists = {k: disc.default_effects(k) for k in ("slip", "curve", "loop")}
     lists["wang2022_table"] = disc.wang2022_table_effects()
@@ -251,7 +251,7 @@ def test_each_friction_law_effect_is_one_module_for_every_record_kind():
 
 
 def test_band_brake_effects_are_one_module_registered_as_instances():
-    from tribojax.discovery._loop import BandBrakeEffect
+    from tribojax._model._effects_loop import BandBrakeEffect
 
     loop = [e.name for e in disc.default_effects("loop")]
     assert loop == ["microslip", "viscous_damping", "normal_load_variation", "backlash",

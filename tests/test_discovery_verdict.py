@@ -157,7 +157,7 @@ def test_drift_degrees_resolve_a_wandering_drift():
     # the score cannot choose between them at a large misfit, so every degree is refitted
     from scipy.interpolate import CubicSpline
 
-    from tribojax.discovery import _slip_effects as _slip
+    from tribojax._model import _effects_slip as _slip
 
     run = tj.SlipRun(t=T, accel=np.sin(2 * np.pi * T / 2.3), slip=np.zeros(N), mass=0.3,
                      noise_std=1e-10)  # fmt: skip

@@ -130,7 +130,8 @@ def _loop_coverage(cls, seeds, A_bar=2.5):
     for seed in seeds:
         loop = tj.synthetic_loop(el, A, 2 * np.pi * 22, cycles=2, samples_per_cycle=200,
                                  noise=sigma, seed=seed)  # fmt: skip
-        fit = tj.fit_loop(loop, cls.__name__.lower(), model="steady")  # σ from the record's noise_std
+        # σ from the record's noise_std
+        fit = tj.fit_loop(loop, cls.__name__.lower(), model="steady")
         assert fit.converged
         hits.append(np.abs(fit.values - truth) <= 2 * fit.std_errors)
         z.append((fit.values - truth) / fit.std_errors)
@@ -168,7 +169,7 @@ def test_surface_fit_recovers_D_G_mu():
     import jax
     import jax.numpy as jnp
 
-    from tribojax._fit._surface import surface_contact_model
+    from tribojax._model._surface_runs import surface_contact_model
 
     loads = (3.6912, 9.5088, 21.3258)
     out = jax.vmap(surface_contact_model(*SURFACE))(jnp.asarray(loads))

@@ -68,7 +68,6 @@ from ._fit._history import BOUC_WEN_STARTS as BOUC_WEN_STARTS
 from ._fit._history import HistoryFit as HistoryFit
 from ._fit._history import fit_history as fit_history
 from ._fit._history import predict_history as predict_history
-from ._fit._surface import fit_surface_from_runs as fit_surface_from_runs
 from ._friction._band_brake import BandBrake as BandBrake
 from ._friction._bouc_wen import BoucWen as BoucWen
 from ._friction._elastic2d import ElasticDryFriction2D as ElasticDryFriction2D
@@ -112,6 +111,7 @@ from ._model import fit_loop as fit_loop
 from ._model import fit_slip_run as fit_slip_run
 from ._model import loop_residuals as loop_residuals
 from ._model import slip_run_start as slip_run_start
+from ._model._surface_runs import fit_surface_from_runs as fit_surface_from_runs
 from ._predict import ExtrapolationWarning as ExtrapolationWarning
 from ._predict import Prediction as Prediction
 from ._predict import fitted_model as fitted_model

@@ -10,10 +10,15 @@ from ._base import EffectDesign as EffectDesign
 from ._curve import BETA_START as BETA_START
 from ._curve import CurveBaseline as CurveBaseline
 from ._curve import curve_baseline as curve_baseline
+from ._default_effects import default_effects as default_effects
 from ._effects import AbstractEffect as AbstractEffect
-from ._effects import default_effects as default_effects
 from ._effects import knob_design as knob_design
 from ._effects import register_effect as register_effect
+from ._effects_friction import TABLE as TABLE
+from ._effects_friction import LoadDependence as LoadDependence
+from ._effects_friction import Stribeck as Stribeck
+from ._effects_friction import Viscous as Viscous
+from ._effects_loop import GAP_GRID as GAP_GRID
 from ._fit import MAX_STEPS as MAX_STEPS
 from ._fit import SOLVER as SOLVER
 from ._fit import fit_model as fit_model

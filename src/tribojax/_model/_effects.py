@@ -1,6 +1,6 @@
-"""The contract of an effect a record model can carry (`AbstractEffect`) and the registry of
-named effects per record kind (`register_effect`, `default_effects`): `discover` ranks and adds
-them, a saved model (`FittedModel`) names them and is rebuilt from them (`rebuild`)."""
+"""The contract of an effect a record model can carry (`AbstractEffect`) and a user's own effects
+(`register_effect`; the built-in ones and `default_effects`: `_default_effects`): `discover` ranks
+and adds them, a saved model (`FittedModel`) names them and is rebuilt from them (`rebuild`)."""
 
 from __future__ import annotations
 
@@ -48,14 +48,14 @@ class AbstractEffect(eqx.Module):
         return None
 
 
-_REGISTRY: dict[str, dict[str, type | AbstractEffect]] = {}
+_REGISTRY: dict[str, dict[str, type | AbstractEffect]] = {}  # the user's, by kind and name
 
 
 def register_effect(effect):
-    """Make `effect` part of `default_effects(effect.kind)`: an AbstractEffect subclass with a
-    no-argument constructor (as a class decorator) or an instance (an effect with named fields,
-    e.g. `BandBrakeEffect("self_energizing")`). Returns `effect`. Registering a name twice
-    replaces the earlier entry."""
+    """Add `effect` to `default_effects(effect.kind)` (a user's own effect; the built-in ones are
+    `_default_effects.BUILT_IN`): an AbstractEffect subclass with a no-argument constructor (as a
+    class decorator) or an instance (an effect with named fields). Returns `effect`. Registering
+    a name twice replaces the earlier entry; a built-in name is replaced in its place."""
     is_class = isinstance(effect, type) and issubclass(effect, AbstractEffect)
     if not (is_class or isinstance(effect, AbstractEffect)):
         raise TypeError(f"register_effect expects an AbstractEffect subclass or instance, "
@@ -64,11 +64,14 @@ def register_effect(effect):
     return effect
 
 
-def default_effects(kind: str) -> list[AbstractEffect]:
-    """Instances of the registered effects of `kind` ("slip" or "loop"), in registration order."""
-    if kind not in _REGISTRY:
-        raise ValueError(f"kind = {kind!r}: no effects registered; known: {sorted(_REGISTRY)}")
-    return [e() if isinstance(e, type) else e for e in _REGISTRY[kind].values()]
+def user_effects(kind: str) -> dict:
+    """The effects a user registered for `kind` ({name: class or instance}, in order)."""
+    return dict(_REGISTRY.get(kind, {}))
+
+
+def user_kinds() -> tuple[str, ...]:
+    """The record kinds a user registered effects for."""
+    return tuple(_REGISTRY)
 
 
 def knob_design(baseline, knobs, names, units, scale, **kw) -> EffectDesign:

@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from ._curve import curve_baseline
-from ._effects import default_effects
+from ._default_effects import default_effects
 from ._fit import MAX_STEPS, fit_model, record_scale
 from ._loop import loop_baseline
 from ._saved import FittedModel, check_values

@@ -285,9 +285,10 @@ def fit_slip_run(run: SlipRun, *, alpha=1.0, start=None, sigma=None, max_steps: 
     The model is `SlipBaseline` (wang2022 Eq 27, consistent reading, driven by the run's own
     sampled acceleration from rest), the same model, residual, transforms, starts and solver as
     `discover`'s baseline (`fit_record`): with the default `alpha=1` and the same samples both
-    give the same parameters. Residuals (model − measured slip)/σ at every sample; parameters as logarithms
-    (F_s below a soft cap of 100·m·max|a|); starts from `slip_run_start` (the quasi-static limit)
-    with C_τ × (1, 0.1, 10) in turn until one converges; standard errors by the delta method;
+    give the same parameters. Residuals (model − measured slip)/σ at every sample; parameters as
+    logarithms (F_s below a soft cap of 100·m·max|a|); starts from `slip_run_start` (the
+    quasi-static limit) with C_τ × (1, 0.1, 10) in turn until one converges; standard errors by
+    the delta method;
     `noise_consistent` from `SlipBaseline.noise_test`.
 
     Args:

@@ -40,7 +40,8 @@ score test is valid):
 An effect may also override `refine(baseline, design, score) -> EffectDesign` to polish its
 nuisance values around the best grid point (`score(design)` is the Rao statistic at the current
 fit; `vibration` refines its frequency and damping this way).
-Register it for `default_effects(kind)` with `@register_effect`, or pass it explicitly:
+Add it to `default_effects(kind)` with `@register_effect` (the built-in effects are a fixed
+table, `tribojax._model._default_effects`), or pass it explicitly:
 `discover(baseline, effects=[*default_effects("slip"), MyEffect()])`. At most `K_MAX` = 12
 strengths in one model.
 
@@ -52,25 +53,27 @@ a trial point where it is not finite is rejected as a rise of the cost.
 
 Slip side (`slip_baseline`, effects `sensor_drift`, `position_error`, `vibration`,
 `load_coupling`, `stribeck`, `viscous_friction`): see `tribojax._model._slip` and
-`tribojax.discovery._slip_effects`.
+`tribojax._model._effects_slip`.
 
 Loop side (`loop_baseline`: Jenkins, wu2015 Eq 1, driven by the measured displacement; effects
 `microslip`, `viscous_damping`, `normal_load_variation`, `backlash`, `force_offset`;
 `discover_loop`, `plot_loop_discovery`; hidden-effect loops `hidden_effect_loop` and wu2015 Eq 7
-stand-ins `eq7_standin_loop`): see `tribojax.discovery._loop`. Optional baseline hooks:
+stand-ins `eq7_standin_loop`): see `tribojax._model._effects_loop`. Optional baseline hooks:
 `AbstractBaseline.noise_model`, `region_info`.
 
 Curve side (`curve_baseline`: Coulomb + linear viscous friction of a steady `FrictionCurve`, both
 directions, each point weighted by its standard error; effects `stribeck` (LuGre steady law),
 `asymmetry` (a direction-dependent level) and `viscous` (a power-law viscous term);
-`discover_curve`, `plot_curve_discovery`): see `tribojax.discovery._curve`.
+`discover_curve`, `plot_curve_discovery`): see `tribojax._model._effects_curve`.
 """
 
 from .._fit._noise import find_regions as find_regions
 from .._fit._noise import noise_estimate as noise_estimate
 from .._model import ALPHA as ALPHA
+from .._model import GAP_GRID as GAP_GRID
 from .._model import K_MAX as K_MAX
 from .._model import AbstractBaseline as AbstractBaseline
+from .._model import AbstractEffect as AbstractEffect
 from .._model import AugmentedPreSlip as AugmentedPreSlip
 from .._model import CurveBaseline as CurveBaseline
 from .._model import DiscoveryData as DiscoveryData
@@ -78,20 +81,17 @@ from .._model import EffectDesign as EffectDesign
 from .._model import LoopBaseline as LoopBaseline
 from .._model import SlipBaseline as SlipBaseline
 from .._model import curve_baseline as curve_baseline
+from .._model import default_effects as default_effects
 from .._model import loop_baseline as loop_baseline
+from .._model import register_effect as register_effect
 from .._model import slip_baseline as slip_baseline
 from .._model import slip_start as slip_start
 from .._model import stage_travel as stage_travel
-from . import _slip_effects  # noqa: F401  (registers the slip effects)
-from ._core import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
-from ._core import AbstractEffect as AbstractEffect
-from ._core import default_effects as default_effects
-from ._core import register_effect as register_effect
-from ._curve import discover_curve as discover_curve  # registers the curve effects
+from ._curve import discover_curve as discover_curve
 from ._curve import plot_curve_discovery as plot_curve_discovery
+from ._discover import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
 from ._discover import DiscoveryReport as DiscoveryReport
 from ._discover import discover as discover
-from ._loop import GAP_GRID as GAP_GRID  # registers the loop effects
 from ._loop import discover_loop as discover_loop
 from ._loop import plot_loop_discovery as plot_loop_discovery
 from ._loop_synthetic import eq7_standin_loop as eq7_standin_loop

@@ -1,39 +1,15 @@
-"""Curve side of discovery: the effects of the friction-curve model (`tribojax._model._curve`:
-its baseline, knobs, noise and weighting), registered for `default_effects("curve")` — `stribeck`
-and `viscous` (`_friction_effects`) and `asymmetry` — with `discover_curve` and its figure.
+"""Curve side of discovery: `discover_curve` on a friction curve and its figure; the curve
+model's effects are `tribojax._model._effects_curve`'s.
 """
 
 from __future__ import annotations
 
-from typing import ClassVar
-
 import numpy as np
 
 from .._io._curve import FrictionCurve
-from .._model import curve_baseline, knob_design
+from .._model import curve_baseline, default_effects
 from .._plot import figure, save_figure
-from ._core import AbstractEffect, default_effects, register_effect
 from ._discover import DiscoveryReport, discover
-from ._friction_effects import Stribeck, Viscous
-
-register_effect(Stribeck("curve"))
-
-
-@register_effect
-class CurveAsymmetry(AbstractEffect):
-    """A direction asymmetry: T0 (friction unit) added in both directions, the friction
-    magnitudes then differ by 2·T0 (equivalently Coulomb levels F_c ± T0)."""
-
-    name: ClassVar[str] = "asymmetry"
-    kind: ClassVar[str] = "curve"
-    description: ClassVar[str] = "direction-dependent level: T0 added in both directions"
-
-    def designs(self, baseline):
-        return [knob_design(baseline, ["asymmetry"], ("T0",), (baseline.units[1],),
-                            float(baseline.f_ref))]  # fmt: skip
-
-
-register_effect(Viscous("curve"))
 
 
 def discover_curve(curve: FrictionCurve, effects=None, **kw) -> DiscoveryReport:

@@ -15,19 +15,23 @@ from .._fit._noise import excess_rmse, find_regions, noise_consistent
 from .._model import (
     ALPHA,
     AbstractBaseline,
+    AbstractEffect,
     DiscoveryData,
     FittedModel,
+    default_effects,
     fit_record,
     fit_saved,
     heldout_residual,
 )
 from .._parallel import in_background
 from ._candidates import rank
-from ._core import DELTA_BIC_THRESHOLD, AbstractEffect, default_effects
 from ._effect_sets import drop_redundant, pair_round
 from ._refits import MAX_MOVES, pick, refit_round
 from ._report import DiscoveryReport, report
 from ._verdict import NoiseModel
+
+DELTA_BIC_THRESHOLD = -10.0
+"""An effect is accepted only below ΔBIC = −10 ("very strong" evidence, Kass & Raftery 1995)."""
 
 _MOVED = ("not added: its strengths are zero within 2 standard errors; the current model "
           "refitted from this refit's optimum is kept")  # fmt: skip

@@ -16,7 +16,7 @@ Knobs (null in brackets) and the effects of kind "wang2022_table" that move them
     load_coupling    κ [0]: N(t) = N(1 + κa/g) (as on the slip side)
     stribeck         δ_s [0], v_s on a grid: velocity weakening (as on the slip side)
     viscous_friction ν [0]: σ2 = ν·C_τ (as on the slip side; these three are the friction
-                     law's effects written once for every record kind, `_friction_effects`)
+                     law's effects written once for every record kind, `_model._effects_friction`)
 
 and one measurement effect with an additive basis (no knob):
     position_step    s [0] on cell k (a grid over the 24 cells): ln|T| + s in that one cell — a
@@ -40,10 +40,19 @@ from jaxtyping import Array
 
 from .._chain import phase_slips, table3_contact, wang2022_loads
 from .._dynamics._profiles import TrapezoidProfile
-from .._model import AbstractBaseline, AugmentedPreSlip, DiscoveryData, EffectDesign, knob_design
+from .._model import (
+    TABLE,
+    AbstractBaseline,
+    AbstractEffect,
+    AugmentedPreSlip,
+    DiscoveryData,
+    EffectDesign,
+    LoadDependence,
+    Stribeck,
+    Viscous,
+    knob_design,
+)
 from .._tables import wang2022_table
-from ._core import AbstractEffect
-from ._friction_effects import TABLE, LoadDependence, Stribeck, Viscous
 
 TABLE_KNOBS = ("position_error", "sensor_drift", "gross_sliding", "load_coupling", "stribeck",
                "log10_v_s", "viscous")  # fmt: skip
@@ -184,5 +193,5 @@ class TablePositionStep(AbstractEffect):
 def wang2022_table_effects() -> list[AbstractEffect]:
     """The candidate effects for `wang2022_table_baseline` (not registered: pass explicitly)."""
     one = [TableKnobEffect(n) for n in ("position_error", "sensor_drift", "gross_sliding")]
-    law = [LoadDependence(TABLE), Stribeck(TABLE), Viscous(TABLE)]  # `_friction_effects`
+    law = [LoadDependence(TABLE), Stribeck(TABLE), Viscous(TABLE)]  # `_model._effects_friction`
     return [*one, *law, TablePositionStep()]

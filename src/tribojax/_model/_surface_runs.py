@@ -12,7 +12,7 @@ import numpy as np
 from .._chain import mu_min as _mu_min
 from .._chain import to_physical, to_theta
 from .._contact._presets import wang2022_table3_model
-from .._model import fit_slip_run
+from .._fit._engine import FitResult, least_squares_fit, thrown
 from .._presets import (
     CALIBRATED_G_M,
     CALIBRATED_M,
@@ -20,7 +20,7 @@ from .._presets import (
     CALIBRATED_SIGMA_S,
     WANG2022_TABLE1_D,
 )
-from ._engine import FitResult, least_squares_fit, thrown
+from ._slip import fit_slip_run
 
 SURFACE_NAMES = ("D", "G_m", "mu_t")
 

@@ -12,8 +12,10 @@ from typing import ClassVar
 
 import numpy as np
 
-from .._model import BETA_START, KD_LOAD_EXPONENT, VS_GRID, knob_design
-from ._core import AbstractEffect
+from ._curve import BETA_START
+from ._effects import AbstractEffect, knob_design
+from ._loop_force import KD_LOAD_EXPONENT
+from ._slip import VS_GRID
 
 TABLE = "wang2022_table"
 

@@ -1,4 +1,4 @@
-"""Slip effects of discovery: the additive ones (`sensor_drift`, `position_error`, `vibration`),
+"""The slip model's effects: the additive ones (`sensor_drift`, `position_error`, `vibration`),
 then the friction law's knobs of the one pre-slip element (`load_coupling`, `stribeck`,
 `viscous_friction`: `_friction_effects`, written once for every record kind); the model and its
 knobs are `tribojax._model.SlipBaseline`'s."""
@@ -9,27 +9,14 @@ from typing import ClassVar
 
 import numpy as np
 
-from .._fit._noise import noise_estimate
-from .._model import (
-    KNOBS,
-    N_ODE_KNOBS,
-    ZETA_MAX,
-    EffectDesign,
-    golden_max,
-    oscillator,
-    stage_travel,
-)
-from ._core import AbstractEffect, register_effect
-from ._friction_effects import LoadDependence, Stribeck, Viscous
+from ._base import EffectDesign
+from ._effects import AbstractEffect
+from ._effects_friction import LoadDependence, Stribeck, Viscous
+from ._fit import record_scale
+from ._modes import golden_max, oscillator
+from ._slip import KNOBS, N_ODE_KNOBS, ZETA_MAX, stage_travel
 
 ZETA_AT_BOUND = 0.98  # a refitted mode with ζ ≥ this × ZETA_MAX is at its bound (`reject`)
-
-
-def _y_scale(baseline) -> float:
-    d = baseline.data()
-    if d.noise_std:
-        return float(d.noise_std)
-    return float(noise_estimate(d.y)[0]) or float(np.std(d.y)) or 1.0
 
 
 def _unit_rms(col):
@@ -37,7 +24,6 @@ def _unit_rms(col):
     return col / rms if rms > 0 else col
 
 
-@register_effect
 class SensorDrift(AbstractEffect):
     """Smooth additive drift of the slip reading: a Legendre series in time, c₀P₀(s) + … +
     c_dP_d(s), s = scaled time ∈ [−1, 1], of degree d ∈ `degrees` (a grid chosen by the score:
@@ -54,7 +40,7 @@ class SensorDrift(AbstractEffect):
     def designs(self, baseline):
         t = np.asarray(baseline.t)
         s = 2 * (t - t[0]) / (t[-1] - t[0]) - 1
-        ys = _y_scale(baseline)
+        ys = record_scale(baseline)
         out = []
         for deg in self.degrees:
             k = deg + 1
@@ -70,7 +56,6 @@ class SensorDrift(AbstractEffect):
         return out  # fmt: skip
 
 
-@register_effect
 class PositionError(AbstractEffect):
     """Reading error that grows with stage travel x_s(t) (fibre bending, Abbe and cosine
     errors): ε·x_s, or ε·x_s + ε₂·x_s² (`degrees` 1 and 2, both refitted, the lower BIC kept):
@@ -84,7 +69,7 @@ class PositionError(AbstractEffect):
 
     def designs(self, baseline):
         _, x = stage_travel(baseline.t, baseline.accel)
-        ys = _y_scale(baseline)
+        ys = record_scale(baseline)
         rms = float(np.sqrt(np.mean(x**2))) or 1.0
         u = x / rms
         out = []
@@ -96,7 +81,6 @@ class PositionError(AbstractEffect):
         return out  # fmt: skip
 
 
-@register_effect
 class Vibration(AbstractEffect):
     """A lightly damped structural mode excited by the stage acceleration, seen in the reading.
 
@@ -123,7 +107,7 @@ class Vibration(AbstractEffect):
 
     def _designs(self, baseline, pairs, statics):
         """Designs for every (f, z) pair in each static form (the oscillator runs once)."""
-        ys = _y_scale(baseline)
+        ys = record_scale(baseline)
         f, z = np.asarray(pairs, dtype=float).reshape(-1, 2).T
         qs = np.asarray(oscillator(baseline.t, baseline.accel, 2 * np.pi * f, z))
         a = np.asarray(baseline.accel)
@@ -181,5 +165,6 @@ def _zeta(u):
     return float(ZETA_MAX / (1.0 + np.exp(-u)))
 
 
-for _effect in (LoadDependence("slip"), Stribeck("slip"), Viscous("slip")):
-    register_effect(_effect)  # after the additive effects, in this candidate order
+SLIP_EFFECTS = (SensorDrift, PositionError, Vibration, LoadDependence("slip"), Stribeck("slip"),
+                Viscous("slip"))  # fmt: skip
+"""The slip model's effects in candidate order: the additive ones, then the friction law's."""
