@@ -49,7 +49,7 @@ from ._saved import FittedModel as FittedModel
 from ._saved import SavedEffect as SavedEffect
 from ._saved import check_values as check_values
 from ._saved import effect_strengths as effect_strengths
-from ._saved import fitted_model as fitted_model
+from ._saved import saved_record_model as saved_record_model
 from ._slip import KNOBS as KNOBS
 from ._slip import N_ODE_KNOBS as N_ODE_KNOBS
 from ._slip import VS_GRID as VS_GRID

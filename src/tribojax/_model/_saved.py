@@ -163,13 +163,13 @@ def effect_strengths(fit) -> dict:
     return out
 
 
-def fitted_model(fit, source: str = "", records=()) -> FittedModel:
+def saved_record_model(fit, source: str = "", records=()) -> FittedModel:
     """The `FittedModel` of a record-model fit (`fit_record`, `fit_slip_run`, `fit_loop(model=
     "history")`, or a discovery state): its baseline's kind and options, physical parameters
     and effects, and the conditions of the fitted `records` (`fitted_range`)."""
     base = fit.model
     if base is None:
-        raise ValueError("fitted_model needs the fit of a record model (FitResult.model is None: "
+        raise ValueError("a saved model needs the fit of a record model (FitResult.model is None: "
                          "a fit of another model, e.g. fit_loop(model='steady'))")
     p = len(base.param_names)
     params = dict(zip(base.param_names, np.asarray(fit.values[:p], float).tolist()))

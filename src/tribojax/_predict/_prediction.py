@@ -22,8 +22,8 @@ from .._model import (
     evaluate,
     fit_saved,
     rebuild,
+    saved_record_model,
 )
-from .._model import fitted_model as record_model_of
 from .._tables import read_json
 from ..discovery import DiscoveryReport
 
@@ -97,7 +97,7 @@ def _fitted_model(result, source) -> FittedModel:
     if isinstance(result, FitResult) and result.fixed.get("direction") == "both":
         return _steady_law(result, source)
     if isinstance(result, FitResult):
-        return record_model_of(result, source)
+        return saved_record_model(result, source)
     raise ValueError(f"fitted_model takes a FitResult, HistoryFit or DiscoveryReport, got "
                      f"{type(result).__name__}")  # fmt: skip
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._fit._measures import rms
 from .._fit._noise import excess_rmse, noise_consistent
-from .._model import FittedModel, effect_strengths, fitted_model
+from .._model import FittedModel, effect_strengths, saved_record_model
 from ._verdict import correlations, flexible_correction, verdict
 
 
@@ -222,5 +222,5 @@ def report(run, state, rounds: list, settings: dict) -> DiscoveryReport:
         y=y, baseline_y=run.base_state.prediction, final_y=state.prediction,
         segment=np.asarray(data.segment),
         signals={**baseline.signals(), "model": np.asarray(state.prediction)},
-        fitted=fitted_model(state) if state.converged else None,
+        fitted=saved_record_model(state) if state.converged else None,
     )  # fmt: skip
