@@ -128,8 +128,8 @@ def decimate_record(
         max_samples: the target size when `factor` is None.
         whole_cycles: loops only: when the reduced loop would still exceed `max_samples` (many
             cycles at few samples each), keep only its first whole cycles that fit (the rest is
-            dropped and `samples_used` says so). For discovery, whose cost grows with the record;
-            a fit of a steady loop is cheap and uses every cycle.
+            dropped and `samples_used` says so). What `tribojax fit` and `discover` do with a
+            loop, so that both fit the same samples (discovery's cost grows with the record).
     Returns:
         (reduced record, `Decimation`). The reduced record is of the same type with its
         `noise_std` set to the reduced noise σ·√g (module docstring); with factor 1 the record

@@ -26,13 +26,14 @@ from .._fit._measures import nrmse, rms
 from .._io._records import read_record
 from .._limits import MAX_STEPS
 from .._model import (
+    FittedModel,
     curve_baseline,
     evaluate,
     fit_loop,
     fit_record,
     fit_slip_run,
     loop_residuals,
-    slip_baseline,
+    rebuild,
 )
 from .._predict import RECORD_KINDS, SAVED_KEY, fitted_model, load_model, refit
 from ._common import (
@@ -177,7 +178,7 @@ def uncertainty_warnings(result: dict) -> list[str]:
 
 def _fit_slip_record(run, args, start, note):
     """A slip run: reduced as `--decimate` asks, then the pre-slip LuGre model."""
-    return _fit_reduced(run, args, start, note, _fit_slip, _slip_full_residuals)
+    return _fit_reduced(run, args, start, note, _fit_slip)
 
 
 def _check_joint(records, paths, args) -> None:
@@ -200,7 +201,7 @@ def _fit_loop_record(loop, args, start, note):
     if model in (*HISTORY_CHOICES, "best") or (model is None and not loop.periodic):
         return fit_history_record(loop, model or "best", args.max_steps, start,
                                   decimate_factor(args) or 1)  # fmt: skip
-    return _fit_reduced(loop, args, start, note, _fit_loop, _loop_full_residuals)
+    return _fit_reduced(loop, args, start, note, _fit_loop)
 
 
 def _fit_curve_record(curve, args, start, note):
@@ -258,30 +259,31 @@ def _record_model_result(fit, full, label, **extra):
     return d, curves
 
 
-def _fit_reduced(full, args, start, note, fit, full_residuals):
+def _fit_reduced(full, args, start, note, fit):
     """`fit` on the record reduced as `--decimate` asks; after a reduction, the fitted model's
-    residuals on every original sample (`full_residuals`) in "full_record"."""
+    residuals on every original sample (`_full_residuals`) in "full_record"."""
     # as `discover` reduces it (a loop: its first whole cycles that fit): the same samples
     record, reduction = reduce_record(full, args, whole_cycles=full.kind == "loop")
     result, curves = fit(record, args, start, reduction, note)
     result["decimation"] = reduction.as_dict()
-    if reduction.factor > 1:
-        resid = full_residuals(full, result, args)
+    resid = _full_residuals(full, result, args) if reduction.factor > 1 else None
+    if resid is not None:
         result["full_record"] = _full_record(resid, result, reduction)
     return result, curves
 
 
-def _slip_full_residuals(full, result, args):
-    # the fitted model (its θ) on the full record: the same model, not a rebuilt element
-    p = result["parameters"]
-    model = slip_baseline(full, alpha=None if "alpha" in p else result["fixed"]["alpha"])
-    theta = model.theta_of([p[name] for name in model.param_names])
-    return evaluate(model, theta) - full.slip
-
-
-def _loop_full_residuals(full, result, args):
-    p = result["parameters"]
-    return loop_residuals(full, args.element, p["mu_N"], p["K_d"], model=args.model or "history")
+def _full_residuals(full, result, args):
+    """Model − data on every sample of the unreduced record: the saved model rebuilt on it and
+    evaluated (`rebuild`, `evaluate`: what `predict` does), wu2015's steady loop by its own
+    formula; None when the fit saved no model (it did not converge)."""
+    if args.model == "steady":
+        p = result["parameters"]
+        return loop_residuals(full, args.element, p["mu_N"], p["K_d"], model="steady")
+    if result.get(SAVED_KEY) is None:
+        return None
+    baseline, theta, _, _ = rebuild(FittedModel.from_dict(result[SAVED_KEY]), full)
+    kind = RECORD_KINDS[baseline.kind]
+    return evaluate(baseline, theta) - kind.measured(baseline)
 
 
 def _full_record(resid, result, reduction) -> dict:
