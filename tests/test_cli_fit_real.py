@@ -33,7 +33,11 @@ def test_fit_epos_folder_as_one_curve(tmp_path, capsys):
             name = f"{'n' if sign < 0 else ''}{rpm}.csv"
             (folder / name).write_text(head + "\n".join(rows) + "\n")
     out = tmp_path / "o"
-    assert main(["fit", str(folder), "--out", str(out)]) == 0
+    # no options: the curve's record model (Coulomb + viscous), as discover's baseline
+    assert main(["fit", str(folder), "--out", str(tmp_path / "r")]) == 0
+    rec = json.loads((tmp_path / "r" / "fit.json").read_text())
+    assert rec["fitted"] == ["F_c", "sigma2"] and rec["fitted_model"]["kind"] == "curve"
+    assert main(["fit", str(folder), "--out", str(out), "--model", "lugre"]) == 0
     res = json.loads((out / "fit.json").read_text())
     assert res["kind"] == "friction_curve" and res["model"] == "lugre"
     assert res["units"] == {"velocity_unit": "rad/s", "friction_unit": "N m"}
@@ -41,7 +45,8 @@ def test_fit_epos_folder_as_one_curve(tmp_path, capsys):
     assert res["parameters"]["T0"] == pytest.approx(0.03 * 9.84e-3, rel=0.02)
     assert set(res["per_direction"]) == {"positive", "negative"} and "nrmse" in res
     # an explicit --max-steps is the budget (no floor overrides it): 2 LM steps do not converge
-    assert main(["fit", str(folder), "--out", str(tmp_path / "s"), "--max-steps", "2"]) == 1
+    assert main(["fit", str(folder), "--out", str(tmp_path / "s"), "--max-steps", "2",
+                 "--model", "lugre"]) == 1  # fmt: skip
     assert json.loads((tmp_path / "s" / "fit.json").read_text())["converged"] is False
     # a model that does not apply to a curve, and a wrong --format, are bad input (2)
     assert main(["fit", str(folder), "--out", str(tmp_path / "p"), "--model", "jenkins"]) == 2
