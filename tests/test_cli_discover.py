@@ -62,7 +62,7 @@ def test_malformed_file_exits_nonzero(tmp_path, capsys):
 def test_loop_records_dispatch(tmp_path, capsys):
     import numpy as np
 
-    from tribojax._io._loop import HysteresisLoop, write_loop
+    from tribojax._io._hysteresis_loop import HysteresisLoop, write_loop
 
     t = np.linspace(0, 3 / 22, 600, endpoint=False)
     u = 1e-6 * np.cos(2 * np.pi * 22 * t)

@@ -108,7 +108,7 @@ def test_cli_discover_takes_the_band_tension(tmp_path):
     effects are candidates (a CSV loop carries no tension of its own); the saved model names
     them and `tribojax predict` takes it."""
     from tribojax._cli._main import main
-    from tribojax._io._loop import write_loop
+    from tribojax._io._hysteresis_loop import write_loop
 
     t = np.linspace(0.0, 3.0, 751)
     u = 8e-3 * np.sin(2 * np.pi * t)

@@ -84,7 +84,7 @@ def test_gradients_through_the_start_match_finite_differences():
 @pytest.mark.slow
 def test_predict_starts_as_fitted_or_as_asked(tmp_path):
     from tribojax._cli._main import main
-    from tribojax._io._loop import write_loop
+    from tribojax._io._hysteresis_loop import write_loop
 
     loop = _history()
     report = tj.discovery.discover(tj.discovery.loop_baseline(loop, initial="measured"),

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._fit._curve import fit_steady_curve
 from .._fit._history import HISTORY_MODELS, fit_history, predict_history
 from .._fit._measures import bic, nrmse, rms
-from .._io._curve import FrictionCurve
+from .._fit._steady_law import fit_steady_curve
+from .._io._friction_curve import FrictionCurve
 from .._limits import DEVICE_MODELS, ELEMENT_MODELS, MAX_STEPS
 from .._predict import SAVED_KEY, fitted_model
 from ._common import CommandError

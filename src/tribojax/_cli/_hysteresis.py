@@ -24,7 +24,7 @@ from .._dynamics._harmonic import harmonic_balance, harmonic_response
 from .._friction._lugre import PreSlipLuGre
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._files import write_text_atomic
-from .._io._loop import read_loop
+from .._io._hysteresis_loop import read_loop
 from .._limits import SAMPLE_LIMITS
 from .._model import analyse_loop, fit_loop
 from .._plot import figure, save_figure

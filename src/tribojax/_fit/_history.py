@@ -28,7 +28,7 @@ from .._friction._band_brake import BandBrake
 from .._friction._bouc_wen import BoucWen
 from .._friction._lugre import LuGre
 from .._friction._rate_independent import Jenkins, Mindlin
-from .._io._loop import HysteresisLoop
+from .._io._hysteresis_loop import HysteresisLoop
 from .._limits import JOINT_SCALE_RATIO
 from .._results import RESULTS
 from ._engine import FitResult, fit_statistics, least_squares_fit, thrown

@@ -16,7 +16,7 @@ import numpy as np
 
 from .._presets import INCH_M, KIP_N, LBF_N
 from .._tables import DataFileError, read_json
-from ._loop import HysteresisLoop
+from ._hysteresis_loop import HysteresisLoop
 
 BRFD_UNITS = {"time units": "s", "displacement units": "in", "friction force units": "kip"}
 BRFD_COLUMNS = 6  # time, displacement, friction force, velocity, two actuator forces

@@ -7,7 +7,9 @@ from pathlib import Path
 from .._limits import RECORD_FORMATS as RECORD_FORMATS
 from .._tables import DataFileError, separator_hint
 from ._brfd import read_brfd
-from ._curve import (
+from ._epos import is_epos
+from ._files import csv_header, data_line_number
+from ._friction_curve import (
     CURVE_COLUMNS,
     TRANSIENT_COLUMNS,
     FrictionCurve,
@@ -16,9 +18,7 @@ from ._curve import (
     read_epos_transient,
     read_friction_curve,
 )
-from ._epos import is_epos
-from ._files import csv_header, data_line_number
-from ._loop import LOOP_COLUMNS, LOOP_FILE_COLUMNS, HysteresisLoop, read_loop
+from ._hysteresis_loop import LOOP_COLUMNS, LOOP_FILE_COLUMNS, HysteresisLoop, read_loop
 from ._slip_run import SLIP_COLUMNS, SlipRun, read_slip_run
 
 _READERS = {

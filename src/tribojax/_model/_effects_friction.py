@@ -12,7 +12,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ._curve import BETA_START
+from ._curve_model import BETA_START
 from ._effects import AbstractEffect, knob_design
 from ._loop_force import KD_LOAD_EXPONENT
 from ._slip import VS_GRID

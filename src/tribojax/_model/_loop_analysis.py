@@ -9,7 +9,7 @@ import numpy as np
 
 from .._checks import check_range
 from .._friction._rate_independent import Jenkins, Mindlin
-from .._io._loop import HysteresisLoop, cycle_starts
+from .._io._hysteresis_loop import HysteresisLoop, cycle_starts
 
 _ELEMENTS = {"jenkins": Jenkins, "mindlin": Mindlin}
 

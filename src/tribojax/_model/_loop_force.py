@@ -53,7 +53,7 @@ import numpy as np
 
 from .._checks import fail_if
 from .._friction._rate_independent import IwanBank, power_unit_bank
-from .._io._loop import HysteresisLoop, cycle_starts
+from .._io._hysteresis_loop import HysteresisLoop, cycle_starts
 from .._presets import WU2015_EQ5_EXPONENT
 from ._loop_analysis import analyse_loop
 

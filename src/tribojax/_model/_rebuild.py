@@ -17,10 +17,10 @@ import math
 
 import numpy as np
 
-from ._curve import curve_baseline
+from ._curve_model import curve_baseline
 from ._default_effects import default_effects
 from ._fit import MAX_STEPS, fit_model, record_scale
-from ._loop import loop_baseline
+from ._loop_model import loop_baseline
 from ._saved import FittedModel, check_values
 from ._slip import slip_baseline
 

@@ -87,13 +87,13 @@ from .._model import register_effect as register_effect
 from .._model import slip_baseline as slip_baseline
 from .._model import slip_start as slip_start
 from .._model import stage_travel as stage_travel
-from ._curve import discover_curve as discover_curve
-from ._curve import plot_curve_discovery as plot_curve_discovery
 from ._discover import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
 from ._discover import DiscoveryReport as DiscoveryReport
 from ._discover import discover as discover
-from ._loop import discover_loop as discover_loop
-from ._loop import plot_loop_discovery as plot_loop_discovery
+from ._discover_curve import discover_curve as discover_curve
+from ._discover_curve import plot_curve_discovery as plot_curve_discovery
+from ._discover_loop import discover_loop as discover_loop
+from ._discover_loop import plot_loop_discovery as plot_loop_discovery
 from ._loop_synthetic import eq7_standin_loop as eq7_standin_loop
 from ._loop_synthetic import eq7_standin_shape as eq7_standin_shape
 from ._loop_synthetic import hidden_effect_loop as hidden_effect_loop

@@ -34,7 +34,7 @@ from .._checks import check_range
 from .._contact._presets import wu2015_eq5_stiffness
 from .._fit._solver import LevenbergMarquardt
 from .._friction._rate_independent import Jenkins, Mindlin
-from .._io._loop import HysteresisLoop, synthetic_loop
+from .._io._hysteresis_loop import HysteresisLoop, synthetic_loop
 from .._presets import WU2015_EQ5_EXPONENT
 from .._reproduce._wu2015 import eq7_curves
 

@@ -1,6 +1,6 @@
 """The friction-curve model: steady friction against velocity (a `FrictionCurve`), the
-record model that `discover` (its effects in `tribojax.discovery._curve`) and a saved steady-law
-fit (`tribojax.fitted_model`) share.
+record model that `discover` (its effects: `_effects_curve`) and a saved steady-law fit
+(`tribojax.fitted_model`) share.
 
 Baseline (`curve_baseline`): Coulomb friction plus linear viscous friction, both directions,
 
@@ -40,7 +40,7 @@ import numpy as np
 from jaxtyping import Array
 
 from .._friction._lugre import stribeck_curve
-from .._io._curve import FrictionCurve
+from .._io._friction_curve import FrictionCurve
 from ._base import AbstractBaseline, DiscoveryData
 
 CURVE_KNOBS = ("stribeck", "log10_v_s", "log_beta", "asymmetry", "log_viscous_exponent")

@@ -22,7 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._friction._lugre import LuGre, stribeck_curve
-from .._io._curve import FrictionCurve, FrictionTransient
+from .._io._friction_curve import FrictionCurve, FrictionTransient
 from ._engine import FitResult, least_squares_fit, thrown
 from ._measures import nrmse
 from ._solver import LevenbergMarquardt

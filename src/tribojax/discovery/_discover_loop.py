@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._io._loop import HysteresisLoop
+from .._io._hysteresis_loop import HysteresisLoop
 from .._model import loop_baseline
 from .._plot import figure, save_figure
 from ._discover import DiscoveryReport, discover

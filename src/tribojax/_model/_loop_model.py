@@ -29,7 +29,7 @@ from .._checks import check_range
 from .._export import cached_jit
 from .._fit._engine import FitResult, least_squares_fit, thrown
 from .._fit._noise import RHO_MAX, lag1, noise_estimate
-from .._io._loop import HysteresisLoop
+from .._io._hysteresis_loop import HysteresisLoop
 from ._base import AbstractBaseline, DiscoveryData
 from ._fit import MAX_STEPS, fit_record
 from ._loop_analysis import _ELEMENTS, _loop_phase, analyse_loop

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._io._curve import FrictionCurve
+from .._io._friction_curve import FrictionCurve
 from .._model import curve_baseline, default_effects
 from .._plot import figure, save_figure
 from ._discover import DiscoveryReport, discover
