@@ -11,7 +11,7 @@ from jaxtyping import Array
 
 import tribojax.discovery as disc
 from tribojax._model import VS_GRID
-from tribojax.discovery import AbstractBaseline, AbstractEffect, DiscoveryData, EffectDesign
+from tribojax.discovery import AbstractBaseline, AbstractEffect, EffectDesign, RecordData
 
 
 class DecayBaseline(AbstractBaseline):
@@ -39,7 +39,7 @@ class DecayBaseline(AbstractBaseline):
         return A * jnp.exp(-self.t / tau) * (1.0 + knobs[0] * jnp.sin(2 * jnp.pi * self.t))
 
     def data(self):
-        return DiscoveryData(np.asarray(self.y), np.asarray(self.t), np.zeros(self.t.size, int),
+        return RecordData(np.asarray(self.y), np.asarray(self.t), np.zeros(self.t.size, int),
                              self.noise, "t (s)", "y (m)")  # fmt: skip
 
 

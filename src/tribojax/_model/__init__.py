@@ -5,8 +5,8 @@ from ._base import ALPHA as ALPHA
 from ._base import K_MAX as K_MAX
 from ._base import N_FOLD_BLOCKS as N_FOLD_BLOCKS
 from ._base import AbstractBaseline as AbstractBaseline
-from ._base import DiscoveryData as DiscoveryData
 from ._base import EffectDesign as EffectDesign
+from ._base import RecordData as RecordData
 from ._curve_model import BETA_START as BETA_START
 from ._curve_model import CurveBaseline as CurveBaseline
 from ._curve_model import curve_baseline as curve_baseline

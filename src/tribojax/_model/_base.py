@@ -26,7 +26,7 @@ serves every combination of effects on a record shape."""
 
 
 @dataclasses.dataclass(frozen=True)
-class DiscoveryData:
+class RecordData:
     """What a baseline compares with: observed samples and where they sit.
 
     y: observed samples (output units, e.g. m of slip or N of force), shape (n,).
@@ -36,6 +36,9 @@ class DiscoveryData:
     noise_std: noise sd of y in output units from the sidecar, or None (estimated then).
     x_label, y_label: axis labels with units.
     segment_names: optional names of the labels (e.g. {0: "falling", 1: "rising"}).
+
+    Every fit of a record model and `discover` read it (`AbstractBaseline.data`); earlier name
+    `DiscoveryData` (`tribojax.discovery.DiscoveryData`, the same class).
     """
 
     y: np.ndarray
@@ -165,7 +168,7 @@ class AbstractBaseline(eqx.Module):
         that trial step, and at the optimum fail the fit (`model_failed`)."""
 
     @abc.abstractmethod
-    def data(self) -> DiscoveryData:
+    def data(self) -> RecordData:
         """The observed record."""
 
     def value_and_jacobians(self, theta, knobs):

@@ -41,7 +41,7 @@ from jaxtyping import Array
 
 from .._friction._lugre import stribeck_curve
 from .._io._friction_curve import FrictionCurve
-from ._base import AbstractBaseline, DiscoveryData
+from ._base import AbstractBaseline, RecordData
 
 CURVE_KNOBS = ("stribeck", "log10_v_s", "log_beta", "asymmetry", "log_viscous_exponent")
 DIRECTION_NAMES = {0: "negative", 1: "positive"}
@@ -116,7 +116,7 @@ class CurveBaseline(AbstractBaseline):
 
     def data(self):
         vu, fu = self.units
-        return DiscoveryData(
+        return RecordData(
             y=np.asarray(self.f * self.weight),
             x=np.asarray(self.v),
             segment=(np.asarray(self.v) > 0).astype(int),

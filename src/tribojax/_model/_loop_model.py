@@ -30,7 +30,7 @@ from .._export import cached_jit
 from .._fit._engine import FitResult, least_squares_fit, thrown
 from .._fit._noise import RHO_MAX, lag1, noise_estimate
 from .._io._hysteresis_loop import HysteresisLoop
-from ._base import AbstractBaseline, DiscoveryData
+from ._base import AbstractBaseline, RecordData
 from ._fit import MAX_STEPS, fit_record
 from ._loop_analysis import _ELEMENTS, _loop_phase, analyse_loop
 from ._loop_force import (
@@ -142,7 +142,7 @@ class LoopBaseline(AbstractBaseline):
         return {"branch": region["segment"], "u_min": lo, "u_max": hi}
 
     def data(self):
-        return DiscoveryData(
+        return RecordData(
             y=np.asarray(self.record.f),
             x=np.asarray(self.x),
             segment=np.asarray(self.segment, dtype=int),

@@ -36,7 +36,7 @@ from .._fit._engine import thrown
 from .._friction._lugre import PreSlipLuGre
 from .._io._slip_run import SlipRun
 from .._results import RESULTS
-from ._base import AbstractBaseline, DiscoveryData
+from ._base import AbstractBaseline, RecordData
 from ._fit import MAX_STEPS, fit_record
 from ._modes import oscillator
 from ._slip_element import AugmentedPreSlip
@@ -239,7 +239,7 @@ class SlipBaseline(AbstractBaseline):
 
     def data(self):
         sd = float(self.noise_std)
-        return DiscoveryData(
+        return RecordData(
             y=np.asarray(self.slip),
             x=np.asarray(self.t),
             segment=np.zeros(self.t.shape[0], int),

@@ -16,7 +16,7 @@ A **baseline** is a concrete `AbstractBaseline` (an equinox Module holding the r
         def start(self): return np.log([...])           # unconstrained θ0 (np array)
         def physical(self, theta): return jnp.exp(theta)  # θ → physical values (JAX)
         def predict(self, theta, knobs): ...            # (n,) model samples (JAX, jacfwd-able)
-        def data(self): return DiscoveryData(y=f, x=u, segment=branch, noise_std=None or sd,
+        def data(self): return RecordData(y=f, x=u, segment=branch, noise_std=None or sd,
                                              x_label="u (m)", y_label="force (N)",
                                              segment_names={0: "falling", 1: "rising"})
 
@@ -76,9 +76,10 @@ from .._model import AbstractBaseline as AbstractBaseline
 from .._model import AbstractEffect as AbstractEffect
 from .._model import AugmentedPreSlip as AugmentedPreSlip
 from .._model import CurveBaseline as CurveBaseline
-from .._model import DiscoveryData as DiscoveryData
 from .._model import EffectDesign as EffectDesign
 from .._model import LoopBaseline as LoopBaseline
+from .._model import RecordData as DiscoveryData  # noqa: F401  (its earlier name, the same class)
+from .._model import RecordData as RecordData
 from .._model import SlipBaseline as SlipBaseline
 from .._model import curve_baseline as curve_baseline
 from .._model import default_effects as default_effects

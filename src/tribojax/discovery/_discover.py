@@ -16,8 +16,8 @@ from .._model import (
     ALPHA,
     AbstractBaseline,
     AbstractEffect,
-    DiscoveryData,
     FittedModel,
+    RecordData,
     default_effects,
     fit_record,
     fit_saved,
@@ -44,7 +44,7 @@ class _Run:
     noise model, which refits sharpen (`consistent`)."""
 
     baseline: AbstractBaseline
-    data: DiscoveryData
+    data: RecordData
     y: np.ndarray
     scale: float
     alpha: float

@@ -45,9 +45,9 @@ from .._model import (
     AbstractBaseline,
     AbstractEffect,
     AugmentedPreSlip,
-    DiscoveryData,
     EffectDesign,
     LoadDependence,
+    RecordData,
     Stribeck,
     Viscous,
     knob_design,
@@ -119,7 +119,7 @@ class Wang2022TableBaseline(AbstractBaseline):
     def data(self):
         y = np.log(np.abs(np.asarray(self.measured)))
         vac = np.asarray(wang2022_table(4)["vacuum_kPa"])
-        return DiscoveryData(
+        return RecordData(
             y=y,
             x=np.tile(vac, 4),
             segment=np.repeat(np.arange(4), 6),
