@@ -4,7 +4,7 @@ by importing a module, so a saved model rebuilds (`rebuild`) without importing `
 
 from __future__ import annotations
 
-from ._effects import AbstractEffect, user_effects, user_kinds
+from ._effects import AbstractEffect, user_effects
 from ._effects_curve import CURVE_EFFECTS
 from ._effects_loop import LOOP_EFFECTS
 from ._effects_slip import SLIP_EFFECTS
@@ -18,9 +18,10 @@ def default_effects(kind: str) -> list[AbstractEffect]:
     the built-in ones in candidate order, then the user's (`register_effect`; a user's effect of a
     built-in name takes its place)."""
     built_in = {e.name: e for e in BUILT_IN.get(kind, ())}
-    added = user_effects(kind)
+    users = user_effects()
+    added = users.get(kind, {})
     if not built_in and not added:
-        known = sorted({*BUILT_IN, *user_kinds()})
+        known = sorted({*BUILT_IN, *users})
         raise ValueError(f"kind = {kind!r}: no effects registered; known: {known}")
     table = {**built_in, **added}
     return [e() if isinstance(e, type) else e for e in table.values()]

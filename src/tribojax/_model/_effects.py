@@ -64,14 +64,9 @@ def register_effect(effect):
     return effect
 
 
-def user_effects(kind: str) -> dict:
-    """The effects a user registered for `kind` ({name: class or instance}, in order)."""
-    return dict(_REGISTRY.get(kind, {}))
-
-
-def user_kinds() -> tuple[str, ...]:
-    """The record kinds a user registered effects for."""
-    return tuple(_REGISTRY)
+def user_effects() -> dict[str, dict]:
+    """The effects a user registered: {kind: {name: class or instance}}, in order."""
+    return {kind: dict(table) for kind, table in _REGISTRY.items()}
 
 
 def knob_design(baseline, knobs, names, units, scale, **kw) -> EffectDesign:

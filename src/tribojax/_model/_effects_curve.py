@@ -1,6 +1,6 @@
 """The friction-curve model's effects (`default_effects("curve")`): `stribeck` and `viscous`
 (the friction law's, `_effects_friction`) and `asymmetry`; the model, its knobs, noise and
-weighting are `_curve.CurveBaseline`'s."""
+weighting are `_curve_model.CurveBaseline`'s."""
 
 from __future__ import annotations
 
