@@ -33,10 +33,13 @@ from catalog import DRIFT_POLY, DRIFT_THERM, DRIFT_WALK  # noqa: E402
 from recio import write_json, write_record  # noqa: E402
 
 LOOP_SEED0, SLIP_SEED0 = 5100, 3100
-LOOP_EFFECTS = ("microslip", "viscous_damping", "normal_load_variation", "backlash",
-                "force_offset")  # fmt: skip
-SLIP_PAIRS = (("sensor_drift", "load_coupling"), ("position_error", "stribeck"),
-              ("vibration", "viscous_friction"), ("load_coupling", "viscous_friction"))  # fmt: skip
+LOOP_EFFECTS = ("microslip", "viscous_damping", "normal_load_variation", "backlash", "force_offset")
+SLIP_PAIRS = (
+    ("sensor_drift", "load_coupling"),
+    ("position_error", "stribeck"),
+    ("vibration", "viscous_friction"),
+    ("load_coupling", "viscous_friction"),
+)
 
 
 def _loop_effect(name, rng):
@@ -47,8 +50,11 @@ def _loop_effect(name, rng):
         return {"c_omega_A_over_muN": rng.uniform(0.05, 0.09)}
     if name == "normal_load_variation":
         quad = bool(rng.integers(2))
-        return {"beta": sign * rng.uniform(0.12, 0.25), "beta2": rng.uniform(0.0, 0.1) * quad,
-                "gamma": 0.0 if quad else 0.76}  # fmt: skip
+        return {
+            "beta": sign * rng.uniform(0.12, 0.25),
+            "beta2": rng.uniform(0.0, 0.1) * quad,
+            "gamma": 0.0 if quad else 0.76,
+        }
     if name == "backlash":
         return {"gap_over_A": rng.uniform(0.15, 0.4)}
     return {"offset_over_muN": sign * rng.uniform(0.05, 0.08)}
@@ -63,8 +69,12 @@ def _slip_effect(name, rng):
     if name == "vibration":
         mode = ("accel", "jerk")[rng.integers(2)]
         gain = rng.uniform(5e-4, 2.5e-3) if mode == "accel" else rng.uniform(1e-4, 2.5e-4)
-        return {"mode": mode, "f_n_Hz": rng.uniform(50.0, 150.0), "zeta": rng.uniform(0.02, 0.05),
-                "gain": gain}  # fmt: skip
+        return {
+            "mode": mode,
+            "f_n_Hz": rng.uniform(50.0, 150.0),
+            "zeta": rng.uniform(0.02, 0.05),
+            "gain": gain,
+        }
     if name == "load_coupling":
         return {"kappa": sign * rng.uniform(0.3, 0.5)}
     if name == "stribeck":
@@ -79,19 +89,30 @@ def specs():
     pairs = [p for p in itertools.combinations(LOOP_EFFECTS, 2) if p != ("microslip", "backlash")]
     for k, pair in enumerate(pairs):
         drive = ("sine", "sine3", "rtri")[rng.integers(3)]
-        spec = {"contact": f"C{rng.integers(1, 6)}", "drive": drive,
-                "effects": {e: _loop_effect(e, rng) for e in pair},
-                "noise_frac": rng.uniform(0.005, 0.015), "seed": LOOP_SEED0 + k,
-                "noise_stated": k % 2 == 1}  # fmt: skip
+        spec = {
+            "contact": f"C{rng.integers(1, 6)}",
+            "drive": drive,
+            "effects": {e: _loop_effect(e, rng) for e in pair},
+            "noise_frac": rng.uniform(0.005, 0.015),
+            "seed": LOOP_SEED0 + k,
+            "noise_stated": k % 2 == 1,
+        }
         if drive == "sine3":
             spec["h"] = 0.25
         loops.append(spec)
     slips = []
     for k, pair in enumerate(SLIP_PAIRS):
-        slips.append({"drive": "trapezoid", "vac": float(rng.choice([0.6, 2, 4, 7, 10, 20])),
-                      "mass_factor": 1.0, "effects": {e: _slip_effect(e, rng) for e in pair},
-                      "noise_frac": 0.01, "seed": SLIP_SEED0 + k,
-                      "noise_stated": k % 2 == 0})  # fmt: skip
+        slips.append(
+            {
+                "drive": "trapezoid",
+                "vac": float(rng.choice([0.6, 2, 4, 7, 10, 20])),
+                "mass_factor": 1.0,
+                "effects": {e: _slip_effect(e, rng) for e in pair},
+                "noise_frac": 0.01,
+                "seed": SLIP_SEED0 + k,
+                "noise_stated": k % 2 == 0,
+            }
+        )
     return loops, slips
 
 

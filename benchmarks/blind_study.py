@@ -67,20 +67,32 @@ def run_one(entry: dict, folder: Path) -> dict:
     wall = time.perf_counter() - t0
     sd = rep.noise_std
     hidden = list(entry["hidden"])
-    row = {"label": entry["label"], "kind": entry["kind"], "hidden": hidden,
-           "drive": entry.get("drive"), "visibility_sd": entry.get("visibility_sd"),
-           "verdict": rep.verdict, "effects": list(rep.effects), "effect": rep.effect,
-           "excess_before_sd": rep.excess_rmse_before / sd,
-           "excess_after_sd": rep.excess_rmse_after / sd, "converged": rep.converged,
-           "heldout_before_sd": _sd(rep.heldout_excess_before, sd),
-           "heldout_after_sd": _sd(rep.heldout_excess_after, sd),
-           "final_consistent": rep.misfit.get("final_consistent"), "noise_std": sd, "seconds": wall,
-           "extra": [e for e in rep.effects if e not in hidden]}  # fmt: skip
-    row["ok"] = bool(score(hidden, row["effects"], rep.verdict, rep.excess_rmse_before,
-                           rep.excess_rmse_after))  # fmt: skip
+    row = {
+        "label": entry["label"],
+        "kind": entry["kind"],
+        "hidden": hidden,
+        "drive": entry.get("drive"),
+        "visibility_sd": entry.get("visibility_sd"),
+        "verdict": rep.verdict,
+        "effects": list(rep.effects),
+        "effect": rep.effect,
+        "excess_before_sd": rep.excess_rmse_before / sd,
+        "excess_after_sd": rep.excess_rmse_after / sd,
+        "converged": rep.converged,
+        "heldout_before_sd": _sd(rep.heldout_excess_before, sd),
+        "heldout_after_sd": _sd(rep.heldout_excess_after, sd),
+        "final_consistent": rep.misfit.get("final_consistent"),
+        "noise_std": sd,
+        "seconds": wall,
+        "extra": [e for e in rep.effects if e not in hidden],
+    }
+    row["ok"] = bool(
+        score(hidden, row["effects"], rep.verdict, rep.excess_rmse_before, rep.excess_rmse_after)
+    )
     h0, h1 = row["heldout_before_sd"], row["heldout_after_sd"]
-    row["ok_heldout"] = bool(row["ok"] and (not hidden or (h0 is not None and h1 is not None
-                                                            and h1 <= 0.5 * h0)))  # fmt: skip
+    row["ok_heldout"] = bool(
+        row["ok"] and (not hidden or (h0 is not None and h1 is not None and h1 <= 0.5 * h0))
+    )
     return row
 
 
@@ -96,29 +108,42 @@ def summarise(rows) -> tuple[dict, str]:
     groups = collections.defaultdict(list)
     for r in rows:
         n = len(r["hidden"])
-        groups[f"{r['kind']}: " + ("clean" if n == 0 else "one effect" if n == 1 else
-                                   "two effects")].append(r)  # fmt: skip
+        groups[
+            f"{r['kind']}: " + ("clean" if n == 0 else "one effect" if n == 1 else "two effects")
+        ].append(r)
     for r in rows:  # the records any residual test can score (module docstring, visibility)
         if len(r["hidden"]) == 1 and r["excess_before_sd"] >= VISIBLE_SD:
             groups["one effect, visible after the baseline refit"].append(r)
-    summary = {k: {"n": len(v), "success": sum(r["ok"] for r in v),
-                   "success_heldout": sum(bool(r.get("ok_heldout")) for r in v),
-                   "with_extra_effects": sum(bool(r.get("extra")) for r in v)}
-               for k, v in groups.items()}  # fmt: skip
-    lines = ["| record | hidden | named | verdict | excess before -> after (sd) | held out (sd) "
-             "| ok | ok held out |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    summary = {
+        k: {
+            "n": len(v),
+            "success": sum(r["ok"] for r in v),
+            "success_heldout": sum(bool(r.get("ok_heldout")) for r in v),
+            "with_extra_effects": sum(bool(r.get("extra")) for r in v),
+        }
+        for k, v in groups.items()
+    }
+    lines = [
+        "| record | hidden | named | verdict | excess before -> after (sd) | held out (sd) "
+        "| ok | ok held out |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
-        lines.append(f"| {r['label']} | {' + '.join(r['hidden']) or 'none'} | "
-                     f"{', '.join(r['effects']) or '-'} | {r['verdict']} | "
-                     f"{r['excess_before_sd']:.2f} -> {r['excess_after_sd']:.2f} | "
-                     f"{_pair(r.get('heldout_before_sd'), r.get('heldout_after_sd'))} | "
-                     f"{'yes' if r['ok'] else 'NO'} | "
-                     f"{'yes' if r.get('ok_heldout') else 'NO'} |")  # fmt: skip
+        lines.append(
+            f"| {r['label']} | {' + '.join(r['hidden']) or 'none'} | "
+            f"{', '.join(r['effects']) or '-'} | {r['verdict']} | "
+            f"{r['excess_before_sd']:.2f} -> {r['excess_after_sd']:.2f} | "
+            f"{_pair(r.get('heldout_before_sd'), r.get('heldout_after_sd'))} | "
+            f"{'yes' if r['ok'] else 'NO'} | "
+            f"{'yes' if r.get('ok_heldout') else 'NO'} |"
+        )
     lines.append("")
     for k, v in summary.items():
-        lines.append(f"- {k}: {v['success']}/{v['n']}, held out too {v['success_heldout']}"
-                     f"/{v['n']} (an effect not hidden added in "
-                     f"{v['with_extra_effects']})")  # fmt: skip
+        lines.append(
+            f"- {k}: {v['success']}/{v['n']}, held out too {v['success_heldout']}"
+            f"/{v['n']} (an effect not hidden added in "
+            f"{v['with_extra_effects']})"
+        )
     return summary, "\n".join(lines)
 
 
@@ -147,13 +172,15 @@ def main(argv=None):
             with log.open("a") as fh:
                 fh.write(json.dumps(row) + "\n")
         rows.append(row)
-        print(f"{row['label']:50s} {'+'.join(row['hidden']) or 'none':32s} {row['verdict']:17s} "
-              f"{','.join(row['effects']) or '-':30s} {row['excess_before_sd']:.2f}->"
-              f"{row['excess_after_sd']:.2f} {'ok' if row['ok'] else 'FAIL'} "
-              f"{row['seconds']:.0f}s", flush=True)  # fmt: skip
+        print(
+            f"{row['label']:50s} {'+'.join(row['hidden']) or 'none':32s} {row['verdict']:17s} "
+            f"{','.join(row['effects']) or '-':30s} {row['excess_before_sd']:.2f}->"
+            f"{row['excess_after_sd']:.2f} {'ok' if row['ok'] else 'FAIL'} "
+            f"{row['seconds']:.0f}s",
+            flush=True,
+        )
     summary, table = summarise(rows)
-    (out / "blind_study.json").write_text(json.dumps({"summary": summary, "rows": rows},
-                                                     indent=1))  # fmt: skip
+    (out / "blind_study.json").write_text(json.dumps({"summary": summary, "rows": rows}, indent=1))
     (out / "blind_study.md").write_text(table + "\n")
     print(table)
     return 0

@@ -159,8 +159,14 @@ def _make_record(work: Path) -> Path:
     return path
 
 
-HISTORY = (Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "brfd"
-           / "earthquake_ImperialValleyDBE_30lb.json")  # fmt: skip
+HISTORY = (
+    Path(__file__).resolve().parents[2]
+    / "shared"
+    / "data"
+    / "real"
+    / "brfd"
+    / "earthquake_ImperialValleyDBE_30lb.json"
+)
 """The brfd Imperial Valley history (28,698 samples), timed when ../shared is present."""
 
 
@@ -180,29 +186,94 @@ def run(quick=False, workdir=None, only=None):
 
     help_s, _ = _fresh([exe, "--help"], env, work)
     import_s, _ = _fresh([sys.executable, "-c", "import tribojax"], env, work)
-    first_use_s, _ = _fresh([sys.executable, "-c", "import tribojax; tribojax.PreSlipLuGre"],
-                            env, work)  # fmt: skip
-    out.append(dict(name="cli_help", tribojax_s=help_s, baseline=None, baseline_s=None,
-                    ratio=None, target=0.3, meets_target=help_s <= 0.3))  # fmt: skip
-    out.append(dict(name="import_tribojax", tribojax_s=import_s, first_use_s=first_use_s,
-                    baseline=None, baseline_s=None, ratio=None, target=1.5,
-                    meets_target=import_s <= 1.5))  # fmt: skip
+    first_use_s, _ = _fresh(
+        [sys.executable, "-c", "import tribojax; tribojax.PreSlipLuGre"], env, work
+    )
+    out.append(
+        dict(
+            name="cli_help",
+            tribojax_s=help_s,
+            baseline=None,
+            baseline_s=None,
+            ratio=None,
+            target=0.3,
+            meets_target=help_s <= 0.3,
+        )
+    )
+    out.append(
+        dict(
+            name="import_tribojax",
+            tribojax_s=import_s,
+            first_use_s=first_use_s,
+            baseline=None,
+            baseline_s=None,
+            ratio=None,
+            target=1.5,
+            meets_target=import_s <= 1.5,
+        )
+    )
 
-    commands = [("fit", ["fit", str(record), "--alpha", "1", "--quiet", "--force",
-                         "--out", str(work / "fit-{state}")], 3.0, 10.0)]  # fmt: skip
+    commands = [
+        (
+            "fit",
+            [
+                "fit",
+                str(record),
+                "--alpha",
+                "1",
+                "--quiet",
+                "--force",
+                "--out",
+                str(work / "fit-{state}"),
+            ],
+            3.0,
+            10.0,
+        )
+    ]
     if not quick:
         commands += [
-            ("discover", ["discover", str(record), "--quiet", "--force",
-                          "--out", str(work / "discover-{state}")], 6.0, None),  # fmt: skip
-            ("frf", ["frf", str(work / "frf.toml"), "--quiet", "--out", str(work / "frf-{state}")],
-             8.0, None),
-            ("reproduce", ["reproduce", "--quiet", "--out", str(work / "reproduce-{state}")], 20.0,
-             None),
+            (
+                "discover",
+                [
+                    "discover",
+                    str(record),
+                    "--quiet",
+                    "--force",
+                    "--out",
+                    str(work / "discover-{state}"),
+                ],
+                6.0,
+                None,
+            ),
+            (
+                "frf",
+                ["frf", str(work / "frf.toml"), "--quiet", "--out", str(work / "frf-{state}")],
+                8.0,
+                None,
+            ),
+            (
+                "reproduce",
+                ["reproduce", "--quiet", "--out", str(work / "reproduce-{state}")],
+                20.0,
+                None,
+            ),
         ]
         if HISTORY.exists():  # issue 30: a 28 s earthquake history discovered in <= 60 s
-            commands.append(("discover_history", ["discover", str(HISTORY), "--quiet", "--force",
-                                                  "--out", str(work / "history-{state}")],
-                             60.0, 60.0))  # fmt: skip
+            commands.append(
+                (
+                    "discover_history",
+                    [
+                        "discover",
+                        str(HISTORY),
+                        "--quiet",
+                        "--force",
+                        "--out",
+                        str(work / "history-{state}"),
+                    ],
+                    60.0,
+                    60.0,
+                )
+            )
     if only:
         commands = [c for c in commands if c[0] in only]
     for name, argv, warm_target, cold_target in commands:
@@ -212,22 +283,38 @@ def run(quick=False, workdir=None, only=None):
             wall, proc = _fresh([sys.executable, "-c", _PROBE, json.dumps(argv_state)], env, work)
             split = _last(proc, "SPLIT")
             if split["exit"] != 0:
-                raise RuntimeError(f"tribojax {' '.join(argv_state)} exited {split['exit']}:\n"
-                                   f"{proc.stderr[-2000:]}")
+                raise RuntimeError(
+                    f"tribojax {' '.join(argv_state)} exited {split['exit']}:\n"
+                    f"{proc.stderr[-2000:]}"
+                )
             split["end_to_end_s"] = wall
             runs[state] = split
         cold, warm = runs["empty_cache"]["end_to_end_s"], runs["warm_cache"]["end_to_end_s"]
-        entry = dict(name=f"cli_{name}", tribojax_s=warm, first_run_s=cold, target=warm_target,
-                     meets_target=warm <= warm_target and (cold_target is None
-                                                           or cold <= cold_target),
-                     runs=runs, baseline=None, baseline_s=None, ratio=None)  # fmt: skip
+        entry = dict(
+            name=f"cli_{name}",
+            tribojax_s=warm,
+            first_run_s=cold,
+            target=warm_target,
+            meets_target=warm <= warm_target and (cold_target is None or cold <= cold_target),
+            runs=runs,
+            baseline=None,
+            baseline_s=None,
+            ratio=None,
+        )
         if name == "fit":  # the SciPy script of the same fit, in a fresh process
-            scipy_s, scipy_out = _fresh([sys.executable, "-c", _SCIPY, str(record),
-                                         str(record.with_suffix(".json"))], env, work)  # fmt: skip
+            scipy_s, scipy_out = _fresh(
+                [sys.executable, "-c", _SCIPY, str(record), str(record.with_suffix(".json"))],
+                env,
+                work,
+            )
             scipy = _last(scipy_out, "SCIPY")
-            entry.update(baseline="scipy least_squares + solve_ivp LSODA (fresh process)",
-                         baseline_s=scipy_s, ratio=scipy_s / warm,
-                         ratio_first_run=scipy_s / cold, scipy=scipy)  # fmt: skip
+            entry.update(
+                baseline="scipy least_squares + solve_ivp LSODA (fresh process)",
+                baseline_s=scipy_s,
+                ratio=scipy_s / warm,
+                ratio_first_run=scipy_s / cold,
+                scipy=scipy,
+            )
             fit = json.loads((work / "fit-warm_cache" / "fit.json").read_text())
             entry["tribojax_parameters"] = fit.get("parameters")
         out.append(entry)
@@ -239,9 +326,12 @@ def main(argv=None):
     parser.add_argument("--out", required=True, help="folder for cold_start.json")
     parser.add_argument("--quick", action="store_true", help="--help, import and fit only")
     parser.add_argument("--workdir", default=None, help="scratch folder (default: a temp dir)")
-    parser.add_argument("--only", nargs="*", default=None,
-                        help="time only these commands (fit discover frf reproduce "
-                             "discover_history)")  # fmt: skip
+    parser.add_argument(
+        "--only",
+        nargs="*",
+        default=None,
+        help="time only these commands (fit discover frf reproduce discover_history)",
+    )
     args = parser.parse_args(argv)
     results = run(quick=args.quick, workdir=args.workdir, only=args.only)
     out = Path(args.out)
@@ -252,13 +342,17 @@ def main(argv=None):
         if "first_run_s" in e:
             line += f"  (first run {e['first_run_s']:.2f} s)"
             for state, r in e["runs"].items():
-                line += (f"\n    {state:<12} import {r['import_s']:.2f} trace {r['trace_s']:.2f} "
-                         f"lower {r['lower_s']:.2f} compile {r['compile_s']:.2f} "
-                         f"work {r['work_s']:.2f} end-to-end {r['end_to_end_s']:.2f} "
-                         f"(cache hits {r['cache_hits']})")  # fmt: skip
+                line += (
+                    f"\n    {state:<12} import {r['import_s']:.2f} trace {r['trace_s']:.2f} "
+                    f"lower {r['lower_s']:.2f} compile {r['compile_s']:.2f} "
+                    f"work {r['work_s']:.2f} end-to-end {r['end_to_end_s']:.2f} "
+                    f"(cache hits {r['cache_hits']})"
+                )
         if e.get("baseline_s") is not None:
-            line += (f"\n    SciPy script {e['baseline_s']:.2f} s: ratio SciPy/tribojax "
-                     f"{e['ratio']:.2f} warm cache, {e['ratio_first_run']:.2f} first run")
+            line += (
+                f"\n    SciPy script {e['baseline_s']:.2f} s: ratio SciPy/tribojax "
+                f"{e['ratio']:.2f} warm cache, {e['ratio_first_run']:.2f} first run"
+            )
         print(line)
     print(f"wrote {out / 'cold_start.json'}")
     return 0

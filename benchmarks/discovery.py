@@ -51,8 +51,15 @@ def scipy_baseline_fit(run, start):
         # one solve across them diverges or steps over the start of the motion
         out, state = np.zeros(t.size), [0.0, 0.0, 0.0]
         for i0, i1 in zip(kinks[:-1], kinks[1:]):
-            sol = solve_ivp(rhs, (t[i0], t[i1]), state, method="LSODA", t_eval=t[i0 : i1 + 1],
-                            rtol=1e-8, atol=1e-9)  # fmt: skip
+            sol = solve_ivp(
+                rhs,
+                (t[i0], t[i1]),
+                state,
+                method="LSODA",
+                t_eval=t[i0 : i1 + 1],
+                rtol=1e-8,
+                atol=1e-9,
+            )
             if not sol.success or not np.all(np.isfinite(sol.y)):
                 return np.full(t.size, 1e6)
             out[i0 : i1 + 1] = sol.y[0]
@@ -60,8 +67,7 @@ def scipy_baseline_fit(run, start):
         return out
 
     t0 = time.perf_counter()
-    res = least_squares(lambda p: (simulate(p) - y) / sd, np.log(start), method="trf",
-                        max_nfev=60)  # fmt: skip
+    res = least_squares(lambda p: (simulate(p) - y) / sd, np.log(start), method="trf", max_nfev=60)
     return time.perf_counter() - t0, res
 
 
@@ -116,8 +122,14 @@ def other_records() -> list[dict]:
         run_ = hidden_effect_run(effect, NOISE_LEVELS["low"], 0.6, seed=0, n=N, t_end=T_END)
         t0 = time.perf_counter()
         rep = disc.discover(disc.slip_baseline(run_))
-        rows.append({"hidden": effect, "seconds": time.perf_counter() - t0, "effect": rep.effect,
-                     "verdict": rep.verdict})  # fmt: skip
+        rows.append(
+            {
+                "hidden": effect,
+                "seconds": time.perf_counter() - t0,
+                "effect": rep.effect,
+                "verdict": rep.verdict,
+            }
+        )
     return rows
 
 

@@ -56,8 +56,10 @@ class LoopRecordSpec:
 
     @property
     def label(self) -> str:
-        return (f"loop:{self.effect}/{self.shape} {self.noise}"
-                f"{'' if self.sidecar else ' est'} s{self.seed}")  # fmt: skip
+        return (
+            f"loop:{self.effect}/{self.shape} {self.noise}"
+            f"{'' if self.sidecar else ' est'} s{self.seed}"
+        )
 
 
 def _stop(u, k, limit):
@@ -116,8 +118,13 @@ def _hardening(u, k, F_s, h):
 
 def rig(rng):
     """(N0 in N, μ, k in N/m, frequency in Hz, Ā) of one record, drawn from `rng`."""
-    return (rng.uniform(1.5, 6.0), rng.uniform(0.2, 0.45), 10 ** rng.uniform(6.0, 6.8),
-            rng.uniform(7.0, 40.0), rng.uniform(1.4, 4.2))  # fmt: skip
+    return (
+        rng.uniform(1.5, 6.0),
+        rng.uniform(0.2, 0.45),
+        10 ** rng.uniform(6.0, 6.8),
+        rng.uniform(7.0, 40.0),
+        rng.uniform(1.4, 4.2),
+    )
 
 
 def make_loop_record(spec: LoopRecordSpec, *, with_noise: bool = True) -> tj.HysteresisLoop:
@@ -170,8 +177,15 @@ def make_loop_record(spec: LoopRecordSpec, *, with_noise: bool = True) -> tj.Hys
         )
     sd = NOISE[spec.noise] * F_s
     f_rec = f_rec + with_noise * rng.normal(0.0, sd, f_rec.size)
-    return tj.HysteresisLoop(t_rec, u_rec, f_rec, source=spec.label, normal_load=N0,
-                             frequency=freq, noise_std=sd if spec.sidecar else None)  # fmt: skip
+    return tj.HysteresisLoop(
+        t_rec,
+        u_rec,
+        f_rec,
+        source=spec.label,
+        normal_load=N0,
+        frequency=freq,
+        noise_std=sd if spec.sidecar else None,
+    )
 
 
 def loop_study_specs() -> list[LoopRecordSpec]:

@@ -48,8 +48,14 @@ IN_VOCAB = {
     "viscous_friction": ("linear", "power_0.7"),
     "position_error": ("linear", "quadratic"),
 }
-OUT_OF_VOCAB = ("sensor_lag", "readout_step", "channel_lag", "stiffness_hardening",
-                "direction_dependent", "mains_pickup")  # fmt: skip
+OUT_OF_VOCAB = (
+    "sensor_lag",
+    "readout_step",
+    "channel_lag",
+    "stiffness_hardening",
+    "direction_dependent",
+    "mains_pickup",
+)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,8 +73,10 @@ class RecordSpec:
 
     @property
     def label(self) -> str:
-        return (f"{self.effect}/{self.shape} {self.load:g}kPa {self.drive} {self.noise}"
-                f"{'' if self.sidecar else ' est'} s{self.seed}")  # fmt: skip
+        return (
+            f"{self.effect}/{self.shape} {self.load:g}kPa {self.drive} {self.noise}"
+            f"{'' if self.sidecar else ' est'} s{self.seed}"
+        )
 
 
 def table3(load):
@@ -144,8 +152,15 @@ def _simulate(spec, rng, tk, ak, ts, v_peak=None):
         zdot = v * (1.0 - np.sign(v) * Fsp / gv)
         Ff = Fsp + C * zdot * 1e-9 + visc(v * 1e-9)
         force = -jerk / w if jerk_mode else -a
-        return [v, a * 1e9 - Ff / MASS * 1e9, zdot, a, vs, qd,
-                force - 2 * zeta * w * qd - w * w * q]  # fmt: skip
+        return [
+            v,
+            a * 1e9 - Ff / MASS * 1e9,
+            zdot,
+            a,
+            vs,
+            qd,
+            force - 2 * zeta * w * qd - w * w * q,
+        ]
 
     y = np.zeros(7)
     out = np.zeros((7, ts.size))
@@ -155,9 +170,17 @@ def _simulate(spec, rng, tk, ak, ts, v_peak=None):
         jerk = (ak[i + 1] - ak[i]) / (t1 - t0)
         sel = (ts > t0 + 1e-12) & (ts < t1 - 1e-12)
         t_eval = np.concatenate([ts[sel], [t1]])
-        sol = solve_ivp(rhs, (t0, t1), y, method="LSODA", t_eval=t_eval, args=(ak[i], t0, jerk),
-                        rtol=1e-9, atol=[1e-7, 1e-4, 1e-7, 1e-9, 1e-9, 1e-12, 1e-10],
-                        max_step=(t1 - t0) / 20)  # fmt: skip
+        sol = solve_ivp(
+            rhs,
+            (t0, t1),
+            y,
+            method="LSODA",
+            t_eval=t_eval,
+            args=(ak[i], t0, jerk),
+            rtol=1e-9,
+            atol=[1e-7, 1e-4, 1e-7, 1e-9, 1e-9, 1e-12, 1e-10],
+            max_step=(t1 - t0) / 20,
+        )
         if not sol.success:
             raise RuntimeError(f"{spec.label}: {sol.message}")
         out[:, sel] = sol.y[:, :-1]
@@ -225,8 +248,14 @@ def make_record(spec: RecordSpec, *, with_noise: bool = True) -> tj.SlipRun:
         slip = slip + add * peak / np.max(np.abs(add))
     sd = NOISE[spec.noise]
     slip = slip + rng.normal(0.0, sd, ts.size) * with_noise
-    return tj.SlipRun(t=ts, accel=accel, slip=slip, mass=MASS,
-                      noise_std=sd if spec.sidecar else None, source=spec.label)  # fmt: skip
+    return tj.SlipRun(
+        t=ts,
+        accel=accel,
+        slip=slip,
+        mass=MASS,
+        noise_std=sd if spec.sidecar else None,
+        source=spec.label,
+    )
 
 
 def study_specs() -> list[RecordSpec]:
@@ -237,15 +266,16 @@ def study_specs() -> list[RecordSpec]:
     for e, shapes in IN_VOCAB.items():
         for sh in shapes:
             # physics effects show only where m·a_max/F_s is large: low loads or the fast drive
-            configs = ([(0.6, "paper"), (2.0, "paper"), (4.0, "fast"), (10.0, "fast"),
-                        (0.6, "fast")]
-                       if e in physics else
-                       [(0.6, "paper"), (4.0, "paper"), (20.0, "paper"), (7.0, "fast"),
-                        (2.0, "fast")])  # fmt: skip
+            configs = (
+                [(0.6, "paper"), (2.0, "paper"), (4.0, "fast"), (10.0, "fast"), (0.6, "fast")]
+                if e in physics
+                else [(0.6, "paper"), (4.0, "paper"), (20.0, "paper"), (7.0, "fast"), (2.0, "fast")]
+            )
             for j, (load, drive) in enumerate(configs):
                 seed += 1
-                specs.append(RecordSpec(e, sh, load, drive, ("low", "high")[j % 2],
-                                        j in (0, 3), seed))  # fmt: skip
+                specs.append(
+                    RecordSpec(e, sh, load, drive, ("low", "high")[j % 2], j in (0, 3), seed)
+                )
     for j, load in enumerate(LOADS_KPA):
         for noise in ("low", "high"):
             seed += 1

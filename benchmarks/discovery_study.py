@@ -88,16 +88,27 @@ def run_one(spec) -> dict:
     rep = disc.discover_loop(rec) if loop else disc.discover(disc.slip_baseline(rec))
     wall = time.perf_counter() - t0
     sd = rep.noise_std
-    row = {"label": spec.label, "kind": "loop" if loop else "slip", "effect_true": spec.effect,
-           "shape": spec.shape, "load_kPa": None if loop else spec.load,
-           "drive": "sine" if loop else spec.drive, "noise": spec.noise,
-           "sidecar": spec.sidecar, "seed": spec.seed, "verdict": rep.verdict,
-           "effect": rep.effect, "effects": list(rep.effects),
-           "excess_before_sd": rep.excess_rmse_before / sd,
-           "excess_after_sd": rep.excess_rmse_after / sd,
-           "F_s": rep.baseline_fit["parameters"].get("F_s"), "converged": rep.converged,
-           "noise_std": sd, "noise_std_true": spec_noise(spec),
-           "seconds": wall}  # fmt: skip
+    row = {
+        "label": spec.label,
+        "kind": "loop" if loop else "slip",
+        "effect_true": spec.effect,
+        "shape": spec.shape,
+        "load_kPa": None if loop else spec.load,
+        "drive": "sine" if loop else spec.drive,
+        "noise": spec.noise,
+        "sidecar": spec.sidecar,
+        "seed": spec.seed,
+        "verdict": rep.verdict,
+        "effect": rep.effect,
+        "effects": list(rep.effects),
+        "excess_before_sd": rep.excess_rmse_before / sd,
+        "excess_after_sd": rep.excess_rmse_after / sd,
+        "F_s": rep.baseline_fit["parameters"].get("F_s"),
+        "converged": rep.converged,
+        "noise_std": sd,
+        "noise_std_true": spec_noise(spec),
+        "seconds": wall,
+    }
     h0, h1 = rep.heldout_excess_before, rep.heldout_excess_after
     row["heldout_before_sd"] = None if h0 is None else h0 / sd
     row["heldout_after_sd"] = None if h1 is None else h1 / sd
@@ -107,8 +118,7 @@ def run_one(spec) -> dict:
     row["misfit_signals"] = [c["signal"] for c in corr]  # largest |correlation| first
     fix = rep.misfit.get("correction") or {}
     row["correction"] = {k: fix.get(k) for k in ("signal", "gap_closed")} if fix else None
-    row["ok"] = score(spec, rep.verdict, rep.effect, rep.excess_rmse_before,
-                      rep.excess_rmse_after)  # fmt: skip
+    row["ok"] = score(spec, rep.verdict, rep.effect, rep.excess_rmse_before, rep.excess_rmse_after)
     return row
 
 
@@ -122,7 +132,7 @@ def summarise(rows) -> tuple[dict, str]:
             if r["effect_true"] in OUT_OF_VOCAB
             else "in_vocabulary"
         )
-        groups[kind].append(r)  # fmt: skip
+        groups[kind].append(r)
     # an in-vocabulary effect the baseline absorbs (baseline residual consistent with the noise:
     # e.g. the quasi-static part of a stiff mode, q ≈ −a/ω², is a slip ∝ a, taken up by K_τ)
     # has nothing left to find: counted apart as well. Re-run at 98df673 (a partial run of
@@ -138,8 +148,9 @@ def summarise(rows) -> tuple[dict, str]:
     # passes the noise test (e.g. a 10 ms lag of the slip reading at 0.6 kPa, s1080: the plain
     # baseline at other F_s, K_τ, C_τ leaves 0.2 sd, p = 0.62), which no residual test can
     # tell from a clean record
-    groups["out_of_vocabulary_visible"] = [r for r in groups.get("out_of_vocabulary", [])
-                                           if r["verdict"] != "none"]  # fmt: skip
+    groups["out_of_vocabulary_visible"] = [
+        r for r in groups.get("out_of_vocabulary", []) if r["verdict"] != "none"
+    ]
     summary = {
         k: {
             "n": len(v),
@@ -152,24 +163,36 @@ def summarise(rows) -> tuple[dict, str]:
     # there (e.g. 0.6 -> 0.3 sd) is at the noise floor of the excess estimate (≈ (2/n)^¼ σ ≈ 0.26σ
     # at n = 461); counted apart, the strict rule above stays the headline
     for k in ("in_vocabulary", "in_vocabulary_visible"):
-        ok = [r["ok"] or (r["verdict"] == "explained" and r["effect"] == r["effect_true"])
-              for r in groups[k]]  # fmt: skip
-        summary[k + "_explained_counts"] = {"n": len(ok), "success": sum(ok),
-                                             "rate": sum(ok) / max(len(ok), 1)}  # fmt: skip
+        ok = [
+            r["ok"] or (r["verdict"] == "explained" and r["effect"] == r["effect_true"])
+            for r in groups[k]
+        ]
+        summary[k + "_explained_counts"] = {
+            "n": len(ok),
+            "success": sum(ok),
+            "rate": sum(ok) / max(len(ok), 1),
+        }
     verdicts = ("none", "explained", "partly_explained", "unexplained")
-    lines = ["| hidden effect | n | first name (count) | none | explained | partly | unexpl. | "
-             "success |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    lines = [
+        "| hidden effect | n | first name (count) | none | explained | partly | unexpl. | "
+        "success |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     by_effect = collections.defaultdict(list)
     for r in rows:
         prefix = "loop:" if r.get("kind") == "loop" else ""
-        by_effect[prefix + r["effect_true"] + ("" if r["shape"] == "-" else "/" + r["shape"])
-                  ].append(r)  # fmt: skip
+        by_effect[
+            prefix + r["effect_true"] + ("" if r["shape"] == "-" else "/" + r["shape"])
+        ].append(r)
     for name, rs in by_effect.items():
         names = collections.Counter(r["effect"] for r in rs)
         cells = [str(sum(r["verdict"] == v for r in rs)) for v in verdicts]
         top = ", ".join(f"{k} ({c})" for k, c in names.most_common(3))
-        lines.append(f"| {name} | {len(rs)} | {top} | " + " | ".join(cells)
-                     + f" | {sum(r['ok'] for r in rs)}/{len(rs)} |")  # fmt: skip
+        lines.append(
+            f"| {name} | {len(rs)} | {top} | "
+            + " | ".join(cells)
+            + f" | {sum(r['ok'] for r in rs)}/{len(rs)} |"
+        )
     lines.append("")
     for k, v in summary.items():
         lines.append(f"- {k}: {v['success']}/{v['n']} ({100 * v['rate']:.0f} %)")
@@ -177,8 +200,10 @@ def summarise(rows) -> tuple[dict, str]:
     lines.append("")
     lines.append("Failing records:")
     for r in fails:
-        lines.append(f"- {r['label']}: verdict {r['verdict']}, effect {r['effect']}, excess "
-                     f"{r['excess_before_sd']:.2f} -> {r['excess_after_sd']:.2f} sd")  # fmt: skip
+        lines.append(
+            f"- {r['label']}: verdict {r['verdict']}, effect {r['effect']}, excess "
+            f"{r['excess_before_sd']:.2f} -> {r['excess_after_sd']:.2f} sd"
+        )
     return summary, "\n".join(lines)
 
 
@@ -187,16 +212,22 @@ def main(argv=None):
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent))
     ap.add_argument("--subset", choices=["all", "ci"], default="all")
     ap.add_argument("--resume", action="store_true")
-    ap.add_argument("--labels", help="file of record labels, one a line: run those, in that order "
-                    "(a re-run of chosen records; write it to another --out)")  # fmt: skip
+    ap.add_argument(
+        "--labels",
+        help="file of record labels, one a line: run those, in that order "
+        "(a re-run of chosen records; write it to another --out)",
+    )
     ap.add_argument(
         "--reverse",
         action="store_true",
         help="last record first, skipping those any log in --out holds already",
     )
     ap.add_argument("--shard", default="0/1", help="i/n: run records i, i+n, ... (one log each)")
-    ap.add_argument("--table-only", action="store_true",
-                    help="write the table from the records in the .jsonl so far")  # fmt: skip
+    ap.add_argument(
+        "--table-only",
+        action="store_true",
+        help="write the table from the records in the .jsonl so far",
+    )
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -229,8 +260,9 @@ def main(argv=None):
     for spec in specs:
         if args.reverse:
             for f in out.glob("discovery_study*.jsonl"):
-                done.update({json.loads(x)["label"]: json.loads(x)
-                             for x in f.read_text().splitlines()})  # fmt: skip
+                done.update(
+                    {json.loads(x)["label"]: json.loads(x) for x in f.read_text().splitlines()}
+                )
             if spec.label in done:
                 continue
         row = done.get(spec.label) or run_one(spec)
@@ -238,13 +270,21 @@ def main(argv=None):
             with log.open("a") as fh:
                 fh.write(json.dumps(row) + "\n")
         rows.append(row)
-        print(f"{row['label']:55s} {row['verdict']:17s} {row['effect']:17s} "
-              f"{row['excess_before_sd']:.2f}->{row['excess_after_sd']:.2f} "
-              f"{'ok' if row['ok'] else 'FAIL'} {row['seconds']:.0f}s", flush=True)  # fmt: skip
+        print(
+            f"{row['label']:55s} {row['verdict']:17s} {row['effect']:17s} "
+            f"{row['excess_before_sd']:.2f}->{row['excess_after_sd']:.2f} "
+            f"{'ok' if row['ok'] else 'FAIL'} {row['seconds']:.0f}s",
+            flush=True,
+        )
     summary, table = summarise(rows)
     total_s = float(np.sum([r["seconds"] for r in rows]))
-    res = {"summary": summary, "rows": rows, "discover_seconds_total": total_s,
-           "records_planned": len(all_specs()), "records_run": len(rows)}  # fmt: skip
+    res = {
+        "summary": summary,
+        "rows": rows,
+        "discover_seconds_total": total_s,
+        "records_planned": len(all_specs()),
+        "records_run": len(rows),
+    }
     (out / "discovery_study.json").write_text(json.dumps(res, indent=1))
     (out / "discovery_study.md").write_text(table + "\n")
     print(table)

@@ -88,8 +88,9 @@ def scipy_fit(start, rtol, loads, measured, kw):
     from scipy.optimize import least_squares
 
     mu_min = tj.chain_mu_min(loads)
-    full0 = tj.chain_theta([start.get(k, DEFAULTS[k]) for k in tj.CHAIN_PARAMETERS],
-                           tj.CHAIN_PARAMETERS, mu_min)
+    full0 = tj.chain_theta(
+        [start.get(k, DEFAULTS[k]) for k in tj.CHAIN_PARAMETERS], tj.CHAIN_PARAMETERS, mu_min
+    )
     n_free = len(FREE)
 
     def physical(th):
@@ -109,8 +110,10 @@ def scipy_fit(start, rtol, loads, measured, kw):
 
     def jac(th):
         r0 = f(th)
-        cols = [(scipy_chain(physical(th + FD_STEP * e), rtol, loads, measured, kw) - r0) / FD_STEP
-                for e in np.eye(th.size)]  # fmt: skip
+        cols = [
+            (scipy_chain(physical(th + FD_STEP * e), rtol, loads, measured, kw) - r0) / FD_STEP
+            for e in np.eye(th.size)
+        ]
         count[0] += th.size
         return np.stack(cols, axis=1)
 
@@ -166,9 +169,13 @@ def run(quick=False):
             "measured: scipy.optimize.least_squares (MINPACK lm, default tolerances) in the JAX "
             f"fit's coordinates from the same start, forward differences with step {FD_STEP} in θ"
         )
-        scipy_info = {"scipy_chain_evaluations": nfev, "scipy_x": x.tolist(),
-                      "scipy_rms_rel": float(np.sqrt(np.mean(sol.fun**2))),
-                      "scipy_message": str(sol.message), "scipy_success": bool(sol.success)}
+        scipy_info = {
+            "scipy_chain_evaluations": nfev,
+            "scipy_x": x.tolist(),
+            "scipy_rms_rel": float(np.sqrt(np.mean(sol.fun**2))),
+            "scipy_message": str(sol.message),
+            "scipy_success": bool(sol.success),
+        }
     common = dict(
         steps=steps,
         residual_evaluations=fit.evaluations,

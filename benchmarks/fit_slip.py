@@ -31,16 +31,29 @@ def _timed(fn, repeats):
 def run(quick=False):
     repeats = 1 if quick else 3
     out = []
-    for name, alpha, truth_alpha in (("fit_slip_run_alpha_fixed", 1.0, 1.0),
-                                     ("fit_slip_run_alpha_free", None, 1.2)):  # fmt: skip
+    for name, alpha, truth_alpha in (
+        ("fit_slip_run_alpha_fixed", 1.0, 1.0),
+        ("fit_slip_run_alpha_free", None, 1.2),
+    ):
         el = tj.PreSlipLuGre(*TRUTH, truth_alpha)
         run_ = tj.synthetic_slip_run(el, noise=2e-10, seed=7, n=10001, t_end=1.0)
         t0 = time.perf_counter()
         wall, fit = _timed(lambda: tj.fit_slip_run(run_, alpha=alpha, throw=False), repeats)
-        out.append(dict(name=name, tribojax_s=wall, baseline=None, baseline_s=None, ratio=None,
-                        target=None, meets_target=None, steps=fit.steps,
-                        converged=bool(fit.converged), samples=len(run_),
-                        total_s=time.perf_counter() - t0))  # fmt: skip
+        out.append(
+            dict(
+                name=name,
+                tribojax_s=wall,
+                baseline=None,
+                baseline_s=None,
+                ratio=None,
+                target=None,
+                meets_target=None,
+                steps=fit.steps,
+                converged=bool(fit.converged),
+                samples=len(run_),
+                total_s=time.perf_counter() - t0,
+            )
+        )
     return out
 
 

@@ -126,8 +126,14 @@ def run_command(args: list[str], out_dir: Path, json_name: str) -> dict:
     wall = time.perf_counter() - t0
     target = out_dir / json_name
     data = json.loads(target.read_text()) if target.exists() else None
-    return {"command": " ".join(["tribojax", *args]), "rc": rc, "wall_s": wall,
-            "stdout": stdout, "stderr_tail": stderr[-2000:], "json": data}  # fmt: skip
+    return {
+        "command": " ".join(["tribojax", *args]),
+        "rc": rc,
+        "wall_s": wall,
+        "stdout": stdout,
+        "stderr_tail": stderr[-2000:],
+        "json": data,
+    }
 
 
 def _reduced(data) -> int | None:
@@ -144,8 +150,7 @@ def compare(spec, path: Path, n_file: int, work: Path, decimate: str) -> dict:
     d1, d2 = work / f"{path.stem}_fit", work / f"{path.stem}_discover"
     options = [] if decimate == "default" else ["--decimate", decimate]
     fit = run_command(["fit", str(path), "--out", str(d1), *options], d1, "fit.json")
-    disc = run_command(["discover", str(path), "--out", str(d2), *options],
-                       d2, "discovery.json")  # fmt: skip
+    disc = run_command(["discover", str(path), "--out", str(d2), *options], d2, "discovery.json")
     fj, dj = fit["json"] or {}, disc["json"] or {}
     base = dj.get("baseline_fit") or {}
     m = re.search(r": \w+ record, (\d+) samples", disc["stdout"])
@@ -155,19 +160,33 @@ def compare(spec, path: Path, n_file: int, work: Path, decimate: str) -> dict:
     for name in [k for k in p_fit if k in p_disc]:
         se = max(float(s_fit.get(name, float("nan"))), float(s_disc.get(name, float("nan"))))
         diff = abs(float(p_fit[name]) - float(p_disc[name]))
-        params[name] = {"fit": p_fit[name], "fit_se": s_fit.get(name), "discover": p_disc[name],
-                        "discover_se": s_disc.get(name), "abs_diff": diff,
-                        "diff_over_se": diff / se if se > 0 else None}  # fmt: skip
+        params[name] = {
+            "fit": p_fit[name],
+            "fit_se": s_fit.get(name),
+            "discover": p_disc[name],
+            "discover_se": s_disc.get(name),
+            "abs_diff": diff,
+            "diff_over_se": diff / se if se > 0 else None,
+        }
     misfit = dj.get("misfit") or {}
     python = None
     if loop and p_fit:  # Python's defaults on the same file
         py = tj.fit_loop(tj.read_loop(path), throw=False)
-        python = {name: {"python": float(v), "cli": p_fit[name],
-                         "relative_diff": abs(float(v) / p_fit[name] - 1.0)}
-                  for name, v in zip(py.names, py.values)}  # fmt: skip
+        python = {
+            name: {
+                "python": float(v),
+                "cli": p_fit[name],
+                "relative_diff": abs(float(v) / p_fit[name] - 1.0),
+            }
+            for name, v in zip(py.names, py.values)
+        }
     return {
-        "label": spec.label, "kind": kind, "file": path.name, "python_fit_loop": python,
-        "samples_in_file": n_file, "decimate": decimate,
+        "label": spec.label,
+        "kind": kind,
+        "file": path.name,
+        "python_fit_loop": python,
+        "samples_in_file": n_file,
+        "decimate": decimate,
         "parameters": params,
         "only_in_fit": sorted(set(p_fit) - set(p_disc)),
         "only_in_discover": sorted(set(p_disc) - set(p_fit)),
@@ -175,22 +194,31 @@ def compare(spec, path: Path, n_file: int, work: Path, decimate: str) -> dict:
         "noise_consistent_fit": fj.get("noise_consistent"),
         "noise_consistent_discover": misfit.get("baseline_consistent"),
         "discover_baseline_noise_p_value": misfit.get("baseline_noise_p_value"),
-        "discover_verdict": dj.get("verdict"), "discover_effects": dj.get("effects"),
+        "discover_verdict": dj.get("verdict"),
+        "discover_effects": dj.get("effects"),
         "fit_reduced_chi2": fj.get("reduced_chi2"),
-        "n_fit": fj.get("n_data"), "n_discover": int(m.group(1)) if m else None,
-        "reduced_fit": _reduced(fj), "reduced_discover": _reduced(dj),
-        "sigma_fit": fj.get("sigma"), "sigma_discover": dj.get("noise_std"),
+        "n_fit": fj.get("n_data"),
+        "n_discover": int(m.group(1)) if m else None,
+        "reduced_fit": _reduced(fj),
+        "reduced_discover": _reduced(dj),
+        "sigma_fit": fj.get("sigma"),
+        "sigma_discover": dj.get("noise_std"),
         "sigma_source_fit": fj.get("sigma_source"),
         "noise_estimated_discover": dj.get("noise_estimated"),
-        "rms_fit": fj.get("rms_residual"), "rms_discover": dj.get("baseline_rmse"),
-        "converged_fit": fj.get("converged"), "converged_discover": base.get("converged"),
+        "rms_fit": fj.get("rms_residual"),
+        "rms_discover": dj.get("baseline_rmse"),
+        "converged_fit": fj.get("converged"),
+        "converged_discover": base.get("converged"),
         "model_fit": fj.get("model"),
-        "wall_fit_s": fit["wall_s"], "wall_discover_s": disc["wall_s"],
-        "rc_fit": fit["rc"], "rc_discover": disc["rc"],
-        "command_fit": fit["command"], "command_discover": disc["command"],
+        "wall_fit_s": fit["wall_s"],
+        "wall_discover_s": disc["wall_s"],
+        "rc_fit": fit["rc"],
+        "rc_discover": disc["rc"],
+        "command_fit": fit["command"],
+        "command_discover": disc["command"],
         "stderr_fit": fit["stderr_tail"] if fit["rc"] != 0 else "",
         "stderr_discover": disc["stderr_tail"] if disc["rc"] != 0 else "",
-    }  # fmt: skip
+    }
 
 
 def _g(x, fmt=".4g") -> str:
@@ -202,8 +230,7 @@ def _g(x, fmt=".4g") -> str:
 
 
 def table(rows) -> str:
-    lines = [f"{'record':34s} {'param':6s} {'fit ± se':>22s} {'discover ± se':>22s} "
-             f"{'|Δ|/se':>8s}"]  # fmt: skip
+    lines = [f"{'record':34s} {'param':6s} {'fit ± se':>22s} {'discover ± se':>22s} {'|Δ|/se':>8s}"]
     for r in rows:
         params = r["parameters"] or {"(none)": None}
         for i, (name, p) in enumerate(params.items()):
@@ -213,12 +240,15 @@ def table(rows) -> str:
                 continue
             a = f"{_g(p['fit'])} ± {_g(p['fit_se'], '.2g')}"
             b = f"{_g(p['discover'])} ± {_g(p['discover_se'], '.2g')}"
-            lines.append(f"{lab:34s} {name:6s} {a:>22s} {b:>22s} "
-                         f"{_g(p['diff_over_se'], '8.2f'):>8s}")  # fmt: skip
+            lines.append(
+                f"{lab:34s} {name:6s} {a:>22s} {b:>22s} {_g(p['diff_over_se'], '8.2f'):>8s}"
+            )
     lines.append("")
-    lines.append(f"{'record':34s} {'n fit/disc':>11s} {'red. fit/disc':>13s} "
-                 f"{'noise ok fit/disc':>17s} {'sigma fit/disc':>19s} {'rms fit/disc':>19s} "
-                 f"{'wall s fit/disc':>15s} {'rc':>5s}")  # fmt: skip
+    lines.append(
+        f"{'record':34s} {'n fit/disc':>11s} {'red. fit/disc':>13s} "
+        f"{'noise ok fit/disc':>17s} {'sigma fit/disc':>19s} {'rms fit/disc':>19s} "
+        f"{'wall s fit/disc':>15s} {'rc':>5s}"
+    )
     for r in rows:
         n = f"{_g(r['n_fit'])}/{_g(r['n_discover'])}"
         red = f"{_g(r['reduced_fit'])}/{_g(r['reduced_discover'])}"
@@ -227,8 +257,10 @@ def table(rows) -> str:
         rms = f"{_g(r['rms_fit'], '.3g')}/{_g(r['rms_discover'], '.3g')}"
         wall = f"{r['wall_fit_s']:.0f}/{r['wall_discover_s']:.0f}"
         rc = f"{r['rc_fit']}/{r['rc_discover']}"
-        lines.append(f"{r['label']:34s} {n:>11s} {red:>13s} {ok:>17s} {sig:>19s} {rms:>19s} "
-                     f"{wall:>15s} {rc:>5s}")  # fmt: skip
+        lines.append(
+            f"{r['label']:34s} {n:>11s} {red:>13s} {ok:>17s} {sig:>19s} {rms:>19s} "
+            f"{wall:>15s} {rc:>5s}"
+        )
     return "\n".join(lines)
 
 
@@ -236,27 +268,35 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default="benchmarks-out/fit_vs_discover.json", help="JSON written")
     ap.add_argument("--quick", action="store_true", help="one slip run and one loop")
-    ap.add_argument("--decimate", default="default",
-                    help="--decimate of both commands (default: none given, as a new user runs "
-                    "them)")  # fmt: skip
-    ap.add_argument("--curve", default=str(CURVE),
-                    help="a measured friction curve compared too (default the screw drive's "
-                    "0.096 kg steady-state folder; skipped when absent)")  # fmt: skip
+    ap.add_argument(
+        "--decimate",
+        default="default",
+        help="--decimate of both commands (default: none given, as a new user runs them)",
+    )
+    ap.add_argument(
+        "--curve",
+        default=str(CURVE),
+        help="a measured friction curve compared too (default the screw drive's "
+        "0.096 kg steady-state folder; skipped when absent)",
+    )
     ap.add_argument(
         "--oversample",
         type=int,
         default=4,
         help="records sampled this many times denser than the study's (default 4)",
     )
-    ap.add_argument("--workdir", default=None,
-                    help="keep the records and command outputs here (default: a temporary "
-                    "folder, removed)")  # fmt: skip
+    ap.add_argument(
+        "--workdir",
+        default=None,
+        help="keep the records and command outputs here (default: a temporary folder, removed)",
+    )
     args = ap.parse_args(argv)
     specs = [*SLIP_SPECS[:1], *LOOP_SPECS[:1]] if args.quick else [*SLIP_SPECS, *LOOP_SPECS]
     curve = Path(args.curve)
     if curve.exists():
-        specs.append(MeasuredCurve(f"measured curve {curve.parent.parent.name}/{curve.name}",
-                                   curve))  # fmt: skip
+        specs.append(
+            MeasuredCurve(f"measured curve {curve.parent.parent.name}/{curve.name}", curve)
+        )
     tmp = None
     if args.workdir:
         work = Path(args.workdir)
@@ -269,9 +309,11 @@ def main(argv=None) -> int:
     try:
         for spec in specs:
             try:
-                path, n = ((spec.path, len(tj.read_record(spec.path)))
-                           if isinstance(spec, MeasuredCurve)
-                           else write_record(spec, work, args.oversample))  # fmt: skip
+                path, n = (
+                    (spec.path, len(tj.read_record(spec.path)))
+                    if isinstance(spec, MeasuredCurve)
+                    else write_record(spec, work, args.oversample)
+                )
                 row = compare(spec, path, n, work, args.decimate)
             except Exception as exc:  # a measurement: record and go on
                 row = {"label": spec.label, "error": f"{type(exc).__name__}: {exc}"}
@@ -279,9 +321,11 @@ def main(argv=None) -> int:
                 rows.append(row)
                 continue
             rows.append(row)
-            print(f"{row['label']}: fit {row['wall_fit_s']:.0f} s (rc {row['rc_fit']}), "
-                  f"discover {row['wall_discover_s']:.0f} s (rc {row['rc_discover']})",
-                  flush=True)  # fmt: skip
+            print(
+                f"{row['label']}: fit {row['wall_fit_s']:.0f} s (rc {row['rc_fit']}), "
+                f"discover {row['wall_discover_s']:.0f} s (rc {row['rc_discover']})",
+                flush=True,
+            )
     finally:
         if tmp is not None:
             tmp.cleanup()
@@ -291,13 +335,20 @@ def main(argv=None) -> int:
     print(text)
     for r in ok_rows:
         for name, c in (r.get("python_fit_loop") or {}).items():
-            print(f"{r['label']}: tj.fit_loop {name} = {c['python']:.8g}, CLI {c['cli']:.8g} "
-                  f"(relative difference {c['relative_diff']:.1e})")  # fmt: skip
-    res = {"what": "tribojax fit vs tribojax discover's baseline fit on the same records",
-           "tribojax_module": str(Path(tj.__file__).resolve().parent),
-           "tribojax_executable": _tribojax(), "decimate": args.decimate,
-           "oversample": args.oversample, "quick": args.quick,
-           "total_wall_s": time.perf_counter() - t_start, "records": rows}  # fmt: skip
+            print(
+                f"{r['label']}: tj.fit_loop {name} = {c['python']:.8g}, CLI {c['cli']:.8g} "
+                f"(relative difference {c['relative_diff']:.1e})"
+            )
+    res = {
+        "what": "tribojax fit vs tribojax discover's baseline fit on the same records",
+        "tribojax_module": str(Path(tj.__file__).resolve().parent),
+        "tribojax_executable": _tribojax(),
+        "decimate": args.decimate,
+        "oversample": args.oversample,
+        "quick": args.quick,
+        "total_wall_s": time.perf_counter() - t_start,
+        "records": rows,
+    }
     out = Path(args.out)
     try:
         out.parent.mkdir(parents=True, exist_ok=True)

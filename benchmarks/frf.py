@@ -126,9 +126,16 @@ def _timed(fn):
 
 
 def entry(name, tribojax_s, baseline, baseline_s, target, meets, **extra):
-    return {"name": name, "tribojax_s": tribojax_s, "baseline": baseline,
-            "baseline_s": baseline_s, "ratio": baseline_s / tribojax_s, "target": target,
-            "meets_target": bool(meets), **extra}  # fmt: skip
+    return {
+        "name": name,
+        "tribojax_s": tribojax_s,
+        "baseline": baseline,
+        "baseline_s": baseline_s,
+        "ratio": baseline_s / tribojax_s,
+        "target": target,
+        "meets_target": bool(meets),
+        **extra,
+    }
 
 
 def run(quick: bool = False) -> list[dict]:
@@ -142,11 +149,19 @@ def run(quick: bool = False) -> list[dict]:
     ref = NumpyHBM(system)
     amps, base_s = _timed(lambda: ref.branch(fr.omega))
     diff = float(np.max(np.abs(amps[:, 0] / fr.amplitude[:, 0] - 1)))
-    results.append(entry(
-        "frf_sdof_jenkins_H5", t, "NumPy FFT-AFT + scipy.optimize.root (hybr), same points",
-        base_s, "<= 1 s warm on 2 cores", t <= 1.0, n_points=len(fr.omega), compile_s=compile_s,
-        max_rel_amplitude_diff=diff,
-    ))  # fmt: skip
+    results.append(
+        entry(
+            "frf_sdof_jenkins_H5",
+            t,
+            "NumPy FFT-AFT + scipy.optimize.root (hybr), same points",
+            base_s,
+            "<= 1 s warm on 2 cores",
+            t <= 1.0,
+            n_points=len(fr.omega),
+            compile_s=compile_s,
+            max_rel_amplitude_diff=diff,
+        )
+    )
     # 2. the 2-DOF benchmark, eight curves
     Fs = tj.FRF_2DOF["F"]
     systems = [tj.frf_2dof_system(F) for F in Fs]
@@ -164,39 +179,57 @@ def run(quick: bool = False) -> list[dict]:
         base_s += s
         diff = max(diff, float(np.max(np.abs(amps[:, 0] / curves[i].amplitude[:, 0] - 1))))
     note = "" if len(base_curves) == len(Fs) else f" (baseline: curves {list(base_curves)})"
-    results.append(entry(
-        "frf_2dof_eight_curves", t, "NumPy FFT-AFT + scipy.optimize.root (hybr)" + note,
-        base_s, "<= 5 s warm on 2 cores", t <= 5.0, compile_s=compile_s,
-        n_points=[len(c.omega) for c in curves], max_rel_amplitude_diff=diff,
-    ))  # fmt: skip
+    results.append(
+        entry(
+            "frf_2dof_eight_curves",
+            t,
+            "NumPy FFT-AFT + scipy.optimize.root (hybr)" + note,
+            base_s,
+            "<= 5 s warm on 2 cores",
+            t <= 5.0,
+            compile_s=compile_s,
+            n_points=[len(c.omega) for c in curves],
+            max_rel_amplitude_diff=diff,
+        )
+    )
     # 3. design curve: 1,000 normal loads in one vmap
     grid = jnp.linspace(8.0, 16.0, 24)
     loads = jnp.linspace(0.5, 8.0, N_DESIGN_LOADS)
 
     @eqx.filter_jit
     def design(Ns):
-        return jax.lax.map(lambda N: tj.peak_on_grid(sdof_system(N, H=3), grid), Ns,
-                           batch_size=DESIGN_CHUNK)  # fmt: skip
+        return jax.lax.map(
+            lambda N: tj.peak_on_grid(sdof_system(N, H=3), grid), Ns, batch_size=DESIGN_CHUNK
+        )
 
     peaks, compile_s = _timed(lambda: jax.block_until_ready(design(loads)).amplitude)
     t = median_time(lambda: design(loads), reps)
     codes = np.asarray(design(loads).result._value)
     sub = np.asarray(loads[:: len(loads) // (10 if not quick else 4)])
     t0 = time.perf_counter()
-    ref_peaks = [NumpyHBM(sdof_system(float(N), H=3)).branch(np.asarray(grid))[:, 0].max()
-                 for N in sub]  # fmt: skip
+    ref_peaks = [
+        NumpyHBM(sdof_system(float(N), H=3)).branch(np.asarray(grid))[:, 0].max() for N in sub
+    ]
     per_load = (time.perf_counter() - t0) / len(sub)
-    results.append(entry(
-        f"frf_design_curve_{len(loads)}_loads", t, "NumPy HBM on the same grid, per load x n",
-        per_load * len(loads), "1,000 loads <= 10 s warm on 2 cores (scaled linearly)",
-        t * 1000 / len(loads) <= 10.0, compile_s=compile_s, n_loads=len(loads), chunk=DESIGN_CHUNK,
-        baseline_note=f"baseline timed on {len(sub)} loads and scaled to {len(loads)} (grid "
-        "maximum only, no refinement)",
-        n_stationary_peaks=int(np.sum(codes == 0)),
-        max_rel_peak_diff_vs_grid_max=float(
-            np.max(np.asarray(ref_peaks) / np.asarray(peaks)[:: len(loads) // len(sub)] - 1)
-        ),
-    ))  # fmt: skip
+    results.append(
+        entry(
+            f"frf_design_curve_{len(loads)}_loads",
+            t,
+            "NumPy HBM on the same grid, per load x n",
+            per_load * len(loads),
+            "1,000 loads <= 10 s warm on 2 cores (scaled linearly)",
+            t * 1000 / len(loads) <= 10.0,
+            compile_s=compile_s,
+            n_loads=len(loads),
+            chunk=DESIGN_CHUNK,
+            baseline_note=f"baseline timed on {len(sub)} loads and scaled to {len(loads)} (grid "
+            "maximum only, no refinement)",
+            n_stationary_peaks=int(np.sum(codes == 0)),
+            max_rel_peak_diff_vs_grid_max=float(
+                np.max(np.asarray(ref_peaks) / np.asarray(peaks)[:: len(loads) // len(sub)] - 1)
+            ),
+        )
+    )
     return results
 
 

@@ -47,9 +47,16 @@ def make_records(folder: Path) -> dict:
         tj.write_slip_run(run, paths["slip"])
     if not paths["loop"].exists():
         omega = 2 * np.pi * F_HZ
-        loop = tj.synthetic_loop(tj.Jenkins(MU, N_LOAD, KD), 3 * MU * N_LOAD / KD, omega,
-                                 cycles=LOOP_CYCLES, samples_per_cycle=LOOP_PER_CYCLE,
-                                 noise=0.004, seed=4, normal_load=N_LOAD)  # fmt: skip
+        loop = tj.synthetic_loop(
+            tj.Jenkins(MU, N_LOAD, KD),
+            3 * MU * N_LOAD / KD,
+            omega,
+            cycles=LOOP_CYCLES,
+            samples_per_cycle=LOOP_PER_CYCLE,
+            noise=0.004,
+            seed=4,
+            normal_load=N_LOAD,
+        )
         tj.write_loop(loop, paths["loop"])
     return paths
 
@@ -58,13 +65,16 @@ def run_cli(args: list[str], limit: float = TIME_LIMIT_S) -> dict:
     """Run `tribojax ARGS` in a fresh process: wall time, its peak RSS (GiB, the child's own
     rusage from `os.wait4`: the console script ends with `os._exit`, so no handler of its own
     could report it), exit status. Past `limit` s the child is killed (exit None)."""
-    code = ("import sys; from importlib.metadata import entry_points; "
-            "(script,) = entry_points(group='console_scripts', name='tribojax'); "
-            "sys.exit(script.load()())")  # fmt: skip
+    code = (
+        "import sys; from importlib.metadata import entry_points; "
+        "(script,) = entry_points(group='console_scripts', name='tribojax'); "
+        "sys.exit(script.load()())"
+    )
     t0 = time.perf_counter()
     with tempfile.TemporaryFile("w+") as log:
-        proc = subprocess.Popen([sys.executable, "-c", code, *args], stdout=log,
-                                stderr=subprocess.STDOUT, text=True)  # fmt: skip
+        proc = subprocess.Popen(
+            [sys.executable, "-c", code, *args], stdout=log, stderr=subprocess.STDOUT, text=True
+        )
         pid, status, usage = 0, 0, None
         while time.perf_counter() - t0 < limit:  # (wait4, not poll: poll would reap it first)
             pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
@@ -79,8 +89,12 @@ def run_cli(args: list[str], limit: float = TIME_LIMIT_S) -> dict:
         log.seek(0)
         tail = log.read()[-1500:]
     if not pid:
-        return {"wall_s": wall, "peak_rss_GiB": float("nan"), "exit": None,
-                "output_tail": f"did not finish in {limit:.0f} s"}  # fmt: skip
+        return {
+            "wall_s": wall,
+            "peak_rss_GiB": float("nan"),
+            "exit": None,
+            "output_tail": f"did not finish in {limit:.0f} s",
+        }
     peak = usage.ru_maxrss / 2**20  # KiB on Linux
     return {"wall_s": wall, "peak_rss_GiB": peak, "exit": proc.returncode, "output_tail": tail}
 
@@ -92,25 +106,35 @@ def _entry(name, cli, baseline, truth=None, fit_json=None):
         extra["decimation"] = d.get("decimation")
         extra["full_record"] = d.get("full_record")
         if truth:
-            extra["errors_in_std"] = {k: (d["parameters"][k] - v) / d["std_errors"][k]
-                                      for k, v in truth.items()}  # fmt: skip
+            extra["errors_in_std"] = {
+                k: (d["parameters"][k] - v) / d["std_errors"][k] for k, v in truth.items()
+            }
     ok = cli["exit"] == 0 and cli["wall_s"] <= 60 and cli["peak_rss_GiB"] <= 2
-    return dict(name=name, tribojax_s=cli["wall_s"], peak_rss_GiB=cli["peak_rss_GiB"],
-                baseline=None if baseline is None else "the same command, --decimate off",
-                baseline_s=None if baseline is None else baseline["wall_s"],
-                ratio=None if baseline is None else baseline["wall_s"] / cli["wall_s"],
-                baseline_detail=baseline, target="<= 60 s and <= 2 GiB on 2 cores (cold)",
-                meets_target=ok, exit=cli["exit"], **extra)  # fmt: skip
+    return dict(
+        name=name,
+        tribojax_s=cli["wall_s"],
+        peak_rss_GiB=cli["peak_rss_GiB"],
+        baseline=None if baseline is None else "the same command, --decimate off",
+        baseline_s=None if baseline is None else baseline["wall_s"],
+        ratio=None if baseline is None else baseline["wall_s"] / cli["wall_s"],
+        baseline_detail=baseline,
+        target="<= 60 s and <= 2 GiB on 2 cores (cold)",
+        meets_target=ok,
+        exit=cli["exit"],
+        **extra,
+    )
 
 
 def run(quick=False, with_baseline=False, only=None, folder=None):
     """Entries for benchmarks/run.py. `quick` skips the (slow) discovery cases."""
     folder = Path(folder or tempfile.mkdtemp(prefix="tribojax-long-"))
     paths = make_records(folder)
-    cases = [("fit_slip_1e6", "fit", "slip", ["--alpha", "1"], SLIP_TRUTH),
-             ("fit_loop_1e6", "fit", "loop", [], {"mu_N": MU * N_LOAD, "K_d": KD}),
-             ("discover_slip_1e6", "discover", "slip", [], None),
-             ("discover_loop_1e6", "discover", "loop", [], None)]  # fmt: skip
+    cases = [
+        ("fit_slip_1e6", "fit", "slip", ["--alpha", "1"], SLIP_TRUTH),
+        ("fit_loop_1e6", "fit", "loop", [], {"mu_N": MU * N_LOAD, "K_d": KD}),
+        ("discover_slip_1e6", "discover", "slip", [], None),
+        ("discover_loop_1e6", "discover", "loop", [], None),
+    ]
     out = []
     for name, cmd, kind, extra, truth in cases:
         if (only and name not in only) or (quick and cmd == "discover"):
@@ -119,12 +143,24 @@ def run(quick=False, with_baseline=False, only=None, folder=None):
         cli = run_cli([cmd, str(paths[kind]), "--out", str(dest), "--force", *extra])
         base = None
         if with_baseline:
-            base = run_cli([cmd, str(paths[kind]), "--out", str(folder / f"{name}-off"),
-                            "--force", "--decimate", "off", *extra])  # fmt: skip
+            base = run_cli(
+                [
+                    cmd,
+                    str(paths[kind]),
+                    "--out",
+                    str(folder / f"{name}-off"),
+                    "--force",
+                    "--decimate",
+                    "off",
+                    *extra,
+                ]
+            )
         fit_json = dest / "fit.json" if cmd == "fit" else None
         out.append(_entry(name, cli, base, truth, fit_json))
-        print(json.dumps({k: v for k, v in out[-1].items() if k != "baseline_detail"}, default=str),
-              flush=True)  # fmt: skip
+        print(
+            json.dumps({k: v for k, v in out[-1].items() if k != "baseline_detail"}, default=str),
+            flush=True,
+        )
     return out
 
 

@@ -38,8 +38,15 @@ MODELS = ("jenkins", "lugre")
 def _cli(model_file, record, cache) -> float:
     out = tempfile.mkdtemp()
     env = {**os.environ, "TRIBOJAX_CACHE_DIR": cache}
-    cmd = [shutil.which("tribojax") or "tribojax", "predict", str(model_file), str(record),
-           "--out", out, "--force"]  # fmt: skip
+    cmd = [
+        shutil.which("tribojax") or "tribojax",
+        "predict",
+        str(model_file),
+        str(record),
+        "--out",
+        out,
+        "--force",
+    ]
     t = time.perf_counter()
     subprocess.run(cmd, check=True, capture_output=True, env=env)
     return time.perf_counter() - t
@@ -47,12 +54,19 @@ def _cli(model_file, record, cache) -> float:
 
 def run(quick=False):
     if not (SRC / f"{TEST}.json").exists() or not (SRC / f"{QUAKE}.json").exists():
-        return [{"name": "predict (skipped)", "tribojax_s": None, "baseline_s": None,
-                 "ratio": None, "meets_target": None, "baseline": None,
-                 "baseline_note": f"{SRC} absent"}]  # fmt: skip
+        return [
+            {
+                "name": "predict (skipped)",
+                "tribojax_s": None,
+                "baseline_s": None,
+                "ratio": None,
+                "meets_target": None,
+                "baseline": None,
+                "baseline_note": f"{SRC} absent",
+            }
+        ]
     sine = tj.read_record(SRC / f"{TEST}.json")
-    sine = tj.HysteresisLoop(sine.t[:N], sine.u[:N], sine.f[:N], source=sine.source,
-                             periodic=False)  # fmt: skip
+    sine = tj.HysteresisLoop(sine.t[:N], sine.u[:N], sine.f[:N], source=sine.source, periodic=False)
     quake = tj.read_record(SRC / f"{QUAKE}.json")
     results = []
     for model in MODELS:
@@ -78,13 +92,22 @@ def run(quick=False):
             cold_s, cached_s = _cli(model_file, SRC / f"{QUAKE}.json", cache), None
             if not quick:
                 cached_s = _cli(model_file, SRC / f"{QUAKE}.json", cache)
-        results.append({
-            "name": f"predict {model} 28 s history", "tribojax_s": warm_s, "baseline_s": base_s,
-            "ratio": base_s / warm_s, "meets_target": warm_s <= 5.0,
-            "baseline": "NumPy loop of the same element (exact increments / RK4 per sample)",
-            "first_call_s": first_s, "cli_empty_cache_s": cold_s, "cli_warm_cache_s": cached_s,
-            "nrmse": pred.nrmse, "nrmse_numpy": nrmse_np,
-            "n_samples": int(quake.t.size)})  # fmt: skip
+        results.append(
+            {
+                "name": f"predict {model} 28 s history",
+                "tribojax_s": warm_s,
+                "baseline_s": base_s,
+                "ratio": base_s / warm_s,
+                "meets_target": warm_s <= 5.0,
+                "baseline": "NumPy loop of the same element (exact increments / RK4 per sample)",
+                "first_call_s": first_s,
+                "cli_empty_cache_s": cold_s,
+                "cli_warm_cache_s": cached_s,
+                "nrmse": pred.nrmse,
+                "nrmse_numpy": nrmse_np,
+                "n_samples": int(quake.t.size),
+            }
+        )
     return results
 
 

@@ -109,25 +109,33 @@ def run(quick: bool = False) -> list[dict]:
         # optimum (+20 % on every positive parameter) so that both do real work
         start = {k: (v * 1.2 if k != "f0" else v) for k, v in start.items()}
         ref_s, ref_nrmse, nfev = _scipy_fit(model, start, loop)
-        results.append({
-            "name": f"real_data_fit_{model}_10000_samples",
-            "tribojax_s": tj_s,
-            "baseline": "scipy.optimize.least_squares (trf, FD Jacobian) on a NumPy stepping loop",
-            "baseline_s": ref_s,
-            "baseline_note": f"one SciPy fit from the tribojax optimum +20 %, {nfev} evaluations",
-            "ratio": ref_s / tj_s,
-            "target": "<= 5 s warm per element (issue 15)",
-            "meets_target": bool(tj_s <= 5.0),
-            "first_call_s": first_s,
-            "nrmse": h.nrmse,
-            "scipy_nrmse": ref_nrmse,
-            "converged": h.fit.converged,
-        })  # fmt: skip
+        results.append(
+            {
+                "name": f"real_data_fit_{model}_10000_samples",
+                "tribojax_s": tj_s,
+                "baseline": (
+                    "scipy.optimize.least_squares (trf, FD Jacobian) on a NumPy stepping loop"
+                ),
+                "baseline_s": ref_s,
+                "baseline_note": (
+                    f"one SciPy fit from the tribojax optimum +20 %, {nfev} evaluations"
+                ),
+                "ratio": ref_s / tj_s,
+                "target": "<= 5 s warm per element (issue 15)",
+                "meets_target": bool(tj_s <= 5.0),
+                "first_call_s": first_s,
+                "nrmse": h.nrmse,
+                "scipy_nrmse": ref_nrmse,
+                "converged": h.fit.converged,
+            }
+        )
     return results
 
 
 if __name__ == "__main__":
     for r in run():
-        print(f"{r['name']:38s} tribojax {r['tribojax_s']:6.2f} s (first {r['first_call_s']:.1f}"
-              f" s)  scipy {r['baseline_s']:7.2f} s  ratio {r['ratio']:6.1f}  NRMSE "
-              f"{r['nrmse']:.3f} / {r['scipy_nrmse']:.3f}  met {r['meets_target']}")  # fmt: skip
+        print(
+            f"{r['name']:38s} tribojax {r['tribojax_s']:6.2f} s (first {r['first_call_s']:.1f}"
+            f" s)  scipy {r['baseline_s']:7.2f} s  ratio {r['ratio']:6.1f}  NRMSE "
+            f"{r['nrmse']:.3f} / {r['scipy_nrmse']:.3f}  met {r['meets_target']}"
+        )

@@ -46,8 +46,15 @@ def scipy_phases(F_s, K, C, method, rtol):
     edges = np.concatenate([[0.0], KINKS, [2.3]])
     for a, b in zip(edges[:-1], edges[1:]):
         te = [t for t in tw if a < t <= b]
-        s = solve_ivp(rhs, (a, b), y, method=method, rtol=rtol, t_eval=sorted(set(te) | {b}),
-                      atol=[rtol * 0.1, rtol * 1e2, rtol * 0.1, rtol * 0.01])  # fmt: skip
+        s = solve_ivp(
+            rhs,
+            (a, b),
+            y,
+            method=method,
+            rtol=rtol,
+            t_eval=sorted(set(te) | {b}),
+            atol=[rtol * 0.1, rtol * 1e2, rtol * 0.1, rtol * 0.01],
+        )
         nfev += s.nfev
         for t in te:
             out[t] = s.y[:, list(s.t).index(t)]
@@ -59,8 +66,16 @@ def scipy_phases(F_s, K, C, method, rtol):
 
 
 def entry(name, s, baseline, base_s, target, met, **extra):
-    return dict(name=name, tribojax_s=s, baseline=baseline, baseline_s=base_s,
-                ratio=base_s / s, target=target, meets_target=bool(met), **extra)  # fmt: skip
+    return dict(
+        name=name,
+        tribojax_s=s,
+        baseline=baseline,
+        baseline_s=base_s,
+        ratio=base_s / s,
+        target=target,
+        meets_target=bool(met),
+        **extra,
+    )
 
 
 def run(quick=False):
@@ -83,19 +98,39 @@ def run(quick=False):
                 break
         reps = 2 if method == "Radau" else (3 if quick else 10)
         base_s = statistics.median(
-            [(lambda t: (scipy_phases(F_s, K, C, method, rtol), time.perf_counter() - t)[1])(
-                time.perf_counter()) for _ in range(reps)]
-        )  # fmt: skip
+            [
+                (lambda t: (scipy_phases(F_s, K, C, method, rtol), time.perf_counter() - t)[1])(
+                    time.perf_counter()
+                )
+                for _ in range(reps)
+            ]
+        )
         goal = 50 if method == "Radau" else 2
-        results.append(entry(
-            f"slip_cycle_vs_scipy_{method.lower()}", one_s,
-            f"scipy solve_ivp {method} rtol {rtol:g}",
-            base_s, f"ratio >= {goal}", base_s / one_s >= goal,
-            scipy_max_rel_err=float(np.max(np.abs(ph / ref - 1))), scipy_nfev=nfev))  # fmt: skip
-    results.insert(0, entry(
-        "slip_one_cycle", one_s, "target 10 ms", 10e-3, "<= 10 ms warm, phases within 1e-6 rel.",
-        one_s <= 10e-3 and err <= 1e-6, compile_s=compile_s,
-        max_rel_err_vs_radau_tight=err))  # fmt: skip
+        results.append(
+            entry(
+                f"slip_cycle_vs_scipy_{method.lower()}",
+                one_s,
+                f"scipy solve_ivp {method} rtol {rtol:g}",
+                base_s,
+                f"ratio >= {goal}",
+                base_s / one_s >= goal,
+                scipy_max_rel_err=float(np.max(np.abs(ph / ref - 1))),
+                scipy_nfev=nfev,
+            )
+        )
+    results.insert(
+        0,
+        entry(
+            "slip_one_cycle",
+            one_s,
+            "target 10 ms",
+            10e-3,
+            "<= 10 ms warm, phases within 1e-6 rel.",
+            one_s <= 10e-3 and err <= 1e-6,
+            compile_s=compile_s,
+            max_rel_err_vs_radau_tight=err,
+        ),
+    )
     # the earlier default, Kvaerno5 + chord, in the same run (no target: a comparison)
     kv = jax.jit(lambda e: tj.slip_phase_averages(e, solver="kvaerno5"))
     t0 = time.perf_counter()
@@ -103,10 +138,19 @@ def run(quick=False):
     kv_compile = time.perf_counter() - t0
     kv_s = median_time(lambda: kv(el), n)
     kv_err = float(np.max(np.abs(np.asarray(kv(el)) * 1e9 / ref - 1)))
-    results.append(dict(
-        name="slip_one_cycle_kvaerno5", tribojax_s=kv_s, baseline="tribojax default (Rodas4)",
-        baseline_s=one_s, ratio=one_s / kv_s, target=None, meets_target=None,
-        compile_s=kv_compile, max_rel_err_vs_radau_tight=kv_err))  # fmt: skip
+    results.append(
+        dict(
+            name="slip_one_cycle_kvaerno5",
+            tribojax_s=kv_s,
+            baseline="tribojax default (Rodas4)",
+            baseline_s=one_s,
+            ratio=one_s / kv_s,
+            target=None,
+            meets_target=None,
+            compile_s=kv_compile,
+            max_rel_err_vs_radau_tight=kv_err,
+        )
+    )
     # six loads vmapped
     els = jax.vmap(lambda f, k, c: tj.PreSlipLuGre(f, k, c))(
         *(jnp.asarray(T3[k]) for k in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m"))
@@ -116,8 +160,17 @@ def run(quick=False):
     jax.block_until_ready(six(els))
     c6 = time.perf_counter() - t0
     six_s = median_time(lambda: six(els), max(3, n // 2))
-    results.append(entry("slip_six_loads_vmap", six_s, "target 40 ms", 40e-3, "<= 40 ms",
-                         six_s <= 40e-3, compile_s=c6))  # fmt: skip
+    results.append(
+        entry(
+            "slip_six_loads_vmap",
+            six_s,
+            "target 40 ms",
+            40e-3,
+            "<= 40 ms",
+            six_s <= 40e-3,
+            compile_s=c6,
+        )
+    )
 
     # gradient of all four phase averages w.r.t. (F_s, K, C, alpha): forward mode (4 parameters).
     # With Rodas4 jax.jacrev also runs forward mode (simulate_slip's custom_jvp): reported beside.
@@ -135,9 +188,19 @@ def run(quick=False):
     j_s = median_time(lambda: jac(theta), max(3, n // 2))
     jrev = jax.jit(jax.jacrev(phases))
     r_s = median_time(lambda: jrev(theta), 3)
-    results.append(entry("slip_grad_phase_averages_jacfwd", j_s, "tribojax forward solve", f_s,
-                         "<= 4x forward", j_s <= 4 * f_s, grad_over_forward=j_s / f_s,
-                         jacrev_over_forward=r_s / f_s, compile_s=cj))  # fmt: skip
+    results.append(
+        entry(
+            "slip_grad_phase_averages_jacfwd",
+            j_s,
+            "tribojax forward solve",
+            f_s,
+            "<= 4x forward",
+            j_s <= 4 * f_s,
+            grad_over_forward=j_s / f_s,
+            jacrev_over_forward=r_s / f_s,
+            compile_s=cj,
+        )
+    )
     return results
 
 

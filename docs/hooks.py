@@ -93,8 +93,11 @@ API_PAGES = [
         "cache, one-kernel loops).",
     ),
 ]
-DISCOVERY_PAGE = ("discovery", "Discovery", "`tribojax.discovery`: baselines, named effects, "
-                  "region tests and the greedy discovery loop.")  # fmt: skip
+DISCOVERY_PAGE = (
+    "discovery",
+    "Discovery",
+    "`tribojax.discovery`: baselines, named effects, region tests and the greedy discovery loop.",
+)
 
 
 # -- notebooks ---------------------------------------------------------------------------------
@@ -207,8 +210,9 @@ def missing_docstrings(names) -> list[str]:
     """The names (dotted) whose object has no docstring, as griffe (and mkdocstrings) see it."""
     import griffe
 
-    package = griffe.load("tribojax", search_paths=[str(REPO / "src")], resolve_aliases=True,
-                          resolve_external=False)  # fmt: skip
+    package = griffe.load(
+        "tribojax", search_paths=[str(REPO / "src")], resolve_aliases=True, resolve_external=False
+    )
     missing = []
     for dotted in names:
         obj = package[dotted.removeprefix("tribojax.")]
@@ -243,16 +247,20 @@ def on_files(files, config):
                 str(STAGE),
                 config["site_dir"],
                 config["use_directory_urls"],
-            )  # fmt: skip
+            )
         )
     pages = public_names()
     for name in missing_docstrings([n for group in pages.values() for n in group]):
-        log.warning("%s has no docstring: every public name needs one (what, units, paper "
-                    "and equation)", name)  # fmt: skip
+        log.warning(
+            "%s has no docstring: every public name needs one (what, units, paper and equation)",
+            name,
+        )
     for page, title, _, intro in API_PAGES:
-        files.append(File.generated(config, f"api/{page}.md",
-                                    content=api_page(title, intro, pages[page])))  # fmt: skip
+        files.append(
+            File.generated(config, f"api/{page}.md", content=api_page(title, intro, pages[page]))
+        )
     page, title, intro = DISCOVERY_PAGE
-    files.append(File.generated(config, f"api/{page}.md",
-                                content=api_page(title, intro, pages[page])))  # fmt: skip
+    files.append(
+        File.generated(config, f"api/{page}.md", content=api_page(title, intro, pages[page]))
+    )
     return files

@@ -41,8 +41,10 @@ from fitting.real_discovery_screw import screwdrive_discovery
 
 MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen", "band_brake")
 DECIMATE = 2
-SCORING_WINDOWS = {"earthquake_ImperialValleyDBE_30lb": (3072, 7680),
-                   "earthquake_KocaeliDBE_30lb": (6144, 14336)}  # fmt: skip
+SCORING_WINDOWS = {
+    "earthquake_ImperialValleyDBE_30lb": (3072, 7680),
+    "earthquake_KocaeliDBE_30lb": (6144, 14336),
+}
 """Samples [start, stop) of the 1024 Hz histories the dataset's authors score their models on
 (ARTS-Laboratory PIML repository, `training reproduction/analyze_validation.py`)."""
 KEPT_OUT = ("1Hz30lbtension1amplitude",)
@@ -69,9 +71,15 @@ def _test_key(name: str):
 
 def _summary(h) -> dict:
     d = h.fit
-    return {"model": h.model, "nrmse": h.nrmse, "converged": d.converged, "result": d.message,
-            "parameters": dict(zip(d.names, d.values.tolist())),
-            "std_errors": dict(zip(d.names, d.std_errors.tolist())), "steps": d.steps}  # fmt: skip
+    return {
+        "model": h.model,
+        "nrmse": h.nrmse,
+        "converged": d.converged,
+        "result": d.message,
+        "parameters": dict(zip(d.names, d.values.tolist())),
+        "std_errors": dict(zip(d.names, d.std_errors.tolist())),
+        "steps": d.steps,
+    }
 
 
 def brfd_study(src: Path, short: bool, log, models=MODELS, prediction_only=False) -> dict:
@@ -90,18 +98,24 @@ def brfd_study(src: Path, short: bool, log, models=MODELS, prediction_only=False
         p = {m: fits[name][m]["parameters"] for m in models}
         if not set(MODELS[:4]) <= set(p):
             continue
-        trend.append({"test": name, "frequency_Hz": f_hz, "amplitude_in": a_in,
-                      "amplitude_m": a_in * 0.0254,
-                      "jenkins_slip_force_N": p["jenkins"]["mu_N"],
-                      "jenkins_stiffness_N_per_m": p["jenkins"]["K_d"],
-                      "mindlin_slip_force_N": p["mindlin"]["mu_N"],
-                      "mindlin_stiffness_N_per_m": p["mindlin"]["K_d"],
-                      "bouc_wen_F_y_N": p["bouc_wen"]["F_y"],
-                      "bouc_wen_stiffness_N_per_m": p["bouc_wen"]["K"],
-                      "bouc_wen_n": p["bouc_wen"]["n"],
-                      "lugre_F_c_N": p["lugre"]["F_c"],
-                      "lugre_sigma0_N_per_m": p["lugre"]["sigma0"],
-                      "f0_N": p["jenkins"]["f0"]})  # fmt: skip
+        trend.append(
+            {
+                "test": name,
+                "frequency_Hz": f_hz,
+                "amplitude_in": a_in,
+                "amplitude_m": a_in * 0.0254,
+                "jenkins_slip_force_N": p["jenkins"]["mu_N"],
+                "jenkins_stiffness_N_per_m": p["jenkins"]["K_d"],
+                "mindlin_slip_force_N": p["mindlin"]["mu_N"],
+                "mindlin_stiffness_N_per_m": p["mindlin"]["K_d"],
+                "bouc_wen_F_y_N": p["bouc_wen"]["F_y"],
+                "bouc_wen_stiffness_N_per_m": p["bouc_wen"]["K"],
+                "bouc_wen_n": p["bouc_wen"]["n"],
+                "lugre_F_c_N": p["lugre"]["F_c"],
+                "lugre_sigma0_N_per_m": p["lugre"]["sigma0"],
+                "f0_N": p["jenkins"]["f0"],
+            }
+        )
     prediction = {}
     splits = dict(SPLITS)
     if short:
@@ -112,21 +126,31 @@ def brfd_study(src: Path, short: bool, log, models=MODELS, prediction_only=False
         prediction[key] = {"description": text, "train": train, "rows": rows}
     rows = _predict({**sines, **quakes}, list(sines), list(quakes), log, models)
     _score_windows(rows, quakes, log)
-    prediction["earthquake"] = {"description": "fit all sinusoidal tests, predict the earthquake "
-                                "histories", "train": list(sines), "rows": rows,
-                                "windows": {k: list(v) for k, v in SCORING_WINDOWS.items()},
-                                "authors_lugre_window_nrmse":
-                                    _authors_lugre(src, quakes)}  # fmt: skip
+    prediction["earthquake"] = {
+        "description": "fit all sinusoidal tests, predict the earthquake histories",
+        "train": list(sines),
+        "rows": rows,
+        "windows": {k: list(v) for k, v in SCORING_WINDOWS.items()},
+        "authors_lugre_window_nrmse": _authors_lugre(src, quakes),
+    }
     kept = [n for n in KEPT_OUT if n in sines]
     if kept and not short:
         train = [n for n in sines if n not in kept]
         rows = _predict({**sines, **quakes}, train, kept + list(quakes), log, models)
         _score_windows(rows, quakes, log)
-        prediction["kept_out"] = {"description": "fit the sinusoidal tests but " + ", ".join(kept)
-                                  + "; predict those and the earthquake histories",
-                                  "train": train, "rows": rows}  # fmt: skip
-    return {"brfd_fits": fits, "slip_force_vs_test": trend, "prediction": prediction,
-            "_records": {**sines, **quakes}}  # fmt: skip
+        prediction["kept_out"] = {
+            "description": "fit the sinusoidal tests but "
+            + ", ".join(kept)
+            + "; predict those and the earthquake histories",
+            "train": train,
+            "rows": rows,
+        }
+    return {
+        "brfd_fits": fits,
+        "slip_force_vs_test": trend,
+        "prediction": prediction,
+        "_records": {**sines, **quakes},
+    }
 
 
 def _measured_start(h, record) -> dict:
@@ -148,7 +172,8 @@ def _score_windows(rows, quakes, log) -> None:
             text = f"{r['model']:9s} {r['test']}: scored window NRMSE {r['window_nrmse']:.3f}"
             if "_force_measured_start" in r:
                 r["window_nrmse_measured_start"] = _window_nrmse(
-                    quakes[r["test"]], r["_force_measured_start"], r["test"])  # fmt: skip
+                    quakes[r["test"]], r["_force_measured_start"], r["test"]
+                )
                 text += f", {r['window_nrmse_measured_start']:.3f} from the measured start"
             log(text)
 
@@ -186,18 +211,29 @@ def _predict(records, train, test, log, models=MODELS) -> list:
     rows = []
     for model in models:
         t0 = time.perf_counter()
-        h = tj.fit_history([records[n] for n in train], model, decimate=DECIMATE, **_starts(model),
-                           throw=False)  # fmt: skip
+        h = tj.fit_history(
+            [records[n] for n in train], model, decimate=DECIMATE, **_starts(model), throw=False
+        )
         seconds = time.perf_counter() - t0
         for name in train + test:
             force, nrmse = tj.predict_history(h, records[name])
-            rows.append({"model": model, "test": name, "role": "fit" if name in train else
-                         "predicted", "nrmse": nrmse, "joint_fit": _summary(h),
-                         "fit_seconds": seconds, "_force": force})  # fmt: skip
+            rows.append(
+                {
+                    "model": model,
+                    "test": name,
+                    "role": "fit" if name in train else "predicted",
+                    "nrmse": nrmse,
+                    "joint_fit": _summary(h),
+                    "fit_seconds": seconds,
+                    "_force": force,
+                }
+            )
             if name in test:
                 rows[-1].update(_measured_start(h, records[name]))
-        log(f"joint {model:9s} on {len(train)} tests: NRMSE {h.nrmse:.3f}; predicted " + ", ".join(
-            f"{r['test'][:12]} {r['nrmse']:.3f}" for r in rows[-len(test):]))  # fmt: skip
+        log(
+            f"joint {model:9s} on {len(train)} tests: NRMSE {h.nrmse:.3f}; predicted "
+            + ", ".join(f"{r['test'][:12]} {r['nrmse']:.3f}" for r in rows[-len(test) :])
+        )
     return rows
 
 
@@ -216,8 +252,9 @@ def screwdrive_study(src: Path, log) -> dict:
         res["transients"] = {}
         for path in sorted((drive / "start_stop").glob("*.csv")):
             tr = tj.read_epos_transient(path)
-            dyn = tj.fit_transient(tr, joint, sigma=float(np.median(curve.friction_scatter)),
-                                   throw=False)  # fmt: skip
+            dyn = tj.fit_transient(
+                tr, joint, sigma=float(np.median(curve.friction_scatter)), throw=False
+            )
             res["transients"][path.stem] = {**dyn.as_dict(), "nrmse": tj.transient_nrmse(dyn, tr)}
             log(f"{drive.name} start-stop {path.stem}: " + _fmt(dyn))
         out[drive.name] = res
@@ -241,8 +278,13 @@ def _figure(study, out: Path) -> None:
         return
     rows = study["prediction"]["earthquake"]["rows"]
     quakes = [n for n in dict.fromkeys(r["test"] for r in rows if r["role"] == "predicted")]
-    fig, axes = plt.subplots(2 * len(quakes), 1, figsize=(11, 5.4 * len(quakes)), squeeze=False,
-                             gridspec_kw=dict(height_ratios=[2, 1] * len(quakes)))  # fmt: skip
+    fig, axes = plt.subplots(
+        2 * len(quakes),
+        1,
+        figsize=(11, 5.4 * len(quakes)),
+        squeeze=False,
+        gridspec_kw=dict(height_ratios=[2, 1] * len(quakes)),
+    )
     for k, name in enumerate(quakes):
         ax, ar = axes[2 * k, 0], axes[2 * k + 1, 0]
         rec = study["_records"][name]
@@ -260,8 +302,10 @@ def _figure(study, out: Path) -> None:
                     label = f"band_brake, measured start ({r['window_nrmse_measured_start']:.2f})"
                     ax.plot(t, late / 1e3, lw=0.7, label=label)
                     ar.plot(t, (late - f) / 1e3, lw=0.6, label=label)
-        ax.set(title=f"{name}: predicted from the sinusoidal tests (scored window, NRMSE)",
-               ylabel="force (kN)")  # fmt: skip
+        ax.set(
+            title=f"{name}: predicted from the sinusoidal tests (scored window, NRMSE)",
+            ylabel="force (kN)",
+        )
         ax.legend(fontsize=7, ncol=6)
         ar.axhline(0.0, color="k", lw=0.5)
         ar.set(xlabel="t (s)", ylabel="predicted − measured (kN)")
@@ -287,9 +331,12 @@ def main(argv=None) -> None:
     parser.add_argument("--short", action="store_true", help="1 and 2 Hz tests only, no splits")
     parser.add_argument("--skip-brfd", action="store_true")
     parser.add_argument("--models", nargs="+", choices=MODELS, default=list(MODELS))
-    parser.add_argument("--prediction-only", action="store_true",
-                        help="brfd: the joint fits and predictions only (no per-test fits, "
-                        "screw drives or discovery)")  # fmt: skip
+    parser.add_argument(
+        "--prediction-only",
+        action="store_true",
+        help="brfd: the joint fits and predictions only (no per-test fits, "
+        "screw drives or discovery)",
+    )
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -297,8 +344,11 @@ def main(argv=None) -> None:
     def log(msg):
         print(f"[{time.perf_counter() - t0:7.1f} s] {msg}", flush=True)
 
-    study = {} if args.skip_brfd else brfd_study(args.src, args.short, log, tuple(args.models),
-                                                    args.prediction_only)  # fmt: skip
+    study = (
+        {}
+        if args.skip_brfd
+        else brfd_study(args.src, args.short, log, tuple(args.models), args.prediction_only)
+    )
     study["decimate"] = DECIMATE
     if not args.prediction_only:
         study["screwdrive"] = screwdrive_study(args.src, log)

@@ -52,8 +52,10 @@ BAND_BRAKE_EFFECTS = ("self_energizing", "direction_asymmetry")
 TRANSFER_TRAIN = "1Hz30lbtension1amplitude"
 """The sine test discovery is run on for `discovery_predicts` (chosen before any result: the
 middle of the frequency and amplitude grid); every other record is scored, never fitted."""
-WINDOWS_S = {"earthquake_ImperialValleyDBE_30lb": (3.0, 7.5),
-             "earthquake_KocaeliDBE_30lb": (6.0, 14.0)}  # fmt: skip
+WINDOWS_S = {
+    "earthquake_ImperialValleyDBE_30lb": (3.0, 7.5),
+    "earthquake_KocaeliDBE_30lb": (6.0, 14.0),
+}
 """The dataset authors' scored windows (samples 3072–7679, 6144–14335 at 1024 Hz), in seconds."""
 
 
@@ -67,8 +69,11 @@ def _test_info(path: Path) -> dict:
     test = tj.brfd_test(path)  # from the file name (the bundled CSV keeps the JSON's stem)
     if test is None:
         return {"drive": "earthquake history"}
-    return {"drive": "sinusoidal", "frequency_Hz": test["frequency_Hz"],
-            "amplitude_in": round(test["amplitude_m"] / INCH_M, 6)}  # fmt: skip
+    return {
+        "drive": "sinusoidal",
+        "frequency_Hz": test["frequency_Hz"],
+        "amplitude_in": round(test["amplitude_m"] / INCH_M, 6),
+    }
 
 
 def _where(report, t) -> dict:
@@ -76,11 +81,17 @@ def _where(report, t) -> dict:
     displacement range in mm, time range in s, RMS over the noise sd), and the share of samples
     they cover."""
     regions = report.misfit.get("regions", [])
-    rows = [{"branch": BRANCH.get(rg.get("branch"), rg.get("branch")),
-             "u_min_mm": 1e3 * rg["u_min"], "u_max_mm": 1e3 * rg["u_max"],
-             "t_s": [float(t[rg["i0"]]), float(t[rg["i1"] - 1])],
-             "rms_over_noise": float(np.sqrt(rg["statistic"])), "p_value": rg["p_value"]}
-            for rg in regions]  # fmt: skip
+    rows = [
+        {
+            "branch": BRANCH.get(rg.get("branch"), rg.get("branch")),
+            "u_min_mm": 1e3 * rg["u_min"],
+            "u_max_mm": 1e3 * rg["u_max"],
+            "t_s": [float(t[rg["i0"]]), float(t[rg["i1"] - 1])],
+            "rms_over_noise": float(np.sqrt(rg["statistic"])),
+            "p_value": rg["p_value"],
+        }
+        for rg in regions
+    ]
     share = sum(rg["n"] for rg in regions) / max(len(t), 1)
     return {"share_of_samples": share, "regions": rows}
 
@@ -91,8 +102,9 @@ def physical_sense(effects) -> str:
         return "nothing named: backlash was expected for this device"
     lines = [NOTES.get(e, e) for e in effects]
     if effects[0] not in FIRST_EXPECTED:
-        lines.insert(0, "neither backlash nor the band's rise named first, though expected for "
-                        "this device")
+        lines.insert(
+            0, "neither backlash nor the band's rise named first, though expected for this device"
+        )
     return "; ".join(lines)
 
 
@@ -127,7 +139,7 @@ def discover_brfd_test(
         "backlash_gap_mm": None if gap is None else 1e3 * gap,
         "first_round": [
             {k: c.get(k) for k in ("name", "p_value", "delta_bic")} for c in d["candidates"]
-        ],  # fmt: skip
+        ],
         "backlash_depth": depth,
         "strengths": strengths,
         "misfit": _where(report, np.asarray(baseline.t)),
@@ -149,11 +161,13 @@ def brfd_discovery(src, short: bool, log) -> list[dict]:
         row = discover_brfd_test(path)
         rows.append(row)
         gap = row["backlash_gap_mm"]
-        log(f"discover {row['test']:34s} {'+'.join(row['effects']) or 'none':36s} "
+        log(
+            f"discover {row['test']:34s} {'+'.join(row['effects']) or 'none':36s} "
             f"{row['verdict']:16s} excess {row['excess_rmse_before_N']:.3g} -> "
             f"{row['excess_rmse_after_N']:.3g} N"
             + ("" if gap is None else f", gap {gap:.3g} mm")
-            + f" ({row['seconds']:.1f} s)")  # fmt: skip
+            + f" ({row['seconds']:.1f} s)"
+        )
     return rows
 
 
@@ -168,21 +182,29 @@ def discovery_predicts(src, log, train: str = TRANSFER_TRAIN) -> dict:
     "records": {test: {"nrmse", "window_nrmse", "window_coverage", ..._measured_start}}}}}."""
     files = brfd_files(Path(src))
     path = next(p for p in files if p.stem == train)
-    reduced, _ = tj.decimate_record(tj.read_record(path), None, whole_cycles=True,
-                                    max_samples=tj.DISCOVER_MAX_SAMPLES)  # fmt: skip
-    vocab = {"without band-brake effects": [e for e in tj.discovery.default_effects("loop")
-                                            if e.name not in BAND_BRAKE_EFFECTS],
-             "with band-brake effects": None}  # fmt: skip
+    reduced, _ = tj.decimate_record(
+        tj.read_record(path), None, whole_cycles=True, max_samples=tj.DISCOVER_MAX_SAMPLES
+    )
+    vocab = {
+        "without band-brake effects": [
+            e for e in tj.discovery.default_effects("loop") if e.name not in BAND_BRAKE_EFFECTS
+        ],
+        "with band-brake effects": None,
+    }
     out = {"train": train, "vocabularies": {}}
     for name, effects in vocab.items():
         t0 = time.perf_counter()
         report = discover(loop_baseline(reduced), effects=effects)
-        row = {"effects": list(report.effects), "verdict": report.verdict,
-               "strengths": report.as_dict()["strengths"],
-               "excess_before_N": report.excess_rmse_before,
-               "excess_after_N": report.excess_rmse_after,
-               "heldout_excess_before_N": report.heldout_excess_before,
-               "heldout_excess_after_N": report.heldout_excess_after, "records": {}}  # fmt: skip
+        row = {
+            "effects": list(report.effects),
+            "verdict": report.verdict,
+            "strengths": report.as_dict()["strengths"],
+            "excess_before_N": report.excess_rmse_before,
+            "excess_after_N": report.excess_rmse_after,
+            "heldout_excess_before_N": report.heldout_excess_before,
+            "heldout_excess_after_N": report.heldout_excess_after,
+            "records": {},
+        }
         for other in files:
             if other.stem == train:
                 continue
@@ -193,15 +215,18 @@ def discovery_predicts(src, log, train: str = TRANSFER_TRAIN) -> dict:
                 rec.update(_window(pred, other.stem))
                 loaded = tj.predict(report.fitted, record, initial="measured")
                 rec["nrmse_measured_start"] = loaded.nrmse
-                rec.update({f"{k}_measured_start": v
-                            for k, v in _window(loaded, other.stem).items()})  # fmt: skip
+                rec.update(
+                    {f"{k}_measured_start": v for k, v in _window(loaded, other.stem).items()}
+                )
             row["records"][other.stem] = rec
         row["seconds"] = time.perf_counter() - t0
         out["vocabularies"][name] = row
-        log(f"discover {train} ({name}): {'+'.join(row['effects']) or 'none'}, excess "
+        log(
+            f"discover {train} ({name}): {'+'.join(row['effects']) or 'none'}, excess "
             f"{row['excess_before_N']:.3g} -> {row['excess_after_N']:.3g} N (held out "
             f"{row['heldout_excess_before_N']:.3g} -> {row['heldout_excess_after_N']:.3g}); "
-            "predicted: " + ", ".join(f"{k} {v['nrmse']:.3f}" for k, v in row["records"].items()))
+            "predicted: " + ", ".join(f"{k} {v['nrmse']:.3f}" for k, v in row["records"].items())
+        )
     return out
 
 
@@ -211,23 +236,27 @@ def _window(pred, name) -> dict:
     lo, hi = WINDOWS_S[name]
     inside = (pred.x >= lo) & (pred.x < hi)
     m, p = pred.measured[inside], pred.predicted[inside]
-    return {"window_nrmse": float(np.sqrt(np.mean((p - m) ** 2)) / np.std(m)),
-            "window_coverage": float(inside.sum() / round((hi - lo) * 1024))}  # fmt: skip
+    return {
+        "window_nrmse": float(np.sqrt(np.mean((p - m) ** 2)) / np.std(m)),
+        "window_coverage": float(inside.sum() / round((hi - lo) * 1024)),
+    }
 
 
 def transfer_table(result) -> str:
     """Markdown table of `discovery_predicts`: NRMSE per record not fitted, per vocabulary."""
     names = list(result["vocabularies"])
-    rows = ["| record (not fitted) | " + " | ".join(names) + " |",
-            "|---|" + "---|" * len(names)]  # fmt: skip
+    rows = ["| record (not fitted) | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
     first = result["vocabularies"][names[0]]["records"]
     for test in first:
         cells = []
         for n in names:
             r = result["vocabularies"][n]["records"][test]
-            w = (f"; window {r['window_nrmse']:.3f}; from the first force: "
-                 f"{r['nrmse_measured_start']:.3f}, window {r['window_nrmse_measured_start']:.3f}"
-                 if "window_nrmse" in r else "")  # fmt: skip
+            w = (
+                f"; window {r['window_nrmse']:.3f}; from the first force: "
+                f"{r['nrmse_measured_start']:.3f}, window {r['window_nrmse_measured_start']:.3f}"
+                if "window_nrmse" in r
+                else ""
+            )
             cells.append(f"{r['nrmse']:.3f}{w}")
         rows.append(f"| {test} | " + " | ".join(cells) + " |")
     return "\n".join(rows)
@@ -235,8 +264,10 @@ def transfer_table(result) -> str:
 
 def table(rows) -> str:
     """Markdown table of the rows (test, effects, verdict, excess before/after, gap)."""
-    out = ["| test | named effects | verdict | excess before (N) | after (N) | gap (mm) |",
-           "|---|---|---|---|---|---|"]  # fmt: skip
+    out = [
+        "| test | named effects | verdict | excess before (N) | after (N) | gap (mm) |",
+        "|---|---|---|---|---|---|",
+    ]
     for r in rows:
         gap = "" if r["backlash_gap_mm"] is None else f"{r['backlash_gap_mm']:.3g}"
         out.append(

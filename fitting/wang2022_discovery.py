@@ -42,8 +42,13 @@ def _acts_on(name: str, strengths: dict, table: int, kpa: float) -> bool:
         return nu.get("table") == table and abs(nu.get("vacuum_kPa", -1) - kpa) < 1e-9
     if name == "gross_sliding":
         return abs(kpa - LOWEST_LOAD_KPA) < 1e-9
-    return name in ("position_error", "sensor_drift", "load_coupling", "stribeck",
-                    "viscous_friction")  # fmt: skip
+    return name in (
+        "position_error",
+        "sensor_drift",
+        "load_coupling",
+        "stribeck",
+        "viscous_friction",
+    )
 
 
 def name_flagged(rep, cells: list[dict], flagged: list[dict]) -> list[dict]:
@@ -55,10 +60,15 @@ def name_flagged(rep, cells: list[dict], flagged: list[dict]) -> list[dict]:
         acting = [n for n in rep.effects if _acts_on(n, rep.strengths[n], t, kpa)]
         acting.sort(key=lambda n: n != "position_step")  # the cell's own effect first
         cell = next(c for c in cells if c["table"] == t and abs(c["vacuum_kPa"] - kpa) < 1e-9)
-        entry = {"table": t, "vacuum_kPa": kpa, "effect": acting[0] if acting else "none",
-                 "effects_acting": acting, "measured_nm": cell["measured_nm"],
-                 "baseline_nm": cell["baseline_nm"],
-                 "with_effect_nm": cell["final_nm"]}  # fmt: skip
+        entry = {
+            "table": t,
+            "vacuum_kPa": kpa,
+            "effect": acting[0] if acting else "none",
+            "effects_acting": acting,
+            "measured_nm": cell["measured_nm"],
+            "baseline_nm": cell["baseline_nm"],
+            "with_effect_nm": cell["final_nm"],
+        }
         if acting:
             entry["strengths"] = rep.strengths[acting[0]]
         if "standardized_residual" in f:
@@ -156,17 +166,23 @@ def main(argv=None) -> int:
         print(f"  {k:>8}: {v['before']:.3f} -> {v['after']:.3f}")
     print("candidates (first round): name, score, p, delta_bic")
     for c in res["candidates"]:
-        print(f"  {c['name']:>16}: S = {c['score']:.2f}, p = {c['p_value']:.2g}, "
-              f"dBIC = {c['delta_bic']}")  # fmt: skip
+        print(
+            f"  {c['name']:>16}: S = {c['score']:.2f}, p = {c['p_value']:.2g}, "
+            f"dBIC = {c['delta_bic']}"
+        )
     for f in res.get("flagged_cells", []):
-        print(f"flagged cell Table {f['table']} at {f['vacuum_kPa']:g} kPa: effect {f['effect']}; "
-              f"measured {f['measured_nm']:.2f} nm, published model {f['baseline_nm']:.2f} nm, "
-              f"with the effect {f['with_effect_nm']:.2f} nm")  # fmt: skip
+        print(
+            f"flagged cell Table {f['table']} at {f['vacuum_kPa']:g} kPa: effect {f['effect']}; "
+            f"measured {f['measured_nm']:.2f} nm, published model {f['baseline_nm']:.2f} nm, "
+            f"with the effect {f['with_effect_nm']:.2f} nm"
+        )
     if "chain_fit_with_steps" in res:
         c = res["chain_fit_with_steps"]
-        print(f"full-chain fit with a step in each flagged cell: {c['parameters']}; rms rel. "
-              f"residual over the other cells {c['rms_relative_residual_unflagged']:.3f} (paper "
-              f"theory {c['paper_theory_rms_relative_residual_unflagged']:.3f})")  # fmt: skip
+        print(
+            f"full-chain fit with a step in each flagged cell: {c['parameters']}; rms rel. "
+            f"residual over the other cells {c['rms_relative_residual_unflagged']:.3f} (paper "
+            f"theory {c['paper_theory_rms_relative_residual_unflagged']:.3f})"
+        )
     print(f"wrote {out / 'wang2022_discovery.json'}")
     return 0 if rep.converged else 3
 

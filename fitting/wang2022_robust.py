@@ -39,9 +39,20 @@ PROFILE_GRIDS = {
 
 def _row(f, wall):
     d = f.as_dict()
-    keep = ("loss", "log_likelihood", "n_parameters", "aic", "bic", "parameters", "std_errors",
-            "flagged_cells", "rms_relative_residual_unflagged", "converged", "em_iterations",
-            "paper_theory_rms_relative_residual_unflagged")  # fmt: skip
+    keep = (
+        "loss",
+        "log_likelihood",
+        "n_parameters",
+        "aic",
+        "bic",
+        "parameters",
+        "std_errors",
+        "flagged_cells",
+        "rms_relative_residual_unflagged",
+        "converged",
+        "em_iterations",
+        "paper_theory_rms_relative_residual_unflagged",
+    )
     out = {k: d[k] for k in keep}
     out["wall_s"] = wall
     return out
@@ -70,17 +81,25 @@ def run(short: bool = False, profiles_only: bool = False) -> dict:
         for nu in nus:
             t = time.perf_counter()
             kw = dict(noise=noise, floor_nm=floor, nu=nu)
-            tries = {"plain_fit": tj.robust_fit_measured_slips(initial=plain, **kw),
-                     "headline_optimum": tj.robust_fit_measured_slips(best.parameters, **kw)}
+            tries = {
+                "plain_fit": tj.robust_fit_measured_slips(initial=plain, **kw),
+                "headline_optimum": tj.robust_fit_measured_slips(best.parameters, **kw),
+            }
             ok = {k: f for k, f in tries.items() if math.isfinite(f.log_likelihood)}
             start = max(ok or tries, key=lambda k: (ok or tries)[k].log_likelihood)
             f = tries[start]
             fits[(noise, floor, nu)] = f
-            rows.append(dict(_row(f, time.perf_counter() - t), start=start,
-                             log_likelihood_by_start={k: g.log_likelihood
-                                                      for k, g in tries.items()}))  # fmt: skip
-            _log(f"{noise} {floor} nu={nu}: ll {f.log_likelihood:.3f}, aic {f.aic:.2f}, "
-                 f"flagged {f.flagged_cells()}, {time.perf_counter() - t:.0f} s")  # fmt: skip
+            rows.append(
+                dict(
+                    _row(f, time.perf_counter() - t),
+                    start=start,
+                    log_likelihood_by_start={k: g.log_likelihood for k, g in tries.items()},
+                )
+            )
+            _log(
+                f"{noise} {floor} nu={nu}: ll {f.log_likelihood:.3f}, aic {f.aic:.2f}, "
+                f"flagged {f.flagged_cells()}, {time.perf_counter() - t:.0f} s"
+            )
     # ν chosen from a grid counts as one more parameter
     for r in rows:
         extra = 0 if r["loss"]["nu"] is None else 1
@@ -91,7 +110,7 @@ def run(short: bool = False, profiles_only: bool = False) -> dict:
             "parameters": plain.parameters,
             "rms_relative_residual": plain.rms_relative_residual,
             "converged": plain.converged,
-        },  # fmt: skip
+        },
         "noise_models": rows,
     }
     if rows:
@@ -105,17 +124,24 @@ def run(short: bool = False, profiles_only: bool = False) -> dict:
         t = time.perf_counter()
         prof = tj.chain_profile_likelihood(best, name, grid)
         out["profiles"][name] = prof
-        _log(f"profile {name}: {np.round(prof['delta_2ll'], 2)} at {prof['values']}, interval "
-             f"{prof['interval_95']}, {time.perf_counter() - t:.0f} s")  # fmt: skip
+        _log(
+            f"profile {name}: {np.round(prof['delta_2ll'], 2)} at {prof['values']}, interval "
+            f"{prof['interval_95']}, {time.perf_counter() - t:.0f} s"
+        )
     if profiles_only:
         return out
     t = time.perf_counter()
     free5 = ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha")
     # from the three-parameter optimum and its EM weights (an unweighted start is pulled off
     # by the flagged cell: measured, it ended at D = 2.977, σ_s = 36 GPa, α = 4, ℓ 1.4 lower)
-    f5 = tj.robust_fit_measured_slips(best.parameters, free=free5, noise=best.noise,
-                                      floor_nm=best.floor_nm, nu=best.nu,
-                                      initial_weights=best.weights)  # fmt: skip
+    f5 = tj.robust_fit_measured_slips(
+        best.parameters,
+        free=free5,
+        noise=best.noise,
+        floor_nm=best.floor_nm,
+        nu=best.nu,
+        initial_weights=best.weights,
+    )
     c = f5.chain
     out["five_free"] = {
         **_row(f5, time.perf_counter() - t),
@@ -124,8 +150,10 @@ def run(short: bool = False, profiles_only: bool = False) -> dict:
         "correlation": c.fit.correlation.tolist(),
         "delta_log_likelihood_vs_three_free": f5.log_likelihood - best.log_likelihood,
     }
-    _log(f"five free: ll {f5.log_likelihood:.3f} (3 free {best.log_likelihood:.3f}), "
-         f"{f5.parameters}, {time.perf_counter() - t:.0f} s")  # fmt: skip
+    _log(
+        f"five free: ll {f5.log_likelihood:.3f} (3 free {best.log_likelihood:.3f}), "
+        f"{f5.parameters}, {time.perf_counter() - t:.0f} s"
+    )
     return out
 
 
@@ -142,15 +170,19 @@ def main(argv=None) -> int:
         return 2
     res = run(short=args.short, profiles_only=args.profiles_only)
     tj.write_json_atomic(path, res)
-    print("noise model, nu: log-likelihood, AIC (+2 for a chosen nu), rms rel. unflagged "
-          "(paper theory on the same cells), flagged")  # fmt: skip
+    print(
+        "noise model, nu: log-likelihood, AIC (+2 for a chosen nu), rms rel. unflagged "
+        "(paper theory on the same cells), flagged"
+    )
     for r in res["noise_models"]:
         loss = r["loss"]
         name = loss["noise"] + (f" c={loss['floor_nm']:g} nm" if loss["floor_nm"] else "")
-        print(f"  {name:>16} nu={loss['nu']}: {r['log_likelihood']:.2f}, "
-              f"{r['aic_with_nu']:.2f}, {r['rms_relative_residual_unflagged']:.3f} "
-              f"({r['paper_theory_rms_relative_residual_unflagged']:.3f}), "
-              f"{[(c['table'], c['vacuum_kPa']) for c in r['flagged_cells']]}")  # fmt: skip
+        print(
+            f"  {name:>16} nu={loss['nu']}: {r['log_likelihood']:.2f}, "
+            f"{r['aic_with_nu']:.2f}, {r['rms_relative_residual_unflagged']:.3f} "
+            f"({r['paper_theory_rms_relative_residual_unflagged']:.3f}), "
+            f"{[(c['table'], c['vacuum_kPa']) for c in r['flagged_cells']]}"
+        )
     print(f"within 2 AIC of the best: {res.get('within_2_aic_of_best')}")
     print(f"wrote {path}")
     return 0

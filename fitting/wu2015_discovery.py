@@ -36,8 +36,9 @@ def run(A_bars=A_BARS, conditions=CONDITIONS, noise=NOISE) -> dict:
     for i, (N, freq) in enumerate(conditions):
         for j, Ab in enumerate(A_bars):
             shape = disc.eq7_standin_shape(Ab)
-            loop = disc.eq7_standin_loop(Ab, normal_load=N, frequency=freq, noise=noise,
-                                         seed=100 * i + j)  # fmt: skip
+            loop = disc.eq7_standin_loop(
+                Ab, normal_load=N, frequency=freq, noise=noise, seed=100 * i + j
+            )
             rep = disc.discover_loop(loop)
             rows.append(
                 {
@@ -71,10 +72,10 @@ def run(A_bars=A_BARS, conditions=CONDITIONS, noise=NOISE) -> dict:
             "named": dict(Counter("+".join(r["effects"]) or "none" for r in sel)),
             "shrink_median": float(
                 np.median([r["baseline_rmse_N"] / r["final_rmse_N"] for r in sel])
-            ),  # fmt: skip
+            ),
             "final_over_noise_median": float(
                 np.median([r["final_rmse_N"] / r["true_noise_std_N"] for r in sel])
-            ),  # fmt: skip
+            ),
         }
     return {
         "study": "discovery on wu2015 Eq 7 stand-in loops (Jenkins baseline)",
@@ -100,16 +101,26 @@ def plot(result: dict, path) -> bool:
     for r in rows:
         st = r["strengths"].get("microslip")
         if st:
-            axes[0].errorbar(r["A_bar"], st["w"]["value"], yerr=st["w"]["std_error"], fmt="o",
-                             color="C3", alpha=0.6)  # fmt: skip
+            axes[0].errorbar(
+                r["A_bar"],
+                st["w"]["value"],
+                yerr=st["w"]["std_error"],
+                fmt="o",
+                color="C3",
+                alpha=0.6,
+            )
         axes[1].plot(r["A_bar"], r["baseline_rmse_N"] / r["true_noise_std_N"], "kx")
         axes[1].plot(r["A_bar"], r["final_rmse_N"] / r["true_noise_std_N"], "C0o", alpha=0.6)
     axes[0].axhline(1.0, color="k", lw=0.8, ls="--")
-    axes[0].set(xlabel="Ā", ylabel="microslip weight w (0 Jenkins, 1 Mindlin)",
-                title="strength of the named effect")  # fmt: skip
+    axes[0].set(
+        xlabel="Ā",
+        ylabel="microslip weight w (0 Jenkins, 1 Mindlin)",
+        title="strength of the named effect",
+    )
     axes[1].axhline(1.0, color="k", lw=0.8, ls="--")
-    axes[1].set(xlabel="Ā", ylabel="RMS residual / noise sd",
-                title="baseline (x) and after discovery (o)")  # fmt: skip
+    axes[1].set(
+        xlabel="Ā", ylabel="RMS residual / noise sd", title="baseline (x) and after discovery (o)"
+    )
     fig.suptitle("wu2015 Eq 7 stand-in loops: discovery against the Jenkins baseline")
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -132,8 +143,10 @@ def main(argv=None) -> int:
     plot(result, out / "wu2015_discovery.png")
     print("wu2015 Eq 7 stand-in loops (NOT raw data): effects named against the Jenkins baseline")
     for Ab, s in result["by_A_bar"].items():
-        print(f"  A_bar = {float(Ab):3.1f}: {s['named']}, RMS shrink x{s['shrink_median']:.2f}, "
-              f"final RMS / noise {s['final_over_noise_median']:.2f}")  # fmt: skip
+        print(
+            f"  A_bar = {float(Ab):3.1f}: {s['named']}, RMS shrink x{s['shrink_median']:.2f}, "
+            f"final RMS / noise {s['final_over_noise_median']:.2f}"
+        )
     bad = [r for r in result["rows"] if not r["converged"]]
     if bad:
         print(f"{len(bad)} baseline fits did not converge")

@@ -27,9 +27,13 @@ TABLE3_LOADS = (3.6912, 4.9638, 6.7818, 9.5088, 12.2358, 21.3258)
 
 
 def make_model(
-    D=CALIBRATED["D"], G=CALIBRATED["G"], M=CALIBRATED["M"], mu_t=CALIBRATED["mu_t"],
-    sigma_s=CALIBRATED["sigma_s"], **kw,
-):  # fmt: skip
+    D=CALIBRATED["D"],
+    G=CALIBRATED["G"],
+    M=CALIBRATED["M"],
+    mu_t=CALIBRATED["mu_t"],
+    sigma_s=CALIBRATED["sigma_s"],
+    **kw,
+):
     """The wang2022 reticle/chuck contact with Table-3-calibrated constants (tribojax presets)."""
     pair = tj.wang2022_pair(sigma_s=sigma_s)
     kw.setdefault("tangential_load", tj.WANG2022_TANGENTIAL_LOAD_N)

@@ -14,8 +14,17 @@ import pytest
 
 import tribojax as tj
 
-P = dict(F_pos=12e3, F_neg=9e3, gap_pos=1.5e-3, gap_neg=1.8e-3, k_gap=1.2e5, A_pos=2.4e3,
-         A_neg=1.5e3, beta_pos=700.0, beta_neg=900.0)  # fmt: skip
+P = dict(
+    F_pos=12e3,
+    F_neg=9e3,
+    gap_pos=1.5e-3,
+    gap_neg=1.8e-3,
+    k_gap=1.2e5,
+    A_pos=2.4e3,
+    A_neg=1.5e3,
+    beta_pos=700.0,
+    beta_neg=900.0,
+)
 
 
 def _reference(u, p):
@@ -44,8 +53,9 @@ def _drive(n=1201, seed=0, amplitude=8e-3):
     rng = np.random.default_rng(seed)
     t = np.linspace(0.0, 6.0, n)
     ph = rng.uniform(0, 2 * np.pi, 2)
-    return t, amplitude * (np.sin(2 * np.pi * 0.5 * t + ph[0]) + 0.4 * np.sin(2 * np.pi * 2.1 * t
-                                                                             + ph[1]))  # fmt: skip
+    return t, amplitude * (
+        np.sin(2 * np.pi * 0.5 * t + ph[0]) + 0.4 * np.sin(2 * np.pi * 2.1 * t + ph[1])
+    )
 
 
 def test_element_matches_the_numpy_reference():
@@ -146,7 +156,11 @@ def test_a_record_that_starts_loaded_is_predicted_from_its_first_force():
     assert measured < 0.02 and rest > 5 * measured
     saved = tj.fitted_model(fit)
     assert tj.predict(saved, held, initial="measured").nrmse == pytest.approx(measured, rel=1e-9)
-    lugre = tj.FittedModel("history", {"sigma0": 1e6, "F_c": 1e4, "F_s": 1e4, "v_s": 0.01,
-                                       "f0": 0.0}, {}, {"element": "lugre"})  # fmt: skip
+    lugre = tj.FittedModel(
+        "history",
+        {"sigma0": 1e6, "F_c": 1e4, "F_s": 1e4, "v_s": 0.01, "f0": 0.0},
+        {},
+        {"element": "lugre"},
+    )
     with pytest.raises(ValueError, match=r"initial = 'measured' is not one of \['rest'\]"):
         tj.predict(lugre, held, initial="measured")

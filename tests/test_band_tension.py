@@ -33,8 +33,14 @@ def _record(tension_lbf, amplitude, seed, tension_known=True, cycles=2.25):
     u = amplitude * np.sin(2 * np.pi * F_HZ * t)
     noise = np.random.default_rng(seed).normal(0.0, 2.0, t.size)
     f = _stop(u, K, C_SLIP * tension_lbf * LBF) + 5.0 + noise
-    return tj.HysteresisLoop(t, u, f, frequency=F_HZ, source=f"<{tension_lbf} lb, seed {seed}>",
-                             band_tension=tension_lbf * LBF if tension_known else None)  # fmt: skip
+    return tj.HysteresisLoop(
+        t,
+        u,
+        f,
+        frequency=F_HZ,
+        source=f"<{tension_lbf} lb, seed {seed}>",
+        band_tension=tension_lbf * LBF if tension_known else None,
+    )
 
 
 def test_tension_from_both_file_name_patterns():
@@ -123,8 +129,11 @@ def test_saved_model_keeps_the_reference_and_the_cli_takes_a_tension(fit30, tmp_
 
 @pytest.mark.slow
 def test_cli_fits_several_records_together(tmp_path):
-    for name, rec in (("a", _record(30, 15e-3, 1)), ("b", _record(30, 25e-3, 2)),
-                      ("held", _record(36, 20e-3, 3))):  # fmt: skip
+    for name, rec in (
+        ("a", _record(30, 15e-3, 1)),
+        ("b", _record(30, 25e-3, 2)),
+        ("held", _record(36, 20e-3, 3)),
+    ):
         tj.write_loop(rec, tmp_path / f"{name}.csv")
     out = tmp_path / "fit"
     files = [str(tmp_path / "a.csv"), str(tmp_path / "b.csv")]

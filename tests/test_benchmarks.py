@@ -32,11 +32,27 @@ def test_summary_table_prints_entries_without_a_baseline(capsys):
     run = importlib.import_module("run")
     env = {"python": "3.11"}
     entries = [
-        dict(name="with_baseline", tribojax_s=0.5, baseline="scipy", baseline_s=1.0, ratio=2.0,
-             target=1.0, meets_target=True, environment=env),
-        dict(name="fit_slip_run_alpha_fixed", tribojax_s=2e-4, baseline=None, baseline_s=None,
-             ratio=None, target=None, meets_target=None, environment=env),
-    ]  # fmt: skip
+        dict(
+            name="with_baseline",
+            tribojax_s=0.5,
+            baseline="scipy",
+            baseline_s=1.0,
+            ratio=2.0,
+            target=1.0,
+            meets_target=True,
+            environment=env,
+        ),
+        dict(
+            name="fit_slip_run_alpha_fixed",
+            tribojax_s=2e-4,
+            baseline=None,
+            baseline_s=None,
+            ratio=None,
+            target=None,
+            meets_target=None,
+            environment=env,
+        ),
+    ]
     run.print_table(entries, 1.0)
     text = capsys.readouterr().out
     assert "fit_slip_run_alpha_fixed" in text and "200.0 us" in text and "no baseline" in text
@@ -47,8 +63,13 @@ def test_summary_table_prints_entries_without_a_baseline(capsys):
 def test_cold_start_probe_splits_a_command(tmp_path):
     cold = importlib.import_module("cold_start")
     argv = ["contact", "--D", "2.88", "--G", "4.36e-8", "--load", "5"]
-    out = subprocess.run([sys.executable, "-c", cold._PROBE, json.dumps(argv)],
-                         capture_output=True, text=True, cwd=tmp_path, timeout=300)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", cold._PROBE, json.dumps(argv)],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=300,
+    )
     split = cold._last(out, "SPLIT")
     assert split["exit"] == 0, out.stderr[-2000:]
     parts = ("import_s", "trace_s", "lower_s", "compile_s")

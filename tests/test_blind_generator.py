@@ -26,8 +26,18 @@ def test_blind_records_are_the_frozen_ones(tmp_path):
     for name, digest in values["code_sha256"].items():
         assert hashlib.sha256((BLIND / name).read_bytes()).hexdigest() == digest, f"{name} changed"
     assert len(frozen) == 2 * 45 + 1  # 29 slip runs, 16 loops (CSV + sidecar), the manifest
-    subprocess.run([sys.executable, str(BLIND / "generate.py"), "--out", str(tmp_path), "--quiet",
-                    "--only", *LABELS], check=True)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            str(BLIND / "generate.py"),
+            "--out",
+            str(tmp_path),
+            "--quiet",
+            "--only",
+            *LABELS,
+        ],
+        check=True,
+    )
     manifest = json.loads((tmp_path / "manifest.json").read_text())
     assert sorted(e["label"] for e in manifest) == sorted(LABELS)
     for entry in manifest:

@@ -63,8 +63,14 @@ def _python(code, env_extra, tmp_path):
         if k not in ("TRIBOJAX_CACHE", "TRIBOJAX_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR")
     }
     env.update(env_extra)
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
-                         cwd=tmp_path, timeout=600)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        timeout=600,
+    )
     assert out.returncode == 0, out.stderr[-3000:]
     return out
 
@@ -105,8 +111,10 @@ def test_fit_programs_are_cached_and_give_the_same_numbers(tmp_path):
 
 
 def test_cache_settings_are_respected(tmp_path):
-    show = ("c = jax.config; print(c.jax_compilation_cache_dir, "
-            "c.jax_persistent_cache_min_compile_time_secs, E.export_dir())")  # fmt: skip
+    show = (
+        "c = jax.config; print(c.jax_compilation_cache_dir, "
+        "c.jax_persistent_cache_min_compile_time_secs, E.export_dir())"
+    )
     head = "import tribojax as tj, jax, tribojax._export as E; "
     plain = f"{head}tj.FractalSurface(2.5, 1e-9, 1.0); {show}"
     opt_in = f"{head}tj.use_compilation_cache(); {show}"
@@ -116,11 +124,20 @@ def test_cache_settings_are_respected(tmp_path):
     assert _python(plain, {}, tmp_path).stdout.split() == ["None", default_min, "None"]
     assert _python(opt_in, {"TRIBOJAX_CACHE": "off"}, tmp_path).stdout.split()[0] == "None"
     chosen = _python(opt_in, {"TRIBOJAX_CACHE_DIR": str(tmp_path / "tjc")}, tmp_path)
-    assert chosen.stdout.split() == [str(tmp_path / "tjc" / "jax"), "0.0",
-                                     str(tmp_path / "tjc" / "export")]  # fmt: skip
-    users = _python(opt_in, {"JAX_COMPILATION_CACHE_DIR": str(tmp_path / "mine"),
-                             "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "5",
-                             "TRIBOJAX_CACHE_DIR": str(tmp_path / "tjc")}, tmp_path)  # fmt: skip
+    assert chosen.stdout.split() == [
+        str(tmp_path / "tjc" / "jax"),
+        "0.0",
+        str(tmp_path / "tjc" / "export"),
+    ]
+    users = _python(
+        opt_in,
+        {
+            "JAX_COMPILATION_CACHE_DIR": str(tmp_path / "mine"),
+            "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "5",
+            "TRIBOJAX_CACHE_DIR": str(tmp_path / "tjc"),
+        },
+        tmp_path,
+    )
     # the user's own JAX folder and threshold stay; tribojax's traces stay in its own folder
     assert users.stdout.split() == [str(tmp_path / "mine"), "5.0", str(tmp_path / "tjc" / "export")]
     home = _python(opt_in, {"XDG_CACHE_HOME": str(tmp_path / "xdg")}, tmp_path).stdout.split()[0]
@@ -152,8 +169,9 @@ def test_dependency_floors_are_met():
     deps = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["dependencies"]
     for dep in deps:
         spec = dep.split(";")[0].strip()
-        name, floor, ceiling = re.fullmatch(r"([A-Za-z0-9_.-]+)>=([0-9.]+)(?:,<([0-9.]+))?",
-                                            spec).groups()  # fmt: skip
+        name, floor, ceiling = re.fullmatch(
+            r"([A-Za-z0-9_.-]+)>=([0-9.]+)(?:,<([0-9.]+))?", spec
+        ).groups()
         have = tuple(int(x) for x in re.findall(r"\d+", version(name))[:3])
         need = tuple(int(x) for x in floor.split("."))
         assert have >= need, f"{name} {version(name)} is below the floor {floor}"
@@ -184,9 +202,14 @@ def test_stored_trace_key_names_everything_the_trace_depends_on():
     x = jnp.ones(3)
     base = key(x, 2.0, jnp.sin)
     assert base is not None and base == key(jnp.zeros(3), 2.0, jnp.sin)  # new data, same program
-    others = [key(x, 3.0, jnp.sin), key(x, 2, jnp.sin), key(x, 2.0, jnp.cos),
-              key(jnp.ones(4), 2.0, jnp.sin), key(jnp.ones(3, dtype=jnp.int32), 2.0, jnp.sin),
-              key(x, 2.0, jnp.sin, fn=E._write)]  # fmt: skip
+    others = [
+        key(x, 3.0, jnp.sin),
+        key(x, 2, jnp.sin),
+        key(x, 2.0, jnp.cos),
+        key(jnp.ones(4), 2.0, jnp.sin),
+        key(jnp.ones(3, dtype=jnp.int32), 2.0, jnp.sin),
+        key(x, 2.0, jnp.sin, fn=E._write),
+    ]
     assert len({base, *others}) == 7 and None not in others
     partial = [key(x, 2.0, functools.partial(jnp.clip, min=m)) for m in (0.0, 0.5, 0.0)]
     assert partial[0] == partial[2] != partial[1] and None not in partial
@@ -259,8 +282,12 @@ def test_threads_meeting_new_programs_export_and_compile_one_at_a_time(tmp_path,
     out = {}
 
     def args(n):
-        return jnp.linspace(0.0, 0.05, n), jnp.linspace(1.0, -1.0, n), jnp.asarray([200.0]), \
-            jnp.asarray([0.1])  # fmt: skip
+        return (
+            jnp.linspace(0.0, 0.05, n),
+            jnp.linspace(1.0, -1.0, n),
+            jnp.asarray([200.0]),
+            jnp.asarray([0.1]),
+        )
 
     def call(n):
         out[n] = np.asarray(oscillator(*args(n)))
@@ -277,8 +304,9 @@ def test_threads_meeting_new_programs_export_and_compile_one_at_a_time(tmp_path,
 
 
 @pytest.mark.slow
-def test_a_stored_trace_filed_under_another_key_is_traced_again_and_rewritten(tmp_path,
-                                                                              monkeypatch):
+def test_a_stored_trace_filed_under_another_key_is_traced_again_and_rewritten(
+    tmp_path, monkeypatch
+):
     import jax.numpy as jnp
     import numpy as np
 
@@ -288,8 +316,12 @@ def test_a_stored_trace_filed_under_another_key_is_traced_again_and_rewritten(tm
     monkeypatch.setattr(C, "_FOLDER", [tmp_path])  # a fresh folder of stored traces
 
     def args(n):
-        return jnp.linspace(0.0, 0.05, n), jnp.linspace(1.0, -1.0, n), jnp.asarray([200.0]), \
-            jnp.asarray([0.1])  # fmt: skip
+        return (
+            jnp.linspace(0.0, 0.05, n),
+            jnp.linspace(1.0, -1.0, n),
+            jnp.asarray([200.0]),
+            jnp.asarray([0.1]),
+        )
 
     oscillator(*args(9))
     (first,) = (tmp_path / "export").glob("*.jaxexp")
@@ -343,8 +375,17 @@ def test_a_corrupted_cache_is_repaired_by_the_next_run(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "EQX_ON_ERROR"}
     env["TRIBOJAX_CACHE_DIR"] = str(tmp_path / "c")
     code = "import sys; from tribojax._cli import entry; sys.argv[0] = 'tribojax'; entry()"
-    cmd = [sys.executable, "-c", code, "hysteresis", "--n", "4", "--out", str(tmp_path / "h"),
-           "--force"]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-c",
+        code,
+        "hysteresis",
+        "--n",
+        "4",
+        "--out",
+        str(tmp_path / "h"),
+        "--force",
+    ]
 
     def run():
         out = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)

@@ -26,8 +26,9 @@ def slip_file(tmp_path_factory):
 
 @pytest.fixture
 def loop_file(tmp_path):
-    loop = tj.synthetic_loop(tj.Mindlin(MU, N, KD), 3 * MU * N / KD, OMEGA, noise=0.004,
-                             seed=4, normal_load=N)  # fmt: skip
+    loop = tj.synthetic_loop(
+        tj.Mindlin(MU, N, KD), 3 * MU * N / KD, OMEGA, noise=0.004, seed=4, normal_load=N
+    )
     path = tmp_path / "loop.csv"
     tj.write_loop(loop, path)
     return path

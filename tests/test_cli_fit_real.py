@@ -28,8 +28,9 @@ def test_fit_epos_folder_as_one_curve(tmp_path, capsys):
     for rpm in (2, 5, 10, 20, 40, 80, 120, 160):
         for sign in (1, -1):
             mag = 25 + 8 * 2.718 ** (-((rpm / 10) ** 2)) + 0.05 * rpm + 3 * sign
-            rows = [f"{i * 51.2:.1f};{sign * rpm};{sign * mag + 0.5 * (-1) ** i:.2f}"
-                    for i in range(40)]  # fmt: skip
+            rows = [
+                f"{i * 51.2:.1f};{sign * rpm};{sign * mag + 0.5 * (-1) ** i:.2f}" for i in range(40)
+            ]
             name = f"{'n' if sign < 0 else ''}{rpm}.csv"
             (folder / name).write_text(head + "\n".join(rows) + "\n")
     out = tmp_path / "o"
@@ -45,14 +46,28 @@ def test_fit_epos_folder_as_one_curve(tmp_path, capsys):
     assert res["parameters"]["T0"] == pytest.approx(0.03 * 9.84e-3, rel=0.02)
     assert set(res["per_direction"]) == {"positive", "negative"} and "nrmse" in res
     # an explicit --max-steps is the budget (no floor overrides it): 2 LM steps do not converge
-    assert main(["fit", str(folder), "--out", str(tmp_path / "s"), "--max-steps", "2",
-                 "--model", "lugre"]) == 1  # fmt: skip
+    assert (
+        main(
+            [
+                "fit",
+                str(folder),
+                "--out",
+                str(tmp_path / "s"),
+                "--max-steps",
+                "2",
+                "--model",
+                "lugre",
+            ]
+        )
+        == 1
+    )
     assert json.loads((tmp_path / "s" / "fit.json").read_text())["converged"] is False
     # a model that does not apply to a curve, and a wrong --format, are bad input (2)
     assert main(["fit", str(folder), "--out", str(tmp_path / "p"), "--model", "jenkins"]) == 2
     assert "does not apply to a friction curve" in capsys.readouterr().err
-    assert main(["fit", str(folder / "n2.csv"), "--out", str(tmp_path / "q"),
-                 "--format", "brfd"]) == 2  # fmt: skip
+    assert (
+        main(["fit", str(folder / "n2.csv"), "--out", str(tmp_path / "q"), "--format", "brfd"]) == 2
+    )
     assert "n2.csv, line 1: not valid JSON" in capsys.readouterr().err
 
 

@@ -61,8 +61,12 @@ def test_hysteresis_out_keeps_an_earlier_result_and_never_mixes_runs(tmp_path, c
 def test_a_lock_left_by_a_dead_run_is_taken_over(tmp_path, capsys):
     out = tmp_path / "c"
     out.mkdir()
-    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
-                          capture_output=True, text=True, check=True)  # fmt: skip
+    dead = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     (out / ".r.json.lock").write_text(dead.stdout)
     assert main([*CONTACT, "--json", str(out / "r.json")]) == 0
     err = capsys.readouterr().err
@@ -115,8 +119,7 @@ def test_a_killed_run_exits_130_and_leaves_no_lock_or_output(tmp_path, sig):
             return 0
         sys.exit(run_command("fit", work, None))
     """)
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=120)  # fmt: skip
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     how = "SIGTERM" if sig == "SIGTERM" else "Ctrl-C"
     assert proc.returncode == 130, proc.stderr
     assert proc.stderr.strip() == f"tribojax fit: interrupted ({how})"
@@ -129,8 +132,9 @@ def test_the_console_script_exits_with_the_status_and_its_output_written(tmp_pat
     code = "import sys; from tribojax._cli import entry; sys.argv[0] = 'tribojax'; entry()"
 
     def run(*args):
-        return subprocess.run([sys.executable, "-c", code, *args], capture_output=True,
-                              text=True, timeout=300)  # fmt: skip
+        return subprocess.run(
+            [sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=300
+        )
 
     ok = run(*CONTACT, "--json", str(tmp_path / "r.json"))
     assert ok.returncode == 0, ok.stderr[-2000:]
@@ -144,8 +148,7 @@ def test_contact_numbers_outside_their_physical_range_are_not_a_result(tmp_path,
     # issue 33 probe: C_tau = 7.82, 0.139, -0.287, -852, 3.3e5 N s/m at these loads, exit 0
     out = tmp_path / "c.json"
     loads = ["1e2", "1e4", "1e6", "1e8", "1e12"]
-    assert main(["contact", "--D", "2.5", "--G", "1e-9", "--load", *loads,
-                 "--json", str(out)]) == 1  # fmt: skip
+    assert main(["contact", "--D", "2.5", "--G", "1e-9", "--load", *loads, "--json", str(out)]) == 1
     rows = json.loads(out.read_text())["contact"]
     err = capsys.readouterr().err
     for row in rows:
@@ -162,8 +165,9 @@ def test_contact_constants_outside_their_range_are_bad_input(capsys, flag, value
     assert f"{flag} = " in _err_line(capsys, "contact")
 
 
-@pytest.mark.parametrize("flag, value", [("--omega", "0"), ("--omega", "nan"), ("--N", "-1"),
-                                         ("--C-tau", "-1")])  # fmt: skip
+@pytest.mark.parametrize(
+    "flag, value", [("--omega", "0"), ("--omega", "nan"), ("--N", "-1"), ("--C-tau", "-1")]
+)
 def test_hysteresis_bad_numbers_are_one_line_and_exit_2(tmp_path, capsys, flag, value):
     # issue 33 probe: --omega 0 printed two JAX/equinox tracebacks and exited 1
     out = tmp_path / "h"
@@ -172,13 +176,20 @@ def test_hysteresis_bad_numbers_are_one_line_and_exit_2(tmp_path, capsys, flag, 
     assert not out.exists()
 
 
-@pytest.mark.parametrize("name, data, expect", [
-    ("u16.csv", "t_s,u_m,f_N\n0,0,0\n".encode("utf-16"), "UTF-16 text"),
-    ("nul.csv", b"\x00" * 4096, "line 1: a NUL byte"),
-    ("semi.csv", b"t_s;u_m;f_N\n0;0,1;0\n", "separated by semicolons"),
-    ("tab.csv", b"t_s\tu_m\tf_N\n0\t0\t0\n", "separated by tabs"),
-    ("long.csv", b"t_s,u_m,f_N\n" + b"1" * 200_000 + b",0,0\n", "long.csv, line 2: field larger"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "name, data, expect",
+    [
+        ("u16.csv", "t_s,u_m,f_N\n0,0,0\n".encode("utf-16"), "UTF-16 text"),
+        ("nul.csv", b"\x00" * 4096, "line 1: a NUL byte"),
+        ("semi.csv", b"t_s;u_m;f_N\n0;0,1;0\n", "separated by semicolons"),
+        ("tab.csv", b"t_s\tu_m\tf_N\n0\t0\t0\n", "separated by tabs"),
+        (
+            "long.csv",
+            b"t_s,u_m,f_N\n" + b"1" * 200_000 + b",0,0\n",
+            "long.csv, line 2: field larger",
+        ),
+    ],
+)
 def test_unreadable_files_are_named_with_the_reason(tmp_path, capsys, name, data, expect):
     # issue 33 probes: UTF-16 was called "Windows-1252 or Latin-1 text?", a zero-byte file and a
     # line over 131,072 characters gave csv's message without file or line, other separators no
@@ -229,10 +240,16 @@ def test_an_interrupt_swallowed_by_a_callback_still_ends_the_run_130(capsys, mon
 def test_a_real_ctrl_c_at_start_up(tmp_path):
     # "ready" once the console script's module is imported (its handler is installed next);
     # the interrupt then lands while the command imports JAX (~1-2 s)
-    code = ("import sys; from tribojax._cli import entry; print('ready', flush=True); "
-            "sys.argv[0] = 'tribojax'; entry()")  # fmt: skip
-    proc = subprocess.Popen([sys.executable, "-c", code, *CONTACT], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    code = (
+        "import sys; from tribojax._cli import entry; print('ready', flush=True); "
+        "sys.argv[0] = 'tribojax'; entry()"
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code, *CONTACT],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     assert proc.stdout.readline() == "ready\n"
     time.sleep(0.2)
     proc.send_signal(signal.SIGINT)

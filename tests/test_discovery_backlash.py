@@ -72,8 +72,14 @@ def record(backbone="jenkins", gap=0.0, viscous=0.0, seed=0, noise=NOISE):
     f = clearance_masing_force(u, BACKBONES[backbone], gap)
     f = f + viscous * F_S * np.cos(2 * np.pi * F_HZ * t)
     f = f + noise * np.random.default_rng(seed).standard_normal(t.size)
-    return tj.HysteresisLoop(t, u, f, frequency=F_HZ, noise_std=noise if noise else None,
-                             source=f"<{backbone} gap {gap} seed {seed}>")  # fmt: skip
+    return tj.HysteresisLoop(
+        t,
+        u,
+        f,
+        frequency=F_HZ,
+        noise_std=noise if noise else None,
+        source=f"<{backbone} gap {gap} seed {seed}>",
+    )
 
 
 def test_generator_and_model_agree():
@@ -119,10 +125,14 @@ _TANH_MISS = pytest.mark.xfail(strict=True, reason="a clearance added after the 
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("backbone", "viscous", "named"), [
-    ("jenkins", 0.0, ()), pytest.param("tanh", 0.0, ("microslip",), marks=_TANH_MISS),
-    ("jenkins", 0.06, ("viscous_damping",)),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("backbone", "viscous", "named"),
+    [
+        ("jenkins", 0.0, ()),
+        pytest.param("tanh", 0.0, ("microslip",), marks=_TANH_MISS),
+        ("jenkins", 0.06, ("viscous_damping",)),
+    ],
+)
 def test_backlash_not_named_without_it(backbone, viscous, named):
     rep = discover(loop_baseline(record(backbone, 0.0, viscous, seed=5)))
     d = rep.as_dict()

@@ -23,7 +23,7 @@ from tribojax._model._loop_force import (
     LoopSpec,
     energize,
     loop_force,
-    prepare_loop,  # fmt: skip
+    prepare_loop,
 )
 from tribojax.discovery import default_effects, discover_loop
 
@@ -53,8 +53,9 @@ def test_energize_keeps_the_slip_force_and_bends_the_stick_branch():
 
 def test_out_of_range_strengths_are_refused_with_their_value():
     t = np.linspace(0.0, 3.0, 301)
-    data = prepare_loop(tj.HysteresisLoop(t=t, u=1e-3 * np.sin(2 * np.pi * t),
-                                          f=np.cos(2 * np.pi * t)))  # fmt: skip
+    data = prepare_loop(
+        tj.HysteresisLoop(t=t, u=1e-3 * np.sin(2 * np.pi * t), f=np.cos(2 * np.pi * t))
+    )
     with pytest.raises(ValueError, match=r"energizing = 45 is outside the allowed range"):
         loop_force(LoopSpec(1.0, 1e4, energizing=45.0), data)
     with pytest.raises(ValueError, match=r"asymmetry = -1 is outside the allowed range \(-1, 1\)"):
@@ -97,8 +98,9 @@ def test_discovery_names_the_band_brake_and_its_model_predicts_another_drive():
     tt, uu = _drive(n=1201, seed=3)
     other = tj.HysteresisLoop(t=tt, u=uu, f=_reference(uu, P), periodic=False)
     found = tj.predict(rep.fitted, other).nrmse
-    jenkins = tj.discovery.discover_loop(tj.HysteresisLoop(t=t, u=u, f=f), effects=[],
-                                         max_effects=0).fitted  # fmt: skip
+    jenkins = tj.discovery.discover_loop(
+        tj.HysteresisLoop(t=t, u=u, f=f), effects=[], max_effects=0
+    ).fitted
     assert found < 0.1 and found < 0.4 * tj.predict(jenkins, other).nrmse
 
 
@@ -115,12 +117,34 @@ def test_cli_discover_takes_the_band_tension(tmp_path):
     f = _reference(u, P) + np.random.default_rng(1).normal(0.0, NOISE, t.size)
     path = tmp_path / "band.csv"
     write_loop(tj.HysteresisLoop(t=t, u=u, f=f), path)
-    assert main(["discover", str(path), "--out", str(tmp_path / "d"), "--band-tension", "30lb",
-                 "--quiet"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "discover",
+                str(path),
+                "--out",
+                str(tmp_path / "d"),
+                "--band-tension",
+                "30lb",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     data = json.loads((tmp_path / "d" / "discovery.json").read_text())
     assert {"self_energizing", "direction_asymmetry"} <= set(data["effects"])
-    assert main(["predict", str(tmp_path / "d" / "discovery.json"), str(path), "--out",
-                 str(tmp_path / "p")]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "predict",
+                str(tmp_path / "d" / "discovery.json"),
+                str(path),
+                "--out",
+                str(tmp_path / "p"),
+            ]
+        )
+        == 0
+    )
     pred = json.loads((tmp_path / "p" / "prediction.json").read_text())
     assert pred["nrmse"] < 0.05
 

@@ -39,8 +39,14 @@ class DecayBaseline(AbstractBaseline):
         return A * jnp.exp(-self.t / tau) * (1.0 + knobs[0] * jnp.sin(2 * jnp.pi * self.t))
 
     def data(self):
-        return RecordData(np.asarray(self.y), np.asarray(self.t), np.zeros(self.t.size, int),
-                             self.noise, "t (s)", "y (m)")  # fmt: skip
+        return RecordData(
+            np.asarray(self.y),
+            np.asarray(self.t),
+            np.zeros(self.t.size, int),
+            self.noise,
+            "t (s)",
+            "y (m)",
+        )
 
 
 @disc.register_effect
@@ -59,8 +65,7 @@ class Ramp(AbstractEffect):
 
     def designs(self, baseline):
         t = np.asarray(baseline.t)
-        return [EffectDesign(("slope",), ("m/s",), np.ones(1) * 0.01,
-                             basis=(0.01 * t)[:, None])]  # fmt: skip
+        return [EffectDesign(("slope",), ("m/s",), np.ones(1) * 0.01, basis=(0.01 * t)[:, None])]
 
 
 class Tone(AbstractEffect):
@@ -74,8 +79,16 @@ class Tone(AbstractEffect):
         out = []
         for f in (3.0, 5.0, 7.0):
             B = 0.01 * np.stack([np.sin(2 * np.pi * f * t), np.cos(2 * np.pi * f * t)], 1)
-            out.append(EffectDesign(("a_sin", "a_cos"), ("m", "m"), 0.01 * np.ones(2), basis=B,
-                                    nuisance={"f_Hz": f}, n_nuisance=1))  # fmt: skip
+            out.append(
+                EffectDesign(
+                    ("a_sin", "a_cos"),
+                    ("m", "m"),
+                    0.01 * np.ones(2),
+                    basis=B,
+                    nuisance={"f_Hz": f},
+                    n_nuisance=1,
+                )
+            )
         return out
 
 
@@ -116,8 +129,10 @@ def test_strength_recovered_with_uncertainty():
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("give_noise", [True, False])
 def test_clean_gives_none_and_no_regions(seed, give_noise):
-    rep = disc.discover(_record("clean", seed=seed, give_noise=give_noise),
-                        effects=[*disc.default_effects("toy"), Tone()])  # fmt: skip
+    rep = disc.discover(
+        _record("clean", seed=seed, give_noise=give_noise),
+        effects=[*disc.default_effects("toy"), Tone()],
+    )
     assert rep.effect == "none" and rep.effects == ()
     assert rep.regions == []
     assert rep.noise_estimated is (not give_noise)
@@ -208,9 +223,15 @@ def test_window_p_values_in_one_call_are_the_scalar_ones():
 
 def test_table_effects_are_one_module_with_a_named_field():
     effects = disc.wang2022_table_effects()
-    assert [e.name for e in effects] == ["position_error", "sensor_drift", "gross_sliding",
-                                         "load_coupling", "stribeck", "viscous_friction",
-                                         "position_step"]  # fmt: skip
+    assert [e.name for e in effects] == [
+        "position_error",
+        "sensor_drift",
+        "gross_sliding",
+        "load_coupling",
+        "stribeck",
+        "viscous_friction",
+        "position_step",
+    ]
     from tribojax.discovery._tables import TableKnobEffect
 
     (d,) = TableKnobEffect("position_error").designs(disc.wang2022_table_baseline())
@@ -227,16 +248,24 @@ def test_each_friction_law_effect_is_one_module_for_every_record_kind():
 
     lists = {k: disc.default_effects(k) for k in ("slip", "curve", "loop")}
     lists["wang2022_table"] = disc.wang2022_table_effects()
-    found = {(type(e).__name__, k, e.name) for k, es in lists.items() for e in es
-             if isinstance(e, (LoadDependence, Stribeck, Viscous))}  # fmt: skip
+    found = {
+        (type(e).__name__, k, e.name)
+        for k, es in lists.items()
+        for e in es
+        if isinstance(e, (LoadDependence, Stribeck, Viscous))
+    }
     assert found == {
-        ("Stribeck", "slip", "stribeck"), ("Stribeck", "curve", "stribeck"),
+        ("Stribeck", "slip", "stribeck"),
+        ("Stribeck", "curve", "stribeck"),
         ("Stribeck", "wang2022_table", "stribeck"),
-        ("Viscous", "slip", "viscous_friction"), ("Viscous", "loop", "viscous_damping"),
-        ("Viscous", "curve", "viscous"), ("Viscous", "wang2022_table", "viscous_friction"),
-        ("LoadDependence", "slip", "load_coupling"), ("LoadDependence", "wang2022_table",
-                                                      "load_coupling"),
-        ("LoadDependence", "loop", "normal_load_variation")}  # fmt: skip
+        ("Viscous", "slip", "viscous_friction"),
+        ("Viscous", "loop", "viscous_damping"),
+        ("Viscous", "curve", "viscous"),
+        ("Viscous", "wang2022_table", "viscous_friction"),
+        ("LoadDependence", "slip", "load_coupling"),
+        ("LoadDependence", "wang2022_table", "load_coupling"),
+        ("LoadDependence", "loop", "normal_load_variation"),
+    }
     assert all(e.kind == k for k, es in lists.items() for e in es)
     # the same physics in two kinds: the table's Stribeck is the slip run's on the same v_s grid,
     # its strength in units of 0.1 and v_s held (one nuisance counted)
@@ -254,8 +283,15 @@ def test_band_brake_effects_are_one_module_registered_as_instances():
     from tribojax._model._effects_loop import BandBrakeEffect
 
     loop = [e.name for e in disc.default_effects("loop")]
-    assert loop == ["microslip", "viscous_damping", "normal_load_variation", "backlash",
-                    "self_energizing", "direction_asymmetry", "force_offset"]  # fmt: skip
+    assert loop == [
+        "microslip",
+        "viscous_damping",
+        "normal_load_variation",
+        "backlash",
+        "self_energizing",
+        "direction_asymmetry",
+        "force_offset",
+    ]
     energizing = disc.default_effects("loop")[4]
     assert energizing == BandBrakeEffect("self_energizing")
     assert "capstan" in energizing.description
@@ -301,8 +337,12 @@ def test_fit_shares_one_compiled_solve_across_effects():
     y = np.asarray(base.y)
     st = fit_model(base, (), base.start(), y, 0.005)
     before, sizes = size(), []
-    for designs in ([Ramp().designs(base)[0]], [Bump().designs(base)[0], Tone().designs(base)[1]],
-                    [Tone().designs(base)[0]], [Ramp().designs(base)[0], Bump().designs(base)[0]]):
+    for designs in (
+        [Ramp().designs(base)[0]],
+        [Bump().designs(base)[0], Tone().designs(base)[1]],
+        [Tone().designs(base)[0]],
+        [Ramp().designs(base)[0], Bump().designs(base)[0]],
+    ):
         th = np.concatenate([st.theta, np.zeros(sum(d.k for d in designs))])
         fit = fit_model(base, tuple(designs), th, y, 0.005)
         assert fit.converged and fit.theta.size == 2 + sum(d.k for d in designs)
@@ -314,20 +354,29 @@ def test_fit_shares_one_compiled_solve_across_effects():
 def test_undetermined_parameter_gives_infinite_not_nan_std_error():
     # a parameter along an undetermined direction has infinite variance; the physical standard
     # errors of the others stayed NaN (0·inf in T·cov·Tᵀ) before
-    from tribojax._fit._engine import fit_statistics
+    from tribojax._fit._result import fit_statistics
     from tribojax._results import RESULTS
 
     rng = np.random.default_rng(3)
     J = np.stack([rng.standard_normal(50), np.zeros(50)], axis=1)  # tau undetermined
     r = rng.standard_normal(50)
     theta = np.array([0.3, -1.0])
-    st = fit_statistics(theta, r, J, names=("A", "tau"), transform=jnp.exp, sigma_known=False,
-                        result=RESULTS.successful, steps=1)
+    st = fit_statistics(
+        theta,
+        r,
+        J,
+        names=("A", "tau"),
+        transform=jnp.exp,
+        sigma_known=False,
+        result=RESULTS.successful,
+        steps=1,
+    )
     A, tau = st.std_errors
     assert tau == np.inf and st.theta_covariance[1, 1] == np.inf
     want = np.exp(0.3) * np.sqrt(st.theta_covariance[0, 0])
     assert np.isfinite(A) and A == pytest.approx(want)
     assert st.theta_covariance[0, 0] == pytest.approx((r @ r / 48) / (J[:, 0] @ J[:, 0]))
+
 
 def test_a_refit_behind_a_candidate_at_the_noise_has_a_step_budget(monkeypatch):
     # `_refit` with `target` (the cost of a candidate that reached the noise): each start gets

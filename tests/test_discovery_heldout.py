@@ -46,8 +46,9 @@ def test_loop_folds_are_alternate_cycles():
 
 def test_curve_folds_alternate_in_velocity():
     v = np.array([-3.0, 2.0, -1.0, 1.0, 0.5, 3.0, -0.2, 2.5])
-    curve = tj.FrictionCurve(v, np.sign(v) * (1 + 0.1 * np.abs(v)), np.full(8, 0.01),
-                             np.zeros(8), np.full(8, 10.0))  # fmt: skip
+    curve = tj.FrictionCurve(
+        v, np.sign(v) * (1 + 0.1 * np.abs(v)), np.full(8, 0.01), np.zeros(8), np.full(8, 10.0)
+    )
     base = disc.curve_baseline(curve)
     folds = np.asarray(base.folds())
     assert folds.size == np.asarray(base.v).size
@@ -81,8 +82,9 @@ def test_heldout_residual_of_the_right_model_is_the_noise():
     fit = disc.discover(base)
     assert fit.effects == ("ramp",)
     r_base = heldout_residual(base, (), base.start(), None, scale)
-    r_ramp = heldout_residual(base, tuple(ramp), np.concatenate([base.start(), [0.0]]), None,
-                              scale, ("ramp",))  # fmt: skip
+    r_ramp = heldout_residual(
+        base, tuple(ramp), np.concatenate([base.start(), [0.0]]), None, scale, ("ramp",)
+    )
     assert np.std(r_ramp) == pytest.approx(0.005, rel=0.15)
     assert np.std(r_base) > 3 * 0.005
     rep = fit.as_dict()

@@ -82,15 +82,20 @@ def test_effects_vanish_at_their_null_and_are_differentiable():
     batch = jnp.stack([knobs, 0.5 * knobs, -knobs])
     vm = jax.vmap(lambda kn: flat(jnp.concatenate([theta, kn])))(batch)
     for row, kn in zip(vm, batch):
-        np.testing.assert_allclose(np.asarray(row), np.asarray(flat(jnp.concatenate([theta, kn]))),
-                                   rtol=0, atol=1e-13 * MUN)  # fmt: skip
+        np.testing.assert_allclose(
+            np.asarray(row),
+            np.asarray(flat(jnp.concatenate([theta, kn]))),
+            rtol=0,
+            atol=1e-13 * MUN,
+        )
     y = base.record.f
 
     def loss(x):
         return 0.5 * jnp.sum((flat(x) - y) ** 2)
 
-    np.testing.assert_allclose(np.asarray(jax.grad(loss)(x)), np.asarray(J.T @ (flat(x) - y)),
-                               rtol=1e-9, atol=0)  # fmt: skip
+    np.testing.assert_allclose(
+        np.asarray(jax.grad(loss)(x)), np.asarray(J.T @ (flat(x) - y)), rtol=1e-9, atol=0
+    )
 
 
 def test_model_drops_the_mindlin_bank_only_while_w_is_held_at_zero():
@@ -110,8 +115,7 @@ def test_model_drops_the_mindlin_bank_only_while_w_is_held_at_zero():
     x = jnp.concatenate([theta, knobs])
     out = [jax.jit(jax.jacfwd(lambda z, b=b: b.predict(z[:2], z[2:])))(x) for b in (base, lean)]
     value = [jax.jit(lambda z, b=b: b.predict(z[:2], z[2:]))(x) for b in (base, lean)]
-    np.testing.assert_allclose(np.asarray(value[1]), np.asarray(value[0]), rtol=0,
-                               atol=1e-12 * MUN)  # fmt: skip
+    np.testing.assert_allclose(np.asarray(value[1]), np.asarray(value[0]), rtol=0, atol=1e-12 * MUN)
     J_full, J_lean = (np.delete(np.asarray(J), 2, axis=1) for J in out)  # all but ∂/∂w
     np.testing.assert_allclose(J_lean, J_full, rtol=0, atol=1e-12 * np.max(np.abs(J_full)))
     assert np.max(np.abs(np.asarray(out[0])[:, 2])) > 0  # the bank's own column: w is seen
@@ -386,8 +390,18 @@ def test_microslip_shape_is_fitted_for_uniformly_spread_slip_limits(tmp_path):
 
     blind = Path(__file__).resolve().parents[1] / "benchmarks" / "blind"
     label = "loop/microslip+viscous_damping/sine3/muN120N/s5013"
-    subprocess.run([sys.executable, str(blind / "generate.py"), "--out", str(tmp_path), "--quiet",
-                    "--only", label], check=True)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            str(blind / "generate.py"),
+            "--out",
+            str(tmp_path),
+            "--quiet",
+            "--only",
+            label,
+        ],
+        check=True,
+    )
     (entry,) = json.loads((tmp_path / "manifest.json").read_text())
     rep = disc.discover(disc.loop_baseline(tj.read_record(tmp_path / entry["file"])))
     assert rep.effects == ("microslip", "viscous_damping") and rep.verdict == "explained"

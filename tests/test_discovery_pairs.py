@@ -23,8 +23,18 @@ LABEL = "loop/normal_load_variation+backlash/sine/muN400N/s5014"
 
 @pytest.mark.slow
 def test_a_load_variation_and_a_clearance_are_named_together(tmp_path):
-    subprocess.run([sys.executable, str(BLIND / "generate.py"), "--out", str(tmp_path), "--quiet",
-                    "--only", LABEL], check=True)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            str(BLIND / "generate.py"),
+            "--out",
+            str(tmp_path),
+            "--quiet",
+            "--only",
+            LABEL,
+        ],
+        check=True,
+    )
     (entry,) = json.loads((tmp_path / "manifest.json").read_text())
     truth = entry["params"]["effects"]
     rep = disc.discover(disc.loop_baseline(tj.read_record(tmp_path / entry["file"])))

@@ -23,14 +23,20 @@ NOISE = RNG.normal(size=N)  # white residual: AR(1) ρ ≈ 0, the ΔBIC uninflat
 
 
 def _design(k):
-    return EffectDesign(tuple(f"s{i}" for i in range(k)), ("m",) * k, np.ones(k),
-                        basis=np.zeros((N, k)))  # fmt: skip
+    return EffectDesign(
+        tuple(f"s{i}" for i in range(k)), ("m",) * k, np.ones(k), basis=np.zeros((N, k))
+    )
 
 
 def _fit(rss, theta_b, k, converged=True):
     r = NOISE * np.sqrt(rss / N)
-    return types.SimpleNamespace(converged=converged, rss=rss, message="",
-                                 theta=np.concatenate([theta_b, np.zeros(k)]), prediction=-r)
+    return types.SimpleNamespace(
+        converged=converged,
+        rss=rss,
+        message="",
+        theta=np.concatenate([theta_b, np.zeros(k)]),
+        prediction=-r,
+    )
 
 
 class _Run:
@@ -68,12 +74,15 @@ def round_(monkeypatch):
     def go(again_rss, big_k=7):
         nonlocal small_again
         small_again = again_rss
-        cands = [Candidate("small", 50.0, 1, 1e-10, 1, _design(1), [], True),
-                 Candidate("big", 40.0, big_k, 1e-8, 1, _design(big_k), [], True)]  # fmt: skip
+        cands = [
+            Candidate("small", 50.0, 1, 1e-10, 1, _design(1), [], True),
+            Candidate("big", 40.0, big_k, 1e-8, 1, _design(big_k), [], True),
+        ]
         ranking = types.SimpleNamespace(candidates=cands, residual=None, cache=None)
         state = types.SimpleNamespace(rss=10.0 * N, theta=np.zeros(1), designs=(), effects=())
-        accepted = R.refit_round(_Run(), state, ranking, 4, -10.0,
-                                 {"small": effect, "big": effect}, False)  # fmt: skip
+        accepted = R.refit_round(
+            _Run(), state, ranking, 4, -10.0, {"small": effect, "big": effect}, False
+        )
         return accepted, state, cands[0], from_big
 
     return go
@@ -184,16 +193,23 @@ def _refit_with(monkeypatch, gn_rss, gn_converged=True, target=None):
     def fit_model(baseline, designs, x0, y, scale, names, max_steps, ceiling, abandon_above):
         calls.append((float(x0[-1]), ceiling, abandon_above, max_steps))
         first = len(calls) == 1
-        return types.SimpleNamespace(converged=gn_converged or not first, steps=5, theta=x0,
-                                     rss=gn_rss if first else 1.1 * N, message="")  # fmt: skip
+        return types.SimpleNamespace(
+            converged=gn_converged or not first,
+            steps=5,
+            theta=x0,
+            rss=gn_rss if first else 1.1 * N,
+            message="",
+        )
 
     monkeypatch.setattr(R, "fit_model", fit_model)
     monkeypatch.setattr(R, "_columns", lambda baseline, state, design, cache: np.ones((N, 1)))
-    state = types.SimpleNamespace(theta=np.zeros(1), jacobian=RNG.normal(size=(N, 1)),
-                                  rss=10.0 * N, designs=(), effects=())  # fmt: skip
+    state = types.SimpleNamespace(
+        theta=np.zeros(1), jacobian=RNG.normal(size=(N, 1)), rss=10.0 * N, designs=(), effects=()
+    )
     design = types.SimpleNamespace(k=1, starts=((10.0,), (100.0,)))
-    fit = R._refit(None, state, design, "x", np.zeros(N), 1.0, NOISE, None, target=target,
-                   floor=1.1 * N)  # fmt: skip
+    fit = R._refit(
+        None, state, design, "x", np.zeros(N), 1.0, NOISE, None, target=target, floor=1.1 * N
+    )
     return fit, sorted(calls[1:], key=repr), calls[0]
 
 
@@ -234,4 +250,5 @@ def test_noise_floor_is_one_spread_above_the_noise():
     assert R._noise_floor(run, state, _design(2)) == pytest.approx(4.0 * (m + np.sqrt(2 * m)))
     run.noise.rho = 0.5  # AR(1): the sum of squares spreads by √((1 + ρ²)/(1 − ρ²))
     assert R._noise_floor(run, state, _design(2)) == pytest.approx(
-        4.0 * (m + np.sqrt(2 * m * 1.25 / 0.75)))
+        4.0 * (m + np.sqrt(2 * m * 1.25 / 0.75))
+    )

@@ -82,8 +82,9 @@ def test_independent_generator_matches_the_library_slip_model():
     F, K, C = dr.table3(0.6)
     tk, ak = dr.drive_knots("paper", F)
     prof = tj.PiecewiseLinearProfile(tk, ak)
-    ref = np.asarray(tj.simulate_slip(tj.PreSlipLuGre(F, K, C), prof, dr.MASS, ts=T,
-                                      t_end=2.3).slip)  # fmt: skip
+    ref = np.asarray(
+        tj.simulate_slip(tj.PreSlipLuGre(F, K, C), prof, dr.MASS, ts=T, t_end=2.3).slip
+    )
     # LSODA (rtol 1e-9, exact sign) vs Rodas4 (rtol 1e-6, smooth sign); the low noise is 1e-3 of it
     assert np.max(np.abs(rec.slip - ref)) < 2e-4 * np.max(np.abs(ref))
     assert np.max(np.abs(ref)) > 20e-9  # m: m·a_max/F_s = 0.66 at 0.6 kPa
@@ -159,8 +160,9 @@ def test_drift_degrees_resolve_a_wandering_drift():
 
     from tribojax._model import _effects_slip as _slip
 
-    run = tj.SlipRun(t=T, accel=np.sin(2 * np.pi * T / 2.3), slip=np.zeros(N), mass=0.3,
-                     noise_std=1e-10)  # fmt: skip
+    run = tj.SlipRun(
+        t=T, accel=np.sin(2 * np.pi * T / 2.3), slip=np.zeros(N), mass=0.3, noise_std=1e-10
+    )
     designs = _slip.SensorDrift().designs(tj.discovery.slip_baseline(run, start=[1.0, 1e7, 500.0]))
     assert [d.k for d in designs] == [4, 7, 10]
     assert _slip.SensorDrift.refit_starts == len(designs)

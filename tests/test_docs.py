@@ -87,8 +87,12 @@ def _mkdocs(config: Path, site: Path):
     env = dict(os.environ, NO_MKDOCS_2_WARNING="1")
     return subprocess.run(
         [sys.executable, "-m", "mkdocs", "build", "--strict", "-f", str(config), "-d", str(site)],
-        cwd=config.parent, env=env, capture_output=True, text=True, timeout=900,
-    )  # fmt: skip
+        cwd=config.parent,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
 
 
 def test_strict_build_fails_on_a_broken_link(tmp_path):
@@ -116,8 +120,11 @@ def site(tmp_path_factory):
 def test_site_builds_strict(site, request):
     out, run, _ = site
     assert run.returncode == 0, f"mkdocs build --strict failed:\n{run.stderr[-6000:]}"
-    selected = {i.callspec.params["path"] for i in request.session.items
-                if i.originalname == "test_notebook_runs"}  # fmt: skip
+    selected = {
+        i.callspec.params["path"]
+        for i in request.session.items
+        if i.originalname == "test_notebook_runs"
+    }
     if selected == set(NOTEBOOKS):
         # this file is one unit of work (tests/conftest.py): the notebooks ran in this process,
         # before the build, which reuses their staged copies
@@ -182,11 +189,21 @@ def _png_heights(html: str) -> list[int]:
 
 def _screenshot(html: Path, png: Path, height: int) -> np.ndarray:
     subprocess.run(
-        [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
-         "--force-device-scale-factor=1", f"--window-size={WIDTH},{height}",
-         f"--screenshot={png}", html.as_uri()],
-        check=True, capture_output=True, timeout=120,
-    )  # fmt: skip
+        [
+            CHROMIUM,
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--hide-scrollbars",
+            "--force-device-scale-factor=1",
+            f"--window-size={WIDTH},{height}",
+            f"--screenshot={png}",
+            html.as_uri(),
+        ],
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
     return np.asarray(Image.open(png).convert("RGB"), dtype=float)
 
 
@@ -202,8 +219,9 @@ def _blocks(ink_rows: np.ndarray, gap: int = 8) -> list[tuple[int, int]]:
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(CHROMIUM is None, reason="headless Chromium not installed (apt-get install "
-                    "chromium)")  # fmt: skip
+@pytest.mark.skipif(
+    CHROMIUM is None, reason="headless Chromium not installed (apt-get install chromium)"
+)
 def test_pages_render_their_figures_in_chromium(site, tmp_path):
     out, run, _ = site
     assert run.returncode == 0

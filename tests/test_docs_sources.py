@@ -40,8 +40,11 @@ def _problems(code: str, where: str) -> list[str]:
     out = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            out += [f"{where}: no module {a.name}" for a in node.names
-                    if importlib.util.find_spec(a.name.split(".")[0]) is None]  # fmt: skip
+            out += [
+                f"{where}: no module {a.name}"
+                for a in node.names
+                if importlib.util.find_spec(a.name.split(".")[0]) is None
+            ]
         elif isinstance(node, ast.ImportFrom) and node.level == 0:
             try:
                 module = importlib.import_module(node.module)
@@ -54,8 +57,12 @@ def _problems(code: str, where: str) -> list[str]:
                         importlib.import_module(f"{node.module}.{a.name}")
                     except ImportError:
                         out.append(f"{where}: {node.module} has no {a.name}")
-        elif (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
-              and node.value.id == "tj" and node.attr not in tj.__all__):  # fmt: skip
+        elif (
+            isinstance(node, ast.Attribute)
+            and isinstance(node.value, ast.Name)
+            and node.value.id == "tj"
+            and node.attr not in tj.__all__
+        ):
             out.append(f"{where}: tj.{node.attr} is not a public name")
     return out
 

@@ -14,6 +14,7 @@ def _solve_programs() -> int:
 
     return len(_engine._solve_jit.programs) + _engine._solve_jit.jitted.jitted._cached._cache_size()
 
+
 def test_power_law_fit_matches_ols_and_recovers_truth():
     # y = A x^b with 2 % multiplicative noise (seed 7); in logs this is linear least squares,
     # so the LM optimum and its standard errors must equal the closed-form OLS ones.
@@ -64,8 +65,9 @@ def test_a_determined_parameter_keeps_a_finite_error_beside_an_undetermined_pair
         y = jnp.array([0.3, -1.1, 0.7, 2.9, -0.4])
         return 1.7 * x * (theta[0] + theta[1] - 1.0) + y * (theta[2] - 2.0)
 
-    fit = tj.least_squares_fit(residuals, jnp.array([0.3, 0.1, 0.0]), names=("a", "b", "c"),
-                               sigma_known=True)
+    fit = tj.least_squares_fit(
+        residuals, jnp.array([0.3, 0.1, 0.0]), names=("a", "b", "c"), sigma_known=True
+    )
     assert np.isinf(fit.std_errors[0]) and np.isinf(fit.std_errors[1])
     assert np.isfinite(fit.std_errors[2]) and fit.std_errors[2] > 0.0
 
@@ -74,8 +76,9 @@ def test_non_convergence_is_reported():
     def residuals(theta, args):
         return jnp.array([jnp.exp(theta[0]) - 1e6, theta[0] * 1e-3])
 
-    fit = tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=2,
-                               throw=False)  # fmt: skip
+    fit = tj.least_squares_fit(
+        residuals, jnp.array([-50.0]), names=("a",), max_steps=2, throw=False
+    )
     assert not fit.converged and fit.message
 
 
@@ -91,8 +94,9 @@ def _power_law_data():
 
 
 def test_fit_reports_a_results_member():
-    fit = tj.least_squares_fit(_power_law_residuals, jnp.zeros(2), _power_law_data(),
-                               names=("a", "b"))  # fmt: skip
+    fit = tj.least_squares_fit(
+        _power_law_residuals, jnp.zeros(2), _power_law_data(), names=("a", "b")
+    )
     assert isinstance(fit.result, tj.RESULTS) and fit.result == tj.RESULTS.successful
     assert fit.converged and fit.message == tj.RESULTS[tj.RESULTS.successful] == ""
     assert fit.as_dict()["result"] == "successful" and fit.as_dict()["converged"] is True
@@ -102,8 +106,9 @@ def test_a_fit_stopped_by_max_steps_says_so():
     def residuals(theta, args):
         return jnp.array([jnp.exp(theta[0]) - 1e6, theta[0] * 1e-3])
 
-    fit = tj.least_squares_fit(residuals, jnp.array([-50.0]), names=("a",), max_steps=1,
-                               throw=False)  # fmt: skip
+    fit = tj.least_squares_fit(
+        residuals, jnp.array([-50.0]), names=("a",), max_steps=1, throw=False
+    )
     assert fit.result == tj.RESULTS.nonlinear_max_steps_reached and not fit.converged
     assert "maximum number of steps" in fit.message and "max_steps = 1" in fit.message
     assert fit.as_dict()["result"] == "nonlinear_max_steps_reached"
@@ -128,9 +133,16 @@ def test_a_failed_model_evaluation_is_reported():
 
 
 def test_fit_result_status_fields_stay_consistent():
-    kw = dict(names=("a",), values=np.ones(1), std_errors=np.ones(1), covariance=np.eye(1),
-              correlation=np.eye(1), theta=np.zeros(1), residuals=np.zeros(3),
-              singular_values=np.ones(1))  # fmt: skip
+    kw = dict(
+        names=("a",),
+        values=np.ones(1),
+        std_errors=np.ones(1),
+        covariance=np.eye(1),
+        correlation=np.eye(1),
+        theta=np.zeros(1),
+        residuals=np.zeros(3),
+        singular_values=np.ones(1),
+    )
     old = tj.FitResult(**kw, converged=False, steps=3, message="stopped")
     assert old.result == tj.RESULTS.not_converged and old.message == "stopped"
     ok = tj.FitResult(**kw, result=tj.RESULTS.successful)
@@ -159,11 +171,17 @@ def test_noise_floor_lm_stops_on_the_statistical_rule():
         return (theta[0] * jnp.exp(theta[1] * x) - y) / 0.01 + jitter
 
     lines = []
-    fit = tj.least_squares_fit(residuals, jnp.array([1.0, 0.0]), (x, y), names=("A", "b"),
-                               sigma_known=True, max_steps=50, jac="fwd",
-                               solver=LevenbergMarquardt.noise_floor(0.0, 0.0, max_rejections=100,
-                                                                     report=True),
-                               progress=lines.append)  # fmt: skip
+    fit = tj.least_squares_fit(
+        residuals,
+        jnp.array([1.0, 0.0]),
+        (x, y),
+        names=("A", "b"),
+        sigma_known=True,
+        max_steps=50,
+        jac="fwd",
+        solver=LevenbergMarquardt.noise_floor(0.0, 0.0, max_rejections=100, report=True),
+        progress=lines.append,
+    )
     assert fit.result == tj.RESULTS.successful and fit.steps < 50
     assert float(jnp.max(jnp.abs(gauss_newton_step(fit.residuals, fit.jacobian)))) < 0.05
     assert np.all(np.abs(fit.values - [2.0, -1.5]) < 3 * fit.std_errors)
@@ -210,16 +228,21 @@ def test_step_budget_is_a_run_time_value_of_one_compiled_solve():
 
     solver = LevenbergMarquardt(1e-10, 1e-12)
     y0 = jnp.array([-1.2, 1.0])
-    fits = {k: tj.least_squares_fit(_rosenbrock, y0, names=("a", "b"), solver=solver,
-                                    max_steps=k, jac="fwd", throw=False)
-            for k in (3, 100)}  # fmt: skip
+    fits = {
+        k: tj.least_squares_fit(
+            _rosenbrock, y0, names=("a", "b"), solver=solver, max_steps=k, jac="fwd", throw=False
+        )
+        for k in (3, 100)
+    }
+
     def programs():
         return _solve_programs()
 
     before = programs()
     for k, fit in fits.items():
-        ref = optx.least_squares(_rosenbrock, solver, y0, options=dict(jac="fwd"), max_steps=k,
-                                 throw=False)  # fmt: skip
+        ref = optx.least_squares(
+            _rosenbrock, solver, y0, options=dict(jac="fwd"), max_steps=k, throw=False
+        )
         assert np.array_equal(fit.theta, np.asarray(ref.value)), k
         assert fit.steps == int(ref.stats["num_steps"])
         ran_out = bool(ref.result == optx.RESULTS.nonlinear_max_steps_reached)
@@ -246,12 +269,21 @@ def test_a_start_above_the_bar_after_its_probe_steps_is_abandoned():
     y0 = jnp.array([-1.2, 1.0])
 
     def fit(bar):
-        return tj.least_squares_fit(_rosenbrock, y0, names=("a", "b"), solver=solver,
-                                    max_steps=100, jac="fwd", bar=bar, throw=False)  # fmt: skip
+        return tj.least_squares_fit(
+            _rosenbrock,
+            y0,
+            names=("a", "b"),
+            solver=solver,
+            max_steps=100,
+            jac="fwd",
+            bar=bar,
+            throw=False,
+        )
 
     free = fit(None)
-    three = tj.least_squares_fit(_rosenbrock, y0, names=("a", "b"), solver=solver, max_steps=3,
-                                 jac="fwd", throw=False)  # fmt: skip
+    three = tj.least_squares_fit(
+        _rosenbrock, y0, names=("a", "b"), solver=solver, max_steps=3, jac="fwd", throw=False
+    )
     cost3 = float(three.residuals @ three.residuals)
     before = _solve_programs()
     cut = fit((3, 0.5 * cost3))
@@ -265,8 +297,9 @@ def test_a_start_above_the_bar_after_its_probe_steps_is_abandoned():
 def _valley(th, args):
     # Rosenbrock's valley of width 1/A with its second row repeated 5,000 times (a record's
     # many samples: a step's promised gain stays above the residual variance while it crawls)
-    return jnp.concatenate([jnp.stack([args[0] * (th[1] - th[0] ** 2)]),
-                            (1.0 - th[0]) * jnp.ones(5000)])  # fmt: skip
+    return jnp.concatenate(
+        [jnp.stack([args[0] * (th[1] - th[0] ** 2)]), (1.0 - th[0]) * jnp.ones(5000)]
+    )
 
 
 def test_a_solve_that_crawls_far_from_a_minimum_is_stopped():
@@ -278,13 +311,22 @@ def test_a_solve_that_crawls_far_from_a_minimum_is_stopped():
     # the same iterates; f = 0 is off
     from tribojax._fit._solver import CRAWL_STEPS, LevenbergMarquardt
 
-    solver = LevenbergMarquardt.record(1e-8, 1e-10, gain_tol=1e-2, noise_tol=1.0,
-                                       max_rejections=12, padded=0)  # fmt: skip
+    solver = LevenbergMarquardt.record(
+        1e-8, 1e-10, gain_tol=1e-2, noise_tol=1.0, max_rejections=12, padded=0
+    )
 
     def fit(a, y0, crawl, max_steps=128):
-        return tj.least_squares_fit(_valley, jnp.array(y0), args=(jnp.asarray(a),),
-                                    names=("a", "b"), solver=solver, max_steps=max_steps,
-                                    jac="fwd", crawl=crawl, throw=False)  # fmt: skip
+        return tj.least_squares_fit(
+            _valley,
+            jnp.array(y0),
+            args=(jnp.asarray(a),),
+            names=("a", "b"),
+            solver=solver,
+            max_steps=max_steps,
+            jac="fwd",
+            crawl=crawl,
+            throw=False,
+        )
 
     def cost(f):
         return float(f.residuals @ f.residuals)

@@ -66,8 +66,9 @@ def test_constant_velocity_step_is_exact():
     el = tj.LuGre(50.0, 0.0, 0.0, 2.0, 3.0, 0.5, 1.0, 2.0)
     for v in (0.3, -1.2):
         g = 2.0 + np.exp(-((v / 0.5) ** 2))
-        sol = solve_ivp(lambda t, z: [v - abs(v) * 50.0 * z[0] / g], (0, 0.2), [0.01],
-                        rtol=1e-12, atol=1e-15)  # fmt: skip
+        sol = solve_ivp(
+            lambda t, z: [v - abs(v) * 50.0 * z[0] / g], (0, 0.2), [0.01], rtol=1e-12, atol=1e-15
+        )
         assert float(el.constant_velocity_step(0.01, v, 0.2)) == pytest.approx(
             sol.y[0, -1], rel=1e-9
         )

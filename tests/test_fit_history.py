@@ -20,16 +20,20 @@ def _ramped_sine(n=3000, fs=1024.0, A=0.02, f=1.0):
     return t, A * ramp * np.sin(2 * np.pi * f * t)
 
 
-def _numpy_jenkins(F=8.0e3, K=3.0e6, f0=500.0, noise=50.0, seed=15, noise_std=None,
-                   frequency=1.0):  # fmt: skip
+def _numpy_jenkins(F=8.0e3, K=3.0e6, f0=500.0, noise=50.0, seed=15, noise_std=None, frequency=1.0):
     t, u = _ramped_sine()
     z, force = 0.0, np.zeros_like(u)
     for i in range(1, len(u)):  # elastic predictor, return to the slip limit: no tribojax code
         z = min(max(z + u[i] - u[i - 1], -F / K), F / K)
         force[i] = K * z
     rng = np.random.default_rng(seed)
-    return tj.HysteresisLoop(t, u, force + f0 + noise * rng.standard_normal(len(u)),
-                             noise_std=noise_std, frequency=frequency)  # fmt: skip
+    return tj.HysteresisLoop(
+        t,
+        u,
+        force + f0 + noise * rng.standard_normal(len(u)),
+        noise_std=noise_std,
+        frequency=frequency,
+    )
 
 
 def test_jenkins_recovered_from_numpy_stepping():
@@ -42,12 +46,15 @@ def test_jenkins_recovered_from_numpy_stepping():
     assert h.nrmse == pytest.approx(50.0 / np.std(loop.f), rel=0.1)
 
 
-@pytest.mark.parametrize("stated, chi2, consistent", [
-    (50.0, 1.0, True),  # the noise the record states is its noise
-    (50.0 / 4.8, 4.8**2, False),  # a residual 4.8x the stated noise: contradicted
-    (50.0 * 5, 1 / 25, False),  # 5x below it: an overstated noise (errors 5x too large)
-    (None, 1.0, True),  # none stated: the first-difference estimate of the residual
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "stated, chi2, consistent",
+    [
+        (50.0, 1.0, True),  # the noise the record states is its noise
+        (50.0 / 4.8, 4.8**2, False),  # a residual 4.8x the stated noise: contradicted
+        (50.0 * 5, 1 / 25, False),  # 5x below it: an overstated noise (errors 5x too large)
+        (None, 1.0, True),  # none stated: the first-difference estimate of the residual
+    ],
+)
 def test_a_history_fit_judges_its_residual_by_the_one_noise_rule(stated, chi2, consistent):
     # issue 72 row 7: the history route reported reduced chi2 = NRMSE² (~4e-4 here) whatever the
     # record stated, and noise_consistent null

@@ -105,8 +105,9 @@ def test_student_t_residuals_square_to_the_likelihood_and_invert(nu):
     want = -2 * (np.sum(dist.logpdf(r2 / s)) - np.sum(dist.logpdf(r / s)))
     assert np.sum(psi2**2) - np.sum(psi**2) == pytest.approx(want, rel=1e-12)
     assert np.all(np.sign(psi) == np.sign(r))
-    np.testing.assert_allclose(st.student_t_residuals_inverse(psi, s, inv_nu), r, rtol=1e-12,
-                               atol=1e-300)  # fmt: skip
+    np.testing.assert_allclose(
+        st.student_t_residuals_inverse(psi, s, inv_nu), r, rtol=1e-12, atol=1e-300
+    )
     # smooth through r = 0: the derivative there is √((ν+1)/ν)/s, and agrees with differences
     d = jax.grad(lambda x: st.student_t_residuals(x, s, inv_nu))
     assert float(d(0.0)) == pytest.approx(math.sqrt(1 + inv_nu) / s, rel=1e-12)
@@ -120,9 +121,12 @@ def test_student_t_residuals_square_to_the_likelihood_and_invert(nu):
 def test_t_scale_maximises_the_likelihood_over_the_scale(nu):
     r = np.random.default_rng(4).standard_t(3, 40) * 0.1
     s = st.t_scale(r, nu)
-    ref = optimize.minimize_scalar(lambda ls: -st.student_t_loglik(r, np.exp(ls), 1.0, nu),
-                                   bounds=(-10, 2), method="bounded",
-                                   options=dict(xatol=1e-12))  # fmt: skip
+    ref = optimize.minimize_scalar(
+        lambda ls: -st.student_t_loglik(r, np.exp(ls), 1.0, nu),
+        bounds=(-10, 2),
+        method="bounded",
+        options=dict(xatol=1e-12),
+    )
     assert s == pytest.approx(np.exp(ref.x), rel=1e-6)
 
 
@@ -132,10 +136,17 @@ def test_t_scale_of_a_cell_not_evaluated_is_nan_not_an_exception():
 
 def test_a_start_with_a_cell_not_evaluated_ends_the_maximisation_at_once():
     y, model = np.array([1.0, 2.0, 3.0]), np.array([1.1, np.nan, 2.9])
-    first = tj.FitResult(names=("a",), values=np.zeros(1), std_errors=np.zeros(1),
-                         covariance=np.eye(1), correlation=np.eye(1), theta=np.zeros(1),
-                         residuals=np.zeros(3), singular_values=np.ones(1),
-                         converged=True)  # fmt: skip
+    first = tj.FitResult(
+        names=("a",),
+        values=np.zeros(1),
+        std_errors=np.zeros(1),
+        covariance=np.eye(1),
+        correlation=np.eye(1),
+        theta=np.zeros(1),
+        residuals=np.zeros(3),
+        singular_values=np.ones(1),
+        converged=True,
+    )
 
     def theta_step(scale, previous):
         raise AssertionError("no fit from a start that could not be evaluated")
@@ -173,16 +184,30 @@ def _t_line(x, y, nu):
     inv_nu = 0.0 if math.isinf(nu) else 1.0 / nu
 
     def theta_step(scale, previous):
-        args = (jnp.asarray(x), jnp.asarray(y), jnp.asarray(sigma), jnp.asarray(scale),
-                jnp.asarray(inv_nu))  # fmt: skip
+        args = (
+            jnp.asarray(x),
+            jnp.asarray(y),
+            jnp.asarray(sigma),
+            jnp.asarray(scale),
+            jnp.asarray(inv_nu),
+        )
         fit = tj.least_squares_fit(_line_residuals, previous.theta, args, names=("a", "b"))
         return fit, fit.theta[0] + fit.theta[1] * x
 
-    first = theta_step(1.0, tj.FitResult(
-        names=("a", "b"), values=np.zeros(2), std_errors=np.zeros(2), covariance=np.eye(2),
-        correlation=np.eye(2), theta=np.zeros(2), residuals=np.zeros(0),
-        singular_values=np.ones(2), converged=True,
-    ))  # fmt: skip (ordinary least squares)
+    first = theta_step(
+        1.0,
+        tj.FitResult(
+            names=("a", "b"),
+            values=np.zeros(2),
+            std_errors=np.zeros(2),
+            covariance=np.eye(2),
+            correlation=np.eye(2),
+            theta=np.zeros(2),
+            residuals=np.zeros(0),
+            singular_values=np.ones(2),
+            converged=True,
+        ),
+    )  # ordinary least squares
     return st.student_t_ml(theta_step, y, sigma, nu, first, tol=1e-10, max_iterations=500)
 
 
@@ -199,8 +224,12 @@ def test_maximisation_reaches_scipys_t_maximum_likelihood(line_data, nu):
         scale = np.exp(log_s) * np.abs(y)
         return -np.sum(stats.t(nu).logpdf((y - a - b * x) / scale) - np.log(scale))
 
-    ref = optimize.minimize(nll, [2.0, 3.0, np.log(0.05)], method="Nelder-Mead",
-                            options=dict(xatol=1e-10, fatol=1e-12, maxiter=20000))  # fmt: skip
+    ref = optimize.minimize(
+        nll,
+        [2.0, 3.0, np.log(0.05)],
+        method="Nelder-Mead",
+        options=dict(xatol=1e-10, fatol=1e-12, maxiter=20000),
+    )
     np.testing.assert_allclose(fit.theta, ref.x[:2], rtol=1e-5)
     assert s == pytest.approx(np.exp(ref.x[2]), rel=1e-4)
     assert history[-1] == pytest.approx(-ref.fun, abs=1e-6)

@@ -101,8 +101,9 @@ def test_bad_input_to_the_slip_fit(run):
 # the same message is in the fast tier (test_fit.py, test_a_fit_stopped_by_max_steps_says_so)
 def test_a_slip_fit_out_of_steps_says_so(run):
     # a start far off with a tiny step budget: not converged, said so (throw=False: no exception)
-    fit = tj.fit_slip_run(run, alpha=1.0, start={"F_s": 2.0, "K_tau": 3e6, "C_tau": 3e4},
-                          max_steps=2, throw=False)  # fmt: skip
+    fit = tj.fit_slip_run(
+        run, alpha=1.0, start={"F_s": 2.0, "K_tau": 3e6, "C_tau": 3e4}, max_steps=2, throw=False
+    )
     assert not fit.converged and "max_steps = 2" in fit.message
     assert fit.result == tj.RESULTS.nonlinear_max_steps_reached
 
@@ -128,8 +129,9 @@ def _loop_coverage(cls, seeds, A_bar=2.5):
     sigma = 0.01 * MU_LOOP * N_LOOP
     hits, z = [], []
     for seed in seeds:
-        loop = tj.synthetic_loop(el, A, 2 * np.pi * 22, cycles=2, samples_per_cycle=200,
-                                 noise=sigma, seed=seed)  # fmt: skip
+        loop = tj.synthetic_loop(
+            el, A, 2 * np.pi * 22, cycles=2, samples_per_cycle=200, noise=sigma, seed=seed
+        )
         # σ from the record's noise_std
         fit = tj.fit_loop(loop, cls.__name__.lower(), model="steady")
         assert fit.converged
@@ -176,7 +178,7 @@ def test_surface_fit_recovers_D_G_mu():
     runs = [
         tj.synthetic_slip_run(
             tj.PreSlipLuGre(F, K, C), noise=NOISE, seed=40 + i, normal_load=L, **SHORT
-        )  # fmt: skip
+        )
         for i, (L, F, K, C) in enumerate(zip(loads, out.F_s, out.K_tau, out.C_tau))
     ]
     fit = tj.fit_surface_from_runs(runs, start=(2.85, 3e-8, 0.16))

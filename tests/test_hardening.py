@@ -17,7 +17,7 @@ import pytest
 import tribojax as tj
 from tribojax._cli import _fit as cli_fit
 from tribojax._cli._main import main
-from tribojax._fit._engine import fit_statistics
+from tribojax._fit._result import fit_statistics
 from tribojax._io._files import write_json_atomic
 
 MU, N, KD, OMEGA = 0.3, 2.94, 1.2e6, 2 * np.pi * 22
@@ -25,8 +25,9 @@ SHARED = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "topog
 
 
 def _loop(tmp_path, name="loop.csv", f_scale=1.0, noise_std=None):
-    loop = tj.synthetic_loop(tj.Jenkins(MU, N, KD), 3 * MU * N / KD, OMEGA, noise=0.004, seed=4,
-                             normal_load=N)  # fmt: skip
+    loop = tj.synthetic_loop(
+        tj.Jenkins(MU, N, KD), 3 * MU * N / KD, OMEGA, noise=0.004, seed=4, normal_load=N
+    )
     loop = dataclasses.replace(loop, f=loop.f * f_scale, noise_std=noise_std)
     path = tmp_path / name
     tj.write_loop(loop, path)
@@ -99,14 +100,16 @@ def test_stated_noise_contradicted_scales_the_errors(tmp_path, capsys):
     # the same errors as a fit that estimates the noise from the residuals (within 1 %; the
     # loop model, as `tribojax fit` fits by default)
     free = tj.fit_loop(tj.read_loop(src), "jenkins", sigma=None, model="history")
-    ref = tj.fit_loop(dataclasses.replace(tj.read_loop(src), noise_std=None), "jenkins",
-                      model="history")
+    ref = tj.fit_loop(
+        dataclasses.replace(tj.read_loop(src), noise_std=None), "jenkins", model="history"
+    )
     for k, name in enumerate(ref.names):
         assert res["std_errors"][name] == pytest.approx(ref.std_errors[k], rel=1e-2)
         assert free.std_errors[k] == pytest.approx(ref.std_errors[k], rel=1e-2)
     # a stated noise that is right keeps its own errors and says so
-    good = tj.fit_loop(dataclasses.replace(tj.read_loop(src), noise_std=0.004), "jenkins",
-                       model="history")
+    good = tj.fit_loop(
+        dataclasses.replace(tj.read_loop(src), noise_std=0.004), "jenkins", model="history"
+    )
     assert good.noise_consistent is True and 0.5 < good.reduced_chi2 < 2
 
 
@@ -116,13 +119,22 @@ def test_unidentifiable_direction_is_reported():
     x = rng.normal(size=50)
     J = np.stack([x, x, np.ones(50)], axis=1)
     r = rng.normal(size=50)
-    fit = fit_statistics(np.zeros(3), r, J, names=("a", "b", "c"), transform=lambda t: t,
-                         sigma_known=True, result=tj.RESULTS.successful, steps=3)  # fmt: skip
+    fit = fit_statistics(
+        np.zeros(3),
+        r,
+        J,
+        names=("a", "b", "c"),
+        transform=lambda t: t,
+        sigma_known=True,
+        result=tj.RESULTS.successful,
+        steps=3,
+    )
     assert fit.converged and not fit.as_dict()["identified"]
     (d,) = fit.unidentifiable
     assert d["relative_singular_value"] < 1e-12
-    np.testing.assert_allclose([d["direction"][k] for k in "abc"], [2**-0.5, -(2**-0.5), 0],
-                               atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(
+        [d["direction"][k] for k in "abc"], [2**-0.5, -(2**-0.5), 0], atol=1e-12
+    )
     assert np.isinf(fit.std_errors[:2]).all()
     text = cli_fit.uncertainty_warnings(fit.as_dict())
     assert len(text) == 1 and "+0.707*a -0.707*b" in text[0] and "not identifiable" in text[0]
@@ -145,9 +157,14 @@ def test_a_failed_loop_fit_raises_unless_asked_not_to(tmp_path):
 
 def test_D_near_either_end_is_not_silent():
     def model(D, throw=True):
-        return tj.FractalContact(tj.FractalSurface(D, 4.36e-8, 1.0),
-                                 tj.wang2022_pair(sigma_s=1.893e9), mu_t=0.1416,
-                                 tangential_load=0.321, mass=0.321, throw=throw)  # fmt: skip
+        return tj.FractalContact(
+            tj.FractalSurface(D, 4.36e-8, 1.0),
+            tj.wang2022_pair(sigma_s=1.893e9),
+            mu_t=0.1416,
+            tangential_load=0.321,
+            mass=0.321,
+            throw=throw,
+        )
 
     with pytest.raises(Exception, match="fully plastic"):  # no tangential stiffness at all
         model(2.001)(3.0)
@@ -170,8 +187,22 @@ def test_contact_cli_warns_when_F_s_is_zero(capsys):
 def test_fit_start_from_the_command_line(tmp_path, capsys):
     src = _loop(tmp_path)
     out = tmp_path / "o"
-    assert main(["fit", str(src), "--out", str(out), "--element", "jenkins",
-                 "--start", "mu_N=0.5", "K_d=3e6"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "fit",
+                str(src),
+                "--out",
+                str(out),
+                "--element",
+                "jenkins",
+                "--start",
+                "mu_N=0.5",
+                "K_d=3e6",
+            ]
+        )
+        == 0
+    )
     res = json.loads((out / "fit.json").read_text())
     assert res["parameters"]["K_d"] == pytest.approx(KD, rel=0.05)
     for bad in (["mu_N"], ["mu_N=x"], ["=3"]):
@@ -191,8 +222,22 @@ def test_a_start_the_data_cannot_inform_is_exit_1(tmp_path, capsys, start):
     # rejected step (failures as NaN inside the compiled fit) and the flat end is exit 1
     src = _loop(tmp_path)
     out = tmp_path / "o"
-    assert main(["fit", str(src), "--out", str(out), "--element", "mindlin", "--quiet",
-                 "--start", *start]) == 1  # fmt: skip
+    assert (
+        main(
+            [
+                "fit",
+                str(src),
+                "--out",
+                str(out),
+                "--element",
+                "mindlin",
+                "--quiet",
+                "--start",
+                *start,
+            ]
+        )
+        == 1
+    )
     captured = capsys.readouterr()
     line = _one_error_line(captured.err, "fit")
     assert "do not determine" in line and "--start" in line
@@ -202,14 +247,17 @@ def test_a_start_the_data_cannot_inform_is_exit_1(tmp_path, capsys, start):
     assert res["identified"] is False and res["unidentifiable"]
 
 
-@pytest.mark.parametrize("option, pattern", [
-    (["--max-steps", "0"], r"--max-steps = 0 must be at least 1"),
-    (["--decimate", "0"], r"--decimate = 0 is outside the allowed range \[1, inf\)"),
-    (["--decimate", "x"], r"--decimate = 'x': expected auto, off or an integer"),
-    (["--max-samples", "3"], r"--max-samples = 3 is outside the allowed range \[4, inf\)"),
-    (["--start", "mu_N=nan"], r"mu_N"),
-    (["--start", "K_d=inf"], r"--start 'K_d=inf': the value must be a finite number"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "option, pattern",
+    [
+        (["--max-steps", "0"], r"--max-steps = 0 must be at least 1"),
+        (["--decimate", "0"], r"--decimate = 0 is outside the allowed range \[1, inf\)"),
+        (["--decimate", "x"], r"--decimate = 'x': expected auto, off or an integer"),
+        (["--max-samples", "3"], r"--max-samples = 3 is outside the allowed range \[4, inf\)"),
+        (["--start", "mu_N=nan"], r"mu_N"),
+        (["--start", "K_d=inf"], r"--start 'K_d=inf': the value must be a finite number"),
+    ],
+)
 def test_fit_numeric_options_are_refused_before_the_fit(tmp_path, capsys, option, pattern):
     # issue 33: every numeric option of `fit` out of range is exit 2 with one line, no output
     src = _loop(tmp_path)
@@ -275,8 +323,9 @@ def test_contact_errors_are_one_line(tmp_path, capsys):
 @pytest.mark.parametrize("cmd", ["fit", "discover", "hysteresis"])
 def test_a_loop_with_zero_force(tmp_path, capsys, cmd):
     t = np.linspace(0, 3 / 22, 600, endpoint=False)
-    loop = tj.HysteresisLoop(t=t, u=1e-6 * np.cos(2 * np.pi * 22 * t), f=0 * t, normal_load=N,
-                             frequency=22.0)  # fmt: skip
+    loop = tj.HysteresisLoop(
+        t=t, u=1e-6 * np.cos(2 * np.pi * 22 * t), f=0 * t, normal_load=N, frequency=22.0
+    )
     src = tmp_path / "zero.csv"
     tj.write_loop(loop, src)
     out = tmp_path / "o"
@@ -392,8 +441,22 @@ def test_real_topographies_get_an_answer(tmp_path, capsys, name):
 @pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/data/topography is absent")
 def test_contact_band_on_a_real_profile(tmp_path, capsys):
     out = tmp_path / "c.json"
-    code = main(["contact", "--topography", str(SHARED / "dektak-1.csv"), "--method", "rms",
-                 "--band", "1e-5", "3e-4", "--load", "5", "--json", str(out)])  # fmt: skip
+    code = main(
+        [
+            "contact",
+            "--topography",
+            str(SHARED / "dektak-1.csv"),
+            "--method",
+            "rms",
+            "--band",
+            "1e-5",
+            "3e-4",
+            "--load",
+            "5",
+            "--json",
+            str(out),
+        ]
+    )
     assert code == 0 and "by rms, band" in capsys.readouterr().out
     surface = json.loads(out.read_text())["surface"]
     assert 1e-5 <= surface["band"][0] < surface["band"][1] <= 3e-4 and 2 < surface["D"] < 3
@@ -414,8 +477,20 @@ def test_truncated_instrument_files_say_so(tmp_path, name):
 def test_contact_band_where_the_surface_is_smoother_than_fractal(tmp_path, capsys):
     pytest.importorskip("SurfaceTopography")
     out = tmp_path / "c.json"
-    code = main(["contact", "--topography", str(SHARED / "di-1.di"), "--band", "1e-8", "1e-7",
-                 "--load", "5", "--json", str(out)])  # fmt: skip
+    code = main(
+        [
+            "contact",
+            "--topography",
+            str(SHARED / "di-1.di"),
+            "--band",
+            "1e-8",
+            "1e-7",
+            "--load",
+            "5",
+            "--json",
+            str(out),
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 0 and "Traceback" not in err and "over the given band" in err
     surface = json.loads(out.read_text())["surface"]
@@ -449,10 +524,25 @@ def test_a_bad_fit_workers_setting_is_one_line_exit_2(tmp_path, value):
     import subprocess
     import sys
 
-    cmd = [sys.executable, "-m", "tribojax._cli._main", "contact", "--D", "2.5", "--G", "1e-9",
-           "--load", "5"]  # fmt: skip
-    out = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path,
-                         env={**os.environ, "TRIBOJAX_FIT_WORKERS": value})  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "tribojax._cli._main",
+        "contact",
+        "--D",
+        "2.5",
+        "--G",
+        "1e-9",
+        "--load",
+        "5",
+    ]
+    out = subprocess.run(
+        cmd,
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={**os.environ, "TRIBOJAX_FIT_WORKERS": value},
+    )
     assert out.returncode == 2, out.stderr[-2000:]
     line = _one_error_line(out.stderr, "contact")
     assert "TRIBOJAX_FIT_WORKERS" in line and repr(value) in line
@@ -464,10 +554,25 @@ def test_a_bad_equinox_error_setting_is_one_line_exit_2(tmp_path):
     import subprocess
     import sys
 
-    cmd = [sys.executable, "-m", "tribojax._cli._main", "contact", "--D", "2.5", "--G", "1e-9",
-           "--load", "5"]  # fmt: skip
-    out = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path,
-                         env={**os.environ, "EQX_ON_ERROR": "maybe"})  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "tribojax._cli._main",
+        "contact",
+        "--D",
+        "2.5",
+        "--G",
+        "1e-9",
+        "--load",
+        "5",
+    ]
+    out = subprocess.run(
+        cmd,
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={**os.environ, "EQX_ON_ERROR": "maybe"},
+    )
     assert out.returncode == 2, out.stderr[-2000:]
     assert "EQX_ON_ERROR = 'maybe'" in _one_error_line(out.stderr, "contact")
 
@@ -507,8 +612,10 @@ def test_a_fit_that_is_not_a_result_saves_no_model_to_predict_with(tmp_path, cap
     # a start whose slider never slips (μN far above the peak force): exit 1, "not a result",
     # and fit.json carries no fitted_model, so predict refuses it naming why
     path, out = _loop(tmp_path), tmp_path / "out"
-    assert main(["fit", str(path), "--out", str(out), "--element", "jenkins",
-                 "--start", "mu_N=50"]) == 1  # fmt: skip
+    assert (
+        main(["fit", str(path), "--out", str(out), "--element", "jenkins", "--start", "mu_N=50"])
+        == 1
+    )
     assert "not a result" in _one_error_line(capsys.readouterr().err, "fit")
     saved = json.loads((out / "fit.json").read_text())
     assert saved["fitted_model"] is None and "do not determine" in saved["not_a_result"]

@@ -83,8 +83,9 @@ def test_bad_factors_name_the_parameter():
 
 def _long_loop(noise=0.004):
     el, A = tj.Jenkins(MU, N, KD), 3 * MU * N / KD
-    return tj.synthetic_loop(el, A, OMEGA, cycles=3, samples_per_cycle=2048, noise=noise, seed=11,
-                             normal_load=N)  # fmt: skip
+    return tj.synthetic_loop(
+        el, A, OMEGA, cycles=3, samples_per_cycle=2048, noise=noise, seed=11, normal_load=N
+    )
 
 
 def test_loop_fit_on_the_reduced_record_agrees_with_the_full_fit():

@@ -38,8 +38,11 @@ def test_measured_start_reproduces_a_loaded_history():
     loop = _history()
     rest = prepare_loop(loop, "rest")
     loaded = prepare_loop(loop, "measured")
-    err = lambda d: float(jnp.max(jnp.abs(loop_force(LoopSpec(MU_N, K_D), d, microslip=False)  # noqa: E731
-                                          - d.f)))  # fmt: skip
+
+    def err(d):
+        force = loop_force(LoopSpec(MU_N, K_D), d, microslip=False)
+        return float(jnp.max(jnp.abs(force - d.f)))
+
     assert err(loaded) < 1e-9 * MU_N  # measured 1.7e-12
     assert err(rest) > 0.5 * MU_N  # from rest the spring starts 0.6 μN short
     with pytest.raises(ValueError, match="initial = 'loaded'"):
@@ -87,8 +90,9 @@ def test_predict_starts_as_fitted_or_as_asked(tmp_path):
     from tribojax._io._hysteresis_loop import write_loop
 
     loop = _history()
-    report = tj.discovery.discover(tj.discovery.loop_baseline(loop, initial="measured"),
-                                   max_effects=0)  # fmt: skip
+    report = tj.discovery.discover(
+        tj.discovery.loop_baseline(loop, initial="measured"), max_effects=0
+    )
     model = report.fitted
     assert model.options == {"element": "jenkins", "initial": "measured"}
     assert model.parameters["mu_N"] == pytest.approx(MU_N, rel=1e-6)
@@ -98,16 +102,43 @@ def test_predict_starts_as_fitted_or_as_asked(tmp_path):
     assert tj.predict(again, loop).nrmse < 1e-5  # the option is saved with the model
     slip_model = tj.FittedModel("slip", {"F_s": 1.0, "K_tau": 1e7, "C_tau": 100.0}, {})
     with pytest.raises(ValueError, match="'measured' is for loop and history models"):
-        tj.predict(slip_model, tj.synthetic_slip_run(tj.PreSlipLuGre(1.0, 1e7, 100.0), n=64),
-                   initial="measured")  # fmt: skip
+        tj.predict(
+            slip_model,
+            tj.synthetic_slip_run(tj.PreSlipLuGre(1.0, 1e7, 100.0), n=64),
+            initial="measured",
+        )
     # the CLI: discover --initial measured saves it; predict takes it; a slip run refuses it
     path = tmp_path / "h.csv"
     write_loop(loop, path)
-    assert main(["discover", str(path), "--out", str(tmp_path / "d"), "--initial", "measured",
-                 "--max-effects", "0", "--quiet"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "discover",
+                str(path),
+                "--out",
+                str(tmp_path / "d"),
+                "--initial",
+                "measured",
+                "--max-effects",
+                "0",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     saved = json.loads((tmp_path / "d" / "discovery.json").read_text())["fitted_model"]
     assert saved["options"]["initial"] == "measured"
-    assert main(["predict", str(tmp_path / "d" / "discovery.json"), str(path), "--out",
-                 str(tmp_path / "p")]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "predict",
+                str(tmp_path / "d" / "discovery.json"),
+                str(path),
+                "--out",
+                str(tmp_path / "p"),
+            ]
+        )
+        == 0
+    )
     pred = json.loads((tmp_path / "p" / "prediction.json").read_text())
     assert pred["initial"] == "measured" and pred["nrmse"] < 1e-5

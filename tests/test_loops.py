@@ -61,8 +61,21 @@ def test_read_loop_round_trip_and_cli(tmp_path):
     np.testing.assert_array_equal(np.asarray(drive.displacements), loop.u)
     np.testing.assert_array_equal(np.asarray(drive.times), loop.t)
     out = tmp_path / "out"
-    rc = main(["hysteresis", "--element", "mindlin", "--K-d", str(KD), "--loop", str(path),
-               "--n", "20", "--out", str(out)])  # fmt: skip
+    rc = main(
+        [
+            "hysteresis",
+            "--element",
+            "mindlin",
+            "--K-d",
+            str(KD),
+            "--loop",
+            str(path),
+            "--n",
+            "20",
+            "--out",
+            str(out),
+        ]
+    )
     assert rc == 0
     table = tj.read_table(out / "hysteresis.csv", columns=("A_m", "K_bar", "C_bar"))
     assert len(table["A_m"]) == 20 and np.all(np.diff(table["K_bar"]) < 0)  # K̄ falls

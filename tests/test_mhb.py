@@ -14,8 +14,7 @@ import tribojax as tj
 def sdof(N=1.0, F=0.5, H=7, K_d=100.0, n_time=None):
     structure = tj.Structure(1.0, 1.0, 100.0)  # ω_n = 10 rad/s, ζ = 0.05
     contact = tj.FrictionContact(tj.Jenkins(1.0, N, K_d), 0)  # A0 = μN/K_d = 0.01 m at N = 1
-    return tj.FrictionSystem(structure, [contact], tj.Excitation(1, cosine=[F]), H=H,
-                             n_time=n_time)  # fmt: skip
+    return tj.FrictionSystem(structure, [contact], tj.Excitation(1, cosine=[F]), H=H, n_time=n_time)
 
 
 @pytest.mark.parametrize("element", [tj.Jenkins(0.3, 10.0, 1e3), tj.Mindlin(0.3, 10.0, 1e3)])
@@ -50,10 +49,16 @@ def _diffrax_amplitude(F, omega, N=1.0, K_d=100.0, periods=60):
     T = 2 * jnp.pi / omega
     ts = (periods - 1) * T + T * jnp.arange(256) / 256
     sol = diffrax.diffeqsolve(
-        diffrax.ODETerm(rhs), diffrax.Tsit5(), 0.0, periods * T, 1e-3, jnp.zeros(3),
-        saveat=diffrax.SaveAt(ts=ts), max_steps=400_000,
+        diffrax.ODETerm(rhs),
+        diffrax.Tsit5(),
+        0.0,
+        periods * T,
+        1e-3,
+        jnp.zeros(3),
+        saveat=diffrax.SaveAt(ts=ts),
+        max_steps=400_000,
         stepsize_controller=diffrax.PIDController(rtol=1e-9, atol=1e-12),
-    )  # fmt: skip
+    )
     x = sol.ys[:, 0]
     th = omega * ts
     return jnp.hypot(2 * jnp.mean(x * jnp.cos(th)), 2 * jnp.mean(x * jnp.sin(th)))
@@ -98,8 +103,9 @@ def test_continuation_passes_resonance_and_matches_time_stepping():
 def test_hill_exponents_of_a_linear_structure():
     # no contact: x = e^{λt}, λ = −ζω_n ± iω_d; Hill's method gives Re λ = −C/(2M) exactly
     for C in (1.0, -0.4):
-        system = tj.FrictionSystem(tj.Structure(2.0, C, 50.0), [], tj.Excitation(1, cosine=[1.0]),
-                                   H=4)  # fmt: skip
+        system = tj.FrictionSystem(
+            tj.Structure(2.0, C, 50.0), [], tj.Excitation(1, cosine=[1.0]), H=4
+        )
         X = tj.solve_hbm(system, 3.0).X
         lam = tj.floquet_exponents(system, X, 3.0)
         assert np.allclose(lam.real, -C / 4.0, atol=1e-9)
@@ -137,8 +143,9 @@ def test_bad_input():
     with pytest.raises(ValueError, match="H = 0"):
         sdof(H=0)
     with pytest.raises(ValueError, match="DOF 3"):
-        tj.FrictionSystem(tj.Structure(1.0, 1.0, 1.0), [tj.FrictionContact(tj.Jenkins(1, 1, 1), 3)],
-                          H=2)  # fmt: skip
+        tj.FrictionSystem(
+            tj.Structure(1.0, 1.0, 1.0), [tj.FrictionContact(tj.Jenkins(1, 1, 1), 3)], H=2
+        )
     with pytest.raises(ValueError, match="frequency range"):
         tj.frequency_response(sdof(H=2), -1.0, 5.0)
     with pytest.raises(ValueError, match="frequency range"):

@@ -43,8 +43,9 @@ def _steady_amplitude(omega, x0, v0, periods=40):
 
     T = 2 * np.pi / omega
     ts = (periods - 1) * T + T * np.arange(256) / 256
-    sol = solve_ivp(rhs, (0.0, periods * T), [x0, v0], method="DOP853", rtol=1e-10, atol=1e-12,
-                    t_eval=ts)  # fmt: skip
+    sol = solve_ivp(
+        rhs, (0.0, periods * T), [x0, v0], method="DOP853", rtol=1e-10, atol=1e-12, t_eval=ts
+    )
     th = omega * ts
     return np.hypot(2 * np.mean(sol.y[0] * np.cos(th)), 2 * np.mean(sol.y[0] * np.sin(th)))
 
@@ -53,8 +54,13 @@ def _steady_amplitude(omega, x0, v0, periods=40):
 def test_continuation_passes_the_folds_of_a_duffing_response():
     # harmonics 1 and 3 of a symmetric cubic; n_time = 16 is alias-free for x³ (harmonics <= 9)
     spring = CubicSpring(jnp.asarray(K3), 0)
-    system = tj.FrictionSystem(tj.Structure(1.0, C, 1.0), [spring], tj.Excitation(1, cosine=[F]),
-                               harmonics=(1, 3), n_time=16)  # fmt: skip
+    system = tj.FrictionSystem(
+        tj.Structure(1.0, C, 1.0),
+        [spring],
+        tj.Excitation(1, cosine=[F]),
+        harmonics=(1, 3),
+        n_time=16,
+    )
     fr = tj.frequency_response(system, 0.5, 2.0)
     assert fr.converged and fr.omega[-1] > 1.8
     w = fr.omega
@@ -74,8 +80,14 @@ def test_continuation_passes_the_folds_of_a_duffing_response():
     upper, middle, lower = cross
     assert fr.stable[upper] and not fr.stable[middle + 1] and fr.stable[lower + 1]
     # the single-harmonic Duffing equation a²[(1 − ω² + ¾k3a²)² + (Cω)²] = F² (three roots)
-    r = np.roots([(0.75 * K3) ** 2, 1.5 * K3 * (1 - W_FOLD**2), (1 - W_FOLD**2) ** 2
-                  + (C * W_FOLD) ** 2, -(F**2)])  # fmt: skip
+    r = np.roots(
+        [
+            (0.75 * K3) ** 2,
+            1.5 * K3 * (1 - W_FOLD**2),
+            (1 - W_FOLD**2) ** 2 + (C * W_FOLD) ** 2,
+            -(F**2),
+        ]
+    )
     backbone = np.sort(np.sqrt(r.real))[::-1]
     ks = np.array([1, 1, 3, 3])
     sine = np.array([False, True, False, True])

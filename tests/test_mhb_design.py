@@ -42,16 +42,21 @@ def surface_damper(q):
     D, G, mu, N = q[0], q[1] * 1e-8, q[2], q[3]
     structure = tj.Structure(K0 / 100, 0.2 * K0 / 100, K0)
     contact = tj.FrictionContact(tj.Jenkins(mu, N, eq4_stiffness(D, G, N)), 0)
-    return tj.FrictionSystem(structure, [contact], tj.Excitation(1, cosine=[1.0]),
-                             harmonics=(1, 3), n_time=32)  # fmt: skip
+    return tj.FrictionSystem(
+        structure, [contact], tj.Excitation(1, cosine=[1.0]), harmonics=(1, 3), n_time=32
+    )
 
 
 def _fd_check(f, q, rel_step, rtol):
     """jax.grad of the scalar f at q against central differences with steps rel_step·q_i."""
     vg = jax.jit(jax.value_and_grad(f))  # one compilation for the gradient and the differences
     g = np.asarray(vg(q)[1])
-    fd = np.array([(float(vg(q.at[i].add(h))[0]) - float(vg(q.at[i].add(-h))[0])) / (2 * h)
-                   for i, h in enumerate(rel_step * np.asarray(q))])  # fmt: skip
+    fd = np.array(
+        [
+            (float(vg(q.at[i].add(h))[0]) - float(vg(q.at[i].add(-h))[0])) / (2 * h)
+            for i, h in enumerate(rel_step * np.asarray(q))
+        ]
+    )
     print("grad", g, "FD", fd, "rel. diff", np.abs(g / fd - 1))
     np.testing.assert_allclose(g, fd, rtol=rtol)
     return g
@@ -82,8 +87,9 @@ def test_peak_derivatives_from_the_surface():
 def sdof(N, K_d=100.0):
     structure = tj.Structure(1.0, 0.2, 100.0)
     contact = tj.FrictionContact(tj.Jenkins(0.3, N, K_d), 0)
-    return tj.FrictionSystem(structure, [contact], tj.Excitation(1, cosine=[1.0]),
-                             harmonics=(1, 3), n_time=32)  # fmt: skip
+    return tj.FrictionSystem(
+        structure, [contact], tj.Excitation(1, cosine=[1.0]), harmonics=(1, 3), n_time=32
+    )
 
 
 @pytest.mark.slow
@@ -139,11 +145,19 @@ def absorber(p):
     N/m). Unlike a damper to ground, whose peak falls monotonically as K_d grows (a stiffer
     contact dissipates more per cycle at the same slip force), K_d here also tunes the absorber:
     K_d → 0 detaches it, K_d → ∞ locks it, so the joint (N, K_d) optimum is interior."""
-    structure = tj.Structure(jnp.diag(jnp.array([1.0, 0.1])), jnp.diag(jnp.array([0.04, 0.0])),
-                             jnp.diag(jnp.array([1.0, 0.0])))  # fmt: skip
+    structure = tj.Structure(
+        jnp.diag(jnp.array([1.0, 0.1])),
+        jnp.diag(jnp.array([0.04, 0.0])),
+        jnp.diag(jnp.array([1.0, 0.0])),
+    )
     contact = tj.FrictionContact(tj.Jenkins(0.5, p[0], p[1]), 0, ref_dof=1)
-    return tj.FrictionSystem(structure, [contact], tj.Excitation(2, cosine=jnp.array([0.02, 0.0])),
-                             harmonics=(1, 3), n_time=32)  # fmt: skip
+    return tj.FrictionSystem(
+        structure,
+        [contact],
+        tj.Excitation(2, cosine=jnp.array([0.02, 0.0])),
+        harmonics=(1, 3),
+        n_time=32,
+    )
 
 
 @pytest.mark.slow
@@ -161,8 +175,10 @@ def test_joint_load_and_stiffness_design_against_grid():
     peaks = jax.jit(jax.vmap(lambda p: tj.peak_on_grid(absorber(p), omegas).amplitude))
     grid = np.asarray(peaks(P))
     j = int(np.argmin(grid))
-    print(f"BFGS: N = {N_opt:.4f}, K_d = {K_opt:.4f}, peak {a_opt:.5f} ({int(design.steps)} "
-          f"steps); grid best {grid[j]:.5f} at {np.asarray(P[j])}")  # fmt: skip
+    print(
+        f"BFGS: N = {N_opt:.4f}, K_d = {K_opt:.4f}, peak {a_opt:.5f} ({int(design.steps)} "
+        f"steps); grid best {grid[j]:.5f} at {np.asarray(P[j])}"
+    )
     # measured: 60 steps (max_steps at the kink), peak 0.09605 vs the grid's best 0.09660
     ends = (tj.RESULTS.successful, tj.RESULTS.nonlinear_max_steps_reached)
     assert any(bool(design.result == r) for r in ends) and np.isfinite(a_opt)

@@ -19,10 +19,16 @@ def _steady_amplitude(rhs, n_state, omega, signal, periods=60):
     T = 2 * jnp.pi / omega
     ts = (periods - 1) * T + T * jnp.arange(512) / 512
     sol = diffrax.diffeqsolve(
-        diffrax.ODETerm(rhs), diffrax.Tsit5(), 0.0, periods * T, 1e-3, jnp.zeros(n_state),
-        saveat=diffrax.SaveAt(ts=ts), max_steps=500_000,
+        diffrax.ODETerm(rhs),
+        diffrax.Tsit5(),
+        0.0,
+        periods * T,
+        1e-3,
+        jnp.zeros(n_state),
+        saveat=diffrax.SaveAt(ts=ts),
+        max_steps=500_000,
         stepsize_controller=diffrax.PIDController(rtol=1e-9, atol=1e-12),
-    )  # fmt: skip
+    )
     x = jax.vmap(signal)(ts, sol.ys)
     th = omega * ts
     return jnp.hypot(2 * jnp.mean(x * jnp.cos(th)), 2 * jnp.mean(x * jnp.sin(th)))
@@ -72,8 +78,9 @@ def _lugre_reference(F, omega):
 
 def _lugre_amplitude(F, omega, H, n_time):
     contact = tj.FrictionContact(tj.LuGre(**LUGRE), 0, cycles=3, substeps=4)
-    system = tj.FrictionSystem(tj.Structure(M, C, K), [contact], tj.Excitation(1, cosine=[F]),
-                               H=H, n_time=n_time)  # fmt: skip
+    system = tj.FrictionSystem(
+        tj.Structure(M, C, K), [contact], tj.Excitation(1, cosine=[F]), H=H, n_time=n_time
+    )
     sol = tj.solve_hbm(system, omega)
     assert bool(sol.converged)
     return float(system.amplitude(sol.X)[0])
@@ -96,8 +103,9 @@ def test_normal_load_continuation_against_time_integration():
     # as the load rises from gross slip towards stick
     def make(N):
         contact = tj.FrictionContact(tj.Jenkins(1.0, N, 100.0), 0)
-        return tj.FrictionSystem(tj.Structure(M, C, K), [contact], tj.Excitation(1, cosine=[1.0]),
-                                 H=5)  # fmt: skip
+        return tj.FrictionSystem(
+            tj.Structure(M, C, K), [contact], tj.Excitation(1, cosine=[1.0]), H=5
+        )
 
     fr = tj.parameter_response(make, 0.2, 3.0, 11.0)
     assert fr.converged and fr.parameter[0] == 0.2 and fr.parameter[-1] > 2.5

@@ -18,8 +18,9 @@ MU, N, KD, OMEGA = 0.3, 2.94, 1.2e6, 2 * np.pi * 22
 def saved(tmp_path_factory):
     """A loop record and the fit.json of its Jenkins loop model."""
     folder = tmp_path_factory.mktemp("model-files")
-    loop = tj.synthetic_loop(tj.Jenkins(MU, N, KD), 3 * MU * N / KD, OMEGA, noise=0.004, seed=4,
-                             normal_load=N)  # fmt: skip
+    loop = tj.synthetic_loop(
+        tj.Jenkins(MU, N, KD), 3 * MU * N / KD, OMEGA, noise=0.004, seed=4, normal_load=N
+    )
     path = folder / "loop.csv"
     tj.write_loop(dataclasses.replace(loop, noise_std=None), path)
     assert main(["fit", str(path), "--out", str(folder / "fit"), "--element", "jenkins"]) == 0
@@ -36,13 +37,17 @@ def _edited(tmp_path, fit, **change):
     return path
 
 
-@pytest.mark.parametrize("name, value, shown", [
-    ("K_d", 0.0, "'parameters.K_d' = 0 N/m is outside the allowed range (0, 1e+20]"),
-    ("K_d", 1e308, "'parameters.K_d' = 1e+308 N/m is outside the allowed range (0, 1e+20]"),
-    ("mu_N", -1.0, "'parameters.mu_N' = -1 N is outside the allowed range (0, 1e+20]"),
-])  # fmt: skip
-def test_a_model_value_outside_its_range_is_exit_2_naming_it(saved, tmp_path, capsys, name, value,
-                                                             shown):  # fmt: skip
+@pytest.mark.parametrize(
+    "name, value, shown",
+    [
+        ("K_d", 0.0, "'parameters.K_d' = 0 N/m is outside the allowed range (0, 1e+20]"),
+        ("K_d", 1e308, "'parameters.K_d' = 1e+308 N/m is outside the allowed range (0, 1e+20]"),
+        ("mu_N", -1.0, "'parameters.mu_N' = -1 N is outside the allowed range (0, 1e+20]"),
+    ],
+)
+def test_a_model_value_outside_its_range_is_exit_2_naming_it(
+    saved, tmp_path, capsys, name, value, shown
+):
     record, fit = saved
     model = _edited(tmp_path, fit, **{f"parameters__{name}": value})
     out = tmp_path / "p"
@@ -59,7 +64,8 @@ def test_a_model_in_other_units_is_refused(saved, tmp_path, capsys):
     model = _edited(tmp_path, fit, units__K_d="N/mm")
     assert main(["predict", str(model), str(record), "--out", str(tmp_path / "p")]) == 2
     assert "field 'units.K_d' is 'N/mm'; the loop model on this record has K_d in 'N/m'" in (
-        capsys.readouterr().err)
+        capsys.readouterr().err
+    )
 
 
 def test_the_saved_model_predicts_unchanged(saved, tmp_path):
@@ -71,8 +77,12 @@ def test_the_saved_model_predicts_unchanged(saved, tmp_path):
 
 
 def test_a_history_model_is_checked_alike(tmp_path):
-    model = tj.FittedModel("history", {"mu_N": 0.9, "K_d": -1e6, "f0": 0.0},
-                           {"mu_N": "N", "K_d": "N/m", "f0": "N"}, {"element": "jenkins"})
+    model = tj.FittedModel(
+        "history",
+        {"mu_N": 0.9, "K_d": -1e6, "f0": 0.0},
+        {"mu_N": "N", "K_d": "N/m", "f0": "N"},
+        {"element": "jenkins"},
+    )
     path = tmp_path / "m.json"
     path.write_text(json.dumps(model.as_dict()))
     with pytest.raises(ValueError, match=r"'parameters.K_d' = -1e\+06 N/m is outside the allowed"):
@@ -135,8 +145,9 @@ def test_a_loop_far_beyond_the_fitted_amplitude_is_flagged(saved, tmp_path, caps
     assert 0.9 * MU * N / KD * 3 < 2 * amp < 1.1 * 2 * MU * N / KD * 3  # the drive's ±3 A0
     assert fitted["normal_load"] == {"min": N, "max": N, "unit": "N"}
     big = tmp_path / "big.csv"  # the same contact driven 8x further: ~8x amplitude and velocity
-    loop = tj.synthetic_loop(tj.Jenkins(MU, N, KD), 24 * MU * N / KD, OMEGA, noise=0.004, seed=5,
-                             normal_load=N)  # fmt: skip
+    loop = tj.synthetic_loop(
+        tj.Jenkins(MU, N, KD), 24 * MU * N / KD, OMEGA, noise=0.004, seed=5, normal_load=N
+    )
     tj.write_loop(loop, big)
     model = _edited(tmp_path, fit)
     out = tmp_path / "p"
@@ -151,7 +162,9 @@ def test_a_loop_far_beyond_the_fitted_amplitude_is_flagged(saved, tmp_path, caps
     with pytest.warns(UserWarning) as said:
         tj.predict(tj.load_model(model), tj.read_loop(big))
     assert sorted(str(w.message).split("'s ")[1].split(" (")[0] for w in said) == [
-        "amplitude", "velocity"]
+        "amplitude",
+        "velocity",
+    ]
     assert tj.predict(tj.load_model(model), tj.read_loop(record)).extrapolation == []
 
 
@@ -162,16 +175,20 @@ def test_a_curve_model_at_twenty_times_the_speed_is_flagged():
     ones = np.ones_like(v)
     curve = tj.FrictionCurve(v, f, 1e-4 * ones, 0 * ones, 10 * ones, units=units)
     fast = tj.FrictionCurve(20 * v, f, 1e-4 * ones, 0 * ones, 10 * ones, units=units)
-    model = tj.FittedModel("curve", {"F_c": 0.01, "sigma2": 2e-5},
-                           {"F_c": "N m", "sigma2": "N m per rpm"},
-                           fitted_range={"velocity": {"min": 20.0, "max": 200.0, "unit": "rpm"}})
+    model = tj.FittedModel(
+        "curve",
+        {"F_c": 0.01, "sigma2": 2e-5},
+        {"F_c": "N m", "sigma2": "N m per rpm"},
+        fitted_range={"velocity": {"min": 20.0, "max": 200.0, "unit": "rpm"}},
+    )
     assert tj.predict(model, curve).extrapolation == []
     with pytest.warns(UserWarning, match=r"velocity \(400 to 4e\+03 rpm\)"):
         far = tj.predict(model, fast).extrapolation
     assert [d["quantity"] for d in far] == ["velocity"]
     # a range in other units is not compared; a model without a range says nothing is known
-    other = dataclasses.replace(model, fitted_range={"velocity": {"min": 20.0, "max": 200.0,
-                                                                  "unit": "rad/s"}})
+    other = dataclasses.replace(
+        model, fitted_range={"velocity": {"min": 20.0, "max": 200.0, "unit": "rad/s"}}
+    )
     assert tj.predict(other, fast).extrapolation == []
     assert tj.predict(dataclasses.replace(model, fitted_range={}), fast).extrapolation is None
 
@@ -179,13 +196,16 @@ def test_a_curve_model_at_twenty_times_the_speed_is_flagged():
 def test_a_joint_fit_spans_its_records():
     from tribojax._io._record import extent_of
 
-    loops = [tj.synthetic_loop(tj.Jenkins(MU, N, KD), a * MU * N / KD, OMEGA, noise=0.004,
-                               seed=4, normal_load=n) for a, n in ((3, N), (6, 2 * N))]  # fmt: skip
+    loops = [
+        tj.synthetic_loop(
+            tj.Jenkins(MU, N, KD), a * MU * N / KD, OMEGA, noise=0.004, seed=4, normal_load=n
+        )
+        for a, n in ((3, N), (6, 2 * N))
+    ]
     span = extent_of(loops)
     amps = [0.5 * np.ptp(lp.u) for lp in loops]
     assert span["amplitude"] == {"min": min(amps), "max": max(amps), "unit": "m"}
     assert span["normal_load"] == {"min": N, "max": 2 * N, "unit": "N"}
-
 
 
 def test_a_model_not_finite_on_the_record_writes_nothing(saved, tmp_path, capsys):
@@ -206,6 +226,7 @@ def test_a_key_given_twice_is_refused_naming_it(saved, tmp_path, capsys):
     model.write_text(text)
     assert main(["predict", str(model), str(record), "--out", str(tmp_path / "p")]) == 2
     assert "the key 'K_d' appears twice" in capsys.readouterr().err
-    assert main(["fit", str(record), "--start", "mu_N=1", "mu_N=2", "--out",
-                 str(tmp_path / "f")]) == 2  # fmt: skip
+    assert (
+        main(["fit", str(record), "--start", "mu_N=1", "mu_N=2", "--out", str(tmp_path / "f")]) == 2
+    )
     assert "mu_N is given twice" in capsys.readouterr().err

@@ -26,11 +26,11 @@ def _record(seed=1):
     slip = dr._simulate(spec, np.random.default_rng(seed), tk, ak, t)[0]
     a = np.interp(t, tk, ak)
     w = 2 * np.pi * F_MODE
+
     def mode(tt, q):
         return [q[1], -np.interp(tt, tk, ak) - 2 * ZETA * w * q[1] - w * w * q[0]]
 
-    sol = solve_ivp(mode, (0.0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-16,
-                    max_step=2e-4)  # fmt: skip
+    sol = solve_ivp(mode, (0.0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-16, max_step=2e-4)
     ringing = sol.y[0] + a / w**2
     ringing /= np.sqrt(np.mean(ringing**2))
     rng = np.random.default_rng(seed)
@@ -88,8 +88,9 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
         crawls.append(k.get("stop_crawl"))
         r = np.zeros_like(real.residuals)
         r[0] = np.sqrt(rss)
-        return dataclasses.replace(real, residuals=r, result=tj.RESULTS.successful,
-                                   converged=None, gain_left=gain)  # fmt: skip
+        return dataclasses.replace(
+            real, residuals=r, result=tj.RESULTS.successful, converged=None, gain_left=gain
+        )
 
     monkeypatch.setattr(mf, "fit_model", canned)
     # one fit at a time: the canned outcomes go by call order (with more workers the further
@@ -106,8 +107,13 @@ def test_baseline_starts_go_on_past_a_stationary_stop_short_of_a_minimum(monkeyp
     # reached; the later start that converges is kept
     outcomes, bars[:], tried[:] = iter([(800.0, 700.0), (120.0, 0.08)]), [], []
     first_failed = iter([tj.RESULTS.nonlinear_max_steps_reached, tj.RESULTS.successful])
-    monkeypatch.setattr(mf, "fit_model", lambda *a, **k: dataclasses.replace(
-        canned(*a, **k), result=next(first_failed), converged=None))  # fmt: skip
+    monkeypatch.setattr(
+        mf,
+        "fit_model",
+        lambda *a, **k: dataclasses.replace(
+            canned(*a, **k), result=next(first_failed), converged=None
+        ),
+    )
     fit = mf.fit_record(base, starts[:2])
     assert bars == [np.inf, pytest.approx(800.0)] and fit.rss == pytest.approx(120.0)
     monkeypatch.setattr(mf, "fit_model", canned)

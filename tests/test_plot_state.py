@@ -38,8 +38,12 @@ def test_plots_keep_the_users_backend_and_pyplot_state(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
     run = subprocess.run(
         [sys.executable, "-c", CODE, str(png), str(bar)],
-        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr[-3000:]
     backend, fignums = run.stdout.strip().splitlines()[-1].split(" ", 1)
     assert backend == "svg"

@@ -41,8 +41,13 @@ def backlash_model():
     499.9 N, K_d 2.0e6 N/m, full-depth clearance of 1.13 mm), written as the generator's values:
     the start of the refits below, without the discovery's cost."""
     effect = tj.SavedEffect("backlash", {"depth": 1.0}, {"gap_m": GAPS[1]})
-    return tj.FittedModel("loop", {"mu_N": F_S, "K_d": 2e6}, {"mu_N": "N", "K_d": "N/m"},
-                          {"element": "jenkins"}, (effect,))  # fmt: skip
+    return tj.FittedModel(
+        "loop",
+        {"mu_N": F_S, "K_d": 2e6},
+        {"mu_N": "N", "K_d": "N/m"},
+        {"element": "jenkins"},
+        (effect,),
+    )
 
 
 @pytest.mark.slow
@@ -69,7 +74,8 @@ def test_discovered_model_predicts_a_loop_at_another_amplitude(backlash_report, 
         assert with_effect.rms_error < 1.25 * NOISE, amplitude  # the noise alone: 5 N
         assert without.rms_error > 10 * NOISE, amplitude
         assert with_effect.nrmse == pytest.approx(
-            with_effect.rms_error / np.std(with_effect.measured), rel=1e-12)
+            with_effect.rms_error / np.std(with_effect.measured), rel=1e-12
+        )
 
 
 def test_history_model_predicts_a_history_it_did_not_fit():
@@ -113,17 +119,24 @@ def test_curve_model_with_two_fitted_nuisances_rebuilds_exactly():
 
 
 def test_saved_model_errors_name_the_field(tmp_path):
-    good = tj.FittedModel("loop", {"mu_N": 500.0, "K_d": 2e6}, {"mu_N": "N", "K_d": "N/m"},
-                          {"element": "jenkins"})  # fmt: skip
+    good = tj.FittedModel(
+        "loop", {"mu_N": 500.0, "K_d": 2e6}, {"mu_N": "N", "K_d": "N/m"}, {"element": "jenkins"}
+    )
     d = good.as_dict()
-    for change, field in (({"format": "tribojax.fitted_model/0"}, "'format'"),
-                          ({"kind": "table"}, "'kind'"),
-                          ({"parameters": {"mu_N": float("nan")}}, "'parameters'"),
-                          ({"effects": [{"strengths": {}}]}, r"'effects\[0\]'")):  # fmt: skip
+    for change, field in (
+        ({"format": "tribojax.fitted_model/0"}, "'format'"),
+        ({"kind": "table"}, "'kind'"),
+        ({"parameters": {"mu_N": float("nan")}}, "'parameters'"),
+        ({"effects": [{"strengths": {}}]}, r"'effects\[0\]'"),
+    ):
         with pytest.raises(ValueError, match=field):
             tj.FittedModel.from_dict({**d, **change})
-    history = {**d, "kind": "history", "options": {"element": "jenkins"},
-               "parameters": {"mu_N": 500.0, "f0": 0.0}}  # fmt: skip
+    history = {
+        **d,
+        "kind": "history",
+        "options": {"element": "jenkins"},
+        "parameters": {"mu_N": 500.0, "f0": 0.0},
+    }
     (tmp_path / "h.json").write_text(json.dumps({"fitted_model": history}))
     with pytest.raises(ValueError, match=r"h.json: fitted_model: field 'parameters' lacks \['K_d'"):
         tj.load_model(tmp_path / "h.json")
@@ -204,8 +217,21 @@ def test_cli_fit_from_a_discovery_json(backlash_model, tmp_path, capsys):
     pred = json.loads((tmp_path / "p" / "prediction.json").read_text())
     assert pred["rms_error"] == pytest.approx(res["rms_residual"], rel=1e-6)
     capsys.readouterr()
-    assert main(["fit", str(held), "--from", str(disc), "--start", "mu_N=400",
-                 "--out", str(tmp_path / "f2")]) == 2  # fmt: skip
+    assert (
+        main(
+            [
+                "fit",
+                str(held),
+                "--from",
+                str(disc),
+                "--start",
+                "mu_N=400",
+                "--out",
+                str(tmp_path / "f2"),
+            ]
+        )
+        == 2
+    )
     assert "--start and --alpha do not apply with --from" in capsys.readouterr().err
 
 
@@ -226,7 +252,8 @@ def test_steady_law_fit_is_the_curve_model_with_two_effects(tmp_path):
     assert main(["fit", str(path), "--out", str(tmp_path / "f"), "--model", "lugre"]) == 0
     saved = tj.load_model(tmp_path / "f" / "fit.json")
     assert saved.kind == "curve" and saved.parameters["F_c"] == pytest.approx(
-        model.parameters["F_c"], rel=1e-9)
+        model.parameters["F_c"], rel=1e-9
+    )
 
 
 def test_discovery_continues_from_a_saved_model(backlash_model, tmp_path):

@@ -62,20 +62,34 @@ def test_presets_agree_with_the_bundled_tables():
     assert float(tj.TrapezoidProfile().a_max) == _presets.WANG2022_A_MAX
     cal = _presets.WANG2022_CALIBRATED
     assert _presets.CHAIN_DEFAULTS == {
-        "D": cal["D"], "G_m": cal["G_m"], "mu_t": cal["mu_t"], "sigma_s_Pa": cal["sigma_s_Pa"],
+        "D": cal["D"],
+        "G_m": cal["G_m"],
+        "mu_t": cal["mu_t"],
+        "sigma_s_Pa": cal["sigma_s_Pa"],
         "alpha": 1.0,
-    }  # fmt: skip
+    }
 
 
 def test_public_names_come_from_presets():
     # the numbers from `_presets` (which imports nothing), the preset builders from `_contact`
     from tribojax._contact import _presets as builders
 
-    for name in ("WANG2022_CALIBRATED", "WANG2022_RETICLE_MASS_KG", "WANG2022_TANGENTIAL_LOAD_N",
-                 "WANG2022_A_MAX"):  # fmt: skip
+    for name in (
+        "WANG2022_CALIBRATED",
+        "WANG2022_RETICLE_MASS_KG",
+        "WANG2022_TANGENTIAL_LOAD_N",
+        "WANG2022_A_MAX",
+    ):
         assert getattr(tj, name) is getattr(_presets, name), name
-    for name in ("wang2022_pair", "wang2022_surface", "wang2022_chuck", "wang2022_reticle",
-                 "vacuum_to_load", "wang2022_table3_model", "wu2015_eq5_stiffness"):  # fmt: skip
+    for name in (
+        "wang2022_pair",
+        "wang2022_surface",
+        "wang2022_chuck",
+        "wang2022_reticle",
+        "vacuum_to_load",
+        "wang2022_table3_model",
+        "wu2015_eq5_stiffness",
+    ):
         assert getattr(tj, name) is getattr(builders, name), name
     assert float(tj.wu2015_eq5_stiffness(1.0)) == _presets.WU2015_EQ5_COEFFICIENT
 

@@ -54,11 +54,20 @@ print(json.dumps(changed))
 
 
 def _run(code, tmp_path, *args, **env):
-    clean = {k: v for k, v in os.environ.items()
-             if k not in ("XLA_FLAGS", "EQX_ON_ERROR", "JAX_ENABLE_X64", "MPLBACKEND",
-                          "TRIBOJAX_CACHE_DIR")}  # fmt: skip
-    return subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True,
-                          cwd=tmp_path, env={**clean, **env}, timeout=600)  # fmt: skip
+    clean = {
+        k: v
+        for k, v in os.environ.items()
+        if k
+        not in ("XLA_FLAGS", "EQX_ON_ERROR", "JAX_ENABLE_X64", "MPLBACKEND", "TRIBOJAX_CACHE_DIR")
+    }
+    return subprocess.run(
+        [sys.executable, "-c", code, *args],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={**clean, **env},
+        timeout=600,
+    )
 
 
 @pytest.mark.parametrize(
@@ -108,6 +117,7 @@ def test_the_command_makes_its_process_choices_for_itself(tmp_path):
     flags, eqx_mode, folder = json.loads(_run(code, tmp_path, TRIBOJAX_CACHE_DIR=cache).stdout)
     assert "xla_cpu_small_while_loop_byte_threshold" in flags and eqx_mode == "nan"
     assert folder == os.path.join(cache, "jax")
-    mine = _run(code, tmp_path, TRIBOJAX_CACHE="off", TRIBOJAX_XLA_HOIST="off",
-                EQX_ON_ERROR="raise")  # fmt: skip
+    mine = _run(
+        code, tmp_path, TRIBOJAX_CACHE="off", TRIBOJAX_XLA_HOIST="off", EQX_ON_ERROR="raise"
+    )
     assert json.loads(mine.stdout) == ["", "raise", None]

@@ -44,8 +44,9 @@ def test_output_lines_stay_whole_on_a_shared_terminal(monkeypatch):
     assert text.endswith("\r\x1b[K")
 
 
-@pytest.mark.parametrize("stream, quiet", [(io.StringIO(), False), (FakeTerminal(), True)],
-                         ids=["pipe", "quiet"])  # fmt: skip
+@pytest.mark.parametrize(
+    "stream, quiet", [(io.StringIO(), False), (FakeTerminal(), True)], ids=["pipe", "quiet"]
+)
 def test_progress_silent_in_a_pipe_and_when_quiet(stream, quiet):
     stdout = sys.stdout
     with Progress("fit", stream=stream, quiet=quiet) as bar:
@@ -67,15 +68,19 @@ def test_long_subcommands_take_quiet():
 @pytest.fixture
 def loop_file(tmp_path):
     mu, N, K_d = 0.3, 2.94, 1.2e6
-    loop = tj.synthetic_loop(tj.Mindlin(mu, N, K_d), 3 * mu * N / K_d, 2 * np.pi * 22,
-                             noise=0.004, seed=4, normal_load=N)  # fmt: skip
+    loop = tj.synthetic_loop(
+        tj.Mindlin(mu, N, K_d), 3 * mu * N / K_d, 2 * np.pi * 22, noise=0.004, seed=4, normal_load=N
+    )
     path = tmp_path / "loop.csv"
     tj.write_loop(loop, path)
     return path
 
 
-@pytest.mark.parametrize("terminal, quiet, shown", [(True, False, True), (False, False, False),
-                         (True, True, False)], ids=["terminal", "pipe", "quiet"])  # fmt: skip
+@pytest.mark.parametrize(
+    "terminal, quiet, shown",
+    [(True, False, True), (False, False, False), (True, True, False)],
+    ids=["terminal", "pipe", "quiet"],
+)
 def test_fit_command_progress(loop_file, monkeypatch, capsys, terminal, quiet, shown):
     err = FakeTerminal() if terminal else io.StringIO()
     monkeypatch.setattr(sys, "stderr", err)

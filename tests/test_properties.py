@@ -26,10 +26,12 @@ from tribojax._io._records import read_record  # noqa: E402
 from tribojax._limits import SAMPLE_FLOORS  # noqa: E402
 from tribojax._tables import read_table  # noqa: E402
 
-FAST = settings(max_examples=30, deadline=None,
-                suppress_health_check=[HealthCheck.function_scoped_fixture])  # fmt: skip
-finite = st.floats(allow_nan=False, allow_infinity=False, width=64, min_value=-1e300,
-                   max_value=1e300)  # fmt: skip
+FAST = settings(
+    max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+finite = st.floats(
+    allow_nan=False, allow_infinity=False, width=64, min_value=-1e300, max_value=1e300
+)
 
 
 @st.composite
@@ -70,11 +72,12 @@ def test_slip_runs_round_trip_exactly(folder, run):
 
 @FAST
 @given(
-    names=st.lists(st.text("abcdefghij_", min_size=1, max_size=8), min_size=1, max_size=5,
-                   unique=True),
+    names=st.lists(
+        st.text("abcdefghij_", min_size=1, max_size=8), min_size=1, max_size=5, unique=True
+    ),
     rows=st.integers(1, 10),
     data=st.data(),
-)  # fmt: skip
+)
 def test_tables_round_trip_in_file_order(folder, names, rows, data):
     values = np.array(
         data.draw(st.lists(finite, min_size=rows * len(names), max_size=rows * len(names)))
@@ -96,8 +99,11 @@ _JUNK = ["abc", "nan", "inf", "-inf", "", "1e999", "0x10", "1,5", "\t", "é", '"
 @st.composite
 def corruptions(draw):
     """(kind, parameters) of one corruption of a valid slip-run CSV and sidecar."""
-    kind = draw(st.sampled_from(["field", "drop", "extra", "bytes", "truncate", "header",
-                                 "sidecar", "reverse"]))  # fmt: skip
+    kind = draw(
+        st.sampled_from(
+            ["field", "drop", "extra", "bytes", "truncate", "header", "sidecar", "reverse"]
+        )
+    )
     return kind, draw(st.integers(0, 10**6)), draw(st.sampled_from(_JUNK))
 
 
@@ -128,8 +134,18 @@ def _corrupt(csv: Path, kind, k, junk):
     csv.write_bytes(raw)
     if kind == "sidecar":
         side = csv.with_suffix(".json")
-        side.write_text(['{"mass_kg": -1}', '{"mass_kg": 0.3, "x": 1}', "{", "[]", '{"mass": 1}',
-                         '{"mass_kg": "0.3"}', '{"mass_kg": null}', ""][k % 8])  # fmt: skip
+        side.write_text(
+            [
+                '{"mass_kg": -1}',
+                '{"mass_kg": 0.3, "x": 1}',
+                "{",
+                "[]",
+                '{"mass": 1}',
+                '{"mass_kg": "0.3"}',
+                '{"mass_kg": null}',
+                "",
+            ][k % 8]
+        )
 
 
 def _valid_run(folder):
@@ -216,8 +232,11 @@ _number = st.sampled_from(["0", "-1", "nan", "inf", "1e-300", "1e300", "2.5", "3
 
 
 @settings(max_examples=25, deadline=None)
-@given(D=_number | st.floats(2.0, 3.0).map(repr), G=_number | st.floats(1e-12, 1e-6).map(repr),
-       load=_number | st.floats(0.1, 100.0).map(repr))  # fmt: skip
+@given(
+    D=_number | st.floats(2.0, 3.0).map(repr),
+    G=_number | st.floats(1e-12, 1e-6).map(repr),
+    load=_number | st.floats(0.1, 100.0).map(repr),
+)
 def test_cli_contact_never_tracebacks(D, G, load):
     """Exit 0 with finite, non-negative contact numbers in the JSON (warnings only on stderr), or
     1 (a solve did not converge) / 2 (bad input, nothing written) with one line on stderr; never
@@ -249,8 +268,9 @@ def test_cli_contact_never_tracebacks(D, G, load):
         assert lines and all(ln.startswith("tribojax contact: warning: ") for ln in lines), args
         (row,) = result["contact"]
         assert not (row["converged"] and row["in_range"]), (args, row)
-        assert any("did not converge" in ln or "outside the physical range" in ln
-                   for ln in lines), args  # fmt: skip
+        assert any(
+            "did not converge" in ln or "outside the physical range" in ln for ln in lines
+        ), args
     else:
         assert code == 2, args
         (line,) = lines
@@ -258,16 +278,35 @@ def test_cli_contact_never_tracebacks(D, G, load):
 
 
 @settings(max_examples=12, deadline=None)
-@given(mu=_number | st.floats(0.01, 1.0).map(repr), N=_number | st.floats(0.1, 100.0).map(repr),
-       K_d=_number | st.floats(1e3, 1e9).map(repr), omega=_number | st.floats(1.0, 1e3).map(repr),
-       abar=st.sampled_from([None, ("0.1", "3"), ("3", "0.1"), ("0", "2"), ("1e-300", "1e300")]))
-def test_cli_hysteresis_never_tracebacks(mu, N, K_d, omega, abar):  # fmt: skip
+@given(
+    mu=_number | st.floats(0.01, 1.0).map(repr),
+    N=_number | st.floats(0.1, 100.0).map(repr),
+    K_d=_number | st.floats(1e3, 1e9).map(repr),
+    omega=_number | st.floats(1.0, 1e3).map(repr),
+    abar=st.sampled_from([None, ("0.1", "3"), ("3", "0.1"), ("0", "2"), ("1e-300", "1e300")]),
+)
+def test_cli_hysteresis_never_tracebacks(mu, N, K_d, omega, abar):
     """issue 33: exit 0 with finite K̄ in [0, 1] and C̄ >= 0 for every amplitude, or exit 1/2 with
     one line and nothing written; never a traceback, never a NaN with exit 0."""
     with tempfile.TemporaryDirectory() as tmp, _Capture() as cap:
         out = Path(tmp) / "h"
-        argv = ["hysteresis", "--element", "jenkins", "--mu", mu, "--N", N, "--K-d", K_d,
-                "--omega", omega, "--n", "3", "--out", str(out)]  # fmt: skip
+        argv = [
+            "hysteresis",
+            "--element",
+            "jenkins",
+            "--mu",
+            mu,
+            "--N",
+            N,
+            "--K-d",
+            K_d,
+            "--omega",
+            omega,
+            "--n",
+            "3",
+            "--out",
+            str(out),
+        ]
         argv += ["--abar", *abar] if abar else []
         try:
             code = main(argv)
@@ -275,8 +314,11 @@ def test_cli_hysteresis_never_tracebacks(mu, N, K_d, omega, abar):  # fmt: skip
             code = ("argparse", exit_.code)
         table = None
         if (out / "hysteresis.csv").exists():  # a comment line, the header, the rows
-            rows = [ln for ln in (out / "hysteresis.csv").read_text().splitlines()
-                    if not ln.startswith("#")][1:]  # fmt: skip
+            rows = [
+                ln
+                for ln in (out / "hysteresis.csv").read_text().splitlines()
+                if not ln.startswith("#")
+            ][1:]
             table = np.array([[float(v) for v in ln.split(",")] for ln in rows])
     args = (argv, code, cap.err)
     if isinstance(code, tuple):
@@ -297,8 +339,7 @@ def test_cli_contact_huge_load_is_not_a_success(tmp_path, capsys):
     # was a known defect (exit 0 with F_s, C_tau and z_max NaN, null in the JSON): now the row
     # is out of range and the exit status 1
     out = tmp_path / "contact.json"
-    code = main(["contact", "--D", "2.88", "--G", "4.36e-8", "--load", "1e300", "--json",
-                 str(out)])  # fmt: skip
+    code = main(["contact", "--D", "2.88", "--G", "4.36e-8", "--load", "1e300", "--json", str(out)])
     (row,) = json.loads(out.read_text())["contact"]
     assert code == 1 and row["in_range"] is False
     assert "outside the physical range" in capsys.readouterr().err

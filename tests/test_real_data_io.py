@@ -20,8 +20,13 @@ EPOS_COLS = ";Velocity actual value averaged;Torque actual value averaged\nms;rp
 
 def _brfd(tmp_path, rows, name="1Hz30lbtension1amplitude.json", **extra):
     path = tmp_path / name
-    obj = {"data": rows, "dt": 1 / 1024, "displacement units": "in",
-           "friction force units": "kip", **extra}  # fmt: skip
+    obj = {
+        "data": rows,
+        "dt": 1 / 1024,
+        "displacement units": "in",
+        "friction force units": "kip",
+        **extra,
+    }
     path.write_text(json.dumps(obj).replace("], [", "],\n["))
     return path
 
@@ -82,8 +87,11 @@ def test_epos_folder_refuses_what_is_not_one_steady_point(tmp_path):
         tj.read_record(folder)
     stray.unlink()
     cut = _epos(folder, "20.csv", [(-20, -40.0), (-20, -41.0)], announced=500)
-    with pytest.raises(tj.DataFileError, match=r"20.csv, line \d+: 2 samples, but the header "
-                       "announces 500"):  # fmt: skip
+    with pytest.raises(
+        tj.DataFileError,
+        match=r"20.csv, line \d+: 2 samples, but the header "
+        "announces 500",
+    ):
         tj.read_record(folder)
     cut.unlink()
     copy = folder / "10 (1).csv"
@@ -216,18 +224,35 @@ def test_effective_samples_of_a_correlated_series():
 def test_epos_resaved_by_a_spreadsheet_is_read_and_edits_are_flagged(tmp_path):
     # trailing empty fields on every line (the units line too), quotes, a note in a spare
     # column, a torque typed with two decimals in a one-decimal column, a time off the grid
-    body = ["0.000;10;31.0", "51.200;10;30.5", "102.400;11;31.2", "153.600;10;30.9",
-            "204.800;10;31.1;checked by hand", "256.000;10;30.75", "307.100;10;31.0",
-            "358.400;10;-31"]  # fmt: skip
+    body = [
+        "0.000;10;31.0",
+        "51.200;10;30.5",
+        "102.400;11;31.2",
+        "153.600;10;30.9",
+        "204.800;10;31.1;checked by hand",
+        "256.000;10;30.75",
+        "307.100;10;31.0",
+        "358.400;10;-31",
+    ]
     text = EPOS_HEAD.replace(";4", ";8") + EPOS_COLS + "\n".join(body) + "\n"
     clean = tmp_path / "clean.csv"
-    clean.write_text(EPOS_HEAD.replace(";4", ";8") + EPOS_COLS + "\n".join(
-        ";".join(line.split(";")[:3]).replace("307.100", "307.200").replace("30.75", "30.7")
-        for line in body) + "\n")  # fmt: skip
+    clean.write_text(
+        EPOS_HEAD.replace(";4", ";8")
+        + EPOS_COLS
+        + "\n".join(
+            ";".join(line.split(";")[:3]).replace("307.100", "307.200").replace("30.75", "30.7")
+            for line in body
+        )
+        + "\n"
+    )
     resaved = tmp_path / "resaved.csv"
-    resaved.write_text("\n".join(
-        ";".join(f'"{f}"' if f.endswith(":") else f for f in line.split(";")) + ";;,,"
-        for line in text.splitlines()) + "\n")  # fmt: skip
+    resaved.write_text(
+        "\n".join(
+            ";".join(f'"{f}"' if f.endswith(":") else f for f in line.split(";")) + ";;,,"
+            for line in text.splitlines()
+        )
+        + "\n"
+    )
     assert tj.detect_format(resaved) == "epos"
     with pytest.warns(tj.DataFileWarning) as caught:
         got = tj.read_record(resaved)
@@ -257,8 +282,10 @@ def test_scored_windows_reproduce_the_authors_lugre_figures():
 
     quakes = {n: tj.read_brfd(SHARED / "brfd" / f"{n}.json") for n in rd.SCORING_WINDOWS}
     got = rd._authors_lugre(SHARED, quakes)
-    assert got == {"earthquake_ImperialValleyDBE_30lb": pytest.approx(0.440, abs=5e-4),
-                   "earthquake_KocaeliDBE_30lb": pytest.approx(0.794, abs=5e-4)}  # fmt: skip
+    assert got == {
+        "earthquake_ImperialValleyDBE_30lb": pytest.approx(0.440, abs=5e-4),
+        "earthquake_KocaeliDBE_30lb": pytest.approx(0.794, abs=5e-4),
+    }
     name = "earthquake_KocaeliDBE_30lb"
     rec = quakes[name]
     f = rec.f[:: rd.DECIMATE]

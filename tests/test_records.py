@@ -21,8 +21,9 @@ def test_synthetic_run_and_model_on_its_own_samples(run):
     assert len(run) == 461 and run.t[-1] == 2.3 and run.mass == 0.321
     assert run.noise_std == 2e-10 and run.normal_load == 17.4
     # the sampled trapezoid's drive stops the solver at its 8 corners (plus the end points) only
-    np.testing.assert_allclose(run.profile().kinks(), [0, 0.1, 0.25, 0.6, 0.75, 1.5, 1.65, 2.0,
-                                                       2.15, 2.3], atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(
+        run.profile().kinks(), [0, 0.1, 0.25, 0.6, 0.75, 1.5, 1.65, 2.0, 2.15, 2.3], atol=1e-12
+    )
     sol = tj.simulate_run(ELEMENT, run)
     resid = np.asarray(sol.slip) - run.slip
     # the noise is all that separates the record from the model: sd 2e-10 m within 15 %
@@ -180,8 +181,11 @@ def test_loop_file_round_trip_new_and_legacy(tmp_path):
     for back in (tj.read_loop(path), tj.read_record(path)):
         assert isinstance(back, tj.HysteresisLoop)
         np.testing.assert_array_equal(back.f, loop.f)
-        assert (back.normal_load, back.frequency, back.noise_std) == (N, loop.frequency,
-                                                                      loop.noise_std)  # fmt: skip
+        assert (back.normal_load, back.frequency, back.noise_std) == (
+            N,
+            loop.frequency,
+            loop.noise_std,
+        )
     with pytest.raises(FileExistsError, match="refusing to overwrite"):
         tj.write_loop(loop, path)
     legacy = tmp_path / "legacy.csv"
@@ -204,8 +208,11 @@ def test_implausible_loop_samples_name_file_line_and_column(tmp_path):
     t, u, f = lines[5].split(",")
     lines[5] = f"{t},{float(u) * 1e300 or 1e300},{f}"
     path.write_text("\n".join(lines) + "\n")
-    with pytest.raises(tj.DataFileError, match=r"big.csv, line 6: displacement_m = .* m is "
-                       r"outside the plausible range \[-1000, 1000\] m"):  # fmt: skip
+    with pytest.raises(
+        tj.DataFileError,
+        match=r"big.csv, line 6: displacement_m = .* m is "
+        r"outside the plausible range \[-1000, 1000\] m",
+    ):
         tj.read_record(path)
     with pytest.raises(ValueError, match=r"f\[2\] = 1e\+12 N is outside the plausible range"):
         tj.HysteresisLoop(loop.t[:4], loop.u[:4], np.array([0.0, 1.0, 1e12, 0.0]))
@@ -278,8 +285,10 @@ def test_every_record_answers_the_record_interface(run):
     transient = tj.FrictionTransient([0.0, 1.0, 2.0], [0.0, 1.0, 0.0], [0.0, 0.2, 0.0])
     assert [len(r) for r in (run, loop, curve, transient)] == [461, len(loop.t), 2, 3]
     # the drive/response series of the reducible kinds, and a resampled copy of the same kind
-    for record, channels, unit in ((run, ("t", "accel", "slip"), "m"),
-                                   (loop, ("t", "u", "f"), "N")):  # fmt: skip
+    for record, channels, unit in (
+        (run, ("t", "accel", "slip"), "m"),
+        (loop, ("t", "u", "f"), "N"),
+    ):
         assert record.reducible and record.response_unit == unit
         for x, name in zip(record.series(), channels):
             assert x is getattr(record, name)

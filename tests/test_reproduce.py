@@ -134,8 +134,12 @@ def test_cli_writes_json_and_figure(tmp_path, capsys):
     from tribojax._reproduce import _tables4to7, _wu2015
 
     if export_dir() is not None:
-        for fn in (_tables4to7._table3_phase_slips, _tables4to7._figure10, _wu2015._curves,
-                   _wu2015._newton_peak):  # fmt: skip
+        for fn in (
+            _tables4to7._table3_phase_slips,
+            _tables4to7._figure10,
+            _wu2015._curves,
+            _wu2015._newton_peak,
+        ):
             assert fn.programs and None not in fn.programs.values(), fn.__name__
 
 
@@ -143,22 +147,35 @@ def test_reproduce_reports_a_fit_that_does_not_converge(monkeypatch, capsys):
     # issue 5 point 6: a non-converged full-chain fit gives a clear message and False (the CLI
     # then exits 1); the fit itself is replaced by a stand-in so that this test is cheap
     from tribojax._cli import _reproduce as _cli
-    from tribojax._fit._engine import FitResult
+    from tribojax._fit._result import FitResult
     from tribojax._reproduce import _chain_fit as _fit_chain
 
     def stand_in(start=None, **kw):
         fit = FitResult(
-            names=("D",), values=np.ones(1), std_errors=np.ones(1), covariance=np.eye(1),
-            correlation=np.eye(1), theta=np.zeros(1), residuals=np.zeros(24),
-            singular_values=np.ones(1), converged=False, steps=60,
+            names=("D",),
+            values=np.ones(1),
+            std_errors=np.ones(1),
+            covariance=np.eye(1),
+            correlation=np.eye(1),
+            theta=np.zeros(1),
+            residuals=np.zeros(24),
+            singular_values=np.ones(1),
+            converged=False,
+            steps=60,
             message="The maximum number of steps was reached",
-        )  # fmt: skip
+        )
         return _fit_chain.ChainFit(
-            fit=fit, parameters=dict(_fit_chain.DEFAULTS), free=("D",),
-            model_nm=_fit_chain.measured_slips(), target_nm=_fit_chain.measured_slips(),
-            scaled_singular_values=np.ones(1), scaled_right_vectors=np.eye(1), wall_s=0.0,
-            evaluations=0, start=dict(_fit_chain.DEFAULTS),
-        )  # fmt: skip
+            fit=fit,
+            parameters=dict(_fit_chain.DEFAULTS),
+            free=("D",),
+            model_nm=_fit_chain.measured_slips(),
+            target_nm=_fit_chain.measured_slips(),
+            scaled_singular_values=np.ones(1),
+            scaled_right_vectors=np.eye(1),
+            wall_s=0.0,
+            evaluations=0,
+            start=dict(_fit_chain.DEFAULTS),
+        )
 
     monkeypatch.setattr(_fit_chain, "fit_measured_slips", stand_in)
     result = {}

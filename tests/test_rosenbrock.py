@@ -26,8 +26,16 @@ def exact(t):
 def solve(dt0, controller=None, ts=(0.37, 1.0)):
     term = dfx.ODETerm(lambda t, y, a: jnp.asarray(A) @ y + jnp.asarray(B) * t)
     kw = {} if controller is None else dict(stepsize_controller=controller)
-    sol = dfx.diffeqsolve(term, tj.Rodas4(), 0.0, 1.0, jnp.asarray(dt0), jnp.asarray(Y0),
-                          saveat=dfx.SaveAt(ts=jnp.asarray(ts)), **kw)  # fmt: skip
+    sol = dfx.diffeqsolve(
+        term,
+        tj.Rodas4(),
+        0.0,
+        1.0,
+        jnp.asarray(dt0),
+        jnp.asarray(Y0),
+        saveat=dfx.SaveAt(ts=jnp.asarray(ts)),
+        **kw,
+    )
     return np.asarray(sol.ys)
 
 
@@ -91,10 +99,18 @@ def test_system_above_the_unrolled_size_is_accurate():
     n = SMALL_N + 2  # a stiff diagonal chain y_i' = -k_i y_i: y_i = exp(-k_i t)
     k = jnp.logspace(0, 3, n)
     term = dfx.ODETerm(lambda t, y, a: -k * y)
-    sol = dfx.diffeqsolve(term, tj.Rodas4(), 0.0, 1.0, 1e-3, jnp.ones(n),
-                          stepsize_controller=dfx.PIDController(rtol=1e-9, atol=1e-12))  # fmt: skip
-    np.testing.assert_allclose(np.asarray(sol.ys[-1]), np.exp(-np.asarray(k)), rtol=1e-6,
-                               atol=1e-12)  # fmt: skip
+    sol = dfx.diffeqsolve(
+        term,
+        tj.Rodas4(),
+        0.0,
+        1.0,
+        1e-3,
+        jnp.ones(n),
+        stepsize_controller=dfx.PIDController(rtol=1e-9, atol=1e-12),
+    )
+    np.testing.assert_allclose(
+        np.asarray(sol.ys[-1]), np.exp(-np.asarray(k)), rtol=1e-6, atol=1e-12
+    )
 
 
 _ONE_KERNEL = r"""
@@ -125,8 +141,13 @@ def _one_kernel_probe(code=_ONE_KERNEL, **env):
     import sys
 
     clean = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "TRIBOJAX_XLA_HOIST")}
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         env={**clean, **env}, check=True)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        env={**clean, **env},
+        check=True,
+    )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -151,9 +172,11 @@ def test_slip_solve_is_one_kernel_on_request_within_its_tolerance_of_xlas_loops(
 
 
 def test_one_kernel_is_an_explicit_choice_that_leaves_a_users_options_alone():
-    show = ("import json, os, tribojax as tj; r = {}; r['after_import'] = os.environ.get("
-            "'XLA_FLAGS', ''); r['chosen'] = tj.use_one_kernel(); "
-            "r['flags'] = os.environ.get('XLA_FLAGS', ''); print(json.dumps(r))")  # fmt: skip
+    show = (
+        "import json, os, tribojax as tj; r = {}; r['after_import'] = os.environ.get("
+        "'XLA_FLAGS', ''); r['chosen'] = tj.use_one_kernel(); "
+        "r['flags'] = os.environ.get('XLA_FLAGS', ''); print(json.dumps(r))"
+    )
     # importing tribojax writes no XLA option; asking for it does
     out = _one_kernel_probe(show)
     assert out["after_import"] == "" and out["chosen"] and "small_while_loop" in out["flags"]
@@ -165,10 +188,12 @@ def test_one_kernel_is_an_explicit_choice_that_leaves_a_users_options_alone():
     assert _one_kernel_probe(show, XLA_FLAGS=mine)["flags"] == mine  # already raised: kept
     # a backend already running has read XLA_FLAGS: refused with the reason, nothing written;
     # Rodas4's factorisation does not depend on any of it
-    late = ("import json, os, jax; jax.numpy.zeros(1).block_until_ready(); import tribojax as tj\n"
-            "try:\n    tj.use_one_kernel(); e = ''\nexcept RuntimeError as err:\n    e = str(err)\n"
-            "from tribojax._dynamics._rodas4 import unrolled_lu\n"
-            "print(json.dumps([os.environ.get('XLA_FLAGS', ''), e, unrolled_lu(4)]))")  # fmt: skip
+    late = (
+        "import json, os, jax; jax.numpy.zeros(1).block_until_ready(); import tribojax as tj\n"
+        "try:\n    tj.use_one_kernel(); e = ''\nexcept RuntimeError as err:\n    e = str(err)\n"
+        "from tribojax._dynamics._rodas4 import unrolled_lu\n"
+        "print(json.dumps([os.environ.get('XLA_FLAGS', ''), e, unrolled_lu(4)]))"
+    )
     flags, err, unrolled = _one_kernel_probe(late)
     assert flags == "" and "backend has started" in err and unrolled
 
@@ -178,10 +203,25 @@ def test_cli_refuses_an_unknown_one_kernel_setting(tmp_path):
     import subprocess
     import sys
 
-    cmd = [sys.executable, "-m", "tribojax._cli._main", "contact", "--D", "2.5", "--G", "1e-9",
-           "--load", "5"]  # fmt: skip
-    out = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path,
-                         env={**os.environ, "TRIBOJAX_XLA_HOIST": "maybe"})  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "tribojax._cli._main",
+        "contact",
+        "--D",
+        "2.5",
+        "--G",
+        "1e-9",
+        "--load",
+        "5",
+    ]
+    out = subprocess.run(
+        cmd,
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={**os.environ, "TRIBOJAX_XLA_HOIST": "maybe"},
+    )
     assert out.returncode == 2 and "TRIBOJAX_XLA_HOIST = 'maybe'" in out.stderr
 
 

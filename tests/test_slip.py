@@ -80,8 +80,9 @@ def test_reverse_and_forward_phase_averages_agree_to_rounding():
     # custom_jvp): reverse and forward agree to rounding (measured 2e-16 of the largest
     # elasticity), which a recomputing reverse pass does not achieve (6e-3, see Rodas4)
     elasticity = np.abs(J_fwd * np.asarray(theta)).max()
-    np.testing.assert_allclose(J * np.asarray(theta), J_fwd * np.asarray(theta),
-                               atol=1e-9 * elasticity)  # fmt: skip
+    np.testing.assert_allclose(
+        J * np.asarray(theta), J_fwd * np.asarray(theta), atol=1e-9 * elasticity
+    )
 
 
 @pytest.mark.slow

@@ -56,9 +56,7 @@ CASES = [(0, "rodas4"), (2, "rodas4"), (5, "rodas4"), (2, "kvaerno5")]
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    "row,solver", CASES, ids=["0.6kPa", "4kPa", "20kPa", "4kPa-kvaerno5"]
-)  # fmt: skip
+@pytest.mark.parametrize("row,solver", CASES, ids=["0.6kPa", "4kPa", "20kPa", "4kPa-kvaerno5"])
 def test_phase_averages_match_scipy_radau(row, solver):
     F_s, K, C = (float(T3[k][row]) for k in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m"))
     slip_ref, phases_ref = reference(F_s, K, C)

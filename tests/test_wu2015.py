@@ -30,8 +30,12 @@ def test_eq7_table_as_published():
 def test_rms_against_eq7_and_cbar_peaks(comparison):
     rms = comparison["eq7_rms"]
     # docs/reproduction.md (independent NumPy/SciPy re-computation) quotes these to 3 digits
-    for model, q, want in [("jenkins", "K", 0.109), ("jenkins", "C", 0.167),
-                           ("mindlin", "K", 0.053), ("mindlin", "C", 0.096)]:  # fmt: skip
+    for model, q, want in [
+        ("jenkins", "K", 0.109),
+        ("jenkins", "C", 0.167),
+        ("mindlin", "K", 0.053),
+        ("mindlin", "C", 0.096),
+    ]:
         assert rms[model][q] == pytest.approx(want, abs=6e-4), (model, q)
     assert rms["mindlin"]["K"] < rms["jenkins"]["K"] and rms["mindlin"]["C"] < rms["jenkins"]["C"]
     # closed forms: Jenkins C̄ = 4(Ā−1)/Ā² peaks at Ā = 2 (C̄ = 1); Mindlin 4(Ā−1.2)/Ā² at 2.4 (5/6)
@@ -58,8 +62,14 @@ def test_eq4_corrected_exponent_is_the_integral_over_elastic_asperities():
     def n(a):  # Majumdar–Bhushan size distribution of the truncated areas
         return 0.5 * D * a_l ** (0.5 * D) * a ** (-0.5 * D - 1)
 
-    want = integrate.quad(lambda a: k_asp * math.sqrt(a) * n(a), a_c, a_l, limit=200,
-                          points=np.geomspace(a_c, a_l, 12)[1:-1], epsrel=1e-12)[0]  # fmt: skip
+    want = integrate.quad(
+        lambda a: k_asp * math.sqrt(a) * n(a),
+        a_c,
+        a_l,
+        limit=200,
+        points=np.geomspace(a_c, a_l, 12)[1:-1],
+        epsrel=1e-12,
+    )[0]
     got = float(tj.fractal_tangential_stiffness(a_l, a_c, D, E, nu))
     assert got == pytest.approx(want, rel=1e-9)
     # the printed exponent 1 − D/2 gives a different number with the wrong units (m^(1-D/2+D/2))

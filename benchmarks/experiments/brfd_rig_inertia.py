@@ -30,8 +30,11 @@ from scipy.optimize import least_squares
 
 import tribojax as tj
 
-SRC = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parents[3] / (
-    "shared/data/real/brfd")  # fmt: skip
+SRC = (
+    Path(sys.argv[1])
+    if len(sys.argv) > 1
+    else Path(__file__).resolve().parents[3] / ("shared/data/real/brfd")
+)
 DEC, SUB = 2, 4
 WINDOWS = {"ImperialValleyDBE": (3072, 7680), "KocaeliDBE": (6144, 14336)}
 
@@ -66,19 +69,23 @@ def _force(x, u, h):
 
 def main():
     sines = [_load(p) for p in sorted(SRC.glob("*amplitude.json"))]
-    band = tj.fit_history([tj.read_brfd(p) for p in sorted(SRC.glob("*amplitude.json"))],
-                          "band_brake", decimate=DEC, throw=False)  # fmt: skip
+    band = tj.fit_history(
+        [tj.read_brfd(p) for p in sorted(SRC.glob("*amplitude.json"))],
+        "band_brake",
+        decimate=DEC,
+        throw=False,
+    )
     print(f"band brake alone: fit NRMSE {band.nrmse:.3f}")
     x0 = np.r_[np.log(band.fit.values[:9]), band.fit.values[9] / 1e4, np.log([2e7, 300.0, 1.5e4])]
     force, jac = jax.jit(_force), jax.jit(jax.jacfwd(_force))
 
     def res(x):
-        return np.concatenate([(np.asarray(force(x, u, t[1] - t[0])) - f) / np.std(f)
-                               for t, u, f in sines])  # fmt: skip
+        return np.concatenate(
+            [(np.asarray(force(x, u, t[1] - t[0])) - f) / np.std(f) for t, u, f in sines]
+        )
 
     def J(x):
-        return np.concatenate([np.asarray(jac(x, u, t[1] - t[0])) / np.std(f)
-                               for t, u, f in sines])  # fmt: skip
+        return np.concatenate([np.asarray(jac(x, u, t[1] - t[0])) / np.std(f) for t, u, f in sines])
 
     t0 = time.perf_counter()
     sol = least_squares(res, x0, jac=J, max_nfev=40, x_scale="jac")

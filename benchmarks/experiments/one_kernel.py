@@ -53,22 +53,38 @@ def compare():
     from benchmarks import blind_study, discovery_study
 
     pairs = [
-        ("study", json.loads((ROOT / "benchmarks/discovery_study.json").read_text())["rows"],
-         _rows(HERE / "study_hoisted.jsonl"), discovery_study.summarise),
-        ("blind", _rows(ROOT / "benchmarks/blind_study_after.jsonl"),
-         _rows(HERE / "blind_slip_hoisted.jsonl") + _rows(HERE / "blind_loop_hoisted.jsonl"),
-         blind_study.summarise),
-        ("blind pairs", _rows(ROOT / "benchmarks/blind_pairs_after.jsonl"),
-         _rows(HERE / "blind_pairs_hoisted.jsonl"), blind_study.summarise),
-        ("study, both settings on one machine (stop 64)",
-         _rows(HERE / "study_default_stop64.jsonl"), _rows(HERE / "study_hoisted_stop64.jsonl"),
-         discovery_study.summarise),
-    ]  # fmt: skip
+        (
+            "study",
+            json.loads((ROOT / "benchmarks/discovery_study.json").read_text())["rows"],
+            _rows(HERE / "study_hoisted.jsonl"),
+            discovery_study.summarise,
+        ),
+        (
+            "blind",
+            _rows(ROOT / "benchmarks/blind_study_after.jsonl"),
+            _rows(HERE / "blind_slip_hoisted.jsonl") + _rows(HERE / "blind_loop_hoisted.jsonl"),
+            blind_study.summarise,
+        ),
+        (
+            "blind pairs",
+            _rows(ROOT / "benchmarks/blind_pairs_after.jsonl"),
+            _rows(HERE / "blind_pairs_hoisted.jsonl"),
+            blind_study.summarise,
+        ),
+        (
+            "study, both settings on one machine (stop 64)",
+            _rows(HERE / "study_default_stop64.jsonl"),
+            _rows(HERE / "study_hoisted_stop64.jsonl"),
+            discovery_study.summarise,
+        ),
+    ]
     for name, default, hoisted, summarise in pairs:
         by_label = {r["label"]: r for r in default}
         print(f"## {name}: {len(hoisted)} records")
-        for tag, rows in (("default", [by_label[r["label"]] for r in hoisted]),
-                          ("opt-in", hoisted)):  # fmt: skip
+        for tag, rows in (
+            ("default", [by_label[r["label"]] for r in hoisted]),
+            ("opt-in", hoisted),
+        ):
             table = summarise(rows)[1]
             lines = [x for x in table.splitlines() if x.startswith("- ") and "kPa" not in x]
             seconds = sum(r["seconds"] for r in rows)
@@ -81,8 +97,10 @@ def compare():
         for r in hoisted:
             d = by_label[r["label"]]
             if (d["ok"], d["effects"], d["verdict"]) != (r["ok"], r["effects"], r["verdict"]):
-                print(f"  changed {r['label']}: {d['ok']} {d['effects']} {d['verdict']} -> "
-                      f"{r['ok']} {r['effects']} {r['verdict']}")  # fmt: skip
+                print(
+                    f"  changed {r['label']}: {d['ok']} {d['effects']} {d['verdict']} -> "
+                    f"{r['ok']} {r['effects']} {r['verdict']}"
+                )
 
 
 def evaluate(rounds=3):
@@ -92,12 +110,19 @@ def evaluate(rounds=3):
     out = {"off": [], "one kernel": []}
     for _ in range(rounds):
         for tag, env in (("off", {"TRIBOJAX_XLA_HOIST": "off"}), ("one kernel", {})):
-            res = subprocess.run([sys.executable, "-c", _EVAL], env={**base, **env},
-                                 capture_output=True, text=True, check=True)  # fmt: skip
+            res = subprocess.run(
+                [sys.executable, "-c", _EVAL],
+                env={**base, **env},
+                capture_output=True,
+                text=True,
+                check=True,
+            )
             out[tag].append(json.loads(res.stdout.strip().splitlines()[-1]))
     for tag, ts in out.items():
-        print(f"{tag}: median of 15 evaluations per process: "
-              + ", ".join(f"{t * 1e3:.1f} ms" for t in ts))  # fmt: skip
+        print(
+            f"{tag}: median of 15 evaluations per process: "
+            + ", ".join(f"{t * 1e3:.1f} ms" for t in ts)
+        )
     return out
 
 

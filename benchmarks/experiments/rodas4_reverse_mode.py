@@ -66,9 +66,11 @@ def bitwise():
 
         a = jax.jit(jax.vmap(fwd))(ys, t0s, hs)
         b = jax.jit(jax.vmap(rev))(ys, t0s, hs)[0]
-        print(f"{part}: primal differs bitwise from the plain program in "
-              f"{int(jnp.sum(jnp.any(plain != a, -1)))}/{n} (jvp program), "
-              f"{int(jnp.sum(jnp.any(plain != b, -1)))}/{n} (vjp + backward program)")  # fmt: skip
+        print(
+            f"{part}: primal differs bitwise from the plain program in "
+            f"{int(jnp.sum(jnp.any(plain != a, -1)))}/{n} (jvp program), "
+            f"{int(jnp.sum(jnp.any(plain != b, -1)))}/{n} (vjp + backward program)"
+        )
 
 
 def recomputation(t_end=0.26):
@@ -84,11 +86,21 @@ def recomputation(t_end=0.26):
         el, args = _args(th)
         y0 = jnp.zeros(4)
         atol = jnp.array([1e-18, 1e-15, 1e-18, 1e-19])
-        ctrl = dfx.PIDController(rtol=1e-8, atol=atol, pcoeff=0.3, icoeff=0.4, factormax=3.0,
-                                 jump_ts=PROFILE.kinks())  # fmt: skip
-        sol = dfx.diffeqsolve(dfx.ODETerm(_vector_field), tj.Rodas4(), 0.0, t_end, 1e-4, y0,
-                              args=args, stepsize_controller=ctrl, max_steps=100_000,
-                              adjoint=adjoint)  # fmt: skip
+        ctrl = dfx.PIDController(
+            rtol=1e-8, atol=atol, pcoeff=0.3, icoeff=0.4, factormax=3.0, jump_ts=PROFILE.kinks()
+        )
+        sol = dfx.diffeqsolve(
+            dfx.ODETerm(_vector_field),
+            tj.Rodas4(),
+            0.0,
+            t_end,
+            1e-4,
+            y0,
+            args=args,
+            stepsize_controller=ctrl,
+            max_steps=100_000,
+            adjoint=adjoint,
+        )
         return sol.ys[-1] / jnp.array([1e-9, 1e-6, 1e-9, 1e-9])
 
     tj.Rodas4.step = logged
@@ -103,10 +115,14 @@ def recomputation(t_end=0.26):
     new = sum(s not in forward for s in backward)
     jf = np.asarray(jax.jit(jax.jacfwd(lambda th: solve(th, dfx.ForwardMode())))(THETA))
     scale = np.abs(jf * np.asarray(THETA)).max()
-    print(f"forward pass: {len(forward)} steps; backward pass: {len(backward)} step calls, "
-          f"{new} of them at (t0, t1) the forward pass never visited")  # fmt: skip
-    print(f"|jacrev - jacfwd| / largest elasticity: "
-          f"{np.abs((jr - jf) * np.asarray(THETA)).max() / scale:.1e}")  # fmt: skip
+    print(
+        f"forward pass: {len(forward)} steps; backward pass: {len(backward)} step calls, "
+        f"{new} of them at (t0, t1) the forward pass never visited"
+    )
+    print(
+        f"|jacrev - jacfwd| / largest elasticity: "
+        f"{np.abs((jr - jf) * np.asarray(THETA)).max() / scale:.1e}"
+    )
 
 
 if __name__ == "__main__":

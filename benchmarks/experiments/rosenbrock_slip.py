@@ -63,15 +63,19 @@ def main(quick=False):
             err = float(np.max(np.abs(ph / ref[f"{row}_{alpha}"] - 1)))
             t = median_time(lambda: fwd(el), n)
             st = sim(el)
-            print(f"{name:36s} row {row} a {alpha:4}: {t * 1e3:6.2f} ms  err {err:.1e}  "
-                  f"acc {int(st['num_accepted_steps'])} rej {int(st['num_rejected_steps'])}",
-                  flush=True)  # fmt: skip
+            print(
+                f"{name:36s} row {row} a {alpha:4}: {t * 1e3:6.2f} ms  err {err:.1e}  "
+                f"acc {int(st['num_accepted_steps'])} rej {int(st['num_rejected_steps'])}",
+                flush=True,
+            )
         els = jax.vmap(lambda f, k, c: tj.PreSlipLuGre(f, k, c))(
             *(jnp.asarray(T3[k]) for k in ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m"))
         )
         six = jax.jit(jax.vmap(lambda e, kw=kw: tj.slip_phase_averages(e, **kw)))
-        print(f"{name:36s} six loads vmapped: {median_time(lambda: six(els), 5) * 1e3:6.1f} ms",
-              flush=True)  # fmt: skip
+        print(
+            f"{name:36s} six loads vmapped: {median_time(lambda: six(els), 5) * 1e3:6.1f} ms",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

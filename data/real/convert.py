@@ -49,34 +49,57 @@ def convert(src: Path, out: Path, full: bool) -> list[dict]:
         if keep:
             loop = dataclasses.replace(loop, t=loop.t[:keep], u=loop.u[:keep], f=loop.f[:keep])
         target = out / "brfd" / f"{path.stem}.csv"
-        note = (f"{path.name} converted to SI (in -> m, kip -> N)"
-                + (f", first {keep} samples" if keep else "") + f"\n{BRFD['source']}\n"
-                + f"Licence: {BRFD['licence']}")  # fmt: skip
+        note = (
+            f"{path.name} converted to SI (in -> m, kip -> N)"
+            + (f", first {keep} samples" if keep else "")
+            + f"\n{BRFD['source']}\n"
+            + f"Licence: {BRFD['licence']}"
+        )
         tj.write_loop(loop, target, note)
-        entries.append({"file": f"brfd/{target.name}", "original": f"brfd/{path.name}",
-                        "original_sha256": sha256(path), **BRFD})  # fmt: skip
+        entries.append(
+            {
+                "file": f"brfd/{target.name}",
+                "original": f"brfd/{path.name}",
+                "original_sha256": sha256(path),
+                **BRFD,
+            }
+        )
     for drive in sorted((src / "screwdrive").glob("driveNo*")):
         for folder in sorted((drive / "steady_state").iterdir()):
             curve = tj.read_epos_steady(folder)
             target = out / "screwdrive" / f"{drive.name}_steady_{folder.name}.csv"
             originals = sorted(folder.glob("*.csv"))
             prov = {"source": SCREW["source"], "licence": SCREW["licence"]}
-            tj.write_friction_curve(curve, target, f"{drive.name}/steady_state/{folder.name}: "
-                                    "one point per EPOS export (mean and scatter)",
-                                    provenance=prov)  # fmt: skip
-            entries.append({"file": f"screwdrive/{target.name}",
-                            "original": f"screwdrive/{drive.name}/steady_state/{folder.name}/",
-                            "original_sha256": {p.name: sha256(p) for p in originals},
-                            **SCREW})  # fmt: skip
+            tj.write_friction_curve(
+                curve,
+                target,
+                f"{drive.name}/steady_state/{folder.name}: "
+                "one point per EPOS export (mean and scatter)",
+                provenance=prov,
+            )
+            entries.append(
+                {
+                    "file": f"screwdrive/{target.name}",
+                    "original": f"screwdrive/{drive.name}/steady_state/{folder.name}/",
+                    "original_sha256": {p.name: sha256(p) for p in originals},
+                    **SCREW,
+                }
+            )
         for path in sorted((drive / "start_stop").glob("*.csv")):
             tr = tj.read_epos_transient(path)
             target = out / "screwdrive" / f"{drive.name}_start_stop_{path.stem}.csv"
             prov = {"source": SCREW["source"], "licence": SCREW["licence"]}
-            tj.write_friction_transient(tr, target, f"{drive.name}/start_stop/{path.name}",
-                                        provenance=prov)  # fmt: skip
-            entries.append({"file": f"screwdrive/{target.name}",
-                            "original": f"screwdrive/{drive.name}/start_stop/{path.name}",
-                            "original_sha256": sha256(path), **SCREW})  # fmt: skip
+            tj.write_friction_transient(
+                tr, target, f"{drive.name}/start_stop/{path.name}", provenance=prov
+            )
+            entries.append(
+                {
+                    "file": f"screwdrive/{target.name}",
+                    "original": f"screwdrive/{drive.name}/start_stop/{path.name}",
+                    "original_sha256": sha256(path),
+                    **SCREW,
+                }
+            )
     for e in entries:
         e["sha256"] = sha256(out / e["file"])
     return entries

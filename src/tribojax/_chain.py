@@ -170,8 +170,9 @@ def chain_contact(params, loads=None):
 PAPER_SOLVER = Rodas4(lu="lapack")  # the wang2022 chain's slip solves (`phase_slips`)
 
 
-def phase_slips(element, *, a_max=WANG2022_A_MAX, profile=None, mass=WANG2022_RETICLE_MASS_KG,
-                **solver_kw):  # fmt: skip
+def phase_slips(
+    element, *, a_max=WANG2022_A_MAX, profile=None, mass=WANG2022_RETICLE_MASS_KG, **solver_kw
+):
     """[T4, T5, T6, T7] (m) of `element` under `TrapezoidProfile(a_max)` (wang2022 Tables 4–7).
 
     `profile` replaces the stage profile; `solver_kw` go to `slip_phase_averages`. The solver
@@ -220,7 +221,16 @@ def chain_phase_slips(
     (F_s, K, C), ok = chain_contact(params, loads)
     ok = ok & (F_s > WANG2022_TANGENTIAL_LOAD_N)  # else gross sliding: run with stand-ins
     F_s, K, C = (jnp.where(ok, x, safe) for x, safe in zip((F_s, K, C), (1.0, 1e7, 500.0)))
-    slips = lugre_phase_slips_nm(F_s, K, C, params[4], adjoint=adjoint, atol=atol, rtol=rtol,
-                                 max_steps=max_steps, throw=False)  # fmt: skip
+    slips = lugre_phase_slips_nm(
+        F_s,
+        K,
+        C,
+        params[4],
+        adjoint=adjoint,
+        atol=atol,
+        rtol=rtol,
+        max_steps=max_steps,
+        throw=False,
+    )
     ok = ok & jnp.all(jnp.isfinite(slips), axis=-1)
     return slips, ok

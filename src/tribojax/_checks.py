@@ -124,8 +124,16 @@ def fail_if(x, bad, message: str):
 
 
 # failure codes of diffrax's, optimistix's and lineax's result enumerations (those that exist)
-_FAILURES = ("max_steps_reached", "singular", "breakdown", "divergence", "dt_min_reached",
-             "nonlinear_max_steps_reached", "nonlinear_divergence", "nonfinite_input")  # fmt: skip
+_FAILURES = (
+    "max_steps_reached",
+    "singular",
+    "breakdown",
+    "divergence",
+    "dt_min_reached",
+    "nonlinear_max_steps_reached",
+    "nonlinear_divergence",
+    "nonfinite_input",
+)
 
 
 def check_result(x, result, enumeration, what: str):
@@ -159,8 +167,10 @@ def finite_or_raise(x, what: str):
         return x
     arr = np.asarray(x)
     if not np.all(np.isfinite(arr)):
-        raise RuntimeError(f"{what}: the result is not finite (a solver did not finish, or an "
-                           "input is outside the model's range)")  # fmt: skip
+        raise RuntimeError(
+            f"{what}: the result is not finite (a solver did not finish, or an "
+            "input is outside the model's range)"
+        )
     return arr
 
 
@@ -190,7 +200,8 @@ def cacheable_call(fn, *args, failed=None, raising=None):
 
 
 def _non_finite(out) -> bool:
-    return not all(bool(np.all(np.isfinite(np.asarray(x))))
-                   for x in jax.tree_util.tree_leaves(out)
-                   if np.asarray(x).dtype.kind in "fc")  # fmt: skip
-
+    return not all(
+        bool(np.all(np.isfinite(np.asarray(x))))
+        for x in jax.tree_util.tree_leaves(out)
+        if np.asarray(x).dtype.kind in "fc"
+    )

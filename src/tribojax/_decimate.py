@@ -153,15 +153,25 @@ def decimate_record(
             raise ValueError(f"max_samples = {max_samples} is outside the allowed range [4, inf)")
         factor = _factor(record, len(t), int(max_samples))
     if isinstance(factor, bool) or int(factor) != factor or factor < 1 or factor == 2:
-        raise ValueError(f"factor = {factor!r} must be 1 or an integer >= 3 (a block quadratic "
-                         "needs 3 samples)")  # fmt: skip
+        raise ValueError(
+            f"factor = {factor!r} must be 1 or an integer >= 3 (a block quadratic needs 3 samples)"
+        )
     factor = int(factor)
     sigma = record.noise_std
     cycles = None if len(t) == n else len(record.cycle_times()) - 1
     if factor == 1:
-        return record, Decimation(1, "none", n, len(t), len(t), "white, per sample",
-                                  None if sigma is None else "the record's noise_std", sigma,
-                                  sigma, cycles_kept=cycles)  # fmt: skip
+        return record, Decimation(
+            1,
+            "none",
+            n,
+            len(t),
+            len(t),
+            "white, per sample",
+            None if sigma is None else "the record's noise_std",
+            sigma,
+            sigma,
+            cycles_kept=cycles,
+        )
     if len(t) // factor < 4:
         raise ValueError(
             f"{record.source}: factor = {factor} leaves {len(t) // factor} samples of "
@@ -186,12 +196,21 @@ def decimate_record(
     # the χ² part of the one noise test (`noise_consistent`), on the block residuals
     follow = None if chi2 is None else bool(chi2_sf(chi2 * dof, dof) >= ALPHA / 3)
     info = Decimation(
-        factor=factor, method=METHOD, samples_in_record=n, samples_used=len(tc) * factor,
+        factor=factor,
+        method=METHOD,
+        samples_in_record=n,
+        samples_used=len(tc) * factor,
         cycles_kept=cycles,
-        samples=len(tc), noise_std_original=float(sigma), noise_std=reduced_std,
-        noise_source=source, block_chi2=chi2, blocks_follow_signal=follow,
-        noise_model=(f"white noise of sd sigma per sample ({unit}); each reduced sample has sd "
-                     f"sigma*sqrt(g), g = {float(np.mean(g)):.4g} (local quadratic over "
-                     f"{factor} samples, evaluated at the block's mean time)"),
-    )  # fmt: skip
+        samples=len(tc),
+        noise_std_original=float(sigma),
+        noise_std=reduced_std,
+        noise_source=source,
+        block_chi2=chi2,
+        blocks_follow_signal=follow,
+        noise_model=(
+            f"white noise of sd sigma per sample ({unit}); each reduced sample has sd "
+            f"sigma*sqrt(g), g = {float(np.mean(g)):.4g} (local quadratic over "
+            f"{factor} samples, evaluated at the block's mean time)"
+        ),
+    )
     return record.resampled(tc, dc, rc, noise_std=reduced_std), info

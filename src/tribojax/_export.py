@@ -96,9 +96,16 @@ def _module_level(x) -> str | None:
     if not callable(x) or isinstance(name, str):  # named, but not bound under that name
         return None
     if id(x) not in _BOUND:
-        where = next((f"obj:{m}.{k}" for m, module in list(sys.modules.items())
-                      if m.startswith("tribojax.") for k, v in vars(module).items() if v is x),
-                     None)  # fmt: skip
+        where = next(
+            (
+                f"obj:{m}.{k}"
+                for m, module in list(sys.modules.items())
+                if m.startswith("tribojax.")
+                for k, v in vars(module).items()
+                if v is x
+            ),
+            None,
+        )
         if where is None:
             return None
         _BOUND[id(x)] = (x, where)  # module-level, so alive anyway: its id is not reused
@@ -121,8 +128,13 @@ def _trace_context() -> tuple:
     """What a trace depends on beyond its arguments: the settings that change how tribojax's code
     traces, and failures as NaN (`tribojax._checks.failures_as_nan`)."""
     c = jax.config
-    return (c.jax_enable_x64, c.jax_numpy_rank_promotion, c.jax_numpy_dtype_promotion,
-            c.jax_default_matmul_precision, nan_mode())  # fmt: skip
+    return (
+        c.jax_enable_x64,
+        c.jax_numpy_rank_promotion,
+        c.jax_numpy_dtype_promotion,
+        c.jax_default_matmul_precision,
+        nan_mode(),
+    )
 
 
 def _key(fn, treedef, static, leaves) -> str | None:
@@ -130,11 +142,19 @@ def _key(fn, treedef, static, leaves) -> str | None:
         return None
     try:
         s_leaves, s_tree = jax.tree_util.tree_flatten(static)
-        text = "\n".join([
-            f"{fn.__module__}.{fn.__qualname__}", _environment(), repr(_trace_context()),
-            _structure(treedef), _structure(s_tree), _atom(tuple(s_leaves)),
-            ";".join(f"{x.dtype}{list(x.shape)}{getattr(x, 'weak_type', False)}" for x in leaves),
-        ])  # fmt: skip
+        text = "\n".join(
+            [
+                f"{fn.__module__}.{fn.__qualname__}",
+                _environment(),
+                repr(_trace_context()),
+                _structure(treedef),
+                _structure(s_tree),
+                _atom(tuple(s_leaves)),
+                ";".join(
+                    f"{x.dtype}{list(x.shape)}{getattr(x, 'weak_type', False)}" for x in leaves
+                ),
+            ]
+        )
     except _Unkeyable:
         return None
     return hashlib.sha256(text.encode()).hexdigest()
@@ -168,8 +188,11 @@ def _write(path: Path, exported) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
         with os.fdopen(fd, "wb") as f:
-            f.write(MAGIC + path.stem.encode() + hashlib.sha256(payload).digest() + payload
-                    if payload else b"")  # fmt: skip
+            f.write(
+                MAGIC + path.stem.encode() + hashlib.sha256(payload).digest() + payload
+                if payload
+                else b""
+            )
         os.replace(tmp, path)
     except (OSError, ImportError):  # `flatbuffers` missing, or a read-only cache folder:
         pass  # the program is still used in this process
@@ -193,8 +216,10 @@ def _export(fn, treedef, static, leaves):
     def flat(*xs):
         return fn(*eqx.combine(jax.tree_util.tree_unflatten(treedef, xs), static))
 
-    specs = [jax.ShapeDtypeStruct(x.shape, x.dtype, weak_type=getattr(x, "weak_type", False))
-             for x in leaves]  # fmt: skip
+    specs = [
+        jax.ShapeDtypeStruct(x.shape, x.dtype, weak_type=getattr(x, "weak_type", False))
+        for x in leaves
+    ]
     try:
         return jax.export.export(jax.jit(flat), disabled_checks=_lapack_calls())(*specs)
     except Exception:  # noqa: BLE001 - not exportable (a host callback): filter_jit traces it
@@ -208,7 +233,8 @@ def _matches(exported, leaves) -> bool:
     """Whether a stored program takes exactly these arrays (shapes and dtypes)."""
     avals = exported.in_avals
     return len(avals) == len(leaves) and all(
-        a.shape == x.shape and a.dtype == x.dtype for a, x in zip(avals, leaves))
+        a.shape == x.shape and a.dtype == x.dtype for a, x in zip(avals, leaves)
+    )
 
 
 def _program(fn, treedef, static, leaves, stem: Path):
@@ -245,12 +271,20 @@ def cached_jit(fn):
         # the signature as JAX's and equinox's own jit caches compare it (trace context,
         # structures and static values by equality, arrays by shape and dtype), and the folder
         s_leaves, s_tree = jax.tree_util.tree_flatten(static)
-        sig = (folder, _trace_context(), treedef, s_tree,
-               *((type(v), v) for v in s_leaves),
-               *((x.shape, x.dtype, getattr(x, "weak_type", False)) for x in leaves))  # fmt: skip
+        sig = (
+            folder,
+            _trace_context(),
+            treedef,
+            s_tree,
+            *((type(v), v) for v in s_leaves),
+            *((x.shape, x.dtype, getattr(x, "weak_type", False)) for x in leaves),
+        )
         try:
-            key = keys[sig] if sig in keys else keys.setdefault(
-                sig, _key(fn, treedef, static, leaves))  # fmt: skip
+            key = (
+                keys[sig]
+                if sig in keys
+                else keys.setdefault(sig, _key(fn, treedef, static, leaves))
+            )
         except TypeError:  # a static value that cannot be hashed: keyed every call
             key = _key(fn, treedef, static, leaves)
         if key is None:

@@ -17,8 +17,10 @@ def _workers(text) -> int:
     if text is None or text == "":
         return min(4, os.cpu_count() or 1)
     if not (text.strip().isascii() and text.strip().isdigit()) or int(text) < 1:
-        raise ValueError(f"TRIBOJAX_FIT_WORKERS = {text!r} is outside the allowed range: a whole "
-                         "number >= 1 (1 runs one fit at a time)")  # fmt: skip
+        raise ValueError(
+            f"TRIBOJAX_FIT_WORKERS = {text!r} is outside the allowed range: a whole "
+            "number >= 1 (1 runs one fit at a time)"
+        )
     return int(text)
 
 

@@ -147,9 +147,17 @@ class ReticleChain(eqx.Module):
 
     def _contact(self, p: dict, throw: bool = True) -> ContactParameters:
         T = self.mass * p["a_max"]
-        model = wang2022_table3_model(p["G"], p["mu_t"], self.pair.sigma_s, M=self.M, D=p["D"],
-                                      gamma=self.gamma, tangential_load=T, mass=self.mass,
-                                      throw=throw)  # fmt: skip
+        model = wang2022_table3_model(
+            p["G"],
+            p["mu_t"],
+            self.pair.sigma_s,
+            M=self.M,
+            D=p["D"],
+            gamma=self.gamma,
+            tangential_load=T,
+            mass=self.mass,
+            throw=throw,
+        )
         return model(p["load"])
 
     def __call__(self, params: dict) -> dict:
@@ -158,9 +166,15 @@ class ReticleChain(eqx.Module):
         out = {"F_s": c.F_s, "K_tau": c.K_tau, "C_tau": c.C_tau, "z_max": c.z_max}
         if self.slip:
             element = PreSlipLuGre(c.F_s, c.K_tau, c.C_tau, self.alpha)
-            phases = phase_slips(element, a_max=p["a_max"], mass=self.mass, rtol=self.rtol,
-                                 atol=self.atol, max_steps=self.max_steps,
-                                 adjoint=dfx.ForwardMode())  # fmt: skip
+            phases = phase_slips(
+                element,
+                a_max=p["a_max"],
+                mass=self.mass,
+                rtol=self.rtol,
+                atol=self.atol,
+                max_steps=self.max_steps,
+                adjoint=dfx.ForwardMode(),
+            )
             out.update(zip(SLIP_OUTPUTS, phases))
         return out
 
@@ -324,8 +338,12 @@ def elasticities(fn, params: dict, *, mode: str = "fwd") -> Elasticities:
 
 
 def slip_sensitivities(
-    D=WANG2022_TABLE1_D, G=CALIBRATED_G_M, mu_t=CALIBRATED_MU_T, load=WANG2022_REFERENCE_LOAD_N,
-    a_max=WANG2022_A_MAX, **chain_kw
+    D=WANG2022_TABLE1_D,
+    G=CALIBRATED_G_M,
+    mu_t=CALIBRATED_MU_T,
+    load=WANG2022_REFERENCE_LOAD_N,
+    a_max=WANG2022_A_MAX,
+    **chain_kw,
 ) -> Elasticities:
     """Elasticities of F_s, K_τ, C_τ, z_max and the phase slips T4–T7 (wang2022 Tables 3–7).
 
@@ -341,8 +359,12 @@ def slip_sensitivities(
 
 
 def hysteresis_sensitivities(
-    D=WANG2022_TABLE1_D, G=CALIBRATED_G_M, mu_t=CALIBRATED_MU_T, load=WANG2022_REFERENCE_LOAD_N,
-    a_max=WANG2022_A_MAX, A=DEFAULT_AMPLITUDE,
+    D=WANG2022_TABLE1_D,
+    G=CALIBRATED_G_M,
+    mu_t=CALIBRATED_MU_T,
+    load=WANG2022_REFERENCE_LOAD_N,
+    a_max=WANG2022_A_MAX,
+    A=DEFAULT_AMPLITUDE,
     *,
     element: str = "mindlin",
     **chain_kw,

@@ -79,8 +79,10 @@ def sweep(fn, batch, *, devices=None):
         return jax.device_put(x, sharding)
 
     placed = jax.tree.map(place, batch)
-    parts = [jax.tree.map(lambda x, d=device: _shard_on(x, d), placed)
-             for device in sharding.mesh.devices.flat]  # fmt: skip
+    parts = [
+        jax.tree.map(lambda x, d=device: _shard_on(x, d), placed)
+        for device in sharding.mesh.devices.flat
+    ]
     # all parts dispatched before any is checked (cacheable_call: one program without host
     # callbacks per part; a non-finite output runs them again with the raising checks)
     local = cacheable_call(lambda f, ps: [_vmapped(f, p) for p in ps], fn, parts)

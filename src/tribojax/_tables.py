@@ -47,11 +47,14 @@ def read_json(path):
     try:
         return json.loads(text, object_pairs_hook=_unique_keys), text
     except _DuplicateKey as err:
-        raise DataFileError(f"{path}: the key {err.args[0]!r} appears twice in one object (which "
-                            "value is meant?)") from None  # fmt: skip
+        raise DataFileError(
+            f"{path}: the key {err.args[0]!r} appears twice in one object (which value is meant?)"
+        ) from None
     except json.JSONDecodeError as err:
-        raise DataFileError(f"{path}, line {err.lineno}: not valid JSON ({err.msg} at column "
-                            f"{err.colno}; a truncated file?)") from None  # fmt: skip
+        raise DataFileError(
+            f"{path}, line {err.lineno}: not valid JSON ({err.msg} at column "
+            f"{err.colno}; a truncated file?)"
+        ) from None
     except RecursionError:
         raise DataFileError(f"{path}: JSON nested too deeply to be a tribojax file") from None
 
@@ -64,15 +67,19 @@ def read_text(path) -> str:
         with open(path, "rb") as f:
             head = f.read(1 << 16)  # checked before the rest is read (a large binary file)
             if head[:4] in (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff"):
-                raise DataFileError(f"{path}: UTF-32 text (byte-order mark); save the file as "
-                                    "UTF-8")  # fmt: skip
+                raise DataFileError(
+                    f"{path}: UTF-32 text (byte-order mark); save the file as UTF-8"
+                )
             if head[:2] in (b"\xff\xfe", b"\xfe\xff"):
-                raise DataFileError(f"{path}: UTF-16 text (byte-order mark); save the file as "
-                                    "UTF-8")  # fmt: skip
+                raise DataFileError(
+                    f"{path}: UTF-16 text (byte-order mark); save the file as UTF-8"
+                )
             if b"\x00" in head:
                 line = head[: head.index(b"\x00")].count(b"\n") + 1
-                raise DataFileError(f"{path}, line {line}: a NUL byte (a binary file, or "
-                                    "UTF-16 text without a byte-order mark); save it as UTF-8")
+                raise DataFileError(
+                    f"{path}, line {line}: a NUL byte (a binary file, or "
+                    "UTF-16 text without a byte-order mark); save it as UTF-8"
+                )
             raw = head + f.read()
     except OSError as err:
         raise DataFileError(f"{path}: cannot be read ({err.strerror or err})") from err
@@ -129,8 +136,10 @@ def read_table(path, *, columns=None, text_columns=()) -> dict[str, np.ndarray]:
                 raise DataFileError(f"{path}, line {lineno}: header has empty or repeated names")
             missing = [c for c in (columns or ()) if c not in header]
             if missing:
-                raise DataFileError(f"{path}, line {lineno}: missing column(s) {missing}; header "
-                                    f"is {header}{separator_hint(text)}")  # fmt: skip
+                raise DataFileError(
+                    f"{path}, line {lineno}: missing column(s) {missing}; header "
+                    f"is {header}{separator_hint(text)}"
+                )
             continue
         if len(fields) != len(header):
             raise DataFileError(
@@ -165,8 +174,10 @@ def separator_hint(header: str) -> str:
     """A hint when a header line looks separated by something other than commas."""
     for sep, name in ((";", "semicolons"), ("\t", "tabs")):
         if sep in header and header.count(sep) >= header.count(","):
-            return (f" (it looks separated by {name}: tribojax reads comma-separated values with "
-                    "a decimal point; export as CSV with ',' between fields and '.' in numbers)")
+            return (
+                f" (it looks separated by {name}: tribojax reads comma-separated values with "
+                "a decimal point; export as CSV with ',' between fields and '.' in numbers)"
+            )
     return ""
 
 

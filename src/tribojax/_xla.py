@@ -43,7 +43,9 @@ def use_one_kernel() -> bool:
     if "xla_backend_extra_options" in flags:
         return False
     if backend_started():
-        raise RuntimeError("use_one_kernel: JAX's backend has started and read XLA_FLAGS already; "
-                           "call it before the first JAX computation")  # fmt: skip
+        raise RuntimeError(
+            "use_one_kernel: JAX's backend has started and read XLA_FLAGS already; "
+            "call it before the first JAX computation"
+        )
     os.environ["XLA_FLAGS"] = f"{flags} {HOIST_FLAG}".strip()
     return True

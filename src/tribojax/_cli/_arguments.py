@@ -66,8 +66,11 @@ def contact_arguments(con) -> None:
     con.add_argument("--load", type=float, nargs="+", required=True, help="normal load(s), N")
     for k, v in CONTACT_DEFAULTS.items():
         con.add_argument("--" + k.replace("_", "-"), dest=k, type=float, default=v)
-    con.add_argument("--json", help="write the results to this JSON file (never an existing "
-                     "file or the --topography input, unless --force for an existing result)")
+    con.add_argument(
+        "--json",
+        help="write the results to this JSON file (never an existing "
+        "file or the --topography input, unless --force for an existing result)",
+    )
     con.add_argument("--force", action="store_true", help="replace an existing --json file")
 
 
@@ -102,9 +105,12 @@ def hysteresis_arguments(parser) -> None:
         help="fit the steady loop (default) or drive the element through the measured history",
     )
     parser.add_argument("--out", default="tribojax-out/hysteresis", help="output folder")
-    parser.add_argument("--force", action="store_true",
-                        help="replace an earlier result in --out (its files from an earlier run "
-                        "that this run does not write are removed)")  # fmt: skip
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an earlier result in --out (its files from an earlier run "
+        "that this run does not write are removed)",
+    )
 
 
 def band_tension(text: str) -> float:
@@ -117,16 +123,23 @@ def band_tension(text: str) -> float:
     except ValueError:
         value = math.nan
     if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"--band-tension = {text!r} is outside the allowed range: "
-                                         "a tension > 0 in N, or in lbf as '30lb'")  # fmt: skip
+        raise argparse.ArgumentTypeError(
+            f"--band-tension = {text!r} is outside the allowed range: "
+            "a tension > 0 in N, or in lbf as '30lb'"
+        )
     return value
 
 
 def _band_tension_argument(parser) -> None:
-    parser.add_argument("--band-tension", type=band_tension, default=None, metavar="T",
-                        help="loops and histories of a band brake: the band's set tension, N (or "
-                        "'30lb'); default: from a brfd file name (<f>Hz<T>lbtension... or "
-                        "earthquake_<name>_<T>lb)")  # fmt: skip
+    parser.add_argument(
+        "--band-tension",
+        type=band_tension,
+        default=None,
+        metavar="T",
+        help="loops and histories of a band brake: the band's set tension, N (or "
+        "'30lb'); default: from a brfd file name (<f>Hz<T>lbtension... or "
+        "earthquake_<name>_<T>lb)",
+    )
 
 
 def fit_arguments(parser) -> None:
@@ -169,57 +182,101 @@ def fit_arguments(parser) -> None:
         "history); friction curves: record (Coulomb + viscous, the model discover starts from; "
         "default) or lugre (the steady law with a direction asymmetry; best: the same)",
     )
-    parser.add_argument("--mixed-scales", action="store_true",
-                        help="several records: fit them together even when their force scales "
-                        "differ by more than 100x (refused otherwise)")  # fmt: skip
-    parser.add_argument("--from", dest="from_model", default=None, metavar="MODEL.json",
-                        help="fit the model saved in a fit.json or discovery.json (with the "
-                        "effects discovery added) to this record, from its saved "
-                        "values")  # fmt: skip
-    parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
-                        help="the record's format (default: detected)")  # fmt: skip
-    parser.add_argument("--max-steps", type=int, default=None,
-                        help=f"LM step budget (default {MAX_STEPS} for slip runs and loops; "
-                        "friction curves: the steady-law fit's own budget)")  # fmt: skip
+    parser.add_argument(
+        "--mixed-scales",
+        action="store_true",
+        help="several records: fit them together even when their force scales "
+        "differ by more than 100x (refused otherwise)",
+    )
+    parser.add_argument(
+        "--from",
+        dest="from_model",
+        default=None,
+        metavar="MODEL.json",
+        help="fit the model saved in a fit.json or discovery.json (with the "
+        "effects discovery added) to this record, from its saved "
+        "values",
+    )
+    parser.add_argument(
+        "--format",
+        choices=RECORD_FORMATS,
+        default=None,
+        help="the record's format (default: detected)",
+    )
+    parser.add_argument(
+        "--max-steps",
+        type=int,
+        default=None,
+        help=f"LM step budget (default {MAX_STEPS} for slip runs and loops; "
+        "friction curves: the steady-law fit's own budget)",
+    )
     parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
     _band_tension_argument(parser)
     add_decimation_arguments(parser)
 
 
 def discover_arguments(parser) -> None:
-    parser.add_argument("file", help="record (slip run or loop CSV, brfd JSON, friction curve or a "
-                        "folder of EPOS steady-state exports)")
-    parser.add_argument("--out", default="discovery-out", help="output folder (default "
-                        "discovery-out)")  # fmt: skip
+    parser.add_argument(
+        "file",
+        help="record (slip run or loop CSV, brfd JSON, friction curve or a "
+        "folder of EPOS steady-state exports)",
+    )
+    parser.add_argument(
+        "--out", default="discovery-out", help="output folder (default discovery-out)"
+    )
     parser.add_argument("--force", action="store_true", help="replace an existing discovery.json")
-    parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
-                        help="the record's format (default: detected)")  # fmt: skip
+    parser.add_argument(
+        "--format",
+        choices=RECORD_FORMATS,
+        default=None,
+        help="the record's format (default: detected)",
+    )
     parser.add_argument("--max-effects", type=int, default=3, help="greedy rounds (default 3)")
-    parser.add_argument("--from", dest="from_model", default=None, metavar="MODEL.json",
-                        help="start from the model saved in a discovery.json or fit.json (its "
-                        "effects refitted on this record), and look for more")  # fmt: skip
+    parser.add_argument(
+        "--from",
+        dest="from_model",
+        default=None,
+        metavar="MODEL.json",
+        help="start from the model saved in a discovery.json or fit.json (its "
+        "effects refitted on this record), and look for more",
+    )
     add_decimation_arguments(parser)
     _band_tension_argument(parser)  # a band brake's record: its effects become candidates
-    parser.add_argument("--initial", choices=("rest", "measured"), default=None,
-                        help="loops and histories: the element starts at rest (default) or in "
-                        "the state that carries the record's first measured force (a history "
-                        "that begins under load)")  # fmt: skip
+    parser.add_argument(
+        "--initial",
+        choices=("rest", "measured"),
+        default=None,
+        help="loops and histories: the element starts at rest (default) or in "
+        "the state that carries the record's first measured force (a history "
+        "that begins under load)",
+    )
 
 
 def predict_arguments(parser) -> None:
-    parser.add_argument("model", help="fit.json or discovery.json (its fitted_model), or a saved "
-                        "model")  # fmt: skip
+    parser.add_argument(
+        "model", help="fit.json or discovery.json (its fitted_model), or a saved model"
+    )
     parser.add_argument("file", help="the record to predict (any format `fit` reads)")
-    parser.add_argument("--out", default=None,
-                        help="output folder (default tribojax-out/predict-STEM)")  # fmt: skip
-    parser.add_argument("--format", choices=RECORD_FORMATS, default=None,
-                        help="the record's format (default: detected)")  # fmt: skip
-    parser.add_argument("--force", action="store_true",
-                        help="replace an existing DIR/prediction.json")  # fmt: skip
-    parser.add_argument("--initial", choices=("rest", "measured"), default=None,
-                        help="loop and history models: start from rest or in the state that "
-                        "carries the record's first measured force (history models: jenkins, "
-                        "band_brake); default: as the model was fitted (rest)")  # fmt: skip
+    parser.add_argument(
+        "--out", default=None, help="output folder (default tribojax-out/predict-STEM)"
+    )
+    parser.add_argument(
+        "--format",
+        choices=RECORD_FORMATS,
+        default=None,
+        help="the record's format (default: detected)",
+    )
+    parser.add_argument(
+        "--force", action="store_true", help="replace an existing DIR/prediction.json"
+    )
+    parser.add_argument(
+        "--initial",
+        choices=("rest", "measured"),
+        default=None,
+        help="loop and history models: start from rest or in the state that "
+        "carries the record's first measured force (history models: jenkins, "
+        "band_brake); default: as the model was fitted (rest)",
+    )
     _band_tension_argument(parser)
 
 

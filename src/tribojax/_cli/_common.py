@@ -128,8 +128,10 @@ def refused_outputs(src, targets, *, force: bool, inputs=()) -> str | None:
     for target in targets:
         named = resolved.get(Path(target).resolve())
         if named is not None:
-            return (f"{target} is an input file: writing it would overwrite the input {named}; "
-                    "choose another --out")  # fmt: skip
+            return (
+                f"{target} is an input file: writing it would overwrite the input {named}; "
+                "choose another --out"
+            )
     first = Path(targets[0])
     if first.is_dir():
         return f"{first} is a folder; choose another output name"
@@ -207,8 +209,7 @@ class Progress:
 
     TICK_S = 0.5
 
-    def __init__(self, label: str, total: int | None = None, *, quiet: bool = False,
-                 stream=None):  # fmt: skip
+    def __init__(self, label: str, total: int | None = None, *, quiet: bool = False, stream=None):
         self.stream = sys.stderr if stream is None else stream
         isatty = getattr(self.stream, "isatty", None)
         self.enabled = not quiet and bool(isatty and isatty())
@@ -318,8 +319,9 @@ def with_band_tension(record, value, path):
     if value is None:
         return record
     if record.kind != "loop":
-        raise CommandError(f"--band-tension is for loops and histories; {path} is "
-                           f"{record.description}")  # fmt: skip
+        raise CommandError(
+            f"--band-tension is for loops and histories; {path} is {record.description}"
+        )
     return dataclasses.replace(record, band_tension=value)
 
 
@@ -331,8 +333,9 @@ def decimate_factor(args) -> int | None:
     try:
         factor = int(text)
     except ValueError:
-        raise CommandError(f"--decimate = {args.decimate!r}: expected auto, off or an integer "
-                           ">= 1") from None  # fmt: skip
+        raise CommandError(
+            f"--decimate = {args.decimate!r}: expected auto, off or an integer >= 1"
+        ) from None
     if factor < 1:
         raise CommandError(f"--decimate = {factor} is outside the allowed range [1, inf)")
     return factor
@@ -344,22 +347,35 @@ def reduce_record(record, args, *, whole_cycles: bool = False):
     A reduction is announced on stdout in one line."""
     factor = decimate_factor(args)
     if args.max_samples < 4:
-        raise CommandError(f"--max-samples = {args.max_samples} is outside the allowed range "
-                           "[4, inf)")  # fmt: skip
-    record, how = decimate_record(record, factor, max_samples=args.max_samples,
-                                  whole_cycles=whole_cycles)  # fmt: skip
+        raise CommandError(
+            f"--max-samples = {args.max_samples} is outside the allowed range [4, inf)"
+        )
+    record, how = decimate_record(
+        record, factor, max_samples=args.max_samples, whole_cycles=whole_cycles
+    )
     if how.cycles_kept is not None:
-        print(f"{record.source}: kept the first {how.cycles_kept} whole cycles "
-              f"({how.samples_used} of {how.samples_in_record} samples)")  # fmt: skip
+        print(
+            f"{record.source}: kept the first {how.cycles_kept} whole cycles "
+            f"({how.samples_used} of {how.samples_in_record} samples)"
+        )
     if how.factor > 1:
-        print(f"{record.source}: {how.samples_used} samples reduced to {how.samples} (blocks "
-              f"of {how.factor}, {how.method}; noise sd {how.noise_std_original:.3g} -> "
-              f"{how.noise_std:.3g})")  # fmt: skip
+        print(
+            f"{record.source}: {how.samples_used} samples reduced to {how.samples} (blocks "
+            f"of {how.factor}, {how.method}; noise sd {how.noise_std_original:.3g} -> "
+            f"{how.noise_std:.3g})"
+        )
     return record, how
 
 
-def plot_model_and_residual(path, c: dict, title: str, resid_axes: tuple[str, str], *,
-                            labels=("data", "model"), title_size=None) -> bool:  # fmt: skip
+def plot_model_and_residual(
+    path,
+    c: dict,
+    title: str,
+    resid_axes: tuple[str, str],
+    *,
+    labels=("data", "model"),
+    title_size=None,
+) -> bool:
     """The figure of `fit` and `predict`: data and model (`c`'s "x", "data", "model", "xlabel",
     "ylabel") over the residual ("resid_x", "resid"). False when matplotlib is missing."""
     fig = figure("figure", figsize=(7, 6), constrained_layout=True)

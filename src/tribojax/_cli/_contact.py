@@ -74,8 +74,11 @@ def surface_estimate(topo, args):
 
 def _finding(text: str) -> str:
     """'method: D = ... over LO-HI m (rms log10 residual ...)' from an estimator's message."""
-    m = re.search(r"by '(\w+)': \w+ \w+ band (\S+ m) has slope \S+ \(D = ([-\d.]+).*?"
-                  r"residual ([\d.]+)", text)  # fmt: skip
+    m = re.search(
+        r"by '(\w+)': \w+ \w+ band (\S+ m) has slope \S+ \(D = ([-\d.]+).*?"
+        r"residual ([\d.]+)",
+        text,
+    )
     return f"{m[1]}: D = {m[3]} over {m[2]} (rms log10 residual {m[4]})" if m else text
 
 
@@ -83,8 +86,11 @@ def run_contact(args) -> int:
     """`tribojax contact`: 0 when every contact solve converged, else 1 (2 bad input)."""
     _check_arguments(args)
     result = {"assumed": {}}
-    with claim_outputs(args.topography, [Path(args.json)], force=args.force) if args.json \
-            else nullcontext():  # fmt: skip
+    with (
+        claim_outputs(args.topography, [Path(args.json)], force=args.force)
+        if args.json
+        else nullcontext()
+    ):
         if args.topography is not None:
             topo = read_topography(args.topography, unit=args.unit, dx=args.dx)
             est, findings = surface_estimate(topo, args)
@@ -117,15 +123,26 @@ def _no_fractal_band(topo, findings, result, args) -> int:
     contact numbers (the model needs 2 < D < 3), a warning that says what to do; exit 0."""
     where = "over the given band" if args.band is not None else "over any band searched"
     smooth = any(re.search(r"D = 1\.|D = 0\.|D = -", f) for f in findings)
-    text = (f"{topo.source}: no fractal scaling {where} ({'; '.join(findings)})"
-            + ("; a D below 2 means the surface is smoother than a fractal one over the measured "
-               "range" if smooth else "")
-            + "; the contact model needs 2 < D < 3, so no contact numbers are given: pass "
-            "--D and --G (e.g. from a longer or finer measurement), or --band LO HI")  # fmt: skip
+    text = (
+        f"{topo.source}: no fractal scaling {where} ({'; '.join(findings)})"
+        + (
+            "; a D below 2 means the surface is smoother than a fractal one over the measured range"
+            if smooth
+            else ""
+        )
+        + "; the contact model needs 2 < D < 3, so no contact numbers are given: pass "
+        "--D and --G (e.g. from a longer or finer measurement), or --band LO HI"
+    )
     warn(text)
     print(f"{topo.source}: no band with 2 < D < 3; estimates: {'; '.join(findings)}")
-    result["surface"] = {"D": None, "G": None, "method": args.method, "findings": findings,
-                         "band": args.band, "warning": text}  # fmt: skip
+    result["surface"] = {
+        "D": None,
+        "G": None,
+        "method": args.method,
+        "findings": findings,
+        "band": args.band,
+        "warning": text,
+    }
     result["contact"] = []
     if args.json:
         write_json_atomic(Path(args.json), result)
@@ -138,13 +155,24 @@ _PHYSICAL = ("Fs_N", "Ktau_N_per_m", "Ctau_Ns_per_m", "zmax_m")  # finite and >=
 
 def _contact_rows(args, D, G, result) -> list:
     assumed = {k: getattr(args, k) for k in CONTACT_DEFAULTS}
-    print("assumed: " + ", ".join(f"{k} = {v:g}" for k, v in assumed.items())
-          + "; wang2022 Table 2 materials")  # fmt: skip
-    result["assumed"] = {**assumed, "materials": "wang2022 Table 2 pair (E* 41.28 GPa, "
-                         "G' 9.158 GPa, H 1.372 GPa)"}  # fmt: skip
+    print(
+        "assumed: "
+        + ", ".join(f"{k} = {v:g}" for k, v in assumed.items())
+        + "; wang2022 Table 2 materials"
+    )
+    result["assumed"] = {
+        **assumed,
+        "materials": "wang2022 Table 2 pair (E* 41.28 GPa, G' 9.158 GPa, H 1.372 GPa)",
+    }
     pair = wang2022_pair(sigma_s=args.sigma_s)
-    model = FractalContact(FractalSurface(D, G, args.M, gamma=args.gamma), pair, mu_t=args.mu_t,
-                           tangential_load=args.tangential_load, mass=args.mass, throw=False)
+    model = FractalContact(
+        FractalSurface(D, G, args.M, gamma=args.gamma),
+        pair,
+        mu_t=args.mu_t,
+        tangential_load=args.tangential_load,
+        mass=args.mass,
+        throw=False,
+    )
     rows = []
     print(f"{'load/N':>9} {'F_s/N':>10} {'K_tau/(N/m)':>12} {'C_tau/(Ns/m)':>12} {'z_max/nm':>9}")
     for load in args.load:
@@ -163,16 +191,22 @@ def _contact_rows(args, D, G, result) -> list:
         row["in_range"] = not bad
         rows.append(row)
         if bad:
-            warn(f"load {load:g} N: {', '.join(f'{k} = {row[k]:g}' for k in bad)} is outside the "
-                 f"physical range [0, inf): the model (wang2022 Eqs 8-24) breaks down at D = "
-                 f"{D:g}, G = {G:g} m and this load, so this is not a result (exit 1); it is "
-                 "checked against the paper at 3.7-21 N (Table 3)")  # fmt: skip
+            warn(
+                f"load {load:g} N: {', '.join(f'{k} = {row[k]:g}' for k in bad)} is outside the "
+                f"physical range [0, inf): the model (wang2022 Eqs 8-24) breaks down at D = "
+                f"{D:g}, G = {G:g} m and this load, so this is not a result (exit 1); it is "
+                "checked against the paper at 3.7-21 N (Table 3)"
+            )
         if row["all_plastic"]:
-            warn(f"load {load:g} N: every asperity is fully plastic (a'_l <= a'_pc): F_s, K_tau, "
-                 "C_tau are 0 in this model; check G (too large?), M and the load")  # fmt: skip
+            warn(
+                f"load {load:g} N: every asperity is fully plastic (a'_l <= a'_pc): F_s, K_tau, "
+                "C_tau are 0 in this model; check G (too large?), M and the load"
+            )
         elif row["Fs_N"] == 0.0:
-            warn(f"load {load:g} N: no asperity is elastic or first elastic-plastic (a'_l <= "
-                 "a'_epc), so F_s = z_max = 0 in this model (wang2022 Eqs 14, 16)")  # fmt: skip
+            warn(
+                f"load {load:g} N: no asperity is elastic or first elastic-plastic (a'_l <= "
+                "a'_epc), so F_s = z_max = 0 in this model (wang2022 Eqs 14, 16)"
+            )
         if not row["converged"]:
             warn(f"load {load:g} N: the load balance did not converge (wang2022 Eqs 8-15)")
         print(

@@ -56,17 +56,24 @@ def run_discover(args) -> int:
     with claim_outputs(src, [target, figure], force=args.force, inputs=[args.from_model]):
         record = with_band_tension(read_record(src, args.format), args.band_tension, src)
         if record.kind not in _DISCOVERY:
-            raise CommandError(f"{src}: discovery has no baseline for a {type(record).__name__} "
-                               "yet; fit it with `tribojax fit`")  # fmt: skip
+            raise CommandError(
+                f"{src}: discovery has no baseline for a {type(record).__name__} "
+                "yet; fit it with `tribojax fit`"
+            )
         make_baseline, plot = _DISCOVERY[record.kind]
-        record, reduction = (reduce_record(record, args, whole_cycles=True) if record.reducible
-                             else (record, None))  # fmt: skip
+        record, reduction = (
+            reduce_record(record, args, whole_cycles=True) if record.reducible else (record, None)
+        )
         if args.initial is not None and record.kind != "loop":
-            raise CommandError(f"--initial is for loops and histories; {src} is "
-                               f"{record.description}")  # fmt: skip
+            raise CommandError(
+                f"--initial is for loops and histories; {src} is {record.description}"
+            )
         try:
-            baseline = (make_baseline(record) if args.initial is None
-                        else loop_baseline(record, initial=args.initial))  # fmt: skip
+            baseline = (
+                make_baseline(record)
+                if args.initial is None
+                else loop_baseline(record, initial=args.initial)
+            )
             with progress(args, "discover"):
                 report = discover(baseline, max_effects=args.max_effects, start=start)
         except ValueError as exc:
@@ -84,6 +91,7 @@ def run_discover(args) -> int:
     print(report.summary())
     print(f"wrote {target}" + (f" and {figure}" if drew else " (no figure: matplotlib missing)"))
     if not report.converged:
-        return error(f"the baseline fit did not converge: {report.baseline_fit['message']}",
-                     status=3)
+        return error(
+            f"the baseline fit did not converge: {report.baseline_fit['message']}", status=3
+        )
     return 0

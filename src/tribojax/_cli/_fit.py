@@ -22,18 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .._fit._measures import nrmse, rms
+from .._fit._measures import nrmse
 from .._io._records import read_record
 from .._limits import MAX_STEPS
 from .._model import (
-    FittedModel,
     curve_baseline,
-    evaluate,
-    fit_loop,
     fit_record,
-    fit_slip_run,
-    loop_residuals,
-    rebuild,
 )
 from .._predict import RECORD_KINDS, SAVED_KEY, fitted_model, load_model, refit
 from ._common import (
@@ -44,12 +38,12 @@ from ._common import (
     error,
     plot_model_and_residual,
     progress,
-    reduce_record,
     warn,
     with_band_tension,
     write_json_atomic,
 )
 from ._fit_real import HISTORY_CHOICES, fit_curve_record, fit_history_record, fit_summary
+from ._fit_reduced import fit_loop_reduced, fit_reduced, fit_slip
 
 # record kinds `tribojax fit` does not fit, and what to do instead
 _NOT_FITTED = {
@@ -65,10 +59,12 @@ def run_fit(args) -> int:
     if args.max_steps is not None and args.max_steps < 1:
         return error(f"--max-steps = {args.max_steps} must be at least 1")
     start = _parse_start(args.start)
-    with claim_outputs(path, [out / "fit.json", out / "fit.png"], force=args.force,
-                       inputs=[args.from_model]):  # fmt: skip
-        records = [with_band_tension(read_record(p, args.format), args.band_tension, p)
-                   for p in paths]  # fmt: skip
+    with claim_outputs(
+        path, [out / "fit.json", out / "fit.png"], force=args.force, inputs=[args.from_model]
+    ):
+        records = [
+            with_band_tension(read_record(p, args.format), args.band_tension, p) for p in paths
+        ]
         full = records[0]
         if full.kind in _NOT_FITTED:
             return error(f"{path} is {full.description}: {_NOT_FITTED[full.kind]}")
@@ -82,31 +78,46 @@ def run_fit(args) -> int:
         fits = _fit_from_model if args.from_model else _FITS[full.kind]
         with progress(args, "fit") as bar:
             if len(records) > 1:  # one element's parameters (+ f0) for all of them
-                result, curves = fit_history_record(records, args.model or "best", args.max_steps,
-                                                    start, decimate_factor(args) or 1,
-                                                    args.mixed_scales)  # fmt: skip
+                result, curves = fit_history_record(
+                    records,
+                    args.model or "best",
+                    args.max_steps,
+                    start,
+                    decimate_factor(args) or 1,
+                    args.mixed_scales,
+                )
             else:
                 result, curves = fits(full, args, start, bar.note)
         result["wall_time_s"] = time.perf_counter() - t0
-        flat = {k for d in result.get("unidentifiable", []) for k, c in d["direction"].items()
-                if abs(c) > 1e-3}  # fmt: skip
+        flat = {
+            k
+            for d in result.get("unidentifiable", [])
+            for k, c in d["direction"].items()
+            if abs(c) > 1e-3
+        }
         if flat and result.get(SAVED_KEY) is not None:  # not a result: no model to predict with
             result[SAVED_KEY] = None
             result["not_a_result"] = f"the data do not determine {', '.join(sorted(flat))}"
         write_json_atomic(out / "fit.json", result, exclusive=not args.force)
-        drew = plot_model_and_residual(out / "fit.png", curves,
-                                       f"{Path(result['source']).name}: {result['model']}",
-                                       ("t (s)", f"model − data ({result['residual_unit']})"),
-                                       title_size=9)  # fmt: skip
+        drew = plot_model_and_residual(
+            out / "fit.png",
+            curves,
+            f"{Path(result['source']).name}: {result['model']}",
+            ("t (s)", f"model − data ({result['residual_unit']})"),
+            title_size=9,
+        )
     what = path if len(paths) == 1 else f"{len(paths)} records ({path.name}, ...)"
-    print(f"{result['kind']} {what}: {result['n_data']} samples, fitted "
-          f"{', '.join(result['fitted'])}")  # fmt: skip
+    print(
+        f"{result['kind']} {what}: {result['n_data']} samples, fitted {', '.join(result['fitted'])}"
+    )
     for name in result["fitted"]:
         v, s = result["parameters"][name], result["std_errors"][name]
         print(f"  {name:6s} = {v:.6g} ± {math.inf if name in flat else s:.2g}")
     unit = result["residual_unit"]
-    print(f"  rms residual {result['rms_residual']:.4g} {unit}; converged: "
-          f"{result['converged']} ({result['steps']} steps, {result['wall_time_s']:.1f} s)")
+    print(
+        f"  rms residual {result['rms_residual']:.4g} {unit}; converged: "
+        f"{result['converged']} ({result['steps']} steps, {result['wall_time_s']:.1f} s)"
+    )
     if "full_record" in result:
         fr = result["full_record"]
         chi2 = f", reduced chi2 {fr['reduced_chi2']:.4g}" if fr["reduced_chi2"] else ""
@@ -119,9 +130,12 @@ def run_fit(args) -> int:
         return error(f"the fit did not converge: {result['message']}", status=FAILED)
     if flat:  # a flat direction: the value printed is not a result
         which = ", ".join(sorted(flat))
-        return error(f"the fit stopped where the data do not determine {which} (the "
-                     "model does not respond to it there, e.g. an element that never slips): "
-                     "not a result; give another --start", status=FAILED)  # fmt: skip
+        return error(
+            f"the fit stopped where the data do not determine {which} (the "
+            "model does not respond to it there, e.g. an element that never slips): "
+            "not a result; give another --start",
+            status=FAILED,
+        )
     return 0
 
 
@@ -165,8 +179,10 @@ def uncertainty_warnings(result: dict) -> list[str]:
     for r in result.get("records", []):
         if r["nrmse"] >= HARDLY_EXPLAINED:
             than = "worse than" if r["nrmse"] >= 1.0 else "hardly better than"
-            out.append(f"{r['source']}: NRMSE {r['nrmse']:.5g} — the joint model fits this "
-                       f"record {than} its mean force would (a constant: NRMSE 1)")  # fmt: skip
+            out.append(
+                f"{r['source']}: NRMSE {r['nrmse']:.5g} — the joint model fits this "
+                f"record {than} its mean force would (a constant: NRMSE 1)"
+            )
     for d in result.get("unidentifiable", []):
         combo = " ".join(f"{v:+.3g}*{k}" for k, v in d["direction"].items() if abs(v) > 1e-3)
         out.append(
@@ -178,20 +194,24 @@ def uncertainty_warnings(result: dict) -> list[str]:
 
 def _fit_slip_record(run, args, start, note):
     """A slip run: reduced as `--decimate` asks, then the pre-slip LuGre model."""
-    return _fit_reduced(run, args, start, note, _fit_slip)
+    return fit_reduced(run, args, start, note, fit_slip)
 
 
 def _check_joint(records, paths, args) -> None:
     """Several records are fitted together only as loops or histories, through an element."""
     for rec, p in zip(records, paths):
         if rec.kind != "loop":
-            raise CommandError(f"{p} is {rec.description}: several records are fitted together "
-                               "only as loops or displacement histories")  # fmt: skip
+            raise CommandError(
+                f"{p} is {rec.description}: several records are fitted together "
+                "only as loops or displacement histories"
+            )
     if args.from_model is not None:
         raise CommandError("--from takes one record")
     if args.model not in (None, *HISTORY_CHOICES, "best"):
-        raise CommandError(f"--model {args.model}: several records are fitted through their "
-                           f"histories; use {', '.join(HISTORY_CHOICES)} or best")  # fmt: skip
+        raise CommandError(
+            f"--model {args.model}: several records are fitted through their "
+            f"histories; use {', '.join(HISTORY_CHOICES)} or best"
+        )
 
 
 def _fit_loop_record(loop, args, start, note):
@@ -199,9 +219,10 @@ def _fit_loop_record(loop, args, start, note):
     history), else reduced as `--decimate` asks and fitted with the loop model of --element."""
     model = args.model
     if model in (*HISTORY_CHOICES, "best") or (model is None and not loop.periodic):
-        return fit_history_record(loop, model or "best", args.max_steps, start,
-                                  decimate_factor(args) or 1)  # fmt: skip
-    return _fit_reduced(loop, args, start, note, _fit_loop)
+        return fit_history_record(
+            loop, model or "best", args.max_steps, start, decimate_factor(args) or 1
+        )
+    return fit_reduced(loop, args, start, note, fit_loop_reduced)
 
 
 def _fit_curve_record(curve, args, start, note):
@@ -210,31 +231,42 @@ def _fit_curve_record(curve, args, start, note):
     LuGre steady law with a direction asymmetry."""
     if args.model in (None, "record"):
         if start:
-            raise CommandError("--start does not apply to a friction curve's record model (its "
-                               "start is the linear least-squares fit)")  # fmt: skip
+            raise CommandError(
+                "--start does not apply to a friction curve's record model (its "
+                "start is the linear least-squares fit)"
+            )
         fit = fit_record(curve_baseline(curve), max_steps=args.max_steps or MAX_STEPS)
-        return _record_model_result(fit, curve, "Coulomb + viscous friction (the curve's "
-                                    "record model)", units=curve.units)  # fmt: skip
+        return _record_model_result(
+            fit, curve, "Coulomb + viscous friction (the curve's record model)", units=curve.units
+        )
     return fit_curve_record(curve, args.model, args.max_steps)
 
 
 # the fit of each record kind (those in _NOT_FITTED excepted)
-_FITS = {"slip_run": _fit_slip_record, "loop": _fit_loop_record,
-         "friction_curve": _fit_curve_record}  # fmt: skip
+_FITS = {
+    "slip_run": _fit_slip_record,
+    "loop": _fit_loop_record,
+    "friction_curve": _fit_curve_record,
+}
 
 
 def _fit_from_model(full, args, start, note):
     """`--from MODEL.json`: the saved model with its effects fitted to the record (`refit`)."""
     if start or args.alpha is not None:
-        raise CommandError("--start and --alpha do not apply with --from (the saved model is the "
-                           "start and says what is held)")  # fmt: skip
+        raise CommandError(
+            "--start and --alpha do not apply with --from (the saved model is the "
+            "start and says what is held)"
+        )
     model = load_model(args.from_model)
     if model.kind not in RECORD_KINDS:
-        raise CommandError(f"--from {args.from_model}: a {model.kind} model; --from takes a "
-                           "slip, loop or curve model (a history: --model ELEMENT)")  # fmt: skip
+        raise CommandError(
+            f"--from {args.from_model}: a {model.kind} model; --from takes a "
+            "slip, loop or curve model (a history: --model ELEMENT)"
+        )
     fit = refit(model, full, max_steps=args.max_steps or MAX_STEPS, throw=False)
-    return _record_model_result(fit, full, f"{model.kind} model from {args.from_model}",
-                                start_model=model.as_dict())  # fmt: skip
+    return _record_model_result(
+        fit, full, f"{model.kind} model from {args.from_model}", start_model=model.as_dict()
+    )
 
 
 def _record_model_result(fit, full, label, **extra):
@@ -250,111 +282,14 @@ def _record_model_result(fit, full, label, **extra):
     how = "the record's noise sd" if data.noise_std else "estimated from the residuals"
     d = fit_summary(fit, full, len(measured), resid, unit, data.noise_std or None, how)
     saved = fitted_model(fit, str(full.source), [full])
-    d.update(model=label + (f" with {', '.join(e.name for e in saved.effects)}"
-                            if saved.effects else ""),
-             nrmse=nrmse(resid, measured), fitted_model=saved.as_dict() if fit.converged else None,
-             **extra)  # fmt: skip
-    curves = dict(x=x, data=measured, model=fit.prediction, xlabel=x_name, ylabel=unit,
-                  resid_x=x, resid=resid)  # fmt: skip
-    return d, curves
-
-
-def _fit_reduced(full, args, start, note, fit):
-    """`fit` on the record reduced as `--decimate` asks; after a reduction, the fitted model's
-    residuals on every original sample (`_full_residuals`) in "full_record"."""
-    # as `discover` reduces it (a loop: its first whole cycles that fit): the same samples
-    record, reduction = reduce_record(full, args, whole_cycles=full.kind == "loop")
-    result, curves = fit(record, args, start, reduction, note)
-    result["decimation"] = reduction.as_dict()
-    resid = _full_residuals(full, result, args) if reduction.factor > 1 else None
-    if resid is not None:
-        result["full_record"] = _full_record(resid, result, reduction)
-    return result, curves
-
-
-def _full_residuals(full, result, args):
-    """Model − data on every sample of the unreduced record: the saved model rebuilt on it and
-    evaluated (`rebuild`, `evaluate`: what `predict` does), wu2015's steady loop by its own
-    formula; None when the fit saved no model (it did not converge)."""
-    if args.model == "steady":
-        p = result["parameters"]
-        return loop_residuals(full, args.element, p["mu_N"], p["K_d"], model="steady")
-    if result.get(SAVED_KEY) is None:
-        return None
-    baseline, theta, _, _ = rebuild(FittedModel.from_dict(result[SAVED_KEY]), full)
-    kind = RECORD_KINDS[baseline.kind]
-    return evaluate(baseline, theta) - kind.measured(baseline)
-
-
-def _full_record(resid, result, reduction) -> dict:
-    """Residual statistics of the fitted model on every sample of the unreduced record."""
-    sigma = reduction.noise_std_original
-    dof = max(len(resid) - len(result["fitted"]), 1)
-    return {
-        "n_data": len(resid),
-        "rms_residual": rms(resid),
-        "reduced_chi2": float(np.sum((resid / sigma) ** 2) / dof) if sigma else None,
-        "sigma": sigma,
-        "what": "the fitted model on every sample of the record before the reduction",
-    }
-
-
-def _reduced_sigma_source(reduction, default):
-    if reduction.factor == 1:
-        return default
-    return f"decimation: {reduction.noise_source}, scaled to the reduced samples"
-
-
-def _fit_slip(run, args, start, reduction, note):
-    if args.alpha is None:  # the paper's law, as discover's baseline
-        alpha = 1.0
-    elif args.alpha == "free":
-        alpha = None
-    else:
-        try:
-            alpha = float(args.alpha)
-        except ValueError:
-            raise ValueError(f"--alpha must be 'free' or a number, got {args.alpha!r}") from None
-    how = (_reduced_sigma_source(reduction, "sidecar noise_std_m") if run.noise_std is not None
-           else "estimated from the residuals")  # fmt: skip
-    steps = args.max_steps or MAX_STEPS
-    fit = fit_slip_run(run, alpha=alpha, max_steps=steps, start=start or None, progress=note,
-                       throw=False)  # fmt: skip
-    resid = fit.prediction - run.slip  # model − data, m
-    d = fit_summary(fit, run, len(run), resid, "m", run.noise_std, how)
-    d["model"] = "PreSlipLuGre (wang2022 Eq 27), slip at every sample"
-    d["nrmse"] = nrmse(resid, run.slip)
-    d["mass_kg"] = run.mass
-    d[SAVED_KEY] = fitted_model(fit, str(run.source), [run]).as_dict() if fit.converged else None
-    curves = dict(x=run.t, data=run.slip, model=run.slip + resid, xlabel="t (s)",
-                  ylabel="slip Δx (m)", resid_x=run.t, resid=resid)  # fmt: skip
-    return d, curves
-
-
-def _fit_loop(loop, args, start, reduction, note):
-    if len(loop.t) <= 2:
-        raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
-    steps = args.max_steps or MAX_STEPS
-    model = args.model or "history"
-    fit = fit_loop(loop, args.element, model=model, max_steps=steps, start=start or None,
-                   throw=False)  # fmt: skip
-    if fit.prediction is not None:  # the loop model: the samples from the first reversal on
-        resid = fit.prediction - loop.f[-len(fit.prediction) :]
-    else:
-        resid = fit.residuals * (loop.noise_std if loop.noise_std is not None else 1.0)
-    m = len(resid)  # N, on the fitted samples (the last m)
-    how = "sidecar noise_std_N" if loop.noise_std is not None else "estimated from the residuals"
-    how = _reduced_sigma_source(reduction, how)
-    d = fit_summary(fit, loop, m, resid, "N", loop.noise_std, how)
-    eq = 1 if args.element == "jenkins" else 2
-    d["model"] = f"{args.element} ({model} loop, wu2015 Eq {eq})"
-    d["nrmse"] = nrmse(resid, loop.f[-m:])
-    d["normal_load_N"], d["frequency_Hz"] = loop.normal_load, loop.frequency
-    if loop.normal_load is not None:
-        d["mu"] = float(fit.values[0] / loop.normal_load)
-    if fit.model is not None and fit.converged:  # the loop model (not the steady formula)
-        d[SAVED_KEY] = fitted_model(fit, str(loop.source), [loop]).as_dict()
-    curves = dict(x=loop.u[-m:], data=loop.f[-m:], model=loop.f[-m:] + resid,
-                  xlabel="displacement u (m)", ylabel="force f (N)", resid_x=loop.t[-m:],
-                  resid=resid)  # fmt: skip
+    d.update(
+        model=label
+        + (f" with {', '.join(e.name for e in saved.effects)}" if saved.effects else ""),
+        nrmse=nrmse(resid, measured),
+        fitted_model=saved.as_dict() if fit.converged else None,
+        **extra,
+    )
+    curves = dict(
+        x=x, data=measured, model=fit.prediction, xlabel=x_name, ylabel=unit, resid_x=x, resid=resid
+    )
     return d, curves

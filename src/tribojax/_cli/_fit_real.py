@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._fit._history import HISTORY_MODELS, fit_history, predict_history
 from .._fit._measures import bic, nrmse, rms
-from .._fit._steady_law import fit_steady_curve
 from .._io._friction_curve import FrictionCurve
 from .._limits import DEVICE_MODELS, ELEMENT_MODELS, MAX_STEPS
+from .._model._history_fit import fit_history, predict_history
+from .._model._history_model import HISTORY_MODELS
+from .._model._steady_law import fit_steady_curve
 from .._predict import SAVED_KEY, fitted_model
 from ._common import CommandError
 
@@ -50,8 +51,14 @@ def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:
     return d
 
 
-def fit_history_record(loops, model: str, max_steps: int | None, start: dict,
-                       decimate: int = 1, mixed_scales: bool = False):  # fmt: skip
+def fit_history_record(
+    loops,
+    model: str,
+    max_steps: int | None,
+    start: dict,
+    decimate: int = 1,
+    mixed_scales: bool = False,
+):
     """Fit `model` (or every element for "best", chosen by the lowest BIC) through the
     displacement history of a loop or of several loops together (one parameter set), on every
     `decimate`-th sample, with at most `max_steps` LM steps (None: `MAX_STEPS`) from the
@@ -62,15 +69,22 @@ def fit_history_record(loops, model: str, max_steps: int | None, start: dict,
     for name in names:
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
         steps = max_steps or MAX_STEPS
-        fits[name] = fit_history(loops, name, start=given or None, max_steps=steps,
-                                 decimate=decimate, mixed_scales=mixed_scales,
-                                 throw=False)  # fmt: skip
+        fits[name] = fit_history(
+            loops,
+            name,
+            start=given or None,
+            max_steps=steps,
+            decimate=decimate,
+            mixed_scales=mixed_scales,
+            throw=False,
+        )
     each = {k: [predict_history(h, lp) for lp in loops] for k, h in fits.items()}
     pred = {k: np.concatenate([force for force, _ in v]) for k, v in each.items()}
     f = np.concatenate([lp.f[::decimate] for lp in loops])
     n = f.size
-    scores = {k: bic(float(np.sum((pred[k] - f) ** 2)), n, len(h.fit.names))
-              for k, h in fits.items()}  # fmt: skip
+    scores = {
+        k: bic(float(np.sum((pred[k] - f) ** 2)), n, len(h.fit.names)) for k, h in fits.items()
+    }
     best = min(scores, key=scores.get)
     h = fits[best]
     resid = pred[best] - f
@@ -81,27 +95,55 @@ def fit_history_record(loops, model: str, max_steps: int | None, start: dict,
         sigma, how = None, "first-difference estimate of each record's residual"
     d = fit_summary(h.fit, loops[0], n, resid, "N", sigma, how)
     source = "; ".join(str(lp.source) for lp in loops)
-    d.update(model=best, nrmse=h.nrmse, route="history", bic=scores[best], decimate=decimate,
-             normal_load_N=loops[0].normal_load, frequency_Hz=loops[0].frequency,
-             band_tension_N=h.band_tension)  # fmt: skip
+    d.update(
+        model=best,
+        nrmse=h.nrmse,
+        route="history",
+        bic=scores[best],
+        decimate=decimate,
+        normal_load_N=loops[0].normal_load,
+        frequency_Hz=loops[0].frequency,
+        band_tension_N=h.band_tension,
+    )
     if len(loops) > 1:
-        d.update(source=source, records=[
-            {"source": str(lp.source), "n_data": int(lp.f[::decimate].size),
-             "nrmse": float(e), "band_tension_N": lp.band_tension}
-            for lp, (_, e) in zip(loops, each[best])])  # fmt: skip
+        d.update(
+            source=source,
+            records=[
+                {
+                    "source": str(lp.source),
+                    "n_data": int(lp.f[::decimate].size),
+                    "nrmse": float(e),
+                    "band_tension_N": lp.band_tension,
+                }
+                for lp, (_, e) in zip(loops, each[best])
+            ],
+        )
     d[SAVED_KEY] = fitted_model(h, source, loops).as_dict() if h.fit.converged else None
     if model == "best":
         d["selected_by"] = "bic"
-        d["candidates"] = {k: {"nrmse": f.nrmse, "bic": scores[k], "converged": f.fit.converged,
-                               "parameters": dict(zip(f.fit.names, f.fit.values.tolist()))}
-                           for k, f in fits.items()}  # fmt: skip
+        d["candidates"] = {
+            k: {
+                "nrmse": f.nrmse,
+                "bic": scores[k],
+                "converged": f.fit.converged,
+                "parameters": dict(zip(f.fit.names, f.fit.values.tolist())),
+            }
+            for k, f in fits.items()
+        }
     t, offset = [], 0.0
     for lp in loops:  # records one after another on the plot's time axis
         t.append(lp.t[::decimate] - lp.t[0] + offset)
         offset = t[-1][-1] + (lp.t[1] - lp.t[0])
     u = np.concatenate([lp.u[::decimate] for lp in loops])
-    curves = dict(x=u, data=f, model=pred[best], xlabel="displacement u (m)",
-                  ylabel="force f (N)", resid_x=np.concatenate(t), resid=resid)  # fmt: skip
+    curves = dict(
+        x=u,
+        data=f,
+        model=pred[best],
+        xlabel="displacement u (m)",
+        ylabel="force f (N)",
+        resid_x=np.concatenate(t),
+        resid=resid,
+    )
     return d, curves
 
 
@@ -115,16 +157,27 @@ def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
     resid = fit.residuals * curve.friction_error
     unit = curve.units["friction_unit"]
     sigma = float(np.median(curve.friction_error))
-    d = fit_summary(fit, curve, len(curve), resid, unit, sigma,
-                    "per-point scatter / sqrt(samples)")  # fmt: skip
-    sides = {side: fit_steady_curve(curve, direction=sign, throw=False, **steps).as_dict()
-             for side, sign in (("positive", 1), ("negative", -1))}
+    d = fit_summary(fit, curve, len(curve), resid, unit, sigma, "per-point scatter / sqrt(samples)")
+    sides = {
+        side: fit_steady_curve(curve, direction=sign, throw=False, **steps).as_dict()
+        for side, sign in (("positive", 1), ("negative", -1))
+    }
     saved = fitted_model(fit, str(curve.source), [curve]) if fit.converged else None
     d[SAVED_KEY] = None if saved is None else saved.as_dict()
-    d.update(model="lugre", nrmse=nrmse(resid, curve.friction),
-             route="steady law with direction asymmetry T0", units=curve.units,
-             per_direction=sides)  # fmt: skip
-    curves = dict(x=curve.velocity, data=curve.friction, model=curve.friction + resid,
-                  xlabel=f"velocity ({curve.units['velocity_unit']})",
-                  ylabel=f"friction ({unit})", resid_x=curve.velocity, resid=resid)  # fmt: skip
+    d.update(
+        model="lugre",
+        nrmse=nrmse(resid, curve.friction),
+        route="steady law with direction asymmetry T0",
+        units=curve.units,
+        per_direction=sides,
+    )
+    curves = dict(
+        x=curve.velocity,
+        data=curve.friction,
+        model=curve.friction + resid,
+        xlabel=f"velocity ({curve.units['velocity_unit']})",
+        ylabel=f"friction ({unit})",
+        resid_x=curve.velocity,
+        resid=resid,
+    )
     return d, curves

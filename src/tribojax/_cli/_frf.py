@@ -30,14 +30,22 @@ from ._common import claim_outputs, error, progress, write_json_atomic
 SCHEMA = {
     "structure": {"M": "matrix", "C": "matrix", "K": "matrix"},
     "contact[]": {
-        "type": "string", "dof": "int?", "ref_dof": "int?", "mu": "number", "N": "number?",
-        "K_d": "number?", "tangential_dof": "int?", "normal_dof": "int?", "k_t": "number?",
-        "k_n": "number?", "n0": "number?",
+        "type": "string",
+        "dof": "int?",
+        "ref_dof": "int?",
+        "mu": "number",
+        "N": "number?",
+        "K_d": "number?",
+        "tangential_dof": "int?",
+        "normal_dof": "int?",
+        "k_t": "number?",
+        "k_n": "number?",
+        "n0": "number?",
     },
     "excitation": {"static": "vector?", "cosine": "vector?", "sine": "vector?", "base": "vector?"},
     "harmonics": {"H": "int?", "set": "vector?", "n_time": "int?"},
     "range": {"omega": "vector", "max_points": "int?", "ds_max": "number?"},
-}  # fmt: skip
+}
 
 NEEDS = {
     "jenkins": ("dof", "N", "K_d"),
@@ -84,18 +92,19 @@ def run_frf(args) -> int:
         cfg = read_config(args.config, SCHEMA)
         system, (w0, w1), opts = build(cfg)
     except (DataFileError, ValueError, TypeError) as err:
-        return error(f"{args.config}: {err}" if not str(err).startswith(str(args.config)) else
-                     str(err))  # fmt: skip
+        return error(
+            f"{args.config}: {err}" if not str(err).startswith(str(args.config)) else str(err)
+        )
     out = Path(args.out)
-    with claim_outputs(args.config, [out / "frf.json", out / "frf.csv", out / "frf.png"],
-                       force=False):  # fmt: skip
+    with claim_outputs(
+        args.config, [out / "frf.json", out / "frf.csv", out / "frf.png"], force=False
+    ):
         t0 = time.perf_counter()
         with progress(args, "frf: continuation"):
             fr = frequency_response(system, w0, w1, **opts)
         elapsed = time.perf_counter() - t0
         n = system.n_dof
-        lines = ["omega_rad_per_s," + ",".join(f"amplitude_dof{i}_m" for i in range(n))
-                 + ",stable"]  # fmt: skip
+        lines = ["omega_rad_per_s," + ",".join(f"amplitude_dof{i}_m" for i in range(n)) + ",stable"]
         for w, a, st in zip(fr.omega, fr.amplitude, fr.stable):
             lines.append(f"{w:.10g}," + ",".join(f"{x:.10g}" for x in a) + f",{int(st)}")
         write_text_atomic(out / "frf.csv", "\n".join(lines) + "\n")

@@ -46,9 +46,13 @@ def run_hysteresis(args) -> int:
         return error("--out must not be the folder of the --loop file")
     if args.n < 2:
         return error(f"--n = {args.n} must be at least 2")
-    for flag, value, lo in (("--omega", args.omega, 0.0), ("--mu", args.mu, 0.0),
-                            ("--N", args.N, 0.0), ("--K-d", args.K_d, 0.0),
-                            ("--C-tau", args.C_tau, None)):  # fmt: skip
+    for flag, value, lo in (
+        ("--omega", args.omega, 0.0),
+        ("--mu", args.mu, 0.0),
+        ("--N", args.N, 0.0),
+        ("--K-d", args.K_d, 0.0),
+        ("--C-tau", args.C_tau, None),
+    ):
         ok = value is None or (math.isfinite(value) and (value >= 0 if lo is None else value > lo))
         if not ok:
             bound = "[0, inf)" if lo is None else "(0, inf)"
@@ -67,17 +71,26 @@ def run_hysteresis(args) -> int:
     if not 0 < lo < hi < math.inf:
         return error(f"amplitude range ({lo:g}, {hi:g}) m must satisfy 0 < min < max < inf")
     if not (A_MIN_M <= lo and hi <= SAMPLE_LIMITS["u"][0]):  # femtometres to a kilometre
-        scale = "" if args.A is not None else (
-            f" (= --abar x A0, A0 = {A0:.3g} m from mu = {args.mu:g}, N = {args.N:g} N, "
-            f"K_d = {K_d:.3g} N/m)")  # fmt: skip
-        return error(f"amplitude range ({lo:.3g}, {hi:.3g}) m{scale} is outside the physical "
-                     f"range [{A_MIN_M:g}, {SAMPLE_LIMITS['u'][0]:g}] m")  # fmt: skip
+        scale = (
+            ""
+            if args.A is not None
+            else (
+                f" (= --abar x A0, A0 = {A0:.3g} m from mu = {args.mu:g}, N = {args.N:g} N, "
+                f"K_d = {K_d:.3g} N/m)"
+            )
+        )
+        return error(
+            f"amplitude range ({lo:.3g}, {hi:.3g}) m{scale} is outside the physical "
+            f"range [{A_MIN_M:g}, {SAMPLE_LIMITS['u'][0]:g}] m"
+        )
     outputs = [out / "hysteresis.csv", out / "hysteresis.png", out / "loop_fit.json"]
     targets = outputs[:3] if loop_result is not None else outputs[:2]
     earlier = [p for p in outputs if p.exists()]
     if earlier and not args.force:
-        return error(f"{out} holds an earlier result ({', '.join(p.name for p in earlier)}); "
-                     "refusing to replace it (use --force or another --out)")  # fmt: skip
+        return error(
+            f"{out} holds an earlier result ({', '.join(p.name for p in earlier)}); "
+            "refusing to replace it (use --force or another --out)"
+        )
     with claim_outputs(args.loop, targets, force=True):
         for p in earlier:  # --force: no file of an earlier run stays beside this run's
             if p in targets:
@@ -98,9 +111,11 @@ def run_hysteresis(args) -> int:
         table = np.stack([np.asarray(getattr(hb, c)) for c in cols], axis=1)
         bad = [c for c, col in zip(cols, table.T) if not np.all(np.isfinite(col))]
         if bad:  # inputs beyond float64 (omega = 1e-300 rad/s: C_eq = W/(pi omega A^2) overflows)
-            return error(f"{', '.join(bad)} not finite at some amplitude: the inputs (omega = "
-                         f"{args.omega:g} rad/s, mu = {args.mu:g}, N = {args.N:g} N, K_d = "
-                         f"{K_d:g} N/m) are outside float64's range")  # fmt: skip
+            return error(
+                f"{', '.join(bad)} not finite at some amplitude: the inputs (omega = "
+                f"{args.omega:g} rad/s, mu = {args.mu:g}, N = {args.N:g} N, K_d = "
+                f"{K_d:g} N/m) are outside float64's range"
+            )
         comment = (
             f"# tribojax hysteresis: {args.element}, mu = {args.mu:g}, N = {args.N:g} N, "
             f"K_d = {K_d:.6g} N/m, A0 = {A0:.6g} m, omega = {args.omega:.6g} rad/s"
@@ -131,8 +146,9 @@ def _lugre_response(element, A, omega, K_d, A0):
     cycles = min(400, max(3, math.ceil(math.log(1e8) * A0 / (4 * float(A.min()))) + 1))
     if cycles == 400:
         print("note: 400 cycles do not settle the smallest amplitudes to 1e-8", file=sys.stderr)
-    one = partial(harmonic_response, element, omega=omega, cycles=cycles, steps_per_cycle=1024,
-                  K_d=K_d, A0=A0)  # fmt: skip
+    one = partial(
+        harmonic_response, element, omega=omega, cycles=cycles, steps_per_cycle=1024, K_d=K_d, A0=A0
+    )
     return jax.jit(jax.vmap(one))(A)
 
 
@@ -141,13 +157,22 @@ def _fit_loop(args) -> dict:
     loop = read_loop(args.loop)
     a = analyse_loop(loop)
     fit = fit_loop(loop, args.element, model=args.fit_model, throw=False)
-    result = {"written_by": WRITER, "loop": str(args.loop), "analysis": a.as_dict(),
-              "fit": {**fit.as_dict(), "element": args.element, "model": args.fit_model}}
-    print(f"loop: A = {a.A:.4g} m, muN = {a.mu_N:.4g} N, K_d (Eq 6) = {a.K_d:.4g} N/m, "
-          f"K_eq = {a.K_eq:.4g} N/m, C_eq = {a.C_eq:.4g} N s/m")  # fmt: skip
+    result = {
+        "written_by": WRITER,
+        "loop": str(args.loop),
+        "analysis": a.as_dict(),
+        "fit": {**fit.as_dict(), "element": args.element, "model": args.fit_model},
+    }
+    print(
+        f"loop: A = {a.A:.4g} m, muN = {a.mu_N:.4g} N, K_d (Eq 6) = {a.K_d:.4g} N/m, "
+        f"K_eq = {a.K_eq:.4g} N/m, C_eq = {a.C_eq:.4g} N s/m"
+    )
     values = zip(fit.names, fit.values, fit.std_errors)
-    print(f"fit ({args.element}): " + ", ".join(f"{n} = {v:.5g} ± {s:.2g}" for n, v, s in values)
-          + f" (converged: {fit.converged}, {fit.steps} steps)")  # fmt: skip
+    print(
+        f"fit ({args.element}): "
+        + ", ".join(f"{n} = {v:.5g} ± {s:.2g}" for n, v, s in values)
+        + f" (converged: {fit.converged}, {fit.steps} steps)"
+    )
     return result
 
 

@@ -21,21 +21,49 @@ __all__ = ["SUBCOMMANDS", "build_parser", "main"]
 # only when it runs). A new subcommand is one line here, its arguments in `_arguments` and one
 # module in this package; errors go through `_common.run_command`.
 SUBCOMMANDS = [
-    ("reproduce", "reproduce wang2022 Tables 3-7 and wu2015 K̄, C̄", A.reproduce_arguments,
-     "_reproduce:cmd_reproduce"),
-    ("contact", "contact parameters from a topography file or D, G", A.contact_arguments,
-     "_contact:run_contact"),
-    ("hysteresis", "K̄, C̄ of a Jenkins or Mindlin element (wu2015)", A.hysteresis_arguments,
-     "_hysteresis:run_hysteresis"),
-    ("discover", "find the effect a slip run or loop's model is missing", A.discover_arguments,
-     "_discover:run_discover"),
-    ("fit", "fit a slip run or hysteresis loop CSV (+ sidecar JSON)", A.fit_arguments,
-     "_fit:run_fit"),
-    ("predict", "a fitted model (fit.json, discovery.json) on another record",
-     A.predict_arguments, "_predict:run_predict"),
-    ("frf", "forced response of a structure with friction contacts", A.frf_arguments,
-     "_frf:run_frf"),
-]  # fmt: skip
+    (
+        "reproduce",
+        "reproduce wang2022 Tables 3-7 and wu2015 K̄, C̄",
+        A.reproduce_arguments,
+        "_reproduce:cmd_reproduce",
+    ),
+    (
+        "contact",
+        "contact parameters from a topography file or D, G",
+        A.contact_arguments,
+        "_contact:run_contact",
+    ),
+    (
+        "hysteresis",
+        "K̄, C̄ of a Jenkins or Mindlin element (wu2015)",
+        A.hysteresis_arguments,
+        "_hysteresis:run_hysteresis",
+    ),
+    (
+        "discover",
+        "find the effect a slip run or loop's model is missing",
+        A.discover_arguments,
+        "_discover:run_discover",
+    ),
+    (
+        "fit",
+        "fit a slip run or hysteresis loop CSV (+ sidecar JSON)",
+        A.fit_arguments,
+        "_fit:run_fit",
+    ),
+    (
+        "predict",
+        "a fitted model (fit.json, discovery.json) on another record",
+        A.predict_arguments,
+        "_predict:run_predict",
+    ),
+    (
+        "frf",
+        "forced response of a structure with friction contacts",
+        A.frf_arguments,
+        "_frf:run_frf",
+    ),
+]
 
 
 # Subcommands that show a progress display on a terminal (`--quiet` turns it off).
@@ -65,8 +93,11 @@ def build_parser() -> argparse.ArgumentParser:
         add_arguments(cmd)
         cmd.add_argument("--debug", dest="debug_here", **debug)
         if name in LONG_RUNNING:
-            cmd.add_argument("--quiet", action="store_true",
-                             help="no progress display (it is shown only on a terminal)")
+            cmd.add_argument(
+                "--quiet",
+                action="store_true",
+                help="no progress display (it is shown only on a terminal)",
+            )
         cmd.set_defaults(target=target)
     return parser
 
@@ -83,8 +114,10 @@ def configure_process() -> None:
         os.environ.setdefault("EQX_ON_ERROR", "nan")
         given = os.environ["EQX_ON_ERROR"]
         if given not in ("raise", "breakpoint", "nan", "off"):  # equinox's traceback otherwise
-            raise ValueError(f"EQX_ON_ERROR = {given!r}: allowed 'raise', 'breakpoint', 'nan' "
-                             "(the command's default) or 'off'")  # fmt: skip
+            raise ValueError(
+                f"EQX_ON_ERROR = {given!r}: allowed 'raise', 'breakpoint', 'nan' "
+                "(the command's default) or 'off'"
+            )
     from .. import _parallel  # noqa: F401  (TRIBOJAX_FIT_WORKERS checked now: exit 2, one line)
     from .._cache import OFF, use_compilation_cache
     from .._xla import use_one_kernel
@@ -180,9 +213,11 @@ def console(argv=None, *, restore: bool = True) -> int:
         from .._cache import repair_compilation_cache
 
         gone = repair_compilation_cache()
-        print(f"tribojax: {len(unreadable)} compiled programs could not be read from the cache; "
-              f"removed {len(gone)} unreadable entries (stored again when next compiled)",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"tribojax: {len(unreadable)} compiled programs could not be read from the cache; "
+            f"removed {len(gone)} unreadable entries (stored again when next compiled)",
+            file=sys.stderr,
+        )
     if status is None or (_INTERRUPTS and status != INTERRUPTED):
         status = _interrupted(argv)
     return status

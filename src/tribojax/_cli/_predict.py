@@ -47,8 +47,9 @@ def run_predict(args) -> int:
             warnings.simplefilter("ignore", ExtrapolationWarning)
             pred = predict(model, record, initial=args.initial)
         if not (np.all(np.isfinite(pred.predicted)) and np.isfinite(pred.nrmse)):
-            raise CommandError("the model is not finite on this record (no file written)",
-                               status=FAILED)  # fmt: skip
+            raise CommandError(
+                "the model is not finite on this record (no file written)", status=FAILED
+            )
         data = pred.as_dict()
         data["model_file"] = str(model_path)
         data["initial"] = args.initial or model.options.get("initial", "rest")
@@ -60,21 +61,38 @@ def run_predict(args) -> int:
         table = np.column_stack([pred.x, pred.measured, pred.predicted])
         rows = "\n".join(",".join(f"{v:.17g}" for v in row) for row in table)
         write_text_atomic(targets[1], ",".join(pred.columns()) + "\n" + rows + "\n")
-        curves = dict(x=pred.x, data=pred.measured, model=pred.predicted, xlabel=pred.x_name,
-                      ylabel=pred.unit, resid_x=pred.x, resid=pred.predicted - pred.measured)
+        curves = dict(
+            x=pred.x,
+            data=pred.measured,
+            model=pred.predicted,
+            xlabel=pred.x_name,
+            ylabel=pred.unit,
+            resid_x=pred.x,
+            resid=pred.predicted - pred.measured,
+        )
         title = f"{Path(pred.record).name}: {pred.model.kind} model, NRMSE {pred.nrmse:.3g}"
-        drew = plot_model_and_residual(targets[2], curves, title,
-                                       (pred.x_name, f"predicted − measured ({pred.unit})"),
-                                       labels=("measured", "predicted"))  # fmt: skip
-    print(f"{model.kind} model ({model_path}) on {src}: {pred.x.size} samples, "
-          f"NRMSE {pred.nrmse:.4g}, rms error {pred.rms_error:.4g} {pred.unit}")
+        drew = plot_model_and_residual(
+            targets[2],
+            curves,
+            title,
+            (pred.x_name, f"predicted − measured ({pred.unit})"),
+            labels=("measured", "predicted"),
+        )
+    print(
+        f"{model.kind} model ({model_path}) on {src}: {pred.x.size} samples, "
+        f"NRMSE {pred.nrmse:.4g}, rms error {pred.rms_error:.4g} {pred.unit}"
+    )
     if scaled:
-        print(f"slip forces scaled by the band tension: {data['model_band_tension_N']:.4g} N "
-              f"(fit) -> {record.band_tension:.4g} N (record)")
+        print(
+            f"slip forces scaled by the band tension: {data['model_band_tension_N']:.4g} N "
+            f"(fit) -> {record.band_tension:.4g} N (record)"
+        )
     print(f"wrote {targets[0]}, {targets[1].name}" + (f" and {targets[2].name}" if drew else ""))
     for d in pred.extrapolation or ():
         warn(describe_beyond(d))
     if pred.extrapolation is None:
-        warn(f"{model_path} saves no fitted range (written before it was kept): whether the "
-             "record lies beyond the conditions it was fitted on is not known")  # fmt: skip
+        warn(
+            f"{model_path} saves no fitted range (written before it was kept): whether the "
+            "record lies beyond the conditions it was fitted on is not known"
+        )
     return 0

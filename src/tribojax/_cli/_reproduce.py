@@ -104,21 +104,29 @@ def _reproduce_fit_measured(result: dict, out_dir: Path | None = None, bar=None)
     )
     result["fit_measured"] = block
     if not fit.converged:  # the robust fit starts from it: not attempted
-        print(f"ERROR: the full-chain fit to the measured slips did not converge: "
-              f"{fit.fit.message}", file=sys.stderr)  # fmt: skip
+        print(
+            f"ERROR: the full-chain fit to the measured slips did not converge: {fit.fit.message}",
+            file=sys.stderr,
+        )
         return False
     if bar is not None:
         bar.step("robust fit")
     print("robust fit (Student-t maximum likelihood on the same engine) ...")
     t0 = time.perf_counter()
     robust = robust_fit.robust_fit_measured_slips(
-        noise=robust_fit.HEADLINE_NOISE, floor_nm=robust_fit.HEADLINE_FLOOR_NM,
-        nu=robust_fit.HEADLINE_NU, initial=fit,
-    )  # fmt: skip
+        noise=robust_fit.HEADLINE_NOISE,
+        floor_nm=robust_fit.HEADLINE_FLOOR_NM,
+        nu=robust_fit.HEADLINE_NU,
+        initial=fit,
+    )
     rd = robust.as_dict()
     keep = ~robust.flagged
-    for key in ("loss", "flagged_cells", "rms_relative_residual_unflagged",
-                "paper_theory_rms_relative_residual_unflagged"):  # fmt: skip
+    for key in (
+        "loss",
+        "flagged_cells",
+        "rms_relative_residual_unflagged",
+        "paper_theory_rms_relative_residual_unflagged",
+    ):
         block[key] = rd[key]
     block["plain_rms_relative_residual_unflagged"] = chain_fit.rms_relative(
         fit.model_nm, measured, keep
@@ -142,8 +150,11 @@ def _reproduce_fit_measured(result: dict, out_dir: Path | None = None, bar=None)
     if fig_path and plot_fit_measured(fit.model_nm, robust.model_nm, robust.flagged, fig_path):
         print(f"wrote {fig_path}")
     if not robust.converged:
-        print(f"ERROR: the robust full-chain fit did not converge: {rd['result']} "
-              f"({robust.chain.fit.message})", file=sys.stderr)  # fmt: skip
+        print(
+            f"ERROR: the robust full-chain fit did not converge: {rd['result']} "
+            f"({robust.chain.fit.message})",
+            file=sys.stderr,
+        )
     return robust.converged
 
 

@@ -84,8 +84,19 @@ def _integrals(laws, bounds, log_al, D):
 
 
 _SCALARS = (
-    "load", "F_s", "K_tau", "C_tau", "z_max", "a_l", "a_ec", "a_epc", "a_pc", "psi", "W_d", "W_s"
-)  # fmt: skip
+    "load",
+    "F_s",
+    "K_tau",
+    "C_tau",
+    "z_max",
+    "a_l",
+    "a_ec",
+    "a_epc",
+    "a_pc",
+    "psi",
+    "W_d",
+    "W_s",
+)
 
 
 def _packed(name: str) -> property:

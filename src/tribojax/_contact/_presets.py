@@ -92,9 +92,18 @@ def vacuum_to_load(
     return suction_area_m2 * p * 1e3 + mass_kg * g
 
 
-def wang2022_table3_model(G, mu_t, sigma_s, *, M=CALIBRATED_M, D=None, gamma=WANG2022_GAMMA,
-                          tangential_load=WANG2022_TANGENTIAL_LOAD_N,
-                          mass=WANG2022_RETICLE_MASS_KG, throw=True) -> FractalContact:  # fmt: skip
+def wang2022_table3_model(
+    G,
+    mu_t,
+    sigma_s,
+    *,
+    M=CALIBRATED_M,
+    D=None,
+    gamma=WANG2022_GAMMA,
+    tangential_load=WANG2022_TANGENTIAL_LOAD_N,
+    mass=WANG2022_RETICLE_MASS_KG,
+    throw=True,
+) -> FractalContact:
     """The reticle/chuck contact model behind wang2022 Table 3, for given unpublished constants.
 
     D = 2.8821 (Table 1; pass `D` to free it) and γ = 1.5, the Table 2 pair with strength

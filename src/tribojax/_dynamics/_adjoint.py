@@ -65,10 +65,12 @@ class ForwardJacobianAdjoint(eqx.Module):
             tleaves = treedef.flatten_up_to(td)
             ts_leaf = len(leaves) - 1 if has_ts else None  # ts is the last leaf
             active = [
-                i for i, t in enumerate(tleaves)
-                if i != ts_leaf and not isinstance(t, SymbolicZero)
+                i
+                for i, t in enumerate(tleaves)
+                if i != ts_leaf
+                and not isinstance(t, SymbolicZero)
                 and jnp.issubdtype(leaves[i].dtype, jnp.inexact)
-            ]  # fmt: skip
+            ]
             if active:
                 flat, unflat = ravel_pytree([leaves[i] for i in active])
 
@@ -89,10 +91,13 @@ class ForwardJacobianAdjoint(eqx.Module):
             if ts_leaf is not None and not isinstance(tleaves[ts_leaf], SymbolicZero):
                 tys = tys + rate(*eqx.combine(d, static), ys) * tleaves[ts_leaf][:, None]
             taux = jax.tree.map(
-                lambda x: np.zeros(np.shape(x), jax.dtypes.float0)
-                if not jnp.issubdtype(x.dtype, jnp.inexact) else jnp.zeros_like(x),
+                lambda x: (
+                    np.zeros(np.shape(x), jax.dtypes.float0)
+                    if not jnp.issubdtype(x.dtype, jnp.inexact)
+                    else jnp.zeros_like(x)
+                ),
                 aux,
-            )  # fmt: skip
+            )
             return (ys, aux), (tys, taux)
 
         return run(dyn)

@@ -59,8 +59,15 @@ def _arclength(fn, y0, lam0, lam_end, args, ds, ds_min, ds_max, max_points, max_
         def aug(w, a):
             return jnp.concatenate([full(w, a), jnp.dot(t, w - z_pred)[None]])
 
-        sol = optx.root_find(aug, solver, z_pred, args, max_steps=max_newton, throw=False,
-                             adjoint=optx.RecursiveCheckpointAdjoint())  # fmt: skip
+        sol = optx.root_find(
+            aug,
+            solver,
+            z_pred,
+            args,
+            max_steps=max_newton,
+            throw=False,
+            adjoint=optx.RecursiveCheckpointAdjoint(),
+        )
         z_new = sol.value
         ok = (sol.result == optx.RESULTS.successful) & jnp.all(jnp.isfinite(z_new))
         ok = ok & (jnp.dot(z_new - z, t) > 0.0)
@@ -86,8 +93,15 @@ def _arclength(fn, y0, lam0, lam_end, args, ds, ds_min, ds_max, max_points, max_
             code=code,
         )
 
-    init = dict(z=z0, t=t0, ds=jnp.asarray(ds, float), i=jnp.asarray(0), Z=Z, steps=steps,
-                code=jnp.asarray(-1))  # fmt: skip
+    init = dict(
+        z=z0,
+        t=t0,
+        ds=jnp.asarray(ds, float),
+        i=jnp.asarray(0),
+        Z=Z,
+        steps=steps,
+        code=jnp.asarray(-1),
+    )
     out = jax.lax.while_loop(cond, body, init)
     lam = lam0 + out["Z"][:, -1] * lam_scale
     return out["Z"][:, :-1], lam, out["steps"], out["i"] + 1, out["code"]
@@ -177,9 +191,18 @@ def _run(system_of, res, first, lam0, lam1, X0, omega0, extra, opts, stability):
     args = extra + (f_ref, x_ref)
     ds, ds_min, ds_max, max_points, max_newton, tol = opts
     Y, lam, steps, n, code = _arclength(
-        res, start.X.reshape(-1) / x_ref, jnp.asarray(lam0), jnp.asarray(lam1), args,
-        ds, ds_min, ds_max, int(max_points), int(max_newton), tol,
-    )  # fmt: skip
+        res,
+        start.X.reshape(-1) / x_ref,
+        jnp.asarray(lam0),
+        jnp.asarray(lam1),
+        args,
+        ds,
+        ds_min,
+        ds_max,
+        int(max_points),
+        int(max_newton),
+        tol,
+    )
     n, code = int(n), int(code)
     lam_n = np.asarray(lam[:n])
     if code == 0 and n > 1 and (lam_n[-1] - lam1) * np.sign(lam1 - lam0) > 0.0:
@@ -206,15 +229,32 @@ def _run(system_of, res, first, lam0, lam1, X0, omega0, extra, opts, stability):
         for i in range(n if system_of is not None else 0):
             mf[i] = floquet_exponents(system_of(lam_n[i]), X[i], omega[i], J[i]).real.max()
     return FrequencyResponse(
-        parameter=lam_n, omega=omega, X=X, amplitude=amp, stable=mf < 1e-6 * omega,
-        max_floquet=mf, newton_steps=np.asarray(steps[:n]), harmonics=first.harmonics,
+        parameter=lam_n,
+        omega=omega,
+        X=X,
+        amplitude=amp,
+        stable=mf < 1e-6 * omega,
+        max_floquet=mf,
+        newton_steps=np.asarray(steps[:n]),
+        harmonics=first.harmonics,
         result=_CODES[code],
-    )  # fmt: skip
+    )
 
 
-def frequency_response(system: FrictionSystem, omega_start, omega_end, *, X0=None, ds=0.02,
-                       ds_min=1e-6, ds_max=0.3, max_points: int = 400, max_newton: int = 12,
-                       tol=1e-9, stability: bool = True) -> FrequencyResponse:  # fmt: skip
+def frequency_response(
+    system: FrictionSystem,
+    omega_start,
+    omega_end,
+    *,
+    X0=None,
+    ds=0.02,
+    ds_min=1e-6,
+    ds_max=0.3,
+    max_points: int = 400,
+    max_newton: int = 12,
+    tol=1e-9,
+    stability: bool = True,
+) -> FrequencyResponse:
     """Forced response of `system` from ω = omega_start to omega_end (rad/s, > 0) by
     pseudo-arclength continuation (docs/structures.md); the start solved by `solve_hbm` from X0.
 
@@ -229,9 +269,21 @@ def frequency_response(system: FrictionSystem, omega_start, omega_end, *, X0=Non
     return _run(None, _freq_res, system, w0, w1, X0, w0, (system,), opts, stability)
 
 
-def parameter_response(make_system, p_start, p_end, omega, *, X0=None, ds=0.02, ds_min=1e-6,
-                       ds_max=0.3, max_points: int = 400, max_newton: int = 12, tol=1e-9,
-                       stability: bool = True) -> FrequencyResponse:  # fmt: skip
+def parameter_response(
+    make_system,
+    p_start,
+    p_end,
+    omega,
+    *,
+    X0=None,
+    ds=0.02,
+    ds_min=1e-6,
+    ds_max=0.3,
+    max_points: int = 400,
+    max_newton: int = 12,
+    tol=1e-9,
+    stability: bool = True,
+) -> FrequencyResponse:
     """Continuation in a scalar parameter p (e.g. the normal load) at fixed ω (rad/s).
 
     `make_system(p)` builds the `FrictionSystem` at p with JAX operations (it is traced).
@@ -242,5 +294,15 @@ def parameter_response(make_system, p_start, p_end, omega, *, X0=None, ds=0.02, 
         raise ValueError(f"omega = {float(omega):g} rad/s must be > 0")
     first = make_system(jnp.asarray(p0))
     opts = (ds, ds_min, ds_max, max_points, max_newton, tol)
-    return _run(lambda p: make_system(jnp.asarray(p)), _param_res, first, p0, p1, X0,
-                float(omega), (make_system, float(omega)), opts, stability)  # fmt: skip
+    return _run(
+        lambda p: make_system(jnp.asarray(p)),
+        _param_res,
+        first,
+        p0,
+        p1,
+        X0,
+        float(omega),
+        (make_system, float(omega)),
+        opts,
+        stability,
+    )

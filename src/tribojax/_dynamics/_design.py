@@ -53,8 +53,16 @@ class Peak(eqx.Module):
     result: RESULTS
 
 
-def resonance_peak(system: FrictionSystem, omega_guess, dof: int = 0, X0=None, *,
-                   bracket=None, tol: float = 1e-9, max_steps: int = 40) -> Peak:  # fmt: skip
+def resonance_peak(
+    system: FrictionSystem,
+    omega_guess,
+    dof: int = 0,
+    X0=None,
+    *,
+    bracket=None,
+    tol: float = 1e-9,
+    max_steps: int = 40,
+) -> Peak:
     """The resonance peak of `dof` near ω = omega_guess (rad/s): root of ∂a/∂ω by Newton.
 
     X0: the MHB coefficients near the peak (default the linear solution; give them from a
@@ -68,8 +76,11 @@ def resonance_peak(system: FrictionSystem, omega_guess, dof: int = 0, X0=None, *
     ok = (sol.result == optx.RESULTS.successful) & jnp.isfinite(sol.value)
     if bracket is not None:
         ok = ok & (sol.value >= bracket[0]) & (sol.value <= bracket[1])
-    code = RESULTS.where(sol.result == optx.RESULTS.successful, RESULTS.nonlinear_divergence,
-                         RESULTS.promote(sol.result))  # fmt: skip
+    code = RESULTS.where(
+        sol.result == optx.RESULTS.successful,
+        RESULTS.nonlinear_divergence,
+        RESULTS.promote(sol.result),
+    )
     omega = jnp.where(ok, sol.value, w0)
     result = RESULTS.where(ok, RESULTS.successful, code)
     return Peak(omega=omega, amplitude=amplitude_at(system, omega, dof, X0), result=result)
@@ -90,8 +101,9 @@ def _amp_slope(system, omega, X0, dof, solver):
     return X, g, ok
 
 
-def peak_on_grid(system: FrictionSystem, omegas, dof: int = 0, *, tol: float = 1e-9,
-                 refine_steps: int = 16) -> Peak:  # fmt: skip
+def peak_on_grid(
+    system: FrictionSystem, omegas, dof: int = 0, *, tol: float = 1e-9, refine_steps: int = 16
+) -> Peak:
     """Resonance peak of `dof` from a grid of frequencies (rad/s, ascending, spanning the peak).
 
     Natural continuation along the grid (each solve started from the previous solution); around
@@ -168,8 +180,9 @@ def _log_peak(log_p, args):
     return jnp.log(peak_on_grid(make_system(jnp.exp(log_p)), omegas, dof).amplitude)
 
 
-def minimise_peak(make_system, p0, omegas, dof: int = 0, *, rtol: float = 1e-6,
-                  max_steps: int = 60) -> PeakDesign:  # fmt: skip
+def minimise_peak(
+    make_system, p0, omegas, dof: int = 0, *, rtol: float = 1e-6, max_steps: int = 60
+) -> PeakDesign:
     """Gradient-based design: the positive parameters p (e.g. [N] or [N, K_d]) minimising the
     resonant amplitude of `dof`, by BFGS (optimistix) on log p with the implicit-function-theorem
     gradient of `peak_on_grid(make_system(p), omegas)`.
@@ -181,9 +194,16 @@ def minimise_peak(make_system, p0, omegas, dof: int = 0, *, rtol: float = 1e-6,
     if not isinstance(p0, jax.core.Tracer) and not bool(jnp.all(p0 > 0)):
         raise ValueError(f"p0 = {np.asarray(p0)} must be > 0 (log-parametrised)")
     args = (make_system, jnp.asarray(omegas, dtype=jnp.float64), dof)
-    sol = optx.minimise(_log_peak, optx.BFGS(rtol=rtol, atol=rtol), jnp.log(p0), args,
-                        max_steps=max_steps, throw=False)  # fmt: skip
+    sol = optx.minimise(
+        _log_peak,
+        optx.BFGS(rtol=rtol, atol=rtol),
+        jnp.log(p0),
+        args,
+        max_steps=max_steps,
+        throw=False,
+    )
     p = jnp.exp(sol.value)
     peak = peak_on_grid(make_system(p), args[1], dof)
-    return PeakDesign(params=p, peak=peak, result=RESULTS.promote(sol.result),
-                      steps=sol.stats["num_steps"])  # fmt: skip
+    return PeakDesign(
+        params=p, peak=peak, result=RESULTS.promote(sol.result), steps=sol.stats["num_steps"]
+    )

@@ -74,8 +74,9 @@ class FrictionSystem(eqx.Module):
     harmonics: tuple = eqx.field(static=True)
     n_time: int = eqx.field(static=True)
 
-    def __init__(self, structure, contacts=(), excitation=None, *, H=None, harmonics=None,
-                 n_time=None):  # fmt: skip
+    def __init__(
+        self, structure, contacts=(), excitation=None, *, H=None, harmonics=None, n_time=None
+    ):
         ensure_x64()
         if not isinstance(structure, Structure):
             raise TypeError(f"structure must be a Structure, got {type(structure).__name__}")
@@ -192,8 +193,16 @@ class HBMSolution(eqx.Module):
         return self.result == RESULTS.successful
 
 
-def solve_hbm(system: FrictionSystem, omega, X0=None, *, rtol=1e-10, atol=1e-10,
-              max_steps: int = 100, solver=None) -> HBMSolution:  # fmt: skip
+def solve_hbm(
+    system: FrictionSystem,
+    omega,
+    X0=None,
+    *,
+    rtol=1e-10,
+    atol=1e-10,
+    max_steps: int = 100,
+    solver=None,
+) -> HBMSolution:
     """Solve R(X, ω) = 0 at one frequency ω (rad/s, > 0) with optimistix and JAX's Jacobian.
 
     `solver` (default `optimistix.Dogleg`: Newton steps inside a trust region, which keeps plain
@@ -229,8 +238,15 @@ def _solve_arrays(system, omega, X0, solver, max_steps):
     # jac="bwd": the (square) Jacobian is materialised once per step by reverse mode, so the
     # trust-region's products J·v, Jᵀ·r and its LU solve are dense algebra, not re-runs of the
     # AFT's history scan (same iterates; about half the time per step)
-    sol = optx.root_find(_scaled_residual, solver, y0, (system, omega, f_ref, x_ref),
-                         max_steps=max_steps, throw=False, options=dict(jac="bwd"))  # fmt: skip
+    sol = optx.root_find(
+        _scaled_residual,
+        solver,
+        y0,
+        (system, omega, f_ref, x_ref),
+        max_steps=max_steps,
+        throw=False,
+        options=dict(jac="bwd"),
+    )
     result = RESULTS.promote(sol.result)
     X = jnp.where(jnp.isfinite(sol.value), sol.value, 0.0) * x_ref
     result = RESULTS.where(jnp.all(jnp.isfinite(sol.value)), result, RESULTS.nonlinear_divergence)

@@ -178,8 +178,13 @@ class TrapezoidProfile(AbstractProfile):
     def from_v_max(cls, a_max=1.0, v_max=0.5, ramp=0.15, cruise=0.75, t_start=0.1):
         """The profile reaching `v_max` (m/s): hold = v_max/a_max − ramp must be >= 0."""
         hold = check_range(v_max, "v_max", 0.0, unit="m/s") / a_max - ramp
-        return cls(a_max, ramp, fail_if(hold, hold < 0, "v_max < a_max*ramp: no hold phase"),
-                   cruise, t_start)  # fmt: skip
+        return cls(
+            a_max,
+            ramp,
+            fail_if(hold, hold < 0, "v_max < a_max*ramp: no hold phase"),
+            cruise,
+            t_start,
+        )
 
     @property
     def v_max(self) -> Array:

@@ -147,7 +147,13 @@ def simulate_slip(
     profile: AbstractProfile | None = None,
     mass=WANG2022_RETICLE_MASS_KG,
     *,
-    ts=None, t_end=DEFAULT_T_END, rtol=1e-6, atol=None, max_steps=20_000, dt0=1e-5, throw=True,
+    ts=None,
+    t_end=DEFAULT_T_END,
+    rtol=1e-6,
+    atol=None,
+    max_steps=20_000,
+    dt0=1e-5,
+    throw=True,
     adjoint: dfx.AbstractAdjoint | ForwardJacobianAdjoint | None = None,
     solver: str | dfx.AbstractSolver | None = "rodas4",
 ) -> SlipSolution:
@@ -227,8 +233,12 @@ def simulate_slip(
         finite = all(np.all(np.isfinite(np.asarray(x))) for x in (sol.slip, sol.velocity))
         return not finite or (throw and not bool(sol.ok))
 
-    return cacheable_call(lambda a: _solve(*a, False, adjoint, dt0, solver), args, failed=failed,
-                          raising=lambda a: _solve(*a, throw, adjoint, dt0, solver))
+    return cacheable_call(
+        lambda a: _solve(*a, False, adjoint, dt0, solver),
+        args,
+        failed=failed,
+        raising=lambda a: _solve(*a, throw, adjoint, dt0, solver),
+    )
 
 
 def slip_phase_averages(

@@ -16,8 +16,14 @@ from ._mhb import FrictionSystem
 
 
 @mode_jit
-def integrate_steady(system: FrictionSystem, omega, periods: int = 100,
-                     steps_per_period: int = 1024, x0=None, v0=None):  # fmt: skip
+def integrate_steady(
+    system: FrictionSystem,
+    omega,
+    periods: int = 100,
+    steps_per_period: int = 1024,
+    x0=None,
+    v0=None,
+):
     """Integrate from (x0, v0) (default rest) over `periods` periods of ω (rad/s, static counts);
     return the last period's samples x (steps_per_period, N), m, at t_j = j·T/steps."""
     s, ex = system.structure, system.excitation

@@ -225,8 +225,18 @@ def excess_rmse(r, sigma) -> float:
     return float(np.sqrt(max(float(np.mean(r * r)) - float(sigma) ** 2, 0.0)))
 
 
-def noise_consistent(r, sigma, rho=0.0, segment=None, x=None, n_params=0, *, alpha=ALPHA,
-                     n_windows=32, estimated=False):  # fmt: skip
+def noise_consistent(
+    r,
+    sigma,
+    rho=0.0,
+    segment=None,
+    x=None,
+    n_params=0,
+    *,
+    alpha=ALPHA,
+    n_windows=32,
+    estimated=False,
+):
     """(consistent, p_value, regions): the one test of "is this residual the noise?" (module
     docstring of `tribojax.discovery._verdict` for the parts): the whole-record χ² of r/σ with
     ν = n − `n_params` (AR(1) ρ: Satterthwaite), and, for a record (`x` given), no flagged

@@ -84,8 +84,10 @@ def report_step(shown, accepted, steps, cost, gn_step):
         progress, t0 = _PROGRESS[-1]
         gn = f"Gauss-Newton step {np.max(gn_step):.2g} std errors"
         gn = gn if np.all(accepted) else "step rejected"
-        progress(f"LM: {np.max(steps)} steps, cost {np.sum(cost):.8g}, {gn}, "
-                 f"{time.perf_counter() - t0:.1f} s")  # fmt: skip
+        progress(
+            f"LM: {np.max(steps)} steps, cost {np.sum(cost):.8g}, {gn}, "
+            f"{time.perf_counter() - t0:.1f} s"
+        )
 
 
 def quiet(**kwargs):
@@ -112,16 +114,17 @@ class RelativeTrustRegion(optx.ClassicalTrustRegion):
 
     def init(self, y, f_info_struct):
         one = jnp.array(1.0)
-        return _RegionState(one, jnp.full_like(one, jnp.inf), jnp.array(0),
-                            jnp.full(2, jnp.inf, dtype=one.dtype))  # fmt: skip
+        return _RegionState(
+            one, jnp.full_like(one, jnp.inf), jnp.array(0), jnp.full(2, jnp.inf, dtype=one.dtype)
+        )
 
     def step(self, first_step, y, y_eval, f_info, f_eval_info, state):
-        size, accept, result, _ = super().step(first_step, y, y_eval, f_info, f_eval_info,
-                                               state)  # fmt: skip
+        size, accept, result, _ = super().step(first_step, y, y_eval, f_info, f_eval_info, state)
         size = jnp.minimum(size, 1.0)
         r = f_info.residual
-        tried = r @ r - jnp.sum((r + f_info.jac.mv(jax.tree_util.tree_map(
-            lambda a, b: a - b, y_eval, y))) ** 2)  # fmt: skip
+        tried = r @ r - jnp.sum(
+            (r + f_info.jac.mv(jax.tree_util.tree_map(lambda a, b: a - b, y_eval, y))) ** 2
+        )
         steps = jnp.where(first_step, 0, state.steps + 1)
         mark = ~first_step & (steps % CRAWL_STEPS == 0)
         marks = jnp.where(mark, jnp.stack([r @ r, state.marks[0]]), state.marks)
@@ -144,8 +147,20 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
     padded: int = eqx.field(static=True, default=0)
     report: bool = eqx.field(static=True, default=False)
 
-    def __init__(self, rtol, atol, *, descent=None, search=None, step_tol=None, gain_tol=None,
-                 noise_tol=None, max_rejections=None, padded=0, report=False):  # fmt: skip
+    def __init__(
+        self,
+        rtol,
+        atol,
+        *,
+        descent=None,
+        search=None,
+        step_tol=None,
+        gain_tol=None,
+        noise_tol=None,
+        max_rejections=None,
+        padded=0,
+        report=False,
+    ):
         self.rtol, self.atol, self.norm = rtol, atol, optx.max_norm
         self.descent = optx.DampedNewtonDescent(lx.QR()) if descent is None else descent
         self.search = optx.ClassicalTrustRegion() if search is None else search
@@ -160,18 +175,31 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
         `step_tol` and `max_rejections` stops; with `report=True` each step is reported to
         `least_squares_fit(progress=...)` (a host callback: the solve is then not kept in the
         compilation cache, hence off by default)."""
-        return cls(rtol, atol, descent=optx.DampedNewtonDescent(),
-                   search=optx.ClassicalTrustRegion(high_cutoff=0.75, low_cutoff=0.25),
-                   step_tol=step_tol, max_rejections=max_rejections, report=report)  # fmt: skip
+        return cls(
+            rtol,
+            atol,
+            descent=optx.DampedNewtonDescent(),
+            search=optx.ClassicalTrustRegion(high_cutoff=0.75, low_cutoff=0.25),
+            step_tol=step_tol,
+            max_rejections=max_rejections,
+            report=report,
+        )
 
     @classmethod
     def record(cls, rtol, atol, *, gain_tol, noise_tol, max_rejections, padded):
         """For a record model with its effects (`fit_model`): radius in Gauss–Newton step
         lengths (cutoffs 0.25/0.75, growth 2 as MINPACK), the `gain_tol` and `noise_tol` stops."""
         search = RelativeTrustRegion(high_cutoff=0.75, low_cutoff=0.25, high_constant=2.0)
-        return cls(rtol, atol, descent=optx.IndirectDampedNewtonDescent(), search=search,
-                   gain_tol=gain_tol, noise_tol=noise_tol, max_rejections=max_rejections,
-                   padded=padded)  # fmt: skip
+        return cls(
+            rtol,
+            atol,
+            descent=optx.IndirectDampedNewtonDescent(),
+            search=search,
+            gain_tol=gain_tol,
+            noise_tol=noise_tol,
+            max_rejections=max_rejections,
+            padded=padded,
+        )
 
     def terminate(self, fn, y, args, options, state, tags):
         r, jac = state.f_info.residual, state.f_info.jac
@@ -190,8 +218,7 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
             )
             if self.report:
                 cost = 0.5 * jnp.sum(r**2)
-                jax.debug.callback(report_step, ~state.first_step, fresh, state.num_steps, cost,
-                                   gn)  # fmt: skip
+                jax.debug.callback(report_step, ~state.first_step, fresh, state.num_steps, cost, gn)
             stop = stop | (test & (gn < self.step_tol))
         if self.gain_tol is not None:
             J = jac.as_matrix()
@@ -207,8 +234,12 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
             crawl = (options or {}).get("crawl")
             if crawl is not None and isinstance(state.search_state, _RegionState):
                 clock, (now, before) = state.search_state.steps, state.search_state.marks
-                crawling = (crawl > 0) & (clock % CRAWL_STEPS == 0) & (gain > 0.5 * (r @ r)) \
-                    & (before - now < crawl * before)  # fmt: skip
+                crawling = (
+                    (crawl > 0)
+                    & (clock % CRAWL_STEPS == 0)
+                    & (gain > 0.5 * (r @ r))
+                    & (before - now < crawl * before)
+                )
         budget = (options or {}).get("budget")
         if budget is not None:  # the step budget as a run-time value (`least_squares_fit`)
             spent = state.num_steps >= budget
@@ -216,7 +247,8 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
             spent = spent | (~state.first_step & (state.num_steps >= probe) & (r @ r > limit))
             spent = spent | (~state.first_step & crawling)
             ran_out = spent & ~stop & (state.result == optx.RESULTS.successful)
-            result = optx.RESULTS.where(ran_out, optx.RESULTS.nonlinear_max_steps_reached,
-                                        state.result)  # fmt: skip
+            result = optx.RESULTS.where(
+                ran_out, optx.RESULTS.nonlinear_max_steps_reached, state.result
+            )
             return stop | spent, result
         return stop, state.result

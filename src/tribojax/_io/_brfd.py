@@ -106,9 +106,13 @@ def read_brfd(path, band_tension=None) -> HysteresisLoop:
     test = brfd_test(path)
     try:
         return HysteresisLoop(
-            t, u, f, source=str(path), frequency=None if test is None else test["frequency_Hz"],
+            t,
+            u,
+            f,
+            source=str(path),
+            frequency=None if test is None else test["frequency_Hz"],
             periodic=test is not None,
             band_tension=brfd_band_tension(path) if band_tension is None else band_tension,
-        )  # fmt: skip
+        )
     except ValueError as err:
         raise DataFileError(str(err)) from None

@@ -44,8 +44,9 @@ def _table(path, where: str, table, spec: dict) -> dict:
         raise DataFileError(f"{path}: [{where}] must be a table")
     for key in table:
         if key not in spec:
-            raise DataFileError(f"{path}: [{where}] has an unknown key {key!r} (allowed: "
-                                f"{', '.join(sorted(spec))})")  # fmt: skip
+            raise DataFileError(
+                f"{path}: [{where}] has an unknown key {key!r} (allowed: {', '.join(sorted(spec))})"
+            )
     for key, kind in spec.items():
         optional = kind.endswith("?")
         kind = kind.rstrip("?")

@@ -122,11 +122,13 @@ def read_epos(path) -> EposExport:
     header["samples read"] = str(len(rows))
     if flagged:
         more = f"; and {len(flagged) - 5} more" if len(flagged) > 5 else ""
-        warnings.warn(f"{path}: {len(flagged)} line(s) look edited, read as written: "
-                      f"{'; '.join(flagged[:5])}{more}",
-                      DataFileWarning, stacklevel=2)  # fmt: skip
-    return EposExport(arr[:, 0], arr[:, 1], arr[:, 2], header, str(path), units_at,
-                      tuple(flagged))  # fmt: skip
+        warnings.warn(
+            f"{path}: {len(flagged)} line(s) look edited, read as written: "
+            f"{'; '.join(flagged[:5])}{more}",
+            DataFileWarning,
+            stacklevel=2,
+        )
+    return EposExport(arr[:, 0], arr[:, 1], arr[:, 2], header, str(path), units_at, tuple(flagged))
 
 
 def _looks_edited(rows, texts, header) -> list[str]:
@@ -141,8 +143,12 @@ def _looks_edited(rows, texts, header) -> list[str]:
         period = 0.0
     t0 = rows[0][1][0]
     for (lineno, values), text in zip(rows, texts):
-        odd = [f"{EPOS_UNITS[c]} value {text[c]!r} has {_decimals(text[c])} decimals, the "
-               f"column {usual[c]}" for c in range(3) if _decimals(text[c]) > usual[c]]  # fmt: skip
+        odd = [
+            f"{EPOS_UNITS[c]} value {text[c]!r} has {_decimals(text[c])} decimals, the "
+            f"column {usual[c]}"
+            for c in range(3)
+            if _decimals(text[c]) > usual[c]
+        ]
         if period > 0 and abs((values[0] - t0) / period - round((values[0] - t0) / period)) > 1e-3:
             odd.append(f"time {text[0]} ms is off the {period:g} ms sampling grid")
         if odd:

@@ -187,8 +187,9 @@ def read_sidecar(
 # record CSVs
 
 
-def write_record_files(path, header, columns, sidecar: dict | None, *, overwrite, comment,
-                       digits: int = 17):  # fmt: skip
+def write_record_files(
+    path, header, columns, sidecar: dict | None, *, overwrite, comment, digits: int = 17
+):
     """Write a CSV (values with `digits` significant digits) and its sidecar atomically; refuse
     existing files unless `overwrite`."""
     path = Path(path)
@@ -197,8 +198,10 @@ def write_record_files(path, header, columns, sidecar: dict | None, *, overwrite
         raise ValueError(f"{path}: a record file must end in .csv (its sidecar is <stem>.json)")
     existing = [] if overwrite else [p for p in targets if p.exists()]
     if existing:
-        raise FileExistsError(f"{existing[0]} exists; refusing to overwrite it (pass "
-                              "overwrite=True, or choose another name)")  # fmt: skip
+        raise FileExistsError(
+            f"{existing[0]} exists; refusing to overwrite it (pass "
+            "overwrite=True, or choose another name)"
+        )
     lines = [f"# {c}" for c in comment.splitlines()] + [",".join(header)]
     lines += [",".join(f"{v:.{digits}g}" for v in row) for row in zip(*columns)]
     if sidecar is not None:
@@ -238,11 +241,15 @@ def implausible(x, name: str) -> tuple[int, str] | None:
     big = np.flatnonzero(size > limit)
     if big.size:
         i = int(big[0])
-        return i, (f"{x[i]:g} {unit} is outside the plausible range [-{limit:g}, {limit:g}] "
-                   f"{unit} (SI units: a unit or export error?)")  # fmt: skip
+        return i, (
+            f"{x[i]:g} {unit} is outside the plausible range [-{limit:g}, {limit:g}] "
+            f"{unit} (SI units: a unit or export error?)"
+        )
     floor = SAMPLE_FLOORS[name]
     if size.size and 0.0 < size.max() < floor:  # every sample tiny (all zero is allowed)
         i = int(np.argmax(size))
-        return i, (f"{x[i]:g} {unit} is the record's largest value, below the plausible "
-                   f"{floor:g} {unit} (SI units: a unit or export error?)")  # fmt: skip
+        return i, (
+            f"{x[i]:g} {unit} is the record's largest value, below the plausible "
+            f"{floor:g} {unit} (SI units: a unit or export error?)"
+        )
     return None

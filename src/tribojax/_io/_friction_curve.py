@@ -67,8 +67,10 @@ class FrictionCurve(AbstractRecord):
         """The range of |velocity| and the peak |friction|, in the curve's units
         (`AbstractRecord.extent`)."""
         v, f = np.abs(self.velocity), float(np.max(np.abs(self.friction)))
-        return {"velocity": (float(v.min()), float(v.max()), self.units["velocity_unit"]),
-                "friction": (f, f, self.units["friction_unit"])}
+        return {
+            "velocity": (float(v.min()), float(v.max()), self.units["velocity_unit"]),
+            "friction": (f, f, self.units["friction_unit"]),
+        }
 
     @property
     def friction_error(self) -> np.ndarray:
@@ -145,14 +147,23 @@ def read_epos_steady(folder) -> FrictionCurve:
         _check_steady_point(path, ex)
         key = hashlib.sha256(ex.velocity.tobytes() + ex.torque.tobytes()).hexdigest()
         if key in seen:
-            raise DataFileError(f"{path}: the same samples as {seen[key]} (a duplicate export, "
-                                "e.g. a copy of a file?); keep one of them")  # fmt: skip
+            raise DataFileError(
+                f"{path}: the same samples as {seen[key]} (a duplicate export, "
+                "e.g. a copy of a file?); keep one of them"
+            )
         seen[key] = path.name
         scatter = float(np.std(ex.torque, ddof=1))
         if not scatter > 0:
             raise DataFileError(f"{path}, line {ex.units_line + 1}: the torque is constant")
-        rows.append((float(np.mean(ex.velocity)), float(np.mean(ex.torque)), scatter,
-                     float(np.std(ex.velocity, ddof=1)), effective_samples(ex.torque)))  # fmt: skip
+        rows.append(
+            (
+                float(np.mean(ex.velocity)),
+                float(np.mean(ex.torque)),
+                scatter,
+                float(np.std(ex.velocity, ddof=1)),
+                effective_samples(ex.torque),
+            )
+        )
     rows.sort()
     cols = dict(zip(CURVE_COLUMNS, np.asarray(rows).T))
     return FrictionCurve(**cols, units=dict(EPOS_UNITS_SI), source=str(folder))
@@ -174,14 +185,18 @@ def _check_steady_point(path, ex) -> None:
             why = f"{path}: 'Recorded samples' is {announced!r}, not a count"
             raise DataFileError(why) from None
         if count != n:
-            raise DataFileError(f"{path}, line {ex.units_line + n}: {n} samples, but the header "
-                                f"announces {count} (a cut or edited export?)")  # fmt: skip
+            raise DataFileError(
+                f"{path}, line {ex.units_line + n}: {n} samples, but the header "
+                f"announces {count} (a cut or edited export?)"
+            )
     direction = np.sign(np.mean(ex.velocity))
     against = float(np.mean(np.sign(ex.velocity) == -direction)) if direction else 1.0
     if against > STEADY_OPPOSITE_MAX:
-        raise DataFileError(f"{path}: not a steady point: {100 * against:.0f} % of the samples "
-                            "move against the mean direction (a start-stop export?); a "
-                            "steady-state folder holds one commanded speed per file")  # fmt: skip
+        raise DataFileError(
+            f"{path}: not a steady point: {100 * against:.0f} % of the samples "
+            "move against the mean direction (a start-stop export?); a "
+            "steady-state folder holds one commanded speed per file"
+        )
 
 
 def read_epos_transient(path) -> FrictionTransient:
@@ -200,22 +215,37 @@ def _read_units(path) -> dict:
     return {k: data[k] for k in _UNIT_KEYS}
 
 
-def write_friction_curve(curve: FrictionCurve, path, comment="", *, provenance=None,
-                         overwrite=False) -> None:  # fmt: skip
+def write_friction_curve(
+    curve: FrictionCurve, path, comment="", *, provenance=None, overwrite=False
+) -> None:
     """Write a curve as CSV `velocity,friction,friction_scatter,velocity_scatter,samples` plus a
     sidecar {"velocity_unit", "friction_unit", provenance...}, atomically; refuses to replace
     existing files unless `overwrite`."""
     cols = [getattr(curve, c) for c in CURVE_COLUMNS]
-    write_record_files(path, CURVE_COLUMNS, cols, {**curve.units, **(provenance or {})},
-                       overwrite=overwrite, comment=comment, digits=12)  # fmt: skip
+    write_record_files(
+        path,
+        CURVE_COLUMNS,
+        cols,
+        {**curve.units, **(provenance or {})},
+        overwrite=overwrite,
+        comment=comment,
+        digits=12,
+    )
 
 
-def write_friction_transient(tr: FrictionTransient, path, comment="", *, provenance=None,
-                             overwrite=False) -> None:  # fmt: skip
+def write_friction_transient(
+    tr: FrictionTransient, path, comment="", *, provenance=None, overwrite=False
+) -> None:
     """Write a transient as CSV `time_s,velocity,friction` plus the units sidecar, atomically."""
-    write_record_files(path, TRANSIENT_COLUMNS, [tr.t, tr.velocity, tr.friction],
-                       {**tr.units, **(provenance or {})}, overwrite=overwrite, comment=comment,
-                       digits=12)  # fmt: skip
+    write_record_files(
+        path,
+        TRANSIENT_COLUMNS,
+        [tr.t, tr.velocity, tr.friction],
+        {**tr.units, **(provenance or {})},
+        overwrite=overwrite,
+        comment=comment,
+        digits=12,
+    )
 
 
 def read_friction_curve(path) -> FrictionCurve | FrictionTransient:

@@ -33,8 +33,12 @@ from ._record import AbstractRecord, metadata_extent
 LOOP_COLUMNS = ("t_s", "u_m", "f_N")  # the legacy format, no sidecar needed
 LOOP_FILE_COLUMNS = ("time_s", "displacement_m", "force_N")
 # the loop's optional metadata: field -> (sidecar key, unit)
-_METADATA = {"normal_load": ("normal_load_N", "N"), "frequency": ("frequency_Hz", "Hz"),
-             "noise_std": ("noise_std_N", "N"), "band_tension": ("band_tension_N", "N")}
+_METADATA = {
+    "normal_load": ("normal_load_N", "N"),
+    "frequency": ("frequency_Hz", "Hz"),
+    "noise_std": ("noise_std_N", "N"),
+    "band_tension": ("band_tension_N", "N"),
+}
 
 
 @final
@@ -103,8 +107,12 @@ class HysteresisLoop(AbstractRecord):
         amp = 0.5 * float(np.ptp(self.u))
         f = float(np.max(np.abs(self.f)))
         v = float(np.max(np.abs(np.diff(self.u) / np.diff(self.t))))
-        return {"amplitude": (amp, amp, "m"), "force": (f, f, "N"), "velocity": (v, v, "m/s"),
-                **metadata_extent(self, ("normal_load", "band_tension"))}  # fmt: skip
+        return {
+            "amplitude": (amp, amp, "m"),
+            "force": (f, f, "N"),
+            "velocity": (v, v, "m/s"),
+            **metadata_extent(self, ("normal_load", "band_tension")),
+        }
 
     def cycle_times(self) -> np.ndarray | None:
         """`cycle_starts(t, u)` for a periodic loop; None for an arbitrary history."""
@@ -153,8 +161,14 @@ def read_loop(path) -> HysteresisLoop:
     schema = _LOOP_SIDECAR if drive == "harmonic" else _HISTORY_SIDECAR
     side = read_sidecar(path, schema, _LOOP_UNITS, required=new, text_keys=("drive",)) or {}
     try:
-        loop = HysteresisLoop(t, u, f, source=str(path), periodic=drive == "harmonic",
-                              **{name: side.get(key) for name, (key, _) in _METADATA.items()})
+        loop = HysteresisLoop(
+            t,
+            u,
+            f,
+            source=str(path),
+            periodic=drive == "harmonic",
+            **{name: side.get(key) for name, (key, _) in _METADATA.items()},
+        )
     except ValueError as err:
         raise DataFileError(str(err)) from None
     if loop.frequency is not None and loop.periodic:
@@ -184,20 +198,28 @@ def write_loop(
     has_meta = not loop.periodic or loop.frequency is not None
     lost = [name for name in _METADATA if getattr(loop, name) is not None]
     if legacy is None and not has_meta and lost:  # never drop silently what the loop states
-        raise ValueError(f"write_loop: the legacy t_s,u_m,f_N format cannot keep {lost}; give "
-                         "the loop its drive frequency (frequency=, Hz) for the format with a "
-                         "sidecar, or legacy=True to drop them")  # fmt: skip
+        raise ValueError(
+            f"write_loop: the legacy t_s,u_m,f_N format cannot keep {lost}; give "
+            "the loop its drive frequency (frequency=, Hz) for the format with a "
+            "sidecar, or legacy=True to drop them"
+        )
     legacy = (not has_meta) if legacy is None else bool(legacy)
     if not legacy and not has_meta:
         raise ValueError("the time_s,displacement_m,force_N format needs the loop's frequency")
     side = None
     if not legacy:
         side = {} if loop.periodic else {"drive": "history"}
-        side.update({key: getattr(loop, name) for name, (key, _) in _METADATA.items()
-                     if getattr(loop, name) is not None})  # fmt: skip
+        side.update(
+            {
+                key: getattr(loop, name)
+                for name, (key, _) in _METADATA.items()
+                if getattr(loop, name) is not None
+            }
+        )
     header = LOOP_COLUMNS if legacy else LOOP_FILE_COLUMNS
-    write_record_files(path, header, (loop.t, loop.u, loop.f), side, overwrite=overwrite,
-                       comment=comment)  # fmt: skip
+    write_record_files(
+        path, header, (loop.t, loop.u, loop.f), side, overwrite=overwrite, comment=comment
+    )
 
 
 def cycle_starts(t, u) -> np.ndarray:

@@ -49,8 +49,10 @@ class AbstractRecord(abc.ABC):
         super().__init_subclass__(**kw)
         for base in cls.__mro__[1:]:  # a record class that sets its kind is concrete: final
             if issubclass(base, AbstractRecord) and "kind" in vars(base):
-                raise TypeError(f"{base.__name__} is a final record class and cannot be "
-                                f"subclassed (subclass AbstractRecord for a new kind)")  # fmt: skip
+                raise TypeError(
+                    f"{base.__name__} is a final record class and cannot be "
+                    f"subclassed (subclass AbstractRecord for a new kind)"
+                )
 
     def _set_series(self, names, *, time: str | None = None) -> None:
         """Replace the fields `names` of this frozen record by read-only float64 copies, checked:
@@ -71,8 +73,10 @@ class AbstractRecord(abc.ABC):
             x.setflags(write=False)
             arrays[name] = x
         if len({len(x) for x in arrays.values()}) > 1:
-            raise ValueError(f"{self.source}: {', '.join(names)} must have the same length, got "
-                             f"{', '.join(str(len(x)) for x in arrays.values())}")  # fmt: skip
+            raise ValueError(
+                f"{self.source}: {', '.join(names)} must have the same length, got "
+                f"{', '.join(str(len(x)) for x in arrays.values())}"
+            )
         for name, x in arrays.items():
             object.__setattr__(self, name, x)
         object.__setattr__(self, "_length", len(arrays[names[0]]))
@@ -80,8 +84,10 @@ class AbstractRecord(abc.ABC):
         steps = np.flatnonzero(np.diff(t) <= 0) if t is not None else ()
         if len(steps):
             i = steps[0] + 1
-            raise ValueError(f"{self.source}: time is not strictly increasing at sample {i} "
-                             f"(t = {t[i]:g} s after {t[i - 1]:g} s)")  # fmt: skip
+            raise ValueError(
+                f"{self.source}: time is not strictly increasing at sample {i} "
+                f"(t = {t[i]:g} s after {t[i - 1]:g} s)"
+            )
 
     @abc.abstractmethod
     def __post_init__(self) -> None:

@@ -31,8 +31,11 @@ SLIP_COLUMNS = ("time_s", "stage_accel_m_s2", "slip_m")
 
 _SLIP_SIDECAR = {"mass_kg": True, "normal_load_N": False, "noise_std_m": False}
 # the run's metadata: field -> (sidecar key, unit)
-_METADATA = {"mass": ("mass_kg", "kg"), "normal_load": ("normal_load_N", "N"),
-             "noise_std": ("noise_std_m", "m")}
+_METADATA = {
+    "mass": ("mass_kg", "kg"),
+    "normal_load": ("normal_load_N", "N"),
+    "noise_std": ("noise_std_m", "m"),
+}
 
 
 @final
@@ -91,15 +94,19 @@ class SlipRun(AbstractRecord):
     def resampled(self, t, drive, response, *, noise_std) -> SlipRun:
         """The run on new samples (t, accel, slip) with slip noise sd `noise_std`, still driven
         by this run's full-resolution `profile` (the class docstring's `drive`)."""
-        return dataclasses.replace(self, t=t, accel=drive, slip=response, noise_std=noise_std,
-                                   drive=self.profile())  # fmt: skip
+        return dataclasses.replace(
+            self, t=t, accel=drive, slip=response, noise_std=noise_std, drive=self.profile()
+        )
 
     def extent(self) -> dict:
         """The stage acceleration's peak |a| (m/s²), the drive force m·|a| it asks of the
         contact (N) and the normal load (N) when known (`AbstractRecord.extent`)."""
         a = float(np.max(np.abs(self.accel)))
-        return {"acceleration": (a, a, "m/s²"), "drive_force": (self.mass * a, self.mass * a, "N"),
-                **metadata_extent(self, ("normal_load",))}  # fmt: skip
+        return {
+            "acceleration": (a, a, "m/s²"),
+            "drive_force": (self.mass * a, self.mass * a, "N"),
+            **metadata_extent(self, ("normal_load",)),
+        }
 
     def profile(self) -> MeasuredProfile:
         """The run's drive: its stage acceleration a(t) (m/s²), `MeasuredProfile.from_samples`
@@ -127,13 +134,16 @@ def read_slip_run(path) -> SlipRun:
     table = read_table(path, columns=SLIP_COLUMNS)
     t = table["time_s"]
     if t[0] < 0:
-        raise DataFileError(f"{path}, line {data_line_number(path, 0)}: time_s = {t[0]:g} must "
-                            "be >= 0")  # fmt: skip
+        raise DataFileError(
+            f"{path}, line {data_line_number(path, 0)}: time_s = {t[0]:g} must be >= 0"
+        )
     steps = np.flatnonzero(np.diff(t) <= 0)
     if steps.size:
         i = steps[0] + 1
-        raise DataFileError(f"{path}, line {data_line_number(path, i)}: time_s = {t[i]:g} does "
-                            f"not increase (previous row {t[i - 1]:g})")  # fmt: skip
+        raise DataFileError(
+            f"{path}, line {data_line_number(path, i)}: time_s = {t[i]:g} does "
+            f"not increase (previous row {t[i - 1]:g})"
+        )
     if len(t) < 2:
         raise DataFileError(f"{path}: a slip run needs at least 2 data rows, got {len(t)}")
     for column, name in (("stage_accel_m_s2", "accel"), ("slip_m", "slip")):
@@ -142,8 +152,13 @@ def read_slip_run(path) -> SlipRun:
             lineno = data_line_number(path, far[0])
             raise DataFileError(f"{path}, line {lineno}: {column} = {far[1]}")
     side = read_sidecar(path, _SLIP_SIDECAR, dict(_METADATA.values()))
-    return SlipRun(t, table["stage_accel_m_s2"], table["slip_m"], source=str(path),
-                   **{name: side[key] for name, (key, _) in _METADATA.items()})  # fmt: skip
+    return SlipRun(
+        t,
+        table["stage_accel_m_s2"],
+        table["slip_m"],
+        source=str(path),
+        **{name: side[key] for name, (key, _) in _METADATA.items()},
+    )
 
 
 def write_slip_run(run: SlipRun, path, *, overwrite: bool = False, comment: str = "") -> None:
@@ -152,10 +167,14 @@ def write_slip_run(run: SlipRun, path, *, overwrite: bool = False, comment: str 
     Refuses (FileExistsError) if the CSV or its sidecar exists, unless `overwrite=True`; both are
     written through temporary files, so a failure leaves no partial file.
     """
-    side = {key: getattr(run, name) for name, (key, _) in _METADATA.items()
-            if getattr(run, name) is not None}  # fmt: skip
-    write_record_files(path, SLIP_COLUMNS, (run.t, run.accel, run.slip), side,
-                       overwrite=overwrite, comment=comment)  # fmt: skip
+    side = {
+        key: getattr(run, name)
+        for name, (key, _) in _METADATA.items()
+        if getattr(run, name) is not None
+    }
+    write_record_files(
+        path, SLIP_COLUMNS, (run.t, run.accel, run.slip), side, overwrite=overwrite, comment=comment
+    )
 
 
 # ---------------------------------------------------------------------------------------------

@@ -23,8 +23,7 @@ from ._fit import MAX_STEPS as MAX_STEPS
 from ._fit import SOLVER as SOLVER
 from ._fit import fit_model as fit_model
 from ._fit import fit_record as fit_record
-from ._fit import heldout_residual as heldout_residual
-from ._fit import record_scale as record_scale
+from ._heldout import heldout_residual as heldout_residual
 from ._loop_analysis import LoopAnalysis as LoopAnalysis
 from ._loop_analysis import analyse_loop as analyse_loop
 from ._loop_force import KD_LOAD_EXPONENT as KD_LOAD_EXPONENT
@@ -41,6 +40,8 @@ from ._modes import oscillator as oscillator
 from ._rebuild import RECORD_KINDS as RECORD_KINDS
 from ._rebuild import fit_saved as fit_saved
 from ._rebuild import rebuild as rebuild
+from ._record_fit import RecordFit as RecordFit
+from ._record_fit import record_scale as record_scale
 from ._residual import evaluate as evaluate
 from ._residual import pack_designs as pack_designs
 from ._residual import padded_args as padded_args
@@ -55,9 +56,9 @@ from ._slip import N_ODE_KNOBS as N_ODE_KNOBS
 from ._slip import VS_GRID as VS_GRID
 from ._slip import ZETA_MAX as ZETA_MAX
 from ._slip import SlipBaseline as SlipBaseline
-from ._slip import fit_slip_run as fit_slip_run
 from ._slip import slip_baseline as slip_baseline
 from ._slip import slip_start as slip_start
 from ._slip import stage_travel as stage_travel
 from ._slip_element import AugmentedPreSlip as AugmentedPreSlip
+from ._slip_fit import fit_slip_run as fit_slip_run
 from ._start import slip_run_start as slip_run_start

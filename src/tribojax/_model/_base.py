@@ -143,8 +143,10 @@ class AbstractBaseline(eqx.Module):
         """θ of physical parameter values (the order of `param_names`): the inverse of
         `physical`, used to evaluate a saved model on a record (`tribojax.predict`). A baseline
         that is to be saved and predicted with defines it."""
-        raise NotImplementedError(f"{type(self).__name__} does not define theta_of: it cannot "
-                                  "be rebuilt from saved parameters")
+        raise NotImplementedError(
+            f"{type(self).__name__} does not define theta_of: it cannot "
+            "be rebuilt from saved parameters"
+        )
 
     def param_ranges(self) -> tuple:
         """The open interval (lo, hi) of each physical parameter (the order of `param_names`):
@@ -211,8 +213,17 @@ class AbstractBaseline(eqx.Module):
         sd, rho = self.noise_model(np.asarray(r, dtype=float))
         estimated = not d.noise_std
         sigma = sd if estimated else float(d.noise_std)
-        ok, p, _ = noise_consistent(r, sigma, rho, d.segment, d.x, n_params, alpha=alpha,
-                                    n_windows=n_windows, estimated=estimated)  # fmt: skip
+        ok, p, _ = noise_consistent(
+            r,
+            sigma,
+            rho,
+            d.segment,
+            d.x,
+            n_params,
+            alpha=alpha,
+            n_windows=n_windows,
+            estimated=estimated,
+        )
         return bool(ok), p, sigma, rho
 
     def folds(self) -> np.ndarray:
@@ -249,4 +260,3 @@ class AbstractBaseline(eqx.Module):
         the abscissa."""
         d = self.data()
         return {d.x_label: np.asarray(d.x, dtype=float)}
-

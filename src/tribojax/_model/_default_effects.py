@@ -25,4 +25,3 @@ def default_effects(kind: str) -> list[AbstractEffect]:
         raise ValueError(f"kind = {kind!r}: no effects registered; known: {known}")
     table = {**built_in, **added}
     return [e() if isinstance(e, type) else e for e in table.values()]
-

@@ -58,8 +58,9 @@ def register_effect(effect):
     a name twice replaces the earlier entry; a built-in name is replaced in its place."""
     is_class = isinstance(effect, type) and issubclass(effect, AbstractEffect)
     if not (is_class or isinstance(effect, AbstractEffect)):
-        raise TypeError(f"register_effect expects an AbstractEffect subclass or instance, "
-                        f"got {effect!r}")  # fmt: skip
+        raise TypeError(
+            f"register_effect expects an AbstractEffect subclass or instance, got {effect!r}"
+        )
     _REGISTRY.setdefault(effect.kind, {})[effect.name] = effect
     return effect
 
@@ -77,5 +78,6 @@ def knob_design(baseline, knobs, names, units, scale, **kw) -> EffectDesign:
     gain = np.zeros((len(baseline.knob_names), len(gains)))
     for j, (knob, g) in enumerate(gains.items()):
         gain[baseline.knob_names.index(knob), j] = g
-    return EffectDesign(tuple(names), tuple(units), np.atleast_1d(np.asarray(scale, float)),
-                        knob_gain=gain, **kw)  # fmt: skip
+    return EffectDesign(
+        tuple(names), tuple(units), np.atleast_1d(np.asarray(scale, float)), knob_gain=gain, **kw
+    )

@@ -19,8 +19,11 @@ class CurveAsymmetry(AbstractEffect):
     description: ClassVar[str] = "direction-dependent level: T0 added in both directions"
 
     def designs(self, baseline):
-        return [knob_design(baseline, ["asymmetry"], ("T0",), (baseline.units[1],),
-                            float(baseline.f_ref))]  # fmt: skip
+        return [
+            knob_design(
+                baseline, ["asymmetry"], ("T0",), (baseline.units[1],), float(baseline.f_ref)
+            )
+        ]
 
 
 CURVE_EFFECTS = (Stribeck("curve"), CurveAsymmetry, Viscous("curve"))

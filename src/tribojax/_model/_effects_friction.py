@@ -46,8 +46,9 @@ class _OneKindEach(AbstractEffect):
 
     def __init__(self, kind: str = "slip"):
         if kind not in self.NAMES:
-            raise ValueError(f"kind = {kind!r}: {type(self).__name__} applies to "
-                             f"{list(self.NAMES)} records")  # fmt: skip
+            raise ValueError(
+                f"kind = {kind!r}: {type(self).__name__} applies to {list(self.NAMES)} records"
+            )
         self.kind, self.name = kind, self.NAMES[kind]
 
 
@@ -100,8 +101,11 @@ class Stribeck(_OneKindEach):
             if kind == "curve":
                 kw["free"] += ((2, "beta", lambda u: BETA_START * np.exp(u)),)
             if kind == "slip":
-                kw["starts"] = tuple((DELTA_START, float(np.log10(v_pk * c / vs)))
-                                     for c in VS_START_FACTORS if v_pk > 0)  # fmt: skip
+                kw["starts"] = tuple(
+                    (DELTA_START, float(np.log10(v_pk * c / vs)))
+                    for c in VS_START_FACTORS
+                    if v_pk > 0
+                )
             out.append(knob_design(baseline, knobs, names, units, scale, **kw))
         return out
 
@@ -131,9 +135,10 @@ class Viscous(_OneKindEach):
 
     @property
     def description(self) -> str:
-        return {"loop": "force proportional to velocity, c·du/dt",
-                "curve": "power-law viscous friction sigma2 v_ref |v/v_ref|^delta"}.get(
-                    self.kind, "viscous friction sigma2 v (LuGre)")  # fmt: skip
+        return {
+            "loop": "force proportional to velocity, c·du/dt",
+            "curve": "power-law viscous friction sigma2 v_ref |v/v_ref|^delta",
+        }.get(self.kind, "viscous friction sigma2 v (LuGre)")
 
     @property
     def score_gate(self) -> bool:
@@ -164,8 +169,11 @@ class LoadDependence(_OneKindEach):
 
     degrees: ClassVar[tuple] = (1, 2)
     kd_exponents: ClassVar[tuple] = (KD_LOAD_EXPONENT, 0.0)
-    NAMES: ClassVar[dict[str, str]] = {"slip": "load_coupling", "loop": "normal_load_variation",
-                                       TABLE: "load_coupling"}  # fmt: skip
+    NAMES: ClassVar[dict[str, str]] = {
+        "slip": "load_coupling",
+        "loop": "normal_load_variation",
+        TABLE: "load_coupling",
+    }
 
     @property
     def description(self) -> str:
@@ -181,9 +189,19 @@ class LoadDependence(_OneKindEach):
         if self.kind != "loop":
             g = 1.0 if self.kind == "slip" else 0.1
             kw = {"starts": tuple((k,) for k in KAPPA_STARTS)} if self.kind == "slip" else {}
-            return [knob_design(baseline, {"load_coupling": g}, ("kappa",), ("1 (per g)",), g,
-                                **kw)]  # fmt: skip
-        return [knob_design(baseline, ("load_slope", "load_curve")[:deg], ("beta", "gamma")[:deg],
-                            ("1",) * deg, np.ones(deg), knob_set={"kd_exponent": float(p)},
-                            nuisance={"degree": float(deg), "kd_exponent": float(p)})
-                for deg in self.degrees for p in self.kd_exponents]  # fmt: skip
+            return [
+                knob_design(baseline, {"load_coupling": g}, ("kappa",), ("1 (per g)",), g, **kw)
+            ]
+        return [
+            knob_design(
+                baseline,
+                ("load_slope", "load_curve")[:deg],
+                ("beta", "gamma")[:deg],
+                ("1",) * deg,
+                np.ones(deg),
+                knob_set={"kd_exponent": float(p)},
+                nuisance={"degree": float(deg), "kd_exponent": float(p)},
+            )
+            for deg in self.degrees
+            for p in self.kd_exponents
+        ]

@@ -34,18 +34,25 @@ class Microslip(AbstractEffect):
 
     name: ClassVar[str] = "microslip"
     kind: ClassVar[str] = "loop"
-    description: ClassVar[str] = ("partial slip: weight w of the Mindlin law, or of a law of "
-                                  "fitted shape p")
+    description: ClassVar[str] = (
+        "partial slip: weight w of the Mindlin law, or of a law of fitted shape p"
+    )
     refit_starts: ClassVar[int] = 2  # both designs
 
     def designs(self, baseline):
         p0 = MINDLIN_SHAPE
-        return [knob_design(baseline, ["microslip"], ("w",), ("1",), 1.0),
-                knob_design(baseline, ("microslip", "log_shape"), ("w", "log_shape_shift"),
-                            ("1", "1"), np.ones(2), nuisance={"shape": p0},
-                            free=((1, "shape", lambda s: 1.0 + (p0 - 1.0) * np.exp(s)),))]
-
-
+        return [
+            knob_design(baseline, ["microslip"], ("w",), ("1",), 1.0),
+            knob_design(
+                baseline,
+                ("microslip", "log_shape"),
+                ("w", "log_shape_shift"),
+                ("1", "1"),
+                np.ones(2),
+                nuisance={"shape": p0},
+                free=((1, "shape", lambda s: 1.0 + (p0 - 1.0) * np.exp(s)),),
+            ),
+        ]
 
 
 class Backlash(AbstractEffect):
@@ -62,19 +69,33 @@ class Backlash(AbstractEffect):
 
     def designs(self, baseline):
         A = float(baseline.record.A)
-        return [knob_design(baseline, ("backlash", "log_gap"), ("depth", "log_gap_shift"),
-                            ("1", "1"), np.ones(2), knob_set={"log_gap": float(np.log(q))},
-                            nuisance={"gap_m": q * A},
-                            free=((1, "gap_m", lambda s, g0=q * A: g0 * np.exp(s)),))
-                for q in GAP_GRID]  # fmt: skip
+        return [
+            knob_design(
+                baseline,
+                ("backlash", "log_gap"),
+                ("depth", "log_gap_shift"),
+                ("1", "1"),
+                np.ones(2),
+                knob_set={"log_gap": float(np.log(q))},
+                nuisance={"gap_m": q * A},
+                free=((1, "gap_m", lambda s, g0=q * A: g0 * np.exp(s)),),
+            )
+            for q in GAP_GRID
+        ]
 
 
 _BAND = {
-    "self_energizing": ("energizing", "sigma",
-                        "exponential (capstan) rise of the force to slip, exponent sigma"),
-    "direction_asymmetry": ("asymmetry", "a",
-                            "slip force muN(1 + a) sliding forward, muN(1 - a) backward"),
-}  # fmt: skip
+    "self_energizing": (
+        "energizing",
+        "sigma",
+        "exponential (capstan) rise of the force to slip, exponent sigma",
+    ),
+    "direction_asymmetry": (
+        "asymmetry",
+        "a",
+        "slip force muN(1 + a) sliding forward, muN(1 - a) backward",
+    ),
+}
 """The band brake's effects: name -> (knob of the loop model, strength, description)."""
 
 
@@ -104,8 +125,6 @@ class BandBrakeEffect(AbstractEffect):
         return [knob_design(baseline, [knob], (strength,), ("1",), 1.0)]
 
 
-
-
 class ForceOffset(AbstractEffect):
     """A constant offset f0 (N) of the force reading (a load-cell zero error): additive, f0 = 0
     null."""
@@ -120,6 +139,12 @@ class ForceOffset(AbstractEffect):
         return [EffectDesign(("f0",), ("N",), np.array([scale]), basis=ones, columns=ones)]
 
 
-LOOP_EFFECTS = (Microslip, Viscous("loop"), LoadDependence("loop"), Backlash,
-                *(BandBrakeEffect(name) for name in _BAND), ForceOffset)  # fmt: skip
+LOOP_EFFECTS = (
+    Microslip,
+    Viscous("loop"),
+    LoadDependence("loop"),
+    Backlash,
+    *(BandBrakeEffect(name) for name in _BAND),
+    ForceOffset,
+)
 """The loop model's effects in candidate order."""

@@ -53,7 +53,7 @@ class SensorDrift(AbstractEffect):
                     basis=np.polynomial.legendre.legvander(s, deg) * ys,
                 )
             )
-        return out  # fmt: skip
+        return out
 
 
 class PositionError(AbstractEffect):
@@ -75,10 +75,16 @@ class PositionError(AbstractEffect):
         out = []
         for deg in self.degrees:
             names, units = ("epsilon", "epsilon2")[:deg], ("m/m", "m/m^2")[:deg]
-            out.append(EffectDesign(names, units, ys / rms ** np.arange(1, deg + 1),
-                                    nuisance={"degree": float(deg)},
-                                    basis=np.stack([u**j * ys for j in range(1, deg + 1)], 1)))
-        return out  # fmt: skip
+            out.append(
+                EffectDesign(
+                    names,
+                    units,
+                    ys / rms ** np.arange(1, deg + 1),
+                    nuisance={"degree": float(deg)},
+                    basis=np.stack([u**j * ys for j in range(1, deg + 1)], 1),
+                )
+            )
+        return out
 
 
 class Vibration(AbstractEffect):
@@ -117,23 +123,37 @@ class Vibration(AbstractEffect):
         out = []
         for static, (q, fi, zi) in ((s, x) for s in statics for x in zip(qs, f, z)):
             q0 = q[:, 0] + (1.0 - static) * a / (2 * np.pi * fi) ** 2
-            out.append(EffectDesign(
-                ("A_q", "A_qdot", "log_f_shift", "logit_zeta_shift"), ("m", "m", "1", "1"),
-                np.array([ys, ys, 1.0, 1.0]), knob_gain=gain,
-                knob_set={"mode_log_f": np.log(fi), "mode_logit_zeta": _logit(zi),
-                          "mode_static": static},
-                columns=np.stack([_unit_rms(q0) * ys, _unit_rms(q[:, 1]) * ys, 0 * q0, 0 * q0], 1),
-                nuisance={"f_Hz": float(fi), "zeta": float(zi), "static": static},
-                free=((2, "f_Hz", lambda u, f0=fi: f0 * np.exp(u)),
-                      (3, "zeta", lambda u, z0=zi: _zeta(_logit(z0) + u)))))
-        return out  # fmt: skip
+            out.append(
+                EffectDesign(
+                    ("A_q", "A_qdot", "log_f_shift", "logit_zeta_shift"),
+                    ("m", "m", "1", "1"),
+                    np.array([ys, ys, 1.0, 1.0]),
+                    knob_gain=gain,
+                    knob_set={
+                        "mode_log_f": np.log(fi),
+                        "mode_logit_zeta": _logit(zi),
+                        "mode_static": static,
+                    },
+                    columns=np.stack(
+                        [_unit_rms(q0) * ys, _unit_rms(q[:, 1]) * ys, 0 * q0, 0 * q0], 1
+                    ),
+                    nuisance={"f_Hz": float(fi), "zeta": float(zi), "static": static},
+                    free=(
+                        (2, "f_Hz", lambda u, f0=fi: f0 * np.exp(u)),
+                        (3, "zeta", lambda u, z0=zi: _zeta(_logit(z0) + u)),
+                    ),
+                )
+            )
+        return out
 
     def reject(self, nuisance):
         """A refit whose damping ratio ends at `ZETA_MAX` is a low-pass of the acceleration,
         not a lightly damped mode (docs/discovery.md)."""
         if nuisance.get("zeta", 0.0) >= ZETA_AT_BOUND * ZETA_MAX:
-            return (f"not a mode: the damping ratio {nuisance['zeta']:.3g} ends at its bound "
-                    f"{ZETA_MAX:g} (a low-pass of the acceleration)")  # fmt: skip
+            return (
+                f"not a mode: the damping ratio {nuisance['zeta']:.3g} ends at its bound "
+                f"{ZETA_MAX:g} (a low-pass of the acceleration)"
+            )
         return None
 
     def frequencies(self, baseline):
@@ -149,11 +169,17 @@ class Vibration(AbstractEffect):
         f0, z0 = design.nuisance["f_Hz"], design.nuisance["zeta"]
         st = design.nuisance["static"]
         step = float(np.log(self.frequencies(baseline)[1] / self.frequencies(baseline)[0]))
-        lf, _ = golden_max(lambda u: score(self.design(baseline, np.exp(u), z0, st)),
-                            np.log(f0) - step, np.log(f0) + step)  # fmt: skip
-        lz, _ = golden_max(lambda u: score(self.design(baseline, np.exp(lf), np.exp(u), st)),
-                            np.log(z0 / 3), np.log(min(3 * z0, 0.8 * ZETA_MAX)),
-                            iters=12)  # fmt: skip
+        lf, _ = golden_max(
+            lambda u: score(self.design(baseline, np.exp(u), z0, st)),
+            np.log(f0) - step,
+            np.log(f0) + step,
+        )
+        lz, _ = golden_max(
+            lambda u: score(self.design(baseline, np.exp(lf), np.exp(u), st)),
+            np.log(z0 / 3),
+            np.log(min(3 * z0, 0.8 * ZETA_MAX)),
+            iters=12,
+        )
         return self.design(baseline, np.exp(lf), np.exp(lz), st)
 
 
@@ -165,6 +191,12 @@ def _zeta(u):
     return float(ZETA_MAX / (1.0 + np.exp(-u)))
 
 
-SLIP_EFFECTS = (SensorDrift, PositionError, Vibration, LoadDependence("slip"), Stribeck("slip"),
-                Viscous("slip"))  # fmt: skip
+SLIP_EFFECTS = (
+    SensorDrift,
+    PositionError,
+    Vibration,
+    LoadDependence("slip"),
+    Stribeck("slip"),
+    Viscous("slip"),
+)
 """The slip model's effects in candidate order: the additive ones, then the friction law's."""

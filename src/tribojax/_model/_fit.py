@@ -1,42 +1,35 @@
-"""The fit of a record model with its effects (`fit_model`), alone (`fit_record`) and held out
-(`heldout_residual`): the solver, start policy and statistics that `fit`, `predict` and
-`discover` share."""
+"""The fit of a record model with its effects (`fit_model`) and alone (`fit_record`): the
+solver, start policy and statistics that `fit`, `predict` and `discover` share (held out:
+`_heldout`)."""
 
 from __future__ import annotations
 
 import dataclasses
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .._checks import runtime_message
-from .._export import cached_jit
-from .._fit._engine import (
-    FAILED_RESIDUAL,
-    fit_statistics,
-    least_squares_fit,
-    thrown,
-    value_and_jacobian,
-)
-from .._fit._noise import noise_estimate
+from .._fit._engine import FAILED_RESIDUAL, least_squares_fit, value_and_jacobian
+from .._fit._result import fit_statistics, thrown
 from .._fit._solver import CRAWL_STEPS, LevenbergMarquardt
 from .._limits import MAX_STEPS as MAX_STEPS
 from .._parallel import in_parallel
 from .._precision import ensure_x64
 from .._results import RESULTS
-from ._base import K_MAX, AbstractBaseline
+from ._base import K_MAX
+from ._record_fit import RecordFit, _Physical, record_scale
 from ._residual import _names, _padded, evaluate, padded_residual
 
 GAIN_TOL = 1e-2  # converged: a Gauss–Newton step would lower the cost by < 0.01 residual variances
-FOLD_SHARE_MIN = 1e-3  # least share of a parameter's Jacobian energy in each held-out fold
 NOISE_TOL = 1.0  # stationary: a rejected step promised < 1 residual variance (evaluation noise)
 PROBE_STEPS = 8  # steps after which a start above a cost reached elsewhere is abandoned
 CRAWL_FRACTION = 0.01  # a baseline start whose cost fell < 1 % in `CRAWL_STEPS` steps: crawling
 RESCALE_FACTOR = 10.0  # a column norm this much off its start value: a restart rescales
-SOLVER = LevenbergMarquardt.record(1e-8, 1e-10, gain_tol=GAIN_TOL, noise_tol=NOISE_TOL,
-                                   max_rejections=12, padded=K_MAX)  # fmt: skip
+SOLVER = LevenbergMarquardt.record(
+    1e-8, 1e-10, gain_tol=GAIN_TOL, noise_tol=NOISE_TOL, max_rejections=12, padded=K_MAX
+)
 
 
 def _rescaled(norms0, J) -> bool:
@@ -51,10 +44,22 @@ def _rescaled(norms0, J) -> bool:
     return bool(np.any(woke | far))
 
 
-def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
-              max_steps=MAX_STEPS, sigma_known=False, noise_consistent=None,
-              weights=None, restarts=3, ceiling=np.inf, abandon_above=np.inf,
-              stop_crawl=False):  # fmt: skip
+def fit_model(
+    baseline,
+    designs=(),
+    theta0=None,
+    y=None,
+    scale=1.0,
+    effects=(),
+    max_steps=MAX_STEPS,
+    sigma_known=False,
+    noise_consistent=None,
+    weights=None,
+    restarts=3,
+    ceiling=np.inf,
+    abandon_above=np.inf,
+    stop_crawl=False,
+):
     """Fit [θ_b, s] of `baseline` with the effects' `designs`, minimising ‖(model − y)/scale‖².
 
     Solver `LevenbergMarquardt.record`; the variables are scaled by the start Jacobian's column
@@ -100,24 +105,44 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
     p, n = len(baseline.param_names), y.shape[0]
     npar = p + sum(d.k for d in designs)
     names = _names(baseline, designs)
-    extra = dict(model=baseline, effects=tuple(effects), designs=designs, scale=float(scale))
+    extra = dict(
+        result_type=RecordFit,
+        model=baseline,
+        effects=tuple(effects),
+        designs=designs,
+        scale=float(scale),
+    )
 
     scales = [np.asarray(d.strength_scale, dtype=np.float64) for d in designs]
     transform = _Physical(baseline, np.concatenate([np.zeros(0), *scales]))
 
     def failed(result, message, steps=0):
-        return fit_statistics(x0[:npar], np.full(n, np.nan), np.full((n, npar), np.nan),
-                              names=names, transform=transform, sigma_known=sigma_known,
-                              result=result, steps=steps, message=message,
-                              prediction=np.full(n, np.nan), **extra)  # fmt: skip
+        return fit_statistics(
+            x0[:npar],
+            np.full(n, np.nan),
+            np.full((n, npar), np.nan),
+            names=names,
+            transform=transform,
+            sigma_known=sigma_known,
+            result=result,
+            steps=steps,
+            message=message,
+            prediction=np.full(n, np.nan),
+            **extra,
+        )
 
     try:
         # d = 1 here: u = x; the start's linearisation is the fit's own compiled solve
-        r0, J0 = (np.asarray(v) for v in value_and_jacobian(padded_residual, x0, args,
-                                                            solver=SOLVER, max_steps=max_steps))
+        r0, J0 = (
+            np.asarray(v)
+            for v in value_and_jacobian(
+                padded_residual, x0, args, solver=SOLVER, max_steps=max_steps
+            )
+        )
         if not np.all(np.isfinite(r0)):
-            return failed(RESULTS.model_failed_at_start,
-                          "the model is not finite at the start values")
+            return failed(
+                RESULTS.model_failed_at_start, "the model is not finite at the start values"
+            )
         # a failed trial point costs more than the start (100x)
         bad = max(FAILED_RESIDUAL, 10.0 * float(np.max(np.abs(r0))))
         with np.errstate(over="ignore"):  # an absurd start (a value of 1e300): inf, d = 0
@@ -125,15 +150,22 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
         d = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
         new = (jnp.asarray(bad, dtype=jnp.float64), jnp.asarray(d, dtype=jnp.float64))
         args = eqx.tree_at(lambda t: (t.bad, t.d), args, new)
-        res = least_squares_fit(padded_residual, x0 / d, args,
-                                names=tuple(f"u{i}" for i in range(p + K_MAX)), jac="fwd",
-                                solver=SOLVER, max_steps=max_steps,
-                                bar=(min(PROBE_STEPS, max_steps), abandon_above),
-                                crawl=CRAWL_FRACTION if stop_crawl else 0.0,
-                                throw=False)  # fmt: skip
+        res = least_squares_fit(
+            padded_residual,
+            x0 / d,
+            args,
+            names=tuple(f"u{i}" for i in range(p + K_MAX)),
+            jac="fwd",
+            solver=SOLVER,
+            max_steps=max_steps,
+            bar=(min(PROBE_STEPS, max_steps), abandon_above),
+            crawl=CRAWL_FRACTION if stop_crawl else 0.0,
+            throw=False,
+        )
     except eqx.EquinoxRuntimeError as err:  # a check inside the model: not a trial rejection
-        return failed(RESULTS.model_failed,
-                      f"the model raised inside the fit: {runtime_message(err)[:300]}")
+        return failed(
+            RESULTS.model_failed, f"the model raised inside the fit: {runtime_message(err)[:300]}"
+        )
     x = (d * res.theta)[:npar]
     r, J = res.residuals[:n], (res.jacobian / d)[:n, :npar]
     if np.all(r == bad):
@@ -141,29 +173,54 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
     cost = float(r @ r)
     g, JTJ = J.T @ r, J.T @ J
     if not (np.all(np.isfinite(JTJ)) and np.all(np.isfinite(g)) and np.isfinite(cost)):
-        return failed(RESULTS.model_failed, "the model's Jacobian is not finite at the optimum",
-                      res.steps)  # fmt: skip
+        return failed(
+            RESULTS.model_failed, "the model's Jacobian is not finite at the optimum", res.steps
+        )
     pred = float(g @ np.linalg.lstsq(JTJ, g, rcond=1e-12)[0])
     s2 = max(cost / max(n - npar, 1), 1.0)
     result, message = res.result, res.message
     if res.result == RESULTS.nonlinear_max_steps_reached and res.steps < max_steps:
-        message = (f"abandoned: after {res.steps} steps its cost {cost:.6g} was above "
-                   f"{abandon_above:.6g}, reached elsewhere") if cost > abandon_above else \
-            (f"crawling: after {res.steps} steps its cost fell by less than "
-             f"{CRAWL_FRACTION:.0%} in {CRAWL_STEPS} steps, far from a minimum")  # fmt: skip
+        message = (
+            (
+                f"abandoned: after {res.steps} steps its cost {cost:.6g} was above "
+                f"{abandon_above:.6g}, reached elsewhere"
+            )
+            if cost > abandon_above
+            else (
+                f"crawling: after {res.steps} steps its cost fell by less than "
+                f"{CRAWL_FRACTION:.0%} in {CRAWL_STEPS} steps, far from a minimum"
+            )
+        )
     elif res.result == RESULTS.nonlinear_max_steps_reached:
         message = f"no convergence in max_steps = {max_steps} steps"
     elif res.converged and pred >= GAIN_TOL * s2:
         message = f"stationary: no descent step (predicted gain {pred / s2:.3g} s²)"
     elif res.converged:
         message = ""
-    if res.converged and pred >= NOISE_TOL * s2 and restarts > 0 \
-            and cost < ceiling - NOISE_TOL * s2 and _rescaled(norms[:npar], J):  # fmt: skip
+    if (
+        res.converged
+        and pred >= NOISE_TOL * s2
+        and restarts > 0
+        and cost < ceiling - NOISE_TOL * s2
+        and _rescaled(norms[:npar], J)
+    ):
         # stopped by rejections far from a minimum: go on rescaled here (a nuisance shift's
         # column was zero at the start) with the model's larger solver budget, if any
         wider = baseline.more_steps() or baseline
-        again = fit_model(wider, designs, x, y, scale, effects, max_steps, sigma_known,
-                          noise_consistent, weights, restarts - 1, cost)  # fmt: skip
+        again = fit_model(
+            wider,
+            designs,
+            x,
+            y,
+            scale,
+            effects,
+            max_steps,
+            sigma_known,
+            noise_consistent,
+            weights,
+            restarts - 1,
+            cost,
+        )
         if again.rss < cost:  # kept also when it ran out of steps still descending
             return dataclasses.replace(again, steps=again.steps + res.steps, model=baseline)
     prediction = y + scale * r
@@ -172,64 +229,26 @@ def fit_model(baseline, designs=(), theta0=None, y=None, scale=1.0, effects=(),
         noise_consistent = False if noise_consistent is None else noise_consistent
     if noise_consistent is None and baseline.noise_gate:
         noise_consistent = baseline.noise_test(scale * r, npar)[0]
-    return fit_statistics(x, r, J, names=names, transform=transform, sigma_known=sigma_known,
-                          result=result, steps=res.steps, message=message,
-                          noise_consistent=noise_consistent, prediction=prediction,
-                          gain_left=pred / s2, **extra)  # fmt: skip
+    return fit_statistics(
+        x,
+        r,
+        J,
+        names=names,
+        transform=transform,
+        sigma_known=sigma_known,
+        result=result,
+        steps=res.steps,
+        message=message,
+        noise_consistent=noise_consistent,
+        prediction=prediction,
+        gain_left=pred / s2,
+        **extra,
+    )
 
 
-def heldout_residual(baseline, designs, x0, y=None, scale=1.0, effects=(),
-                     max_steps=MAX_STEPS):  # fmt: skip
-    """Two-fold held-out residual (output units): the samples of each fold of `baseline.folds()`
-    minus the model (with the effects' `designs`, their nuisance values fixed) fitted from
-    x0 = [θ_b, s] on the other fold alone. Every sample is predicted once by a fit that did not
-    see it. None when the model has no folds, a fold's fit fails, or a parameter has less than
-    `FOLD_SHARE_MIN` of its Jacobian energy at x0 (Σ (∂r/∂x)², where it has any) in either
-    fold: that fold cannot determine it, so its fit keeps the start value, which saw the
-    held-out samples (why at x0: docs/discovery.md, "Held-out evidence"). Where the model is not
-    finite (a solve ran out of steps) the check is done again once with `baseline.more_steps()`."""
-    y = np.asarray(baseline.data().y if y is None else y, dtype=float)
-    if baseline.folds() is None:  # no held-out check for this model
-        return None
-    out = _heldout(baseline, designs, x0, y, scale, effects, max_steps)
-    wider = baseline.more_steps() if out is _NOT_FINITE else None
-    if wider is not None:
-        out = _heldout(wider, designs, x0, y, scale, effects, max_steps)
-    return None if out is _NOT_FINITE else out
-
-
-_NOT_FINITE = object()  # a held-out check where the model was not finite
-
-
-def _heldout(baseline, designs, x0, y, scale, effects, max_steps):
-    folds = np.asarray(baseline.folds())
-    xp, args = _padded(baseline, designs, x0, y, scale)
-    npar = len(baseline.param_names) + sum(d.k for d in designs)
-    J = np.asarray(value_and_jacobian(padded_residual, xp, args, solver=SOLVER)[1])[: y.size, :npar]
-    energy = [np.sum(J[folds == k] ** 2, axis=0) for k in (0, 1)]
-    total = energy[0] + energy[1]
-    if not np.all(np.isfinite(total)):
-        return _NOT_FINITE
-    share = np.minimum(*energy)[total > 0] / total[total > 0]
-    if np.any(share < FOLD_SHARE_MIN):
-        return None
-    out = np.empty_like(y)
-    fold_fits = in_parallel([lambda k=k: fit_model(baseline, designs, x0, y, scale, effects,
-                                                   max_steps=max_steps, restarts=0,
-                                                   weights=(folds != k).astype(float))
-                             for k in (0, 1)])  # fmt: skip
-    for k, f in enumerate(fold_fits):
-        if f.result in (RESULTS.model_failed_at_start, RESULTS.model_failed) \
-                or not np.all(np.isfinite(f.prediction)):  # fmt: skip
-            return _NOT_FINITE
-        if not f.converged:
-            return None
-        out[folds == k] = (y - f.prediction)[folds == k]
-    return out
-
-
-def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_known=None,
-               throw=False):  # fmt: skip
+def fit_record(
+    baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_known=None, throw=False
+):
     """Fit a record model alone (no effects): the fit that `fit` reports and `discover` starts
     from. From each of `starts` (θ; default `baseline.starts()`) in turn until one converges at
     a minimum, which is kept; else the first that converged; else the lowest cost. A stationary
@@ -252,9 +271,17 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
     known = bool(data.noise_std) if sigma_known is None else sigma_known
 
     def call(th, above=np.inf):
-        return lambda: fit_model(baseline, (), np.asarray(th, dtype=float), y, scale,
-                                 max_steps=max_steps, sigma_known=known, abandon_above=above,
-                                 stop_crawl=True)  # fmt: skip
+        return lambda: fit_model(
+            baseline,
+            (),
+            np.asarray(th, dtype=float),
+            y,
+            scale,
+            max_steps=max_steps,
+            sigma_known=known,
+            abandon_above=above,
+            stop_crawl=True,
+        )
 
     thetas = list(baseline.starts() if starts is None else starts)
 
@@ -263,43 +290,18 @@ def fit_record(baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_
         first = in_parallel([call(thetas[0])])[0]
         yield first
         above = first.rss if np.isfinite(first.rss) else np.inf  # a cost reached, converged or not
-        yield from (fut.result() for fut in in_parallel([call(th, above) for th in thetas[1:]],
-                                                        wait=False))  # fmt: skip
+        yield from (
+            fut.result() for fut in in_parallel([call(th, above) for th in thetas[1:]], wait=False)
+        )
 
     fits = []
     for f in in_order():
         fits.append(f)
-        if f.converged and not (f.gain_left or 0.0) >= NOISE_TOL \
-                and not baseline.at_bound(f.theta[: len(baseline.param_names)]):  # fmt: skip
+        if (
+            f.converged
+            and not (f.gain_left or 0.0) >= NOISE_TOL
+            and not baseline.at_bound(f.theta[: len(baseline.param_names)])
+        ):
             return thrown(f, throw)  # at a minimum: the next starts are not needed
     converged = [f for f in fits if f.converged]
     return thrown(converged[0] if converged else min(fits, key=lambda f: f.rss), throw)
-
-
-def record_scale(baseline) -> float:
-    """The residual unit of a record model's fits (output units): the record's noise sd, else the
-    first-difference estimate `noise_estimate` of its data, else their sd (else 1)."""
-    data = baseline.data()
-    y = np.asarray(data.y, dtype=float)
-    scale = data.noise_std if data.noise_std else noise_estimate(y, data.segment)[0]
-    return float(scale) if scale > 0 else float(np.std(y) or 1.0)
-
-
-@dataclasses.dataclass(frozen=True)
-class _Physical:
-    """[θ_b, s] → [baseline.physical(θ_b), s·strength scale], the physical values of a record
-    model's fit, with its Jacobian from one stored program (`fit_statistics`' delta method)."""
-
-    baseline: AbstractBaseline
-    scales: np.ndarray
-
-    def value_and_jacobian(self, x):
-        return _physical_and_jacobian(self.baseline, *(jnp.asarray(v, dtype=jnp.float64)
-                                                       for v in (self.scales, x)))  # fmt: skip
-
-
-@cached_jit
-def _physical_and_jacobian(baseline, scales, x):
-    p = len(baseline.param_names)
-    transform = lambda x: jnp.concatenate([baseline.physical(x[:p]), x[p:] * scales])  # noqa: E731
-    return transform(x), jax.jacfwd(transform)(x)

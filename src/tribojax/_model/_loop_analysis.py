@@ -81,8 +81,10 @@ def analyse_loop(loop: HysteresisLoop, *, window: float = 0.05) -> LoopAnalysis:
     # a reversal the record ends on (no samples after it) gives no slope
     k1, k2 = ([k for k in ks if k is not None] for ks in (k1, k2))
     if not k1 or not k2:
-        raise ValueError(f"{loop.source}: no reversal with samples after it to measure the "
-                         "stiffness K_d (wu2015 Eq 6)")  # fmt: skip
+        raise ValueError(
+            f"{loop.source}: no reversal with samples after it to measure the "
+            "stiffness K_d (wu2015 Eq 6)"
+        )
     k1, k2 = float(np.mean(k1)), float(np.mean(k2))
     K_d = 0.5 * (k1 + k2)
     mu_N = 0.5 * float(np.mean(swings))
@@ -95,10 +97,20 @@ def analyse_loop(loop: HysteresisLoop, *, window: float = 0.05) -> LoopAnalysis:
     C_eq = float(-F_s / (A * omega))
     W = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(u))) / cycles
     return LoopAnalysis(
-        cycles=cycles, omega=float(omega), A=A, mu_N=mu_N, k1=k1, k2=k2, K_d=K_d, K_eq=K_eq,
-        C_eq=C_eq, K_bar=K_eq / K_d, C_bar=float(np.pi * omega * C_eq / K_d), A_bar=A * K_d / mu_N,
+        cycles=cycles,
+        omega=float(omega),
+        A=A,
+        mu_N=mu_N,
+        k1=k1,
+        k2=k2,
+        K_d=K_d,
+        K_eq=K_eq,
+        C_eq=C_eq,
+        K_bar=K_eq / K_d,
+        C_bar=float(np.pi * omega * C_eq / K_d),
+        A_bar=A * K_d / mu_N,
         W=W,
-    )  # fmt: skip
+    )
 
 
 def _reversal_slope(u, f, r, span) -> float:

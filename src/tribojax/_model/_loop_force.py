@@ -222,12 +222,18 @@ def loop_force(
         y, k = A0 * jnp.ones(1), jnp.ones(1)
     if check:
         b = fail_if(b, spec.gap < 0.0, "backlash: gap (m) is outside the allowed range [0, inf)")
-        b = fail_if(b, jnp.abs(spec.energizing) > SIGMA_MAX,
-                    f"self_energizing: energizing{_got(spec.energizing)} is outside the allowed "
-                    f"range [-{SIGMA_MAX:g}, {SIGMA_MAX:g}]")  # fmt: skip
-        b = fail_if(b, jnp.abs(spec.asymmetry) >= 1.0,
-                    f"direction_asymmetry: asymmetry{_got(spec.asymmetry)} is outside the "
-                    "allowed range (-1, 1)")  # fmt: skip
+        b = fail_if(
+            b,
+            jnp.abs(spec.energizing) > SIGMA_MAX,
+            f"self_energizing: energizing{_got(spec.energizing)} is outside the allowed "
+            f"range [-{SIGMA_MAX:g}, {SIGMA_MAX:g}]",
+        )
+        b = fail_if(
+            b,
+            jnp.abs(spec.asymmetry) >= 1.0,
+            f"direction_asymmetry: asymmetry{_got(spec.asymmetry)} is outside the "
+            "allowed range (-1, 1)",
+        )
     h = 0.5 * jnp.maximum(spec.gap, 0.0)
     widen = spec.depth * h / y  # per slider: limit scale y_j·a(u) + ε·h, floored at 0 (a trial
     # ε < 0 inside fits)
@@ -251,8 +257,11 @@ def loop_force(
     bank = IwanBank(y, k)
     z0 = jnp.zeros_like(y)
     if data.loaded:  # the state of the first measured force, reached by loading from rest
-        z0 = loaded_state(lambda zz: output(spring(zz), b[0], s_safe[0]),
-                          y * jnp.maximum(a[0] + widen, 0.0), data.f_start)  # fmt: skip
+        z0 = loaded_state(
+            lambda zz: output(spring(zz), b[0], s_safe[0]),
+            y * jnp.maximum(a[0] + widen, 0.0),
+            data.f_start,
+        )
 
     def step(z, inp):
         du, a_i = inp
@@ -295,7 +304,7 @@ def loaded_state(force_of, limits, target) -> jax.Array:
 
 
 def _got(x) -> str:
-    """" = <value>" for a concrete scalar (an eager check's message), "" under a trace."""
+    """ " = <value>" for a concrete scalar (an eager check's message), "" under a trace."""
     return "" if isinstance(x, jax.core.Tracer) else f" = {float(x):g}"
 
 

@@ -27,8 +27,9 @@ from jaxtyping import Array
 
 from .._checks import check_range
 from .._export import cached_jit
-from .._fit._engine import FitResult, least_squares_fit, thrown
+from .._fit._engine import least_squares_fit
 from .._fit._noise import RHO_MAX, lag1, noise_estimate
+from .._fit._result import FitResult, thrown
 from .._io._hysteresis_loop import HysteresisLoop
 from ._base import AbstractBaseline, RecordData
 from ._fit import MAX_STEPS, fit_record
@@ -45,8 +46,18 @@ from ._loop_force import (
 from ._residual import evaluate
 
 BRANCH_NAMES = {0: "unloading", 1: "loading"}
-LOOP_KNOBS = ("microslip", "load_slope", "viscous", "backlash", "log_gap", "load_curve",
-              "kd_exponent", "energizing", "asymmetry", "log_shape")
+LOOP_KNOBS = (
+    "microslip",
+    "load_slope",
+    "viscous",
+    "backlash",
+    "log_gap",
+    "load_curve",
+    "kd_exponent",
+    "energizing",
+    "asymmetry",
+    "log_shape",
+)
 
 
 class LoopBaseline(AbstractBaseline):
@@ -134,8 +145,11 @@ class LoopBaseline(AbstractBaseline):
         return super().folds()
 
     def signals(self):
-        return {"u (m)": np.asarray(self.x), "velocity (m/s)": np.asarray(self.record.v),
-                "time (s)": np.asarray(self.t)}  # fmt: skip
+        return {
+            "u (m)": np.asarray(self.x),
+            "velocity (m/s)": np.asarray(self.record.v),
+            "time (s)": np.asarray(self.t),
+        }
 
     def region_info(self, region):
         lo, hi = sorted((region["start"], region["end"]))
@@ -160,8 +174,13 @@ def history_start(loop: HysteresisLoop) -> tuple[float, float]:
     return mu_N, mu_N / (0.025 * float(np.ptp(loop.u)))
 
 
-def loop_baseline(loop: HysteresisLoop, element: str = "jenkins", start=None,
-                  noise_std=None, initial: str = "rest") -> LoopBaseline:  # fmt: skip
+def loop_baseline(
+    loop: HysteresisLoop,
+    element: str = "jenkins",
+    start=None,
+    noise_std=None,
+    initial: str = "rest",
+) -> LoopBaseline:
     """The model of a loop record (Jenkins, or `element="mindlin"`), started from `start` (μN in
     N, K_d in N/m) or `analyse_loop`'s μN and wu2015 Eq 6 K_d (a history, `periodic=False`:
     `history_start`, the noise from first differences). The force noise sd is `noise_std`, else
@@ -212,9 +231,17 @@ def cycle_noise(r, t, period, segment=None) -> tuple[float, float]:
     return (sigma if sigma > 0 else float(np.std(dn))), rho
 
 
-def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, window: float = 0.05,
-             model: str = "history", max_steps=None, start=None,
-             throw: bool = True) -> FitResult:  # fmt: skip
+def fit_loop(
+    loop: HysteresisLoop,
+    element: str = "jenkins",
+    *,
+    sigma=None,
+    window: float = 0.05,
+    model: str = "history",
+    max_steps=None,
+    start=None,
+    throw: bool = True,
+) -> FitResult:
     """Least-squares fit of μN (N) and K_d (N/m) of a Jenkins or Mindlin element to a loop.
 
     model="history" (default, as `tribojax fit`): the loop model `LoopBaseline` (the element
@@ -256,8 +283,9 @@ def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, wind
     if model == "history":
         base = loop_baseline(loop, element, (init["mu_N"], init["K_d"]), noise_std=sigma)
         if base.record.f.shape[0] <= 2:
-            raise ValueError(f"{loop.source}: {base.record.f.shape[0]} samples are too few to "
-                             "fit mu_N and K_d")  # fmt: skip
+            raise ValueError(
+                f"{loop.source}: {base.record.f.shape[0]} samples are too few to fit mu_N and K_d"
+            )
         fit = fit_record(base, [theta0], max_steps=max_steps or MAX_STEPS)
     else:
         fit = _fit_steady(loop, _ELEMENTS[element], analysis, theta0, sigma, max_steps or 500)
@@ -268,10 +296,13 @@ def fit_loop(loop: HysteresisLoop, element: str = "jenkins", *, sigma=None, wind
         std[0], cov[0, :], cov[:, 0] = np.inf, np.inf, np.inf
         corr[0, :], corr[:, 0] = np.nan, np.nan
         corr[0, 0] = 1.0
-        msg = (f"mu_N is only bounded below (>= {fit.values[0]:.6g} N): the fitted Jenkins loop "
-               f"does not slip (A_bar = {A_fit:.4g} <= 1)")  # fmt: skip
-        fit = dataclasses.replace(fit, std_errors=std, covariance=cov, correlation=corr,
-                                  message=msg)  # fmt: skip
+        msg = (
+            f"mu_N is only bounded below (>= {fit.values[0]:.6g} N): the fitted Jenkins loop "
+            f"does not slip (A_bar = {A_fit:.4g} <= 1)"
+        )
+        fit = dataclasses.replace(
+            fit, std_errors=std, covariance=cov, correlation=corr, message=msg
+        )
     return thrown(fit, throw)
 
 
@@ -279,12 +310,20 @@ def _fit_steady(loop, cls, analysis, theta0, sigma, max_steps):
     sigma = loop.noise_std if sigma is None else sigma
     args = _steady_args(loop, analysis, 1.0 if sigma is None else sigma)
     if args[1].shape[0] <= 2:
-        raise ValueError(f"{loop.source}: {args[1].shape[0]} samples are too few to fit mu_N "
-                         "and K_d")  # fmt: skip
-    return least_squares_fit(_SteadyResiduals(cls), jnp.asarray(theta0), args,
-                             names=("mu_N", "K_d"), transform=jnp.exp,
-                             sigma_known=sigma is not None, max_steps=max_steps,
-                             jac="fwd", throw=False)  # fmt: skip
+        raise ValueError(
+            f"{loop.source}: {args[1].shape[0]} samples are too few to fit mu_N and K_d"
+        )
+    return least_squares_fit(
+        _SteadyResiduals(cls),
+        jnp.asarray(theta0),
+        args,
+        names=("mu_N", "K_d"),
+        transform=jnp.exp,
+        sigma_known=sigma is not None,
+        max_steps=max_steps,
+        jac="fwd",
+        throw=False,
+    )
 
 
 def _steady_args(loop, analysis, scale):

@@ -15,8 +15,11 @@ from .._export import cached_jit
 def _transition(M, h):
     """exp(M·h) for every step length h (one matrix exponential when the sampling is uniform)."""
     uniform = jnp.all(jnp.abs(h - h[0]) <= 1e-12 * jnp.abs(h[0]))
-    return jax.lax.cond(uniform, lambda: jnp.broadcast_to(expm(M * h[0]), (h.size, 4, 4)),
-                        lambda: jax.vmap(lambda hh: expm(M * hh))(h))  # fmt: skip
+    return jax.lax.cond(
+        uniform,
+        lambda: jnp.broadcast_to(expm(M * h[0]), (h.size, 4, 4)),
+        lambda: jax.vmap(lambda hh: expm(M * hh))(h),
+    )
 
 
 @cached_jit  # its trace is stored (tribojax._export): discovery's mode refits call it often

@@ -46,17 +46,31 @@ def _slip(record, options):
 
 
 RECORD_KINDS = {
-    "slip": RecordKind("slip_run", _slip, lambda b: ("time_s", np.asarray(b.t)),
-                       lambda b: np.asarray(b.slip), lambda b: "m"),
-    "loop": RecordKind("loop", lambda rec, o: loop_baseline(rec, o.get("element", "jenkins"),
-                                                            initial=o.get("initial", "rest")),
-                       lambda b: ("time_s", np.asarray(b.t)), lambda b: np.asarray(b.record.f),
-                       lambda b: "N"),
-    "curve": RecordKind("friction_curve", lambda rec, o: curve_baseline(rec),
-                        lambda b: (f"velocity_{b.units[0]}", np.asarray(b.v)),
-                        lambda b: np.asarray(b.f), lambda b: b.units[1],
-                        lambda b, y: y / np.asarray(b.weight)),
-}  # fmt: skip
+    "slip": RecordKind(
+        "slip_run",
+        _slip,
+        lambda b: ("time_s", np.asarray(b.t)),
+        lambda b: np.asarray(b.slip),
+        lambda b: "m",
+    ),
+    "loop": RecordKind(
+        "loop",
+        lambda rec, o: loop_baseline(
+            rec, o.get("element", "jenkins"), initial=o.get("initial", "rest")
+        ),
+        lambda b: ("time_s", np.asarray(b.t)),
+        lambda b: np.asarray(b.record.f),
+        lambda b: "N",
+    ),
+    "curve": RecordKind(
+        "friction_curve",
+        lambda rec, o: curve_baseline(rec),
+        lambda b: (f"velocity_{b.units[0]}", np.asarray(b.v)),
+        lambda b: np.asarray(b.f),
+        lambda b: b.units[1],
+        lambda b, y: y / np.asarray(b.weight),
+    ),
+}
 
 
 def rebuild(model: FittedModel, record):
@@ -73,21 +87,24 @@ def on_baseline(model: FittedModel, baseline):
     missing = [n for n in baseline.param_names if n not in model.parameters]
     if missing:
         raise ValueError(f"{at}: field 'parameters' lacks {missing} of the {model.kind} model")
-    check_values(model, baseline.param_names, baseline.param_units, baseline.param_ranges(),
-                 at)
+    check_values(model, baseline.param_names, baseline.param_units, baseline.param_ranges(), at)
     theta = baseline.theta_of([model.parameters[n] for n in baseline.param_names])
     registry = {e.name: e for e in default_effects(baseline.kind)}
     designs, strengths = [], []
     for saved in model.effects:
         if saved.name not in registry:
-            raise ValueError(f"{at}: effect {saved.name!r} is not a {model.kind} effect; known: "
-                             f"{sorted(registry)}")  # fmt: skip
+            raise ValueError(
+                f"{at}: effect {saved.name!r} is not a {model.kind} effect; known: "
+                f"{sorted(registry)}"
+            )
         d, s = _design(registry[saved.name], baseline, saved)
         for sn, su in zip(d.strength_names, d.strength_units):
             stated = model.units.get(f"{saved.name}.{sn}")
             if stated is not None and stated != su:
-                raise ValueError(f"{at}: field 'units.{saved.name}.{sn}' is {stated!r}; on this "
-                                 f"record the effect's {sn} is in {su!r}")  # fmt: skip
+                raise ValueError(
+                    f"{at}: field 'units.{saved.name}.{sn}' is {stated!r}; on this "
+                    f"record the effect's {sn} is in {su!r}"
+                )
         designs.append(d)
         strengths.extend(s)
     return theta, tuple(designs), np.asarray(strengths, dtype=float)
@@ -100,9 +117,16 @@ def fit_saved(model: FittedModel, baseline, *, max_steps=MAX_STEPS, sigma_known=
     `FitResult` of `fit_model` (why from the saved values: docs/fitting.md)."""
     theta, designs, s = on_baseline(model, baseline)
     known = bool(baseline.data().noise_std) if sigma_known is None else sigma_known
-    return fit_model(baseline, designs, np.concatenate([theta, s]), None, record_scale(baseline),
-                     effects=tuple(e.name for e in model.effects), max_steps=max_steps,
-                     sigma_known=known)  # fmt: skip
+    return fit_model(
+        baseline,
+        designs,
+        np.concatenate([theta, s]),
+        None,
+        record_scale(baseline),
+        effects=tuple(e.name for e in model.effects),
+        max_steps=max_steps,
+        sigma_known=known,
+    )
 
 
 def _distance(a: float, b: float) -> float:
@@ -126,9 +150,11 @@ def _design(effect, baseline, saved):
         if gap < best_gap:
             best, best_gap = d, gap
     if best is None:
-        raise ValueError(f"model: effect {saved.name!r} with strengths {sorted(saved.strengths)} "
-                         f"and nuisance {saved.nuisance} matches none of its designs on this "
-                         "record")  # fmt: skip
+        raise ValueError(
+            f"model: effect {saved.name!r} with strengths {sorted(saved.strengths)} "
+            f"and nuisance {saved.nuisance} matches none of its designs on this "
+            "record"
+        )
     free = {i: (name, fn) for i, name, fn in best.free}
     s = []
     for i, name in enumerate(best.strength_names):

@@ -115,8 +115,11 @@ def padded_args(baseline, base, gain, basis, k, y, scale, weights=None) -> Padde
     w = np.ones(np.shape(y)) if weights is None else weights
     arrays = (base, gain, basis, np.arange(K_MAX) < k, y, w, scale, np.inf, d)
     moved = np.any(gain != 0, axis=1) | (base != np.asarray(baseline.knob_null(), dtype=float))
-    return Padded(_for_knobs(baseline, moved), *(jnp.asarray(v, dtype=jnp.float64) for v in arrays),
-                  knobs=bool(np.any(moved)))  # fmt: skip
+    return Padded(
+        _for_knobs(baseline, moved),
+        *(jnp.asarray(v, dtype=jnp.float64) for v in arrays),
+        knobs=bool(np.any(moved)),
+    )
 
 
 def _for_knobs(baseline, moved):

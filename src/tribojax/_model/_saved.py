@@ -72,8 +72,10 @@ class FittedModel:
             raise ValueError(f"{where}: expected a JSON object, got {type(d).__name__}")
         fmt = d.get("format")
         if fmt != MODEL_FORMAT:
-            raise ValueError(f"{where}: field 'format' is {fmt!r}; this tribojax reads "
-                             f"{MODEL_FORMAT!r} (save the model again with this version)")
+            raise ValueError(
+                f"{where}: field 'format' is {fmt!r}; this tribojax reads "
+                f"{MODEL_FORMAT!r} (save the model again with this version)"
+            )
         kind = d.get("kind")
         if kind not in KINDS:
             raise ValueError(f"{where}: field 'kind' is {kind!r}; one of {list(KINDS)} expected")
@@ -83,8 +85,13 @@ class FittedModel:
             at = f"{where}: field 'effects[{i}]'"
             if not isinstance(e, dict) or not isinstance(e.get("name"), str):
                 raise ValueError(f"{at}: expected an object with a 'name'")
-            effects.append(SavedEffect(e["name"], _numbers(e.get("strengths", {}), at),
-                                       _numbers(e.get("nuisance", {}), at)))  # fmt: skip
+            effects.append(
+                SavedEffect(
+                    e["name"],
+                    _numbers(e.get("strengths", {}), at),
+                    _numbers(e.get("nuisance", {}), at),
+                )
+            )
         options = d.get("options") or {}
         if not isinstance(options, dict):
             raise ValueError(f"{where}: field 'options' must be an object")
@@ -112,17 +119,23 @@ def check_values(model: FittedModel, names, units, ranges, where: str = "model")
         if not (lo < v < hi and abs(v) <= PARAMETER_LIMIT):
             shown = f"{v:g} {unit}".rstrip()
             low = f"{lo:g}" if lo > -PARAMETER_LIMIT else f"{-PARAMETER_LIMIT:g}"
-            raise ValueError(f"{where}: field 'parameters.{name}' = {shown} is outside the "
-                             f"allowed range ({low}, {top:g}{')' if hi <= top else ']'}")
+            raise ValueError(
+                f"{where}: field 'parameters.{name}' = {shown} is outside the "
+                f"allowed range ({low}, {top:g}{')' if hi <= top else ']'}"
+            )
         stated = model.units.get(name)
         if stated is not None and stated != unit:
-            raise ValueError(f"{where}: field 'units.{name}' is {stated!r}; the {model.kind} "
-                             f"model on this record has {name} in {unit!r}")  # fmt: skip
+            raise ValueError(
+                f"{where}: field 'units.{name}' is {stated!r}; the {model.kind} "
+                f"model on this record has {name} in {unit!r}"
+            )
     for e in model.effects:
         for k, v in {**e.strengths, **e.nuisance}.items():
             if abs(v) > PARAMETER_LIMIT:
-                raise ValueError(f"{where}: effect {e.name!r}: {k} = {v:g} is outside the "
-                                 f"allowed range [{-PARAMETER_LIMIT:g}, {PARAMETER_LIMIT:g}]")
+                raise ValueError(
+                    f"{where}: effect {e.name!r}: {k} = {v:g} is outside the "
+                    f"allowed range [{-PARAMETER_LIMIT:g}, {PARAMETER_LIMIT:g}]"
+                )
 
 
 def _numbers(d, where) -> dict:
@@ -167,10 +180,12 @@ def saved_record_model(fit, source: str = "", records=()) -> FittedModel:
     """The `FittedModel` of a record-model fit (`fit_record`, `fit_slip_run`, `fit_loop(model=
     "history")`, or a discovery state): its baseline's kind and options, physical parameters
     and effects, and the conditions of the fitted `records` (`fitted_range`)."""
-    base = fit.model
+    base = getattr(fit, "model", None)
     if base is None:
-        raise ValueError("a saved model needs the fit of a record model (FitResult.model is None: "
-                         "a fit of another model, e.g. fit_loop(model='steady'))")
+        raise ValueError(
+            "a saved model needs the fit of a record model (a RecordFit; got a "
+            f"{type(fit).__name__} of another model, e.g. fit_loop(model='steady'))"
+        )
     p = len(base.param_names)
     params = dict(zip(base.param_names, np.asarray(fit.values[:p], float).tolist()))
     units = dict(zip(base.param_names, base.param_units))
@@ -180,5 +195,6 @@ def saved_record_model(fit, source: str = "", records=()) -> FittedModel:
         nuisance = st.pop("nuisance")
         effects.append(SavedEffect(name, {k: v["value"] for k, v in st.items()}, nuisance))
         units.update({f"{name}.{k}": v["unit"] for k, v in st.items()})
-    return FittedModel(base.kind, params, units, base.options(), tuple(effects), str(source),
-                       extent_of(records))  # fmt: skip
+    return FittedModel(
+        base.kind, params, units, base.options(), tuple(effects), str(source), extent_of(records)
+    )

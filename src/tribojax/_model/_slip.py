@@ -32,18 +32,24 @@ from jaxtyping import Array
 
 from .._dynamics._profiles import MeasuredProfile
 from .._dynamics._slip import simulate_slip
-from .._fit._engine import thrown
 from .._friction._lugre import PreSlipLuGre
 from .._io._slip_run import SlipRun
-from .._results import RESULTS
 from ._base import AbstractBaseline, RecordData
-from ._fit import MAX_STEPS, fit_record
 from ._modes import oscillator
 from ._slip_element import AugmentedPreSlip
 from ._start import C_TAU_START_FACTORS, slip_run_start
 
-KNOBS = ("viscous", "stribeck", "log10_v_s", "load_coupling",
-         "mode_q", "mode_qdot", "mode_log_f", "mode_logit_zeta", "mode_static")  # fmt: skip
+KNOBS = (
+    "viscous",
+    "stribeck",
+    "log10_v_s",
+    "load_coupling",
+    "mode_q",
+    "mode_qdot",
+    "mode_log_f",
+    "mode_logit_zeta",
+    "mode_static",
+)
 ZETA_MAX = 0.3  # damping ratio bound of a structural mode (above: a low-pass of a(t), not a mode)
 N_ODE_KNOBS = 4  # the knobs of the friction element; the mode's knobs act on the reading
 ODE_MAX_STEPS = 20_000  # ODE step budget of the model's slip solve (`simulate_slip`'s)
@@ -69,9 +75,15 @@ def stage_travel(t, accel):
 def slip_start(t, accel, slip, mass) -> np.ndarray:
     """Start values (F_s in N, K_τ in N/m, C_τ in N s/m) of the baseline:
     `tribojax.slip_run_start` (the quasi-static limit of wang2022 Eq 27) as an array."""
-    s = slip_run_start(SlipRun(t=np.asarray(t, float), accel=np.asarray(accel, float),
-                               slip=np.asarray(slip, float), mass=float(mass),
-                               source="slip record"))  # fmt: skip
+    s = slip_run_start(
+        SlipRun(
+            t=np.asarray(t, float),
+            accel=np.asarray(accel, float),
+            slip=np.asarray(slip, float),
+            mass=float(mass),
+            source="slip record",
+        )
+    )
     return np.array([s["F_s"], s["K_tau"], s["C_tau"]])
 
 
@@ -138,8 +150,9 @@ class SlipBaseline(AbstractBaseline):
         v = np.asarray(values, dtype=float)
         cap = np.log(float(self.f_max))
         if not v[0] < float(self.f_max):
-            raise ValueError(f"F_s = {v[0]:g} N is outside the model's range "
-                             f"(0, {float(self.f_max):g})")
+            raise ValueError(
+                f"F_s = {v[0]:g} N is outside the model's range (0, {float(self.f_max):g})"
+            )
         return np.concatenate([[cap - np.log(np.expm1(cap - np.log(v[0])))], np.log(v[1:])])
 
     def options(self):
@@ -156,8 +169,13 @@ class SlipBaseline(AbstractBaseline):
         F, sd = values["F_s"], std_errors["F_s"]
         fm = float(self.f_max)
         if F > F_CAP_NEAR * fm or not sd < F:
-            return {"F_s": {"lower_bound": float(min(F, fm) / 2 if not sd < F else F - 2 * sd),
-                            "upper_bound": fm, "unit": "N"}}  # fmt: skip
+            return {
+                "F_s": {
+                    "lower_bound": float(min(F, fm) / 2 if not sd < F else F - 2 * sd),
+                    "upper_bound": fm,
+                    "unit": "N",
+                }
+            }
         return {}
 
     def more_steps(self):
@@ -174,14 +192,29 @@ class SlipBaseline(AbstractBaseline):
         F_s, K, C = self.physical(theta)[:3]
         # v_s within [1e-12, 1e3] m/s: a trial step of the fit cannot underflow it to 0
         log_vs = jnp.clip(knobs[2], LOG10_VS_RANGE[0], LOG10_VS_RANGE[1])
-        return AugmentedPreSlip(F_s, K, C, jnp.abs(knobs[0]) * self.sigma_ref, knobs[1],
-                                10.0**log_vs, knobs[3], self.profile,
-                                alpha=self.bristle_exponent(theta))  # fmt: skip
+        return AugmentedPreSlip(
+            F_s,
+            K,
+            C,
+            jnp.abs(knobs[0]) * self.sigma_ref,
+            knobs[1],
+            10.0**log_vs,
+            knobs[3],
+            self.profile,
+            alpha=self.bristle_exponent(theta),
+        )
 
     def _solve(self, theta, knobs):
-        return simulate_slip(self.element(theta, knobs), self.profile, self.mass, ts=self.t,
-                             t_end=self.t_end, adjoint=dfx.ForwardMode(), throw=False,
-                             max_steps=self.max_steps)  # fmt: skip
+        return simulate_slip(
+            self.element(theta, knobs),
+            self.profile,
+            self.mass,
+            ts=self.t,
+            t_end=self.t_end,
+            adjoint=dfx.ForwardMode(),
+            throw=False,
+            max_steps=self.max_steps,
+        )
 
     def _mode(self, km):
         """The mode term of the reading: A_q·q_s/rms(q_s) + A_q̇·q̇/rms(q̇), m, for knobs
@@ -203,9 +236,16 @@ class SlipBaseline(AbstractBaseline):
         model with every knob at its null, without the knob states (a smaller program)."""
         F_s, K, C = self.physical(theta)[:3]
         element = PreSlipLuGre(F_s, K, C, self.bristle_exponent(theta))
-        return simulate_slip(element, self.profile, self.mass, ts=self.t, t_end=self.t_end,
-                             adjoint=dfx.ForwardMode(), throw=False,
-                             max_steps=self.max_steps).slip  # fmt: skip
+        return simulate_slip(
+            element,
+            self.profile,
+            self.mass,
+            ts=self.t,
+            t_end=self.t_end,
+            adjoint=dfx.ForwardMode(),
+            throw=False,
+            max_steps=self.max_steps,
+        ).slip
 
     def value_and_jacobian(self, theta, null=None):
         def f(tb):
@@ -226,16 +266,20 @@ class SlipBaseline(AbstractBaseline):
             out = self._mode(km)
             return out, out
 
-        (jb, jk), value = jax.jacfwd(ode, argnums=(0, 1), has_aux=True)(theta,
-                                                                        knobs[:N_ODE_KNOBS])
+        (jb, jk), value = jax.jacfwd(ode, argnums=(0, 1), has_aux=True)(theta, knobs[:N_ODE_KNOBS])
         jm, vm = jax.jacfwd(mode, has_aux=True)(knobs[N_ODE_KNOBS:])
         return value + vm, jb, jnp.concatenate([jk, jm], axis=1)
 
     def signals(self):
         t, a = np.asarray(self.t), np.asarray(self.accel)
         v, x = stage_travel(t, a)
-        return {"time": t, "accel": a, "jerk": np.gradient(a, t), "stage_velocity": v,
-                "stage_travel": x}  # fmt: skip
+        return {
+            "time": t,
+            "accel": a,
+            "jerk": np.gradient(a, t),
+            "stage_velocity": v,
+            "stage_travel": x,
+        }
 
     def data(self):
         sd = float(self.noise_std)
@@ -275,87 +319,3 @@ def slip_baseline(run, start=None, alpha=1.0) -> SlipBaseline:
         alpha=1.0 if alpha is None else float(alpha),
         free_alpha=alpha is None,
     )
-
-
-def fit_slip_run(run: SlipRun, *, alpha=1.0, start=None, sigma=None, max_steps: int = MAX_STEPS,
-                 progress=None, throw: bool = True):  # fmt: skip
-    """Fit F_s (N), K_τ (N/m), C_τ (N s/m) and, if `alpha` is None, α of the slip-run model
-    (by default α = 1, as `tribojax fit` and `discover`'s baseline).
-
-    The model is `SlipBaseline` (wang2022 Eq 27, consistent reading, driven by the run's own
-    sampled acceleration from rest), the same model, residual, transforms, starts and solver as
-    `discover`'s baseline (`fit_record`): with the default `alpha=1` and the same samples both
-    give the same parameters. Residuals (model − measured slip)/σ at every sample; parameters as
-    logarithms (F_s below a soft cap of 100·m·max|a|); starts from `slip_run_start` (the
-    quasi-static limit) with C_τ × (1, 0.1, 10) in turn until one converges; standard errors by
-    the delta method;
-    `noise_consistent` from `SlipBaseline.noise_test`.
-
-    Args:
-        run: the slip run.
-        alpha: fixed bristle exponent (> 0; default 1, wang2022's law), or None to fit it
-            (start 1).
-        start: dict of start values (keys F_s, K_tau, C_tau[, alpha]); missing keys from
-            `slip_run_start(run)`; a given C_tau is the only C_τ start.
-        sigma: slip noise sd (m); default the run's `noise_std`; if neither, the residual unit is
-            the first-difference estimate and the standard errors use the residual scale.
-        max_steps: LM step budget (per start).
-        progress: optional callable receiving one line per start and its outcome.
-        throw: raise `tribojax.FitError` (holding the FitResult) when the fit does not succeed
-            (default); False returns it flagged.
-    Returns:
-        FitResult (names ("F_s", "K_tau", "C_tau"[, "alpha"]); `fixed` holds α when fixed) with
-        the fitted `model`, its `prediction` and `scale`.
-    Raises:
-        ValueError for fewer data than parameters, a bad α/σ/start, or a model that cannot be
-        evaluated at any start.
-    """
-    names = ("F_s", "K_tau", "C_tau", "alpha")[: 4 if alpha is None else 3]
-    if len(run) <= len(names):
-        raise ValueError(f"{run.source}: {len(run)} slip samples are too few to fit "
-                         f"{len(names)} parameters {names}; need more data than parameters")
-    if alpha is not None:
-        alpha = _positive(alpha, "alpha", "")
-    start = dict(start or {})
-    unknown = set(start) - {"F_s", "K_tau", "C_tau", "alpha"}
-    if unknown:
-        raise ValueError(f"start has unknown key(s) {sorted(unknown)}; allowed "
-                         "['F_s', 'K_tau', 'C_tau', 'alpha']")  # fmt: skip
-    for key, value in start.items():
-        start[key] = _positive(value, f"start[{key!r}]", "")
-    sigma = run.noise_std if sigma is None else _positive(sigma, "sigma", "m")
-    if sigma is not None and sigma != run.noise_std:
-        run = dataclasses.replace(run, noise_std=float(sigma))
-    guess = {**slip_run_start(run), **start} if not {"F_s", "K_tau", "C_tau"} <= set(start) \
-        else start  # fmt: skip
-    model = slip_baseline(run, [guess["F_s"], guess["K_tau"], guess["C_tau"]], alpha=alpha)
-    starts = [model.start()] if "C_tau" in start else model.starts()
-    if alpha is None:  # the α start
-        starts = [np.concatenate([th[:3], [np.log(start.get("alpha", 1.0))]]) for th in starts]
-    if progress is not None:
-        progress(f"start: {len(starts)} C_tau start(s) from F_s = {guess['F_s']:.5g}, K_tau = "
-                 f"{guess['K_tau']:.5g}, C_tau = {guess['C_tau']:.5g}")  # fmt: skip
-    fit = fit_record(model, starts, max_steps=max_steps)
-    if fit.result == RESULTS.model_failed_at_start:
-        raise ValueError(f"{run.source}: the slip solver fails at the start values; give a "
-                         "start closer to the data (start=, or tribojax fit --start NAME=VALUE)")
-    if progress is not None:
-        progress(f"LM: {fit.steps} steps, {'converged' if fit.converged else fit.message}")
-    names = model.param_names
-    p = len(names)
-    fit = dataclasses.replace(fit, names=names, values=fit.values[:p],
-                              std_errors=fit.std_errors[:p], covariance=fit.covariance[:p, :p],
-                              correlation=fit.correlation[:p, :p])  # fmt: skip
-    fit = fit if alpha is None else dataclasses.replace(fit, fixed={"alpha": float(alpha)})
-    return thrown(fit, throw)
-
-
-def _positive(x, name, unit):
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number, got {x!r}") from None
-    if not (np.isfinite(x) and x > 0):
-        unit = f" {unit}" if unit else ""
-        raise ValueError(f"{name} = {x:g}{unit} is outside the allowed range (0, inf)")
-    return x

@@ -46,8 +46,20 @@ class AugmentedPreSlip(AbstractFrictionElement):
     profile: AbstractProfile
     velocity_scale: float = eqx.field(static=True)
 
-    def __init__(self, F_s, K_tau, C_tau, sigma2, stribeck, v_s, kappa, profile, *,
-                 velocity_scale=DEFAULT_VELOCITY_SCALE, alpha=1.0):  # fmt: skip
+    def __init__(
+        self,
+        F_s,
+        K_tau,
+        C_tau,
+        sigma2,
+        stribeck,
+        v_s,
+        kappa,
+        profile,
+        *,
+        velocity_scale=DEFAULT_VELOCITY_SCALE,
+        alpha=1.0,
+    ):
         self.F_s = check_range(F_s, "F_s", 0.0, unit="N")
         self.K_tau = check_range(K_tau, "K_tau", 0.0, unit="N/m")
         self.C_tau = check_range(C_tau, "C_tau", 0.0, lo_open=False, unit="N s/m")
@@ -78,8 +90,9 @@ class AugmentedPreSlip(AbstractFrictionElement):
         return stribeck_curve(velocity, F_c, F_s, self.v_s, 2.0)
 
     def _zdot(self, z, m, v):
-        return bristle_rate(v, self.K_tau * m * z / self.strength(v, m), self.alpha,
-                            self.velocity_scale)  # fmt: skip
+        return bristle_rate(
+            v, self.K_tau * m * z / self.strength(v, m), self.alpha, self.velocity_scale
+        )
 
     def initial_state(self):
         z = jnp.zeros_like(self.K_tau)

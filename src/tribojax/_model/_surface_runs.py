@@ -12,7 +12,8 @@ import numpy as np
 from .._chain import mu_min as _mu_min
 from .._chain import to_physical, to_theta
 from .._contact._presets import wang2022_table3_model
-from .._fit._engine import FitResult, least_squares_fit, thrown
+from .._fit._engine import least_squares_fit
+from .._fit._result import FitResult, thrown
 from .._presets import (
     CALIBRATED_G_M,
     CALIBRATED_M,
@@ -20,7 +21,7 @@ from .._presets import (
     CALIBRATED_SIGMA_S,
     WANG2022_TABLE1_D,
 )
-from ._slip import fit_slip_run
+from ._slip_fit import fit_slip_run
 
 SURFACE_NAMES = ("D", "G_m", "mu_t")
 
@@ -118,11 +119,20 @@ def fit_surface_from_runs(
     theta0 = jnp.asarray(to_theta(start, SURFACE_NAMES, mu_min))  # ValueError outside the box
     if progress is not None:
         progress("surface: D, G, mu_t from the runs' F_s, K_tau, C_tau")
-    fit = least_squares_fit(_SurfaceResiduals(float(sigma_s), float(M)), theta0,
-                            (loads, target, whiten, jnp.asarray(mu_min)), names=SURFACE_NAMES,
-                            transform=lambda th: to_physical(th, SURFACE_NAMES, mu_min),
-                            sigma_known=True, throw=False)  # fmt: skip
-    fixed = {"alpha": float(alpha), "sigma_s_Pa": float(sigma_s), "M": float(M),
-             "loads_N": [float(x) for x in loads],
-             "stage1": [dict(zip(f.names, f.values.tolist())) for f in fits]}  # fmt: skip
+    fit = least_squares_fit(
+        _SurfaceResiduals(float(sigma_s), float(M)),
+        theta0,
+        (loads, target, whiten, jnp.asarray(mu_min)),
+        names=SURFACE_NAMES,
+        transform=lambda th: to_physical(th, SURFACE_NAMES, mu_min),
+        sigma_known=True,
+        throw=False,
+    )
+    fixed = {
+        "alpha": float(alpha),
+        "sigma_s_Pa": float(sigma_s),
+        "M": float(M),
+        "loads_N": [float(x) for x in loads],
+        "stage1": [dict(zip(f.names, f.values.tolist())) for f in fits],
+    }
     return thrown(dataclasses.replace(fit, fixed=fixed), throw)

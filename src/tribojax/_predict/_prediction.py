@@ -9,9 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._fit._engine import FitResult, thrown
-from .._fit._history import HISTORY_MODELS, HISTORY_UNITS, HistoryFit, history_force
 from .._fit._measures import nrmse, rms
+from .._fit._result import FitResult, thrown
 from .._io._record import extent_of
 from .._model import (
     MAX_STEPS,
@@ -24,6 +23,8 @@ from .._model import (
     rebuild,
     saved_record_model,
 )
+from .._model._history_fit import HistoryFit
+from .._model._history_model import HISTORY_MODELS, HISTORY_UNITS, history_force
 from .._tables import read_json
 from ..discovery import DiscoveryReport
 
@@ -62,11 +63,17 @@ class Prediction:
 
     def as_dict(self) -> dict:
         """The prediction.json contract: "nrmse", "model", "record" (plus extra keys)."""
-        return {"nrmse": self.nrmse, "model": self.model.as_dict(), "record": self.record,
-                "rms_error": self.rms_error, "unit": self.unit, "n_data": int(self.x.size),
-                "extrapolation": self.extrapolation,
-                "columns": list(self.columns()),
-                "what": "nrmse = rms(predicted - measured) / std(measured)"}  # fmt: skip
+        return {
+            "nrmse": self.nrmse,
+            "model": self.model.as_dict(),
+            "record": self.record,
+            "rms_error": self.rms_error,
+            "unit": self.unit,
+            "n_data": int(self.x.size),
+            "extrapolation": self.extrapolation,
+            "columns": list(self.columns()),
+            "what": "nrmse = rms(predicted - measured) / std(measured)",
+        }
 
 
 def fitted_model(result, source: str = "", records=()) -> FittedModel:
@@ -89,17 +96,25 @@ def _fitted_model(result, source) -> FittedModel:
     if isinstance(result, HistoryFit):
         names = [n for n, _ in HISTORY_MODELS[result.model]]
         params = dict(zip(names, np.asarray(result.fit.values, float).tolist()))
-        return FittedModel("history", params, {n: HISTORY_UNITS[n] for n in names},
-                           {"element": result.model, "decimate": result.decimate,
-                            **({} if result.band_tension is None
-                               else {"band_tension_N": result.band_tension})},
-                           source=source)  # fmt: skip
+        return FittedModel(
+            "history",
+            params,
+            {n: HISTORY_UNITS[n] for n in names},
+            {
+                "element": result.model,
+                "decimate": result.decimate,
+                **({} if result.band_tension is None else {"band_tension_N": result.band_tension}),
+            },
+            source=source,
+        )
     if isinstance(result, FitResult) and result.fixed.get("direction") == "both":
         return _steady_law(result, source)
     if isinstance(result, FitResult):
         return saved_record_model(result, source)
-    raise ValueError(f"fitted_model takes a FitResult, HistoryFit or DiscoveryReport, got "
-                     f"{type(result).__name__}")  # fmt: skip
+    raise ValueError(
+        f"fitted_model takes a FitResult, HistoryFit or DiscoveryReport, got "
+        f"{type(result).__name__}"
+    )
 
 
 def _steady_law(fit, source) -> FittedModel:
@@ -108,13 +123,21 @@ def _steady_law(fit, source) -> FittedModel:
     (T0) effects: the same law term by term (`discovery.curve_baseline`)."""
     p = dict(zip(fit.names, np.asarray(fit.values, float).tolist()))
     fu, vu = fit.fixed["friction_unit"], fit.fixed["velocity_unit"]
-    effects = (SavedEffect("stribeck", {"F_s_minus_F_c": p["F_s"] - p["F_c"]},
-                           {"v_s": p["v_s"], "beta": p["beta"]}),
-               SavedEffect("asymmetry", {"T0": p["T0"]}))  # fmt: skip
-    units = {"F_c": fu, "sigma2": f"{fu} per {vu}", "stribeck.F_s_minus_F_c": fu,
-             "asymmetry.T0": fu}  # fmt: skip
-    return FittedModel("curve", {"F_c": p["F_c"], "sigma2": p["sigma2"]}, units, {}, effects,
-                       source)  # fmt: skip
+    effects = (
+        SavedEffect(
+            "stribeck", {"F_s_minus_F_c": p["F_s"] - p["F_c"]}, {"v_s": p["v_s"], "beta": p["beta"]}
+        ),
+        SavedEffect("asymmetry", {"T0": p["T0"]}),
+    )
+    units = {
+        "F_c": fu,
+        "sigma2": f"{fu} per {vu}",
+        "stribeck.F_s_minus_F_c": fu,
+        "asymmetry.T0": fu,
+    }
+    return FittedModel(
+        "curve", {"F_c": p["F_c"], "sigma2": p["sigma2"]}, units, {}, effects, source
+    )
 
 
 def load_model(path) -> FittedModel:
@@ -126,12 +149,13 @@ def load_model(path) -> FittedModel:
     if isinstance(d, dict) and "format" not in d:
         if SAVED_KEY in d and d[SAVED_KEY] is None:
             why = d.get("not_a_result") or d.get("message") or "the fit did not succeed"
-            raise ValueError(f"{path}: field '{SAVED_KEY}' is null: the fit saved no model "
-                             f"({why})")  # fmt: skip
+            raise ValueError(f"{path}: field '{SAVED_KEY}' is null: the fit saved no model ({why})")
         if d.get(SAVED_KEY) is None:
-            raise ValueError(f"{path}: no field '{SAVED_KEY}' (written by `tribojax fit` or "
-                             "`discover` of this version for a slip run, loop, history or "
-                             "friction curve; wu2015's steady-loop fit saves none)")  # fmt: skip
+            raise ValueError(
+                f"{path}: no field '{SAVED_KEY}' (written by `tribojax fit` or "
+                "`discover` of this version for a slip run, loop, history or "
+                "friction curve; wu2015's steady-loop fit saves none)"
+            )
         saved, where = d[SAVED_KEY], f"{path}: {SAVED_KEY}"
     model = FittedModel.from_dict(saved, where)
     if model.kind == "history":
@@ -150,8 +174,9 @@ def predict(model: FittedModel, record, *, initial: str | None = None) -> Predic
     as the model was fitted (rest, or "measured" for a loop model fitted from a loaded start).
     ValueError when the record is of another kind."""
     if not isinstance(model, FittedModel):
-        raise ValueError(f"model must be a FittedModel (tribojax.load_model), got "
-                         f"{type(model).__name__}")  # fmt: skip
+        raise ValueError(
+            f"model must be a FittedModel (tribojax.load_model), got {type(model).__name__}"
+        )
     source = str(getattr(record, "source", ""))
     need = "loop" if model.kind == "history" else RECORD_KINDS[model.kind].record_kind
     _check_kind(model, record, need, "predicts")
@@ -161,8 +186,10 @@ def predict(model: FittedModel, record, *, initial: str | None = None) -> Predic
         x_name, unit = "time_s", "N"
         x, measured, predicted = _history(model, record, initial or "rest")
     elif initial == "measured" and model.kind != "loop":
-        raise ValueError(f"initial = {initial!r}: a {model.kind} model starts as its fit did; "
-                         "'measured' is for loop and history models")  # fmt: skip
+        raise ValueError(
+            f"initial = {initial!r}: a {model.kind} model starts as its fit did; "
+            "'measured' is for loop and history models"
+        )
     else:
         if model.kind == "loop" and initial is not None:
             model = dataclasses.replace(model, options={**model.options, "initial": initial})
@@ -175,8 +202,18 @@ def predict(model: FittedModel, record, *, initial: str | None = None) -> Predic
     far = beyond(model.fitted_range, record.extent()) if model.fitted_range else None
     for d in far or ():
         warnings.warn(describe_beyond(d), ExtrapolationWarning, stacklevel=2)
-    return Prediction(model, source, x_name, np.asarray(x), measured, predicted, unit,
-                      nrmse(err, measured), rms(err), far)  # fmt: skip
+    return Prediction(
+        model,
+        source,
+        x_name,
+        np.asarray(x),
+        measured,
+        predicted,
+        unit,
+        nrmse(err, measured),
+        rms(err),
+        far,
+    )
 
 
 EXTRAPOLATION_MARGIN = 1.25
@@ -195,19 +232,30 @@ def beyond(fitted_range: dict, extent: dict, margin: float = EXTRAPOLATION_MARGI
         if r is None or r["unit"] != unit:
             continue
         if hi > r["max"] * margin or lo < r["min"] / margin:
-            out.append({"quantity": name, "record_min": float(lo), "record_max": float(hi),
-                        "fitted_min": r["min"], "fitted_max": r["max"], "unit": unit})
+            out.append(
+                {
+                    "quantity": name,
+                    "record_min": float(lo),
+                    "record_max": float(hi),
+                    "fitted_min": r["min"],
+                    "fitted_max": r["max"],
+                    "unit": unit,
+                }
+            )
     return out
 
 
 def describe_beyond(d: dict) -> str:
     """One line for an entry of `beyond`."""
+
     def span(lo, hi):
         return f"{lo:.3g}" if lo == hi else f"{lo:.3g} to {hi:.3g}"
 
-    return (f"extrapolation: the record's {d['quantity'].replace('_', ' ')} "
-            f"({span(d['record_min'], d['record_max'])} {d['unit']}) lies outside the fitted "
-            f"range ({span(d['fitted_min'], d['fitted_max'])} {d['unit']})")
+    return (
+        f"extrapolation: the record's {d['quantity'].replace('_', ' ')} "
+        f"({span(d['record_min'], d['record_max'])} {d['unit']}) lies outside the fitted "
+        f"range ({span(d['fitted_min'], d['fitted_max'])} {d['unit']})"
+    )
 
 
 def refit(model: FittedModel, record, *, max_steps: int = MAX_STEPS, throw: bool = True):
@@ -218,8 +266,10 @@ def refit(model: FittedModel, record, *, max_steps: int = MAX_STEPS, throw: bool
     estimate). Returns the `FitResult` of `fit_model` (`fitted_model(result)` saves it);
     it raises `FitError` when the fit fails, unless `throw=False`."""
     if model.kind not in RECORD_KINDS:
-        raise ValueError(f"refit takes a record model (slip, loop, curve), not a {model.kind!r} "
-                         "model (a history fit: tribojax.fit_history)")  # fmt: skip
+        raise ValueError(
+            f"refit takes a record model (slip, loop, curve), not a {model.kind!r} "
+            "model (a history fit: tribojax.fit_history)"
+        )
     _check_kind(model, record, RECORD_KINDS[model.kind].record_kind, "fits")
     baseline = RECORD_KINDS[model.kind].build(record, model.options)
     return thrown(fit_saved(model, baseline, max_steps=max_steps), throw)
@@ -228,8 +278,10 @@ def refit(model: FittedModel, record, *, max_steps: int = MAX_STEPS, throw: bool
 def _check_kind(model, record, need, verb):
     kind = getattr(record, "kind", type(record).__name__)
     if kind != need:
-        raise ValueError(f"{getattr(record, 'source', '') or 'record'}: a {kind} record; the "
-                         f"{model.kind} model {verb} {need} records")  # fmt: skip
+        raise ValueError(
+            f"{getattr(record, 'source', '') or 'record'}: a {kind} record; the "
+            f"{model.kind} model {verb} {need} records"
+        )
 
 
 def _check_history(model, where) -> list:
@@ -237,19 +289,29 @@ def _check_history(model, where) -> list:
     (the element, a missing parameter, a band tension that is not > 0)."""
     element = model.options.get("element")
     if element not in HISTORY_MODELS:
-        raise ValueError(f"{where}: field 'options.element' is {element!r}; one of "
-                         f"{sorted(HISTORY_MODELS)} expected")  # fmt: skip
+        raise ValueError(
+            f"{where}: field 'options.element' is {element!r}; one of "
+            f"{sorted(HISTORY_MODELS)} expected"
+        )
     names = [n for n, _ in HISTORY_MODELS[element]]
     missing = [n for n in names if n not in model.parameters]
     if missing:
         raise ValueError(f"{where}: field 'parameters' lacks {missing} of the {element} model")
-    check_values(model, names, [HISTORY_UNITS[n] for n in names],
-                 [(0.0, np.inf) if positive else (-np.inf, np.inf)
-                  for _, positive in HISTORY_MODELS[element]], where)  # fmt: skip
+    check_values(
+        model,
+        names,
+        [HISTORY_UNITS[n] for n in names],
+        [
+            (0.0, np.inf) if positive else (-np.inf, np.inf)
+            for _, positive in HISTORY_MODELS[element]
+        ],
+        where,
+    )
     tension = model.options.get("band_tension_N")
     if tension is not None and not (isinstance(tension, int | float) and tension > 0):
-        raise ValueError(f"{where}: field 'options.band_tension_N' is {tension!r}; a tension > 0 "
-                         "(N) expected")  # fmt: skip
+        raise ValueError(
+            f"{where}: field 'options.band_tension_N' is {tension!r}; a tension > 0 (N) expected"
+        )
     return names
 
 

@@ -36,8 +36,9 @@ import numpy as np
 from .._chain import chain_contact as chain_contact
 from .._chain import chain_phase_slips, mu_min, to_physical, to_theta, wang2022_loads
 from .._checks import as_f64, runtime_message
-from .._fit._engine import FAILED_RESIDUAL, FitResult, gauss_newton_step, least_squares_fit
+from .._fit._engine import FAILED_RESIDUAL, gauss_newton_step, least_squares_fit
 from .._fit._measures import rms
+from .._fit._result import FitResult
 from .._fit._solver import LevenbergMarquardt
 from .._presets import CHAIN_DEFAULTS
 from .._results import RESULTS, result_name
@@ -325,25 +326,42 @@ def fit_measured_slips(
     mu_lo = mu_min(loads)
     theta_full0 = jnp.asarray(to_theta([start_full[k] for k in PARAMETERS], PARAMETERS, mu_lo))
     idx = jnp.array([PARAMETERS.index(n) for n in free])
-    args = (theta_full0, idx, jnp.asarray(mu_lo), jnp.asarray(target), jnp.asarray(sigma),
-            jnp.asarray(np.sqrt(weights)), jnp.asarray(float(log_residuals)),
-            jnp.asarray(inv_nu), jnp.asarray(t_scale), loads)  # fmt: skip
+    args = (
+        theta_full0,
+        idx,
+        jnp.asarray(mu_lo),
+        jnp.asarray(target),
+        jnp.asarray(sigma),
+        jnp.asarray(np.sqrt(weights)),
+        jnp.asarray(float(log_residuals)),
+        jnp.asarray(inv_nu),
+        jnp.asarray(t_scale),
+        loads,
+    )
     residuals = _RESIDUALS[(jac, bool(progress))]
 
     def transform(theta):
         return to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo)[idx]
 
-    _PROGRESS.update(on=bool(progress), n=0, t0=time.perf_counter(), size=target.size,
-                     sink=progress)  # fmt: skip
+    _PROGRESS.update(
+        on=bool(progress), n=0, t0=time.perf_counter(), size=target.size, sink=progress
+    )
     t0 = time.perf_counter()
     try:
         fit = least_squares_fit(
-            residuals, theta_full0[idx], args, names=free, transform=transform, rtol=rtol,
-            atol=atol, max_steps=max_steps, jac=jac,
-            solver=LevenbergMarquardt.noise_floor(float(rtol), float(atol),
-                                                  report=bool(progress)),
-            optimum_tol=GN_STEP_TOL, throw=False,
-        )  # fmt: skip
+            residuals,
+            theta_full0[idx],
+            args,
+            names=free,
+            transform=transform,
+            rtol=rtol,
+            atol=atol,
+            max_steps=max_steps,
+            jac=jac,
+            solver=LevenbergMarquardt.noise_floor(float(rtol), float(atol), report=bool(progress)),
+            optimum_tol=GN_STEP_TOL,
+            throw=False,
+        )
     except RuntimeError as err:  # equinox runtime errors inside the compiled fit
         _PROGRESS["on"] = False
         last = dict(zip(PARAMETERS, _PROGRESS.get("last", [])))
@@ -367,8 +385,15 @@ def fit_measured_slips(
     _, sv, vt = np.linalg.svd(S, full_matrices=False)
     gn_step = float(np.max(np.abs(np.asarray(gauss_newton_step(r, J)))))
     return ChainFit(
-        fit=fit, parameters=dict(zip(PARAMETERS, phys.tolist())), free=free,
-        model_nm=np.asarray(model), target_nm=np.asarray(target), scaled_singular_values=sv,
-        scaled_right_vectors=vt, wall_s=wall, evaluations=evaluations, start=start_full,
+        fit=fit,
+        parameters=dict(zip(PARAMETERS, phys.tolist())),
+        free=free,
+        model_nm=np.asarray(model),
+        target_nm=np.asarray(target),
+        scaled_singular_values=sv,
+        scaled_right_vectors=vt,
+        wall_s=wall,
+        evaluations=evaluations,
+        start=start_full,
         gauss_newton_step=gn_step,
-    )  # fmt: skip
+    )

@@ -38,8 +38,16 @@ def plot_fit_measured(plain_nm, robust_nm, flagged, path=None, *, files=True):
         ax.plot(vac, np.abs(robust_nm[:, j]), "C0^-", label="robust fit")
         flag = flagged[:, j]
         if np.any(flag):
-            ax.plot(vac[flag], np.abs(y[flag, j]), "o", ms=14, mfc="none", mec="C1", mew=2,
-                    label="flagged")  # fmt: skip
+            ax.plot(
+                vac[flag],
+                np.abs(y[flag, j]),
+                "o",
+                ms=14,
+                mfc="none",
+                mec="C1",
+                mew=2,
+                label="flagged",
+            )
         ax.set_xscale("log")
         ax.set_yscale("log")
         # a function is wrapped in a FuncFormatter by matplotlib

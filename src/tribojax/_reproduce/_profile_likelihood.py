@@ -72,9 +72,15 @@ def profile_likelihood(
     points = {best: (robust.log_likelihood, robust, True)}
 
     def weighted(at, value):
-        return fit_measured_slips(dict(at, **{name: float(value)}), free=others, target=y,
-                                  loads=loads, **form, weights=robust.weights,
-                                  **fit_kw)  # fmt: skip
+        return fit_measured_slips(
+            dict(at, **{name: float(value)}),
+            free=others,
+            target=y,
+            loads=loads,
+            **form,
+            weights=robust.weights,
+            **fit_kw,
+        )
 
     for side in (grid[grid > best], grid[grid < best][::-1]):  # outward from the optimum
         start = dict(robust.parameters)
@@ -91,10 +97,16 @@ def profile_likelihood(
                 start = dict(half.parameters)
                 first = weighted(start, v)
             fit = robust_fit_measured_slips(
-                free=others, noise=robust.noise, floor_nm=robust.floor_nm, nu=robust.nu,
-                target=y, loads=loads, initial=first,
-                max_iterations=em_iterations, **fit_kw,
-            )  # fmt: skip
+                free=others,
+                noise=robust.noise,
+                floor_nm=robust.floor_nm,
+                nu=robust.nu,
+                target=y,
+                loads=loads,
+                initial=first,
+                max_iterations=em_iterations,
+                **fit_kw,
+            )
             ok = bool(first.converged and fit.chain.converged)
             points[float(v)] = (fit.log_likelihood, fit, ok)
             start = dict(fit.parameters)

@@ -199,7 +199,7 @@ class RobustChainFit:
             "floor_nm": self.floor_nm,
             "scale": self.scale,
             "fitted_by": "maximum likelihood on least_squares_fit: theta at fixed scale "
-                         "(Student-t residuals), then the scale, until the likelihood stops rising",
+            "(Student-t residuals), then the scale, until the likelihood stops rising",
         }
 
     def as_dict(self) -> dict:
@@ -231,7 +231,7 @@ class RobustChainFit:
                     self.weights.ravel(),
                     self.standardized.ravel(),
                 )
-            ],  # fmt: skip
+            ],
         )
         if paper is not None:
             out["paper_theory_rms_relative_residual_unflagged"] = rms_relative(
@@ -281,8 +281,9 @@ def robust_fit_measured_slips(
     y = measured_slips() if target is None else np.asarray(target, dtype=float)
     sigma = noise_shape(y, noise, floor_nm)  # σ_i of the density
     log = noise == "relative"
-    kw = dict(free=tuple(free), target=y, loads=loads, **residual_form(y, noise, floor_nm),
-              **fit_kw)  # fmt: skip
+    kw = dict(
+        free=tuple(free), target=y, loads=loads, **residual_form(y, noise, floor_nm), **fit_kw
+    )
     if initial is None:
         initial = fit_measured_slips(start, weights=initial_weights, **kw)
 
@@ -291,9 +292,15 @@ def robust_fit_measured_slips(
         return new, new.model_nm
 
     fit, r, u, scale, history, result = student_t_ml(
-        theta_step, y, sigma, nu, (initial, initial.model_nm), max_iterations=max_iterations,
-        tol=tol, log=log,
-    )  # fmt: skip
+        theta_step,
+        y,
+        sigma,
+        nu,
+        (initial, initial.model_nm),
+        max_iterations=max_iterations,
+        tol=tol,
+        log=log,
+    )
     chain = fit  # (the start could not be evaluated: nothing to weight)
     if np.all(np.isfinite(u)):
         chain = fit_measured_slips(fit.parameters, weights=u, **kw)  # statistics at the optimum
@@ -305,8 +312,16 @@ def robust_fit_measured_slips(
     ok = np.all(np.isfinite(r)) and np.all(np.isfinite(J))  # else a cell was not evaluated
     z = standardized_residuals(r, J) if ok else np.full_like(r, np.nan)
     return RobustChainFit(
-        chain=chain, noise=noise, floor_nm=None if noise != "mixed" else float(floor_nm),
-        nu=float(nu), scale=scale, residuals=r, weights=u, standardized=z,
-        threshold=flag_threshold(y.size), log_likelihood=student_t_loglik(r, scale, sigma, nu),
-        history=history, result=result,
-    )  # fmt: skip
+        chain=chain,
+        noise=noise,
+        floor_nm=None if noise != "mixed" else float(floor_nm),
+        nu=float(nu),
+        scale=scale,
+        residuals=r,
+        weights=u,
+        standardized=z,
+        threshold=flag_threshold(y.size),
+        log_likelihood=student_t_loglik(r, scale, sigma, nu),
+        history=history,
+        result=result,
+    )

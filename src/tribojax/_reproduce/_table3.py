@@ -26,7 +26,8 @@ from .._contact._presets import (
     wang2022_surface,
     wang2022_table3_model,
 )
-from .._fit._engine import FitResult, least_squares_fit
+from .._fit._engine import least_squares_fit
+from .._fit._result import FitResult
 from .._presets import (
     CALIBRATED_M,
     WANG2022_GAMMA,

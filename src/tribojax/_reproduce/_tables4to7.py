@@ -18,7 +18,8 @@ from .._chain import lugre_phase_slips_nm, table3_contact
 from .._checks import check_range, finite_result
 from .._dynamics._slip import simulate_slip
 from .._export import cached_jit
-from .._fit._engine import FitResult, least_squares_fit
+from .._fit._engine import least_squares_fit
+from .._fit._result import FitResult
 from .._friction._lugre import PreSlipLuGre
 from .._plot import figure, save_figure
 from .._presets import WANG2022_RETICLE_MASS_KG
@@ -34,8 +35,9 @@ def table3_phase_slips(alpha, adjoint=dfx.RecursiveCheckpointAdjoint()):
     not finish raises `RuntimeError` here, or gives NaN under a trace.
     """
     alpha = check_range(alpha, "alpha", 0.0)
-    return finite_result(_table3_phase_slips, alpha, adjoint,
-                         what=f"wang2022 Tables 4-7 slips at alpha = {alpha}")  # fmt: skip
+    return finite_result(
+        _table3_phase_slips, alpha, adjoint, what=f"wang2022 Tables 4-7 slips at alpha = {alpha}"
+    )
 
 
 @cached_jit
@@ -120,8 +122,9 @@ def reproduce_tables4to7(fit: FitResult | None = None) -> dict:
 @cached_jit
 def _figure10(alpha, ts):
     def one(f, k, c):
-        sol = simulate_slip(PreSlipLuGre(f, k, c, alpha), mass=WANG2022_RETICLE_MASS_KG, ts=ts,
-                            throw=False)  # fmt: skip
+        sol = simulate_slip(
+            PreSlipLuGre(f, k, c, alpha), mass=WANG2022_RETICLE_MASS_KG, ts=ts, throw=False
+        )
         return sol.slip * 1e9, sol.z * 1e9
 
     return jax.vmap(one)(*table3_contact())
@@ -161,8 +164,9 @@ def plot_figure10(result: dict, path) -> bool:
     if fig is None:
         return False
     t = jnp.linspace(0.0, 2.3, 1151)
-    slip, z = finite_result(_figure10, jnp.float64(1.0), t,
-                            what="wang2022 Figure 10 at alpha = 1.0")  # fmt: skip
+    slip, z = finite_result(
+        _figure10, jnp.float64(1.0), t, what="wang2022 Figure 10 at alpha = 1.0"
+    )
     vac = wang2022_table(3)["vacuum_kPa"]
     measured = measured_slips()
     windows = [(0.25, 0.6), (0.73, 1.5), (1.65, 2.0), (2.25, 2.3)]

@@ -63,8 +63,9 @@ def _curves(element, A_bar):
 def dimensionless_curves(name: str, A_bar):
     """K̄(Ā), C̄(Ā) (dimensionless) of the named element ("jenkins" or "mindlin"), Ā > 0."""
     A_bar = check_range(A_bar, "A_bar", 0.0)
-    K, C = finite_result(_curves, unit_element(name), jnp.atleast_1d(A_bar),
-                         what=f"K_bar, C_bar of {name}")  # fmt: skip
+    K, C = finite_result(
+        _curves, unit_element(name), jnp.atleast_1d(A_bar), what=f"K_bar, C_bar of {name}"
+    )
     return jnp.asarray(K), jnp.asarray(C)
 
 
@@ -92,8 +93,9 @@ def cbar_peak(name: str) -> tuple[float, float]:
     """
     grid = jnp.linspace(1.05, 6.0, 100)
     _, C = dimensionless_curves(name, grid)
-    a, c = finite_result(_newton_peak, unit_element(name), grid[int(np.argmax(C))],
-                         what=f"the C_bar peak of {name}")  # fmt: skip
+    a, c = finite_result(
+        _newton_peak, unit_element(name), grid[int(np.argmax(C))], what=f"the C_bar peak of {name}"
+    )
     return float(a), float(c)
 
 

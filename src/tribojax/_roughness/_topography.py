@@ -124,8 +124,9 @@ def _read_plain(path: Path, dx, unit: str) -> Topography:
                 continue
             raise DataFileError(f"{path}, line {lineno}: {text[:60]!r} is not a row of numbers")
         if not all(np.isfinite(row)):  # float() takes "inf" and "nan"
-            raise DataFileError(f"{path}, line {lineno}: {text[:60]!r} holds a value that is "
-                                "not a finite number")  # fmt: skip
+            raise DataFileError(
+                f"{path}, line {lineno}: {text[:60]!r} holds a value that is not a finite number"
+            )
         if width is not None and len(row) != width:
             raise DataFileError(
                 f"{path}, line {lineno}: {len(row)} values, earlier rows have {width}"
@@ -178,8 +179,15 @@ def _read_instrument(path: Path) -> Topography:
     return Topography(z.T * s, dx=dx, dy=dy, source=path.name)
 
 
-_TRUNCATED = ("not large enough", "truncat", "not a valid zip", "unexpected end", "eof",
-              "bad magic number for file header", "file is not a zip file")  # fmt: skip
+_TRUNCATED = (
+    "not large enough",
+    "truncat",
+    "not a valid zip",
+    "unexpected end",
+    "eof",
+    "bad magic number for file header",
+    "file is not a zip file",
+)
 
 
 def _format_of(st, path: Path) -> str | None:
@@ -211,8 +219,10 @@ def _unreadable(path: Path, fmt: str | None, err: Exception) -> str:
     text = " ".join(str(err).split())
     kind = f"a {fmt} file" if fmt else "any instrument format SurfaceTopography knows"
     if any(k in text.lower() for k in _TRUNCATED):
-        return (f"{path}: the file is truncated or damaged ({path.stat().st_size} bytes; read as "
-                f"{kind}: {text[:200]})")  # fmt: skip
+        return (
+            f"{path}: the file is truncated or damaged ({path.stat().st_size} bytes; read as "
+            f"{kind}: {text[:200]})"
+        )
     return f"{path}: cannot be read as {kind} ({text[:300]})"
 
 

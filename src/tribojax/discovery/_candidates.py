@@ -42,10 +42,15 @@ class Candidate:
 
     def public(self) -> dict:
         """The candidate as discovery.json lists it."""
-        out = {"name": self.name, "score": self.score, "dof": self.dof,
-               "p_value": self.p_value, "grid_points": self.grid_points,
-               "nuisance": {k: float(v) for k, v in self.design.nuisance.items()},
-               "delta_bic": self.delta_bic}  # fmt: skip
+        out = {
+            "name": self.name,
+            "score": self.score,
+            "dof": self.dof,
+            "p_value": self.p_value,
+            "grid_points": self.grid_points,
+            "nuisance": {k: float(v) for k, v in self.design.nuisance.items()},
+            "delta_bic": self.delta_bic,
+        }
         for key in ("rmse_after", "delta_bic_common", "refit_message", "heldout_excess"):
             if getattr(self, key) is not None:
                 out[key] = getattr(self, key)
@@ -70,8 +75,11 @@ def rank(baseline, effects, grids, state, y, scale, n_starts) -> Ranking:
     J_cur = state.jacobian
     cache: dict = {}
     room = K_MAX - sum(d.k for d in state.designs)
-    fits = {e.name: [d for d in grids[e.name] if d.k <= room] for e in effects
-            if e.name not in state.effects}  # fmt: skip
+    fits = {
+        e.name: [d for d in grids[e.name] if d.k <= room]
+        for e in effects
+        if e.name not in state.effects
+    }
     prefetch_columns(baseline, state, [d for grid in fits.values() for d in grid], cache)
 
     def score_of(d):
@@ -97,7 +105,8 @@ def rank(baseline, effects, grids, state, y, scale, n_starts) -> Ranking:
             S2, dof2 = score_of(d)
             if S2 > S and dof2 == dof:
                 S, pv = S2, chi2_sf(S2, dof)
-        cands.append(Candidate(e.name, S, dof, min(1.0, pv * len(grid)), len(grid), d, seeds,
-                               e.score_gate))  # fmt: skip
+        cands.append(
+            Candidate(e.name, S, dof, min(1.0, pv * len(grid)), len(grid), d, seeds, e.score_gate)
+        )
     cands.sort(key=lambda c: (c.p_value, -c.score))
     return Ranking(cands, r, cache)

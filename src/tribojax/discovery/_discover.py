@@ -33,8 +33,10 @@ from ._verdict import NoiseModel
 DELTA_BIC_THRESHOLD = -10.0
 """An effect is accepted only below ΔBIC = −10 ("very strong" evidence, Kass & Raftery 1995)."""
 
-_MOVED = ("not added: its strengths are zero within 2 standard errors; the current model "
-          "refitted from this refit's optimum is kept")  # fmt: skip
+_MOVED = (
+    "not added: its strengths are zero within 2 standard errors; the current model "
+    "refitted from this refit's optimum is kept"
+)
 
 
 @dataclasses.dataclass
@@ -60,11 +62,20 @@ class _Run:
         """Make `state` the baseline fit: its residual, noise model, regions and noise test."""
         b, data = self.baseline, self.data
         r = self.y - state.prediction
-        ok, p, sigma, rho = b.noise_test(r, len(b.param_names), alpha=self.alpha,
-                                         n_windows=self.n_windows)  # fmt: skip
+        ok, p, sigma, rho = b.noise_test(
+            r, len(b.param_names), alpha=self.alpha, n_windows=self.n_windows
+        )
         self.noise = NoiseModel(sigma, rho, b.noise_model(r)[0], not data.noise_std)
-        self.regions = find_regions(r, data.x, data.segment, sigma, rho, n_windows=self.n_windows,
-                                    alpha=self.alpha, segment_names=data.segment_names)  # fmt: skip
+        self.regions = find_regions(
+            r,
+            data.x,
+            data.segment,
+            sigma,
+            rho,
+            n_windows=self.n_windows,
+            alpha=self.alpha,
+            segment_names=data.segment_names,
+        )
         for g in self.regions:
             g.update(b.region_info(g))
         self.base_state, self.r0, self.base_test = state, r, (ok, p)
@@ -75,8 +86,14 @@ class _Run:
         `heldout`); each model's is computed once."""
         key = id(state)
         if key not in self._heldout:
-            self._heldout[key] = (state, in_background(lambda: heldout_residual(
-                self.baseline, state.designs, state.theta, self.y, self.scale, state.effects)))
+            self._heldout[key] = (
+                state,
+                in_background(
+                    lambda: heldout_residual(
+                        self.baseline, state.designs, state.theta, self.y, self.scale, state.effects
+                    )
+                ),
+            )
         return self._heldout[key][1]
 
     def heldout(self, state) -> float | None:
@@ -92,10 +109,20 @@ class _Run:
         if state is not self.base_state:
             self.noise.sharpen(self.baseline, state, self.y)
         n_par = len(self.baseline.param_names) + sum(d.k + d.n_nuisance for d in state.designs)
-        return self.baseline.noise_gate and noise_consistent(
-            self.y - state.prediction, self.noise.sigma, self.noise.rho, self.data.segment,
-            self.data.x, n_par, alpha=self.alpha, n_windows=self.n_windows,
-            estimated=not self.data.noise_std)[0]  # fmt: skip
+        return (
+            self.baseline.noise_gate
+            and noise_consistent(
+                self.y - state.prediction,
+                self.noise.sigma,
+                self.noise.rho,
+                self.data.segment,
+                self.data.x,
+                n_par,
+                alpha=self.alpha,
+                n_windows=self.n_windows,
+                estimated=not self.data.noise_std,
+            )[0]
+        )
 
 
 def discover(
@@ -167,8 +194,11 @@ def discover(
     run = _Run(baseline, data, np.asarray(data.y, dtype=float), state.scale, alpha, n_windows)
     run.rebase(state)
     base_ok = run.consistent(state)  # then the candidates are ranked, none is refitted or added
-    started = fit_saved(start, baseline, sigma_known=False) \
-        if start is not None and state.converged else None
+    started = (
+        fit_saved(start, baseline, sigma_known=False)
+        if start is not None and state.converged
+        else None
+    )
     state = state if started is None or not started.converged else started
     moves, rounds = 0, []
     grids = {e.name: e.designs(baseline) for e in effects}
@@ -178,10 +208,10 @@ def discover(
             break
         if not base_ok:  # the report and the first choice need the baseline's held-out check:
             run.prefetch(run.base_state)  # on the threads the first Gauss–Newton start leaves
-        accepted = refit_round(run, state, ranking, n_refit, delta_bic_threshold, by_name,
-                               base_ok)  # fmt: skip
-        picked = pick(run, state, accepted, delta_bic_threshold, moves < MAX_MOVES) \
-            if accepted else None  # fmt: skip
+        accepted = refit_round(run, state, ranking, n_refit, delta_bic_threshold, by_name, base_ok)
+        picked = (
+            pick(run, state, accepted, delta_bic_threshold, moves < MAX_MOVES) if accepted else None
+        )
         if picked is not None:
             best_c, best, moved = picked
             if moved is not None:  # a better optimum of the current model
@@ -204,18 +234,27 @@ def discover(
             base_ok = run.consistent(state)
         if run.consistent(state):  # explained: nothing is left to name
             break
-    state, dropped = drop_redundant(run, state, delta_bic_threshold) if state.converged \
-        else (state, [])  # fmt: skip
-    settings = {"criterion": "Rao score (chi2, Bonferroni over grid and candidates) then "
-                "Delta BIC (AR(1)-inflated) below threshold and a lower held-out "
-                "excess (two-fold)",
-                "delta_bic_threshold": delta_bic_threshold, "alpha": alpha,
-                "max_effects": max_effects, "n_refit": n_refit, "n_windows": n_windows,
-                "candidates_offered": list(by_name), "effects_dropped": dropped}  # fmt: skip
+    state, dropped = (
+        drop_redundant(run, state, delta_bic_threshold) if state.converged else (state, [])
+    )
+    settings = {
+        "criterion": "Rao score (chi2, Bonferroni over grid and candidates) then "
+        "Delta BIC (AR(1)-inflated) below threshold and a lower held-out "
+        "excess (two-fold)",
+        "delta_bic_threshold": delta_bic_threshold,
+        "alpha": alpha,
+        "max_effects": max_effects,
+        "n_refit": n_refit,
+        "n_windows": n_windows,
+        "candidates_offered": list(by_name),
+        "effects_dropped": dropped,
+    }
     if start is not None:
         settings["start_model"] = {
-            "source": start.source, "effects": [e.name for e in start.effects],
-            "refit": "none" if started is None else started.message or "converged"}  # fmt: skip
+            "source": start.source,
+            "effects": [e.name for e in start.effects],
+            "refit": "none" if started is None else started.message or "converged",
+        }
     return report(run, state, rounds, settings)
 
 

@@ -43,8 +43,9 @@ def plot_curve_discovery(report: DiscoveryReport, curve: FrictionCurve, path) ->
         k = np.sign(v) == sign
         c = "C1" if sign > 0 else "C2"
         name = "positive" if sign > 0 else "negative"
-        ax.errorbar(np.abs(v[k]), np.abs(f[k]), yerr=err[k], fmt=mk, ms=3, color=c,
-                    label=f"data, {name}")  # fmt: skip
+        ax.errorbar(
+            np.abs(v[k]), np.abs(f[k]), yerr=err[k], fmt=mk, ms=3, color=c, label=f"data, {name}"
+        )
         ax.plot(np.abs(v[k]), np.abs(report.baseline_y[k] / w[k]), "-", color=c, lw=0.8, alpha=0.6)
         ax.plot(np.abs(v[k]), np.abs(report.final_y[k] / w[k]), "--", color=c, lw=1.2)
     ax.plot([], [], "k-", lw=0.8, alpha=0.6, label="baseline (Coulomb + viscous)")
@@ -58,8 +59,11 @@ def plot_curve_discovery(report: DiscoveryReport, curve: FrictionCurve, path) ->
     ax.plot(v, (report.y - report.baseline_y) / unit, "C0o-", ms=3, lw=0.6, label="baseline")
     ax.plot(v, (report.y - report.final_y) / unit, "C3s-", ms=3, lw=0.6, label="augmented")
     ax.axhline(0.0, color="k", lw=0.6)
-    ax.set(xlabel=f"velocity ({vu})", ylabel="residual / standard error",
-           title="residuals; shaded: flagged regions")  # fmt: skip
+    ax.set(
+        xlabel=f"velocity ({vu})",
+        ylabel="residual / standard error",
+        title="residuals; shaded: flagged regions",
+    )
     ax.legend(fontsize=8)
     fig.suptitle(f"discovery: effect = {report.effect}, verdict = {report.verdict}")
     save_figure(fig, path, dpi=110)

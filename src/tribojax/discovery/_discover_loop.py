@@ -49,8 +49,11 @@ def plot_loop_discovery(report: DiscoveryReport, path) -> bool:
     ax.plot(k, y - report.baseline_y, "C0.", ms=2, label=f"before: RMS {before:.3g} N")
     ax.plot(k, y - report.final_y, "C3.", ms=2, label=f"after: RMS {after:.3g} N")
     ax.axhline(0.0, color="k", lw=0.6)
-    ax.set(xlabel="sample", ylabel="residual (N)",
-           title="residuals; shaded: flagged (orange loading, green unloading)")  # fmt: skip
+    ax.set(
+        xlabel="sample",
+        ylabel="residual (N)",
+        title="residuals; shaded: flagged (orange loading, green unloading)",
+    )
     ax.legend(fontsize=8)
     fig.suptitle(f"discovery: effect = {report.effect}")
     save_figure(fig, path, dpi=110)

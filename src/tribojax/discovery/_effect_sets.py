@@ -24,21 +24,31 @@ def drop_redundant(run, state, threshold):
     dropped, n, p = [], run.y.size, len(run.baseline.param_names)
     while len(state.effects) >= 2 and run.consistent(state):
         ends = p + np.cumsum([0] + [d.k for d in state.designs])
-        keeps = [[j for j in range(len(state.effects)) if j != i]
-                 for i in range(len(state.effects) - 1)]  # fmt: skip
+        keeps = [
+            [j for j in range(len(state.effects)) if j != i] for i in range(len(state.effects) - 1)
+        ]
 
         def without(keep):
-            x0 = np.concatenate([state.theta[:p], *(state.theta[ends[j] : ends[j + 1]]
-                                                    for j in keep)])  # fmt: skip
-            return fit_model(run.baseline, tuple(state.designs[j] for j in keep), x0, run.y,
-                             run.scale, tuple(state.effects[j] for j in keep))  # fmt: skip
+            x0 = np.concatenate(
+                [state.theta[:p], *(state.theta[ends[j] : ends[j + 1]] for j in keep)]
+            )
+            return fit_model(
+                run.baseline,
+                tuple(state.designs[j] for j in keep),
+                x0,
+                run.y,
+                run.scale,
+                tuple(state.effects[j] for j in keep),
+            )
 
         fits = in_parallel([lambda keep=keep: without(keep) for keep in keeps])
         rho, best = residual_rho(run.y - state.prediction), None
         for i, f in enumerate(fits):
             d = state.designs[i]
-            if not (f.converged and np.isfinite(f.rss)) or _delta_bic(
-                    state.rss, f.rss, n, d.k + d.n_nuisance, rho) < threshold:  # fmt: skip
+            if (
+                not (f.converged and np.isfinite(f.rss))
+                or _delta_bic(state.rss, f.rss, n, d.k + d.n_nuisance, rho) < threshold
+            ):
                 continue  # it earns its place
             if run.consistent(f) and (best is None or f.rss < best[1].rss):
                 best = (i, f)
@@ -62,29 +72,43 @@ def pair_round(run, state, ranking, threshold, by_name):
     the first that lowers the held-out excess (`_generalises`) is returned as its refit, else
     None."""
     y, n, p = run.y, run.y.size, state.theta.size
-    done = sorted((c for c in ranking.candidates
-                   if c.refit is not None and c.refit[0].rss < state.rss),
-                  key=lambda c: c.refit[0].rss)[:PAIR_CANDIDATES]  # fmt: skip
+    done = sorted(
+        (c for c in ranking.candidates if c.refit is not None and c.refit[0].rss < state.rss),
+        key=lambda c: c.refit[0].rss,
+    )[:PAIR_CANDIDATES]
     room = K_MAX - sum(d.k for d in state.designs)
-    pairs = [(a, b) for i, a in enumerate(done) for b in done[i + 1 :]
-             if a.refit[1].k + b.refit[1].k <= room]  # fmt: skip
+    pairs = [
+        (a, b)
+        for i, a in enumerate(done)
+        for b in done[i + 1 :]
+        if a.refit[1].k + b.refit[1].k <= room
+    ]
 
     def joint(a, b):
         (fa, da), (fb, db) = a.refit, b.refit
         x0 = np.concatenate([fa.theta, fb.theta[p:]])
-        return fit_model(run.baseline, state.designs + (da, db), x0, y, run.scale,
-                         state.effects + (a.name, b.name))  # fmt: skip
+        return fit_model(
+            run.baseline,
+            state.designs + (da, db),
+            x0,
+            y,
+            run.scale,
+            state.effects + (a.name, b.name),
+        )
 
     qualified = []
     for (a, b), f in zip(pairs, in_parallel([lambda a=a, b=b: joint(a, b) for a, b in pairs])):
         if not (f.converged and np.isfinite(f.rss)) or any(
-                by_name[c.name].reject(_strengths_of(run, f, c.name)) for c in (a, b)):  # fmt: skip
+            by_name[c.name].reject(_strengths_of(run, f, c.name)) for c in (a, b)
+        ):
             continue
         rho = residual_rho(y - f.prediction)
         dk = [c.refit[1].k + c.refit[1].n_nuisance for c in (a, b)]
         dbic = _delta_bic(f.rss, state.rss, n, sum(dk), rho)
-        each = (_delta_bic(f.rss, a.refit[0].rss, n, dk[1], rho) < threshold
-                and _delta_bic(f.rss, b.refit[0].rss, n, dk[0], rho) < threshold)  # fmt: skip
+        each = (
+            _delta_bic(f.rss, a.refit[0].rss, n, dk[1], rho) < threshold
+            and _delta_bic(f.rss, b.refit[0].rss, n, dk[0], rho) < threshold
+        )
         if dbic < threshold and each:
             qualified.append((dbic, a, b, f))
     for dbic, a, b, f in sorted(qualified, key=lambda q: q[0]):

@@ -28,8 +28,9 @@ def _knob_jacobian(baseline, theta_b, knobs) -> np.ndarray:
         gain[j : j + k, :k] = np.eye(k)
         args = padded_args(baseline, knobs, gain, np.zeros((n, K_MAX)), k, np.zeros(n), 1.0)
         try:
-            r, J = (np.asarray(v) for v in value_and_jacobian(padded_residual, x, args,
-                                                              solver=SOLVER))  # fmt: skip
+            r, J = (
+                np.asarray(v) for v in value_and_jacobian(padded_residual, x, args, solver=SOLVER)
+            )
         except eqx.EquinoxRuntimeError:  # a check inside the model failed
             out[:, j : j + k] = np.nan
             continue

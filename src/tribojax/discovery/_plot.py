@@ -62,9 +62,14 @@ def plot_correction(report, path) -> bool:
     s = np.asarray(report.signals[corr["signal"]])
     ax = fig.subplots()
     ax.plot(s, report.y - report.final_y, ".", ms=2, color="0.5", label="final residual")
-    ax.plot(corr["knots"], corr["values"], "o-", color="C3", lw=1.5,
-            label=f"linear-spline correction: closes {100 * corr['gap_closed']:.0f} % of the "
-            "excess²")  # fmt: skip
+    ax.plot(
+        corr["knots"],
+        corr["values"],
+        "o-",
+        color="C3",
+        lw=1.5,
+        label=f"linear-spline correction: closes {100 * corr['gap_closed']:.0f} % of the excess²",
+    )
     ax.set_xlabel(corr["signal"])
     ax.set_ylabel(f"residual ({report.labels.get('y_unit', '')})")
     ax.set_title(f"verdict: {report.verdict}; where the missing term sits", fontsize=10)

@@ -42,8 +42,17 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
     above = _abandon_above(state, target)
 
     def fit_from(x0, above=above):
-        return lambda: fit_model(baseline, designs, x0, y, scale, names, max_steps=budget,
-                                 ceiling=state.rss, abandon_above=above)  # fmt: skip
+        return lambda: fit_model(
+            baseline,
+            designs,
+            x0,
+            y,
+            scale,
+            names,
+            max_steps=budget,
+            ceiling=state.rss,
+            abandon_above=above,
+        )
 
     gauss_newton = []
     A = np.concatenate([state.jacobian, _columns(baseline, state, design, cache) / scale], axis=1)
@@ -51,8 +60,9 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
         step = np.linalg.lstsq(A, r, rcond=None)[0]
         p = state.theta.size
         gauss_newton.append(fit_from(np.concatenate([state.theta + step[:p], step[p:]])))
-    starts = [fit_from(np.concatenate([state.theta, np.asarray(s0, dtype=float)]))
-              for s0 in design.starts]  # fmt: skip
+    starts = [
+        fit_from(np.concatenate([state.theta, np.asarray(s0, dtype=float)])) for s0 in design.starts
+    ]
 
     def at_noise(fit):
         return fit.converged and fit.rss <= min(floor, state.rss)
@@ -81,12 +91,22 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
         return dataclasses.replace(
             min(ran_out, key=lambda f: f.rss),
             message=f"not refitted to the end: after {QUICK_STEPS} steps its cost was above "
-                    f"{QUICK_MARGIN:g}x that of a candidate that reaches the noise")  # fmt: skip
+            f"{QUICK_MARGIN:g}x that of a candidate that reaches the noise",
+        )
     if run and min(f.rss for f in run) < min((f.rss for f in good), default=np.inf):
         # a fit that ran out of steps while still descending, below every converged one (e.g.
         # an unidentified F_s walking to its bound), goes on from where it stopped, once
-        fits.append(fit_model(baseline, designs, min(run, key=lambda f: f.rss).theta, y, scale,
-                              names, ceiling=state.rss))  # fmt: skip
+        fits.append(
+            fit_model(
+                baseline,
+                designs,
+                min(run, key=lambda f: f.rss).theta,
+                y,
+                scale,
+                names,
+                ceiling=state.rss,
+            )
+        )
         good += [f for f in fits[-1:] if f.converged and np.isfinite(f.rss)]
     return min(good, key=lambda f: f.rss) if good else fits[-1]
 
@@ -172,9 +192,23 @@ def refit_round(run, state, ranking, n_refit, threshold, by_name, base_ok) -> li
             continue
         starts = (d, *c.seeds)  # several starts: the best grid points by score
         floor = _noise_floor(run, state, d)
-        with speculatively([lambda dd=dd: _refit(run.baseline, state, dd, c.name, y, run.scale,
-                                                 ranking.residual, ranking.cache, rss_explains,
-                                                 floor) for dd in starts]) as refits:  # fmt: skip
+        with speculatively(
+            [
+                lambda dd=dd: _refit(
+                    run.baseline,
+                    state,
+                    dd,
+                    c.name,
+                    y,
+                    run.scale,
+                    ranking.residual,
+                    ranking.cache,
+                    rss_explains,
+                    floor,
+                )
+                for dd in starts
+            ]
+        ) as refits:
             d, new = _best_start(run, starts, (fut.result() for fut in refits), n)
         if explains is None:
             before.append((c, starts, new, d))
@@ -188,8 +222,9 @@ def refit_round(run, state, ranking, n_refit, threshold, by_name, base_ok) -> li
         if c.refit is not None and c.refit[0] is explains or d.k + d.n_nuisance >= dk_explains:
             continue
         again = _from_explaining(run, state, c, starts, explains, dk_explains)
-        if again is not None and not (new.converged and _bic(again[1], again[0], n)
-                                      >= _bic(new, d, n)):  # fmt: skip
+        if again is not None and not (
+            new.converged and _bic(again[1], again[0], n) >= _bic(new, d, n)
+        ):
             accepted[:] = [a for a in accepted if a[0] is not c]
             c.refit, c.delta_bic, c.rmse_after, c.refit_message = None, None, None, None
             _settle(run, state, c, *again, threshold, by_name, accepted)
@@ -215,8 +250,11 @@ def _best_start(run, starts, fits, n):
     first start when none converged); stops reading at the first that reaches the noise."""
     d, new = None, None
     for dd, f in zip(starts, fits):
-        if new is None or (f.converged and not _bic(f, dd, n) >= _bic(new, d, n)) \
-                or not new.converged:  # fmt: skip
+        if (
+            new is None
+            or (f.converged and not _bic(f, dd, n) >= _bic(new, d, n))
+            or not new.converged
+        ):
             d, new = dd, f
         if new.converged and run.consistent(new):
             break  # at the noise: further starts cannot do better
@@ -253,10 +291,21 @@ def _from_explaining(run, state, c, starts, explains, dk_explains):
     x0 = [np.concatenate([explains.theta[:p], np.zeros(dd.k)]) for dd in starts]
     names = state.effects + (c.name,)
     above = _abandon_above(state, explains.rss)
-    fits = in_parallel([lambda dd=dd, x=x: fit_model(run.baseline, state.designs + (dd,), x,
-                                                     run.y, run.scale, names,
-                                                     max_steps=QUICK_STEPS, abandon_above=above)
-                        for dd, x in zip(starts, x0)])  # fmt: skip
+    fits = in_parallel(
+        [
+            lambda dd=dd, x=x: fit_model(
+                run.baseline,
+                state.designs + (dd,),
+                x,
+                run.y,
+                run.scale,
+                names,
+                max_steps=QUICK_STEPS,
+                abandon_above=above,
+            )
+            for dd, x in zip(starts, x0)
+        ]
+    )
     d, new = _best_start(run, starts, fits, run.y.size)
     return (d, new) if new.converged and np.isfinite(new.rss) else None
 
@@ -270,8 +319,11 @@ def pick(run, state, accepted, threshold, may_move):
     accepted = list(accepted)
     while accepted:
         best_c, best = choose(accepted, state, run.y.size)
-        moved = _moved_optimum(run.baseline, state, best, run.y, run.scale, threshold) \
-            if may_move else None  # fmt: skip
+        moved = (
+            _moved_optimum(run.baseline, state, best, run.y, run.scale, threshold)
+            if may_move
+            else None
+        )
         if moved is not None or _generalises(run, state, best, best_c):
             return best_c, best, moved
         accepted = [a for a in accepted if a[0] is not best_c]
@@ -286,8 +338,10 @@ def _generalises(run, state, new, c) -> bool:
     c.heldout_excess = after
     if before is None or (after is not None and after < before):
         return True
-    c.refit_message = (f"not added: held-out excess {_g(after)} not below the current "
-                       f"model's {_g(before)} (fitted on one half, scored on the other)")
+    c.refit_message = (
+        f"not added: held-out excess {_g(after)} not below the current "
+        f"model's {_g(before)} (fitted on one half, scored on the other)"
+    )
     return False
 
 

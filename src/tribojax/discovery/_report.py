@@ -117,7 +117,7 @@ class DiscoveryReport:
         unit = self.labels.get("y_unit", "")
         lines = [
             f"verdict: {self.verdict}; effect: {self.effect}"
-            + (f"  (all: {', '.join(self.effects)})" if self.effects else ""),  # fmt: skip
+            + (f"  (all: {', '.join(self.effects)})" if self.effects else ""),
             f"rmse: baseline {self.baseline_rmse:.4g} {unit} -> final {self.final_rmse:.4g} {unit}"
             f" (noise sd {self.noise_std:.3g}{' estimated' if self.noise_estimated else ''})",
             f"excess misfit beyond the noise: {self.excess_rmse_before:.3g} -> "
@@ -138,12 +138,16 @@ class DiscoveryReport:
             lines.append(f"  {name}: " + "; ".join(parts))
         if self.verdict in ("partly_explained", "unexplained"):
             corr = self.misfit.get("correlations", [])[:3]
-            lines.append("remaining misfit correlates with: " + ", ".join(
-                f"{c['signal']} ({c['correlation']:+.2f})" for c in corr))  # fmt: skip
+            lines.append(
+                "remaining misfit correlates with: "
+                + ", ".join(f"{c['signal']} ({c['correlation']:+.2f})" for c in corr)
+            )
             fc = self.misfit.get("correction")
             if fc:
-                lines.append(f"a term in {fc['signal']} could close {100 * fc['gap_closed']:.0f}%"
-                             " of the remaining excess")  # fmt: skip
+                lines.append(
+                    f"a term in {fc['signal']} could close {100 * fc['gap_closed']:.0f}%"
+                    " of the remaining excess"
+                )
         if not self.baseline_fit["converged"]:
             lines.append(f"WARNING: baseline fit did not converge: {self.baseline_fit['message']}")
         return "\n".join(lines)
@@ -172,17 +176,36 @@ def _misfit(run, rf, state):
     baseline, data, nz = run.baseline, run.data, run.noise
     n_final = len(baseline.param_names) + sum(d.k + d.n_nuisance for d in state.designs)
     base_ok, p0 = run.base_test
-    final_ok, p1, remaining = noise_consistent(rf, nz.sigma, nz.rho, data.segment, data.x,
-                                               n_final, alpha=run.alpha, n_windows=run.n_windows,
-                                               estimated=not data.noise_std)  # fmt: skip
+    final_ok, p1, remaining = noise_consistent(
+        rf,
+        nz.sigma,
+        nz.rho,
+        data.segment,
+        data.x,
+        n_final,
+        alpha=run.alpha,
+        n_windows=run.n_windows,
+        estimated=not data.noise_std,
+    )
     e0, e1 = excess_rmse(run.r0, nz.sigma), excess_rmse(rf, nz.sigma)
     held = (None, None) if base_ok else (run.heldout(run.base_state), run.heldout(state))
-    v = verdict(len(state.effects), base_ok, final_ok, e0, e1,
-                None if held[0] is None else held, sigma=nz.sigma)  # fmt: skip
+    v = verdict(
+        len(state.effects),
+        base_ok,
+        final_ok,
+        e0,
+        e1,
+        None if held[0] is None else held,
+        sigma=nz.sigma,
+    )
     if not baseline.noise_gate:  # no noise test: the ΔBIC selection alone decides
         v = "explained" if state.effects else "none"
-    misfit = {"baseline_noise_p_value": p0, "final_noise_p_value": p1,
-              "baseline_consistent": base_ok, "final_consistent": final_ok}  # fmt: skip
+    misfit = {
+        "baseline_noise_p_value": p0,
+        "final_noise_p_value": p1,
+        "baseline_consistent": base_ok,
+        "final_consistent": final_ok,
+    }
     if v in ("partly_explained", "unexplained"):
         signals = {**baseline.signals(), "model": np.asarray(state.prediction)}
         for rg in remaining:
@@ -210,17 +233,32 @@ def report(run, state, rounds: list, settings: dict) -> DiscoveryReport:
     misfit, v, e0, e1, held = _misfit(run, rf, state)
     unit = data.y_label.split("(")[-1].rstrip(")") if "(" in data.y_label else ""
     return DiscoveryReport(
-        kind=baseline.kind, effects=state.effects, baseline_rmse=rms(run.r0), final_rmse=rms(rf),
-        regions=run.regions, candidates=rounds[0] if rounds else [], rounds=rounds,
+        kind=baseline.kind,
+        effects=state.effects,
+        baseline_rmse=rms(run.r0),
+        final_rmse=rms(rf),
+        regions=run.regions,
+        candidates=rounds[0] if rounds else [],
+        rounds=rounds,
         strengths=effect_strengths(state),
         baseline_fit=_fit_dict(baseline, run.base_state, run.scale),
-        final_fit=_fit_dict(baseline, state, run.scale), noise_std=run.noise.sigma,
-        noise_estimated=not data.noise_std, rho=run.noise.rho, settings=settings, verdict=v,
-        excess_rmse_before=e0, excess_rmse_after=e1, heldout_excess_before=held[0],
-        heldout_excess_after=held[1], misfit=misfit,
-        labels={"x": data.x_label, "y": data.y_label, "y_unit": unit}, x=np.asarray(data.x),
-        y=y, baseline_y=run.base_state.prediction, final_y=state.prediction,
+        final_fit=_fit_dict(baseline, state, run.scale),
+        noise_std=run.noise.sigma,
+        noise_estimated=not data.noise_std,
+        rho=run.noise.rho,
+        settings=settings,
+        verdict=v,
+        excess_rmse_before=e0,
+        excess_rmse_after=e1,
+        heldout_excess_before=held[0],
+        heldout_excess_after=held[1],
+        misfit=misfit,
+        labels={"x": data.x_label, "y": data.y_label, "y_unit": unit},
+        x=np.asarray(data.x),
+        y=y,
+        baseline_y=run.base_state.prediction,
+        final_y=state.prediction,
         segment=np.asarray(data.segment),
         signals={**baseline.signals(), "model": np.asarray(state.prediction)},
         fitted=saved_record_model(state) if state.converged else None,
-    )  # fmt: skip
+    )

@@ -54,8 +54,15 @@ from .._model import (
 )
 from .._tables import wang2022_table
 
-TABLE_KNOBS = ("position_error", "sensor_drift", "gross_sliding", "load_coupling", "stribeck",
-               "log10_v_s", "viscous")  # fmt: skip
+TABLE_KNOBS = (
+    "position_error",
+    "sensor_drift",
+    "gross_sliding",
+    "load_coupling",
+    "stribeck",
+    "log10_v_s",
+    "viscous",
+)
 
 
 def _travel_columns(profile: TrapezoidProfile, t_end=2.3):
@@ -85,6 +92,7 @@ class Wang2022TableBaseline(AbstractBaseline):
         """None: no held-out check (24 published cells; an effect may sit in one cell, such as
         a reading step in one phase of one run, which no other cell can confirm)."""
         return None
+
     F_s: Array  # (6,) N
     K_tau: Array  # (6,) N/m
     C_tau: Array  # (6,) N s/m
@@ -108,8 +116,9 @@ class Wang2022TableBaseline(AbstractBaseline):
         w = jnp.min(self.load) / self.load
 
         def one(F, K, C, wi):
-            el = AugmentedPreSlip(F * (1.0 - dgs * wi), K, C, visc * C, strib, 10.0**lvs, kappa,
-                                  prof)  # fmt: skip
+            el = AugmentedPreSlip(
+                F * (1.0 - dgs * wi), K, C, visc * C, strib, 10.0**lvs, kappa, prof
+            )
             return phase_slips(el, profile=prof, adjoint=dfx.ForwardMode(), throw=False)
 
         phases = jax.vmap(one)(self.F_s, self.K_tau, self.C_tau, w) * 1e9  # (6, 4) nm
@@ -162,8 +171,9 @@ class TableKnobEffect(AbstractEffect):
 
     def __check_init__(self):
         if self.name not in _ONE_KNOB:
-            raise ValueError(f"name = {self.name!r}: a one-knob table effect is one of "
-                             f"{sorted(_ONE_KNOB)}")  # fmt: skip
+            raise ValueError(
+                f"name = {self.name!r}: a one-knob table effect is one of {sorted(_ONE_KNOB)}"
+            )
 
     def designs(self, baseline):
         knob, strength, unit, scale = _ONE_KNOB[self.name]
@@ -183,10 +193,16 @@ class TablePositionStep(AbstractEffect):
         for k in range(4 * n):  # table-major cells, as `predict`
             basis = np.zeros((4 * n, 1))
             basis[k, 0] = 1.0
-            out.append(EffectDesign(("log_step",), ("1 (ln of the cell's factor)",), np.ones(1),
-                                    basis=basis, nuisance={"table": 4 + k // n,
-                                                           "vacuum_kPa": float(vac[k % n])},
-                                    n_nuisance=1))  # fmt: skip
+            out.append(
+                EffectDesign(
+                    ("log_step",),
+                    ("1 (ln of the cell's factor)",),
+                    np.ones(1),
+                    basis=basis,
+                    nuisance={"table": 4 + k // n, "vacuum_kPa": float(vac[k % n])},
+                    n_nuisance=1,
+                )
+            )
         return out
 
 

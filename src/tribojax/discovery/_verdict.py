@@ -75,8 +75,9 @@ class NoiseModel:
                 self.sigma = float(s_new)
 
 
-def verdict(n_effects, base_ok, final_ok, excess_before, excess_after, heldout=None, *,
-            sigma=None) -> str:  # fmt: skip
+def verdict(
+    n_effects, base_ok, final_ok, excess_before, excess_after, heldout=None, *, sigma=None
+) -> str:
     """The verdict (module docstring) from the consistency tests, the excess misfits and
     `heldout` = (h₀, h₁), the held-out excesses (None: not available; h₁ None: the final
     model's held-out fit failed), all in output units; `sigma`: the noise sd (None: the
@@ -88,8 +89,12 @@ def verdict(n_effects, base_ok, final_ok, excess_before, excess_after, heldout=N
     h0, h1 = (None, None) if heldout is None else heldout
     halved = heldout is None or (h1 is not None and h1 <= 0.5 * h0 and h0 > 0)
     lowered = heldout is None or (h1 is not None and h1 < h0)
-    close = heldout is None or sigma is None or h1 is None \
-        or heldout_gap(h1, excess_after) <= HELDOUT_GAP * sigma  # fmt: skip
+    close = (
+        heldout is None
+        or sigma is None
+        or h1 is None
+        or heldout_gap(h1, excess_after) <= HELDOUT_GAP * sigma
+    )
     if final_ok and halved and close:
         return "explained"
     if excess_before > 0 and excess_after <= 0.5 * excess_before and lowered:
@@ -139,7 +144,11 @@ def flexible_correction(r, signals: dict, sigma, n_knots=N_KNOTS) -> dict | None
         coef = np.linalg.lstsq(B, r, rcond=None)[0]
         e1 = excess_rmse(r - B @ coef, sigma)
         if best is None or e1 < best["excess_rmse_after_correction"]:
-            best = {"signal": name, "knots": knots.tolist(), "values": coef.tolist(),
-                    "excess_rmse_after_correction": e1,
-                    "gap_closed": float(1.0 - e1**2 / e0**2)}  # fmt: skip
+            best = {
+                "signal": name,
+                "knots": knots.tolist(),
+                "values": coef.tolist(),
+                "excess_rmse_after_correction": e1,
+                "gap_closed": float(1.0 - e1**2 / e0**2),
+            }
     return best

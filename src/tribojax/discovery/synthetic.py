@@ -96,13 +96,29 @@ def _oscillator_scipy(t, profile, f, zeta):
 
     kinks = np.asarray(profile.kinks())
     # the mode is not stiff: explicit DOP853 agrees with Radau to 3e-10 of the peak
-    sol = solve_ivp(rhs, (t[0], t[-1]), [0.0, 0.0], method="DOP853", t_eval=t, rtol=1e-10,
-                    atol=1e-14, max_step=float(np.min(np.diff(kinks))) / 4)  # fmt: skip
+    sol = solve_ivp(
+        rhs,
+        (t[0], t[-1]),
+        [0.0, 0.0],
+        method="DOP853",
+        t_eval=t,
+        rtol=1e-10,
+        atol=1e-14,
+        max_step=float(np.min(np.diff(kinks))) / 4,
+    )
     return sol.y[0]
 
 
-def hidden_effect_run(effect: str, noise: float, load: float = 0.6, seed: int = 0, *,
-                      n: int = 461, t_end: float = 2.3, drive: float | None = DRIVE) -> SlipRun:
+def hidden_effect_run(
+    effect: str,
+    noise: float,
+    load: float = 0.6,
+    seed: int = 0,
+    *,
+    n: int = 461,
+    t_end: float = 2.3,
+    drive: float | None = DRIVE,
+) -> SlipRun:
     """A slip run with `effect` hidden (or "clean"), `noise` sd in m, at `load` kPa vacuum.
 
     `n` samples on [0, t_end]; keep (n − 1)/t_end·0.01 an integer so that the profile's kinks
@@ -136,8 +152,14 @@ def hidden_effect_run(effect: str, noise: float, load: float = 0.6, seed: int = 
         extra = h["gain"] * _oscillator_scipy(t, prof, h["f_Hz"], h["zeta"])
     rng = np.random.default_rng(seed)
     slip = run.slip + extra + noise * rng.standard_normal(t.size)
-    return SlipRun(t=t, accel=run.accel, slip=slip, mass=m, noise_std=noise if noise > 0 else None,
-                   source=f"hidden:{effect}:{load}kPa:noise={noise:g}:seed={seed}:drive={drive}")
+    return SlipRun(
+        t=t,
+        accel=run.accel,
+        slip=slip,
+        mass=m,
+        noise_std=noise if noise > 0 else None,
+        source=f"hidden:{effect}:{load}kPa:noise={noise:g}:seed={seed}:drive={drive}",
+    )
 
 
 def confusion_study(

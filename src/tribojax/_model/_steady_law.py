@@ -21,11 +21,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._fit._engine import least_squares_fit
+from .._fit._measures import nrmse
+from .._fit._result import FitResult, thrown
+from .._fit._solver import LevenbergMarquardt
 from .._friction._lugre import LuGre, stribeck_curve
 from .._io._friction_curve import FrictionCurve, FrictionTransient
-from ._engine import FitResult, least_squares_fit, thrown
-from ._measures import nrmse
-from ._solver import LevenbergMarquardt
 
 # the noise-floor LM (docs/fitting.md, "Why some fit rules are set where they are")
 _SOLVER = LevenbergMarquardt.noise_floor(1e-10, 1e-12)
@@ -57,8 +58,9 @@ def _steady_start(v, f) -> np.ndarray:
     return np.log([F_c, F_s, v_s, 2.0, sigma2])
 
 
-def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2000,
-                     throw: bool = True) -> FitResult:  # fmt: skip
+def fit_steady_curve(
+    curve: FrictionCurve, *, direction=None, max_steps: int = 2000, throw: bool = True
+) -> FitResult:
     """Fit the LuGre steady law to a friction curve (see the module docstring).
 
     Args:
@@ -96,9 +98,18 @@ def fit_steady_curve(curve: FrictionCurve, *, direction=None, max_steps: int = 2
         out = jnp.exp(theta[:5])
         return jnp.concatenate([out, theta[5:] * scale]) if joint else out
 
-    fit = least_squares_fit(_SteadyResiduals(joint), jnp.asarray(theta0), (v, f, err),
-                            names=names, transform=tr, sigma_known=True, max_steps=max_steps,
-                            jac="fwd", solver=_SOLVER, throw=False)  # fmt: skip
+    fit = least_squares_fit(
+        _SteadyResiduals(joint),
+        jnp.asarray(theta0),
+        (v, f, err),
+        names=names,
+        transform=tr,
+        sigma_known=True,
+        max_steps=max_steps,
+        jac="fwd",
+        solver=_SOLVER,
+        throw=False,
+    )
     fixed = {"direction": "both" if joint else int(direction), **c.units}
     return thrown(dataclasses.replace(fit, fixed=fixed), throw)
 
@@ -127,12 +138,26 @@ def _transient_args(tr: FrictionTransient, p: dict, curve_error=None):
     T0 = float(p.get("T0", 0.0))
     moving = jnp.asarray(np.flatnonzero(tr.velocity != 0.0))  # at rest the drive is off
     err = curve_error if curve_error is not None else float(np.std(tr.friction[tr.velocity != 0]))
-    return (law, T0, jnp.asarray(tr.velocity), jnp.asarray(np.diff(tr.t)),
-            jnp.asarray(tr.friction), moving, err)  # fmt: skip
+    return (
+        law,
+        T0,
+        jnp.asarray(tr.velocity),
+        jnp.asarray(np.diff(tr.t)),
+        jnp.asarray(tr.friction),
+        moving,
+        err,
+    )
 
 
-def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start=(1.0, 1e-3),
-                  max_steps: int = 300, throw: bool = True) -> FitResult:  # fmt: skip
+def fit_transient(
+    tr: FrictionTransient,
+    steady: FitResult,
+    *,
+    sigma=None,
+    start=(1.0, 1e-3),
+    max_steps: int = 300,
+    throw: bool = True,
+) -> FitResult:
     """Fit LuGre's bristle stiffness σ0 and damping σ1 to a start–stop transient, the steady
     law (and asymmetry T0) fixed from `fit_steady_curve`.
 
@@ -146,11 +171,18 @@ def fit_transient(tr: FrictionTransient, steady: FitResult, *, sigma=None, start
     record bounds what can be resolved (standard errors and `unidentifiable` say so).
     """
     law = dict(zip(steady.names, steady.values.tolist()))
-    fit = least_squares_fit(_TransientResiduals(), jnp.log(jnp.asarray(start)),
-                            _transient_args(tr, law, sigma), names=("sigma0", "sigma1"),
-                            transform=jnp.exp, sigma_known=sigma is not None,
-                            max_steps=max_steps, jac="fwd", solver=_SOLVER,
-                            throw=False)  # fmt: skip
+    fit = least_squares_fit(
+        _TransientResiduals(),
+        jnp.log(jnp.asarray(start)),
+        _transient_args(tr, law, sigma),
+        names=("sigma0", "sigma1"),
+        transform=jnp.exp,
+        sigma_known=sigma is not None,
+        max_steps=max_steps,
+        jac="fwd",
+        solver=_SOLVER,
+        throw=False,
+    )
     return thrown(dataclasses.replace(fit, fixed={"steady": law}), throw)
 
 

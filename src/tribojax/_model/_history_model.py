@@ -1,0 +1,200 @@
+"""The history models: friction elements driven through a measured displacement history
+(the time-domain route of `fit_history`, a separately named product beside the loop record
+model: docs/fitting.md, "History fits are a separate product").
+
+Each model is driven through the measured displacement u(t) from rest at the first sample
+(`tribojax.drive`: exact increments for the rate-independent Jenkins and Mindlin elements, RK4
+for LuGre and Bouc–Wen); its force plus a constant offset f0 (the load cell's zero and any mean
+asymmetry) is compared with the measured force. The figure of merit is the normalised RMS
+error NRMSE = rms(model − measured) / std(measured).
+
+Band tension (a band brake's load knob, `HysteresisLoop.band_tension`): by the capstan law the
+friction force is proportional to the set tension, so a model's slip forces (`TENSION_SCALED`)
+are those at the fit's reference tension and scale with T/T_ref on a record at tension T; the
+other parameters do not (the derivation and assumptions: docs/data.md, "Band tension").
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from .._checks import check_range
+from .._dynamics._harmonic import drive
+from .._export import cached_jit
+from .._fit._measures import nrmse
+from .._friction._band_brake import BandBrake
+from .._friction._bouc_wen import BoucWen
+from .._friction._lugre import LuGre
+from .._friction._rate_independent import Jenkins, Mindlin
+from .._io._hysteresis_loop import HysteresisLoop
+
+HISTORY_MODELS = {
+    "jenkins": (("mu_N", True), ("K_d", True), ("f0", False)),
+    "mindlin": (("mu_N", True), ("K_d", True), ("f0", False)),
+    "lugre": (("sigma0", True), ("F_c", True), ("F_s", True), ("v_s", True), ("f0", False)),
+    "bouc_wen": (("K", True), ("F_y", True), ("n", True), ("f0", False)),
+    "band_brake": (
+        ("F_pos", True),
+        ("F_neg", True),
+        ("gap_pos", True),
+        ("gap_neg", True),
+        ("k_gap", True),
+        ("A_pos", True),
+        ("A_neg", True),
+        ("beta_pos", True),
+        ("beta_neg", True),
+        ("f0", False),
+    ),
+}
+TENSION_SCALED = ("mu_N", "F_c", "F_s", "F_y", "F_pos", "F_neg", "A_pos", "A_neg")
+"""Slip-force parameters, proportional to the band tension (capstan law, module docstring)."""
+MINDLIN_IWAN = 64  # Iwan elements of the Mindlin rate form in the history fits
+
+
+def history_element(model: str, p):
+    """The element of `model` for the physical parameter vector p (order of HISTORY_MODELS)."""
+    if model == "jenkins":
+        return Jenkins(p[0], 1.0, p[1])
+    if model == "mindlin":
+        return Mindlin(p[0], 1.0, p[1], n_iwan=MINDLIN_IWAN)
+    if model == "lugre":  # σ1 = σ2 = 0: neither is resolved by these loops (σ2 drifts to 0)
+        return LuGre(p[0], 0.0, 0.0, p[1], p[2], p[3], 1.0, 2.0)
+    if model == "bouc_wen":
+        return BoucWen(p[0], p[1], p[2], 0.5)
+    return BandBrake(*(p[i] for i in range(9)))  # "band_brake" (callers check `model`)
+
+
+class _Transform(eqx.Module):
+    """θ → physical: exp for positive parameters, θ·scale for the signed offset."""
+
+    positive: tuple = eqx.field(static=True)
+    scale: float = eqx.field(static=True)
+
+    def __call__(self, theta):
+        mask = jnp.asarray(self.positive)
+        return jnp.where(mask, jnp.exp(jnp.where(mask, theta, 0.0)), theta * self.scale)
+
+
+class _HistoryResiduals(eqx.Module):
+    """(model + f0 − measured)/std(measured) over every record in args (a tuple of records
+    (t, u, f, scale, tension ratio): the slip forces scale with the ratio)."""
+
+    model: str = eqx.field(static=True)
+    transform: _Transform
+    initial: str = eqx.field(static=True, default="rest")
+
+    def __call__(self, theta, args):
+        p = self.transform(theta)
+        scaled = jnp.asarray([n in TENSION_SCALED for n, _ in HISTORY_MODELS[self.model]])
+        out = []
+        for t, u, f, scale, ratio in args:
+            el = history_element(self.model, jnp.where(scaled, p * ratio, p))
+            if self.initial == "measured":  # the state that carries the first measured force
+                force = drive(el, u, state0=el.state_for_force(f[0] - p[-1]))
+            elif self.model in ("jenkins", "mindlin", "band_brake"):
+                force = drive(el, u)
+            else:  # RK4, one step per sample interval (h·rate ≪ 1 at 1 kHz for these rigs)
+                force = drive(el, u, t, substeps=1)
+            out.append((force + p[-1] - f) / scale)
+        return jnp.concatenate(out)
+
+
+@cached_jit
+def _residuals(fn, theta, records):
+    # one compiled program per record shape (cached across processes), not op-by-op dispatch
+    return fn(theta, records)
+
+
+def _records(loops, decimate: int, band_tension=None):
+    """(t, u, f, std f, T/T_ref) of every `decimate`-th sample of each loop; T_ref is
+    `band_tension` (N), else the first loop's. A loop without a tension among loops with one
+    (or against a given reference) is refused, naming it and the field."""
+    for loop in loops:
+        if not isinstance(loop, HysteresisLoop):
+            raise ValueError(f"fit_history needs HysteresisLoop records, got {type(loop).__name__}")
+    ref = band_tension if band_tension is not None else loops[0].band_tension
+    with_tension = [lp.band_tension is not None for lp in loops]
+    if (ref is not None or any(with_tension)) and not all(with_tension):
+        lp = loops[with_tension.index(False)]
+        raise ValueError(
+            f"{lp.source}: field 'band_tension' is missing, while the model scales its slip "
+            "forces with the band tension; name the file <f>Hz<T>lbtension<A>amplitude.json or "
+            "earthquake_<name>_<T>lb.json, or give it (band_tension=..., N; --band-tension)"
+        )
+    out = []
+    for loop in loops:
+        sl = slice(None, None, decimate)
+        f = jnp.asarray(loop.f[sl])
+        ratio = 1.0 if ref is None else loop.band_tension / ref
+        out.append((jnp.asarray(loop.t[sl]), jnp.asarray(loop.u[sl]), f, float(jnp.std(f)), ratio))
+    return tuple(out)
+
+
+def _nrmse(residuals, records) -> float:
+    """rms(residual)/std(measured) over all records (residuals are divided by each std)."""
+    scales = np.concatenate([np.full(len(rec[2]), rec[3]) for rec in records])
+    f = np.concatenate([np.asarray(rec[2]) for rec in records])
+    return nrmse(np.asarray(residuals) * scales, f)
+
+
+HISTORY_UNITS = {
+    "mu_N": "N",
+    "K_d": "N/m",
+    "f0": "N",
+    "sigma0": "N/m",
+    "F_c": "N",
+    "F_s": "N",
+    "v_s": "m/s",
+    "K": "N/m",
+    "F_y": "N",
+    "n": "1",
+    "F_pos": "N",
+    "F_neg": "N",
+    "gap_pos": "m",
+    "gap_neg": "m",
+    "k_gap": "N/m",
+    "A_pos": "N",
+    "A_neg": "N",
+    "beta_pos": "1/m",
+    "beta_neg": "1/m",
+}
+"""Units of the history models' parameters (`HISTORY_MODELS`)."""
+
+
+INITIAL_STATES = ("rest", "measured")
+"""How a history prediction starts: from rest, or in the state that carries the record's first
+measured force (a device left loaded by an earlier test; `MEASURED_START` models only)."""
+MEASURED_START = ("jenkins", "band_brake")
+
+
+def history_force(
+    model: str,
+    values,
+    loop: HysteresisLoop,
+    decimate: int = 1,
+    band_tension=None,
+    initial: str = "rest",
+):
+    """(force N, NRMSE) of history model `model` at physical parameters `values` (the order of
+    `HISTORY_MODELS[model]`, f0 last) on every `decimate`-th sample of `loop`, driven from rest
+    (`initial="rest"`) or from the state whose force (+ f0) is the first measured force
+    (`"measured"`: Jenkins and the band brake); `band_tension` (N): the tension the slip forces
+    in `values` belong to (None: unscaled)."""
+    if model not in HISTORY_MODELS:
+        raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
+    if initial not in INITIAL_STATES or (initial == "measured" and model not in MEASURED_START):
+        allowed = INITIAL_STATES if model in MEASURED_START else ("rest",)
+        raise ValueError(
+            f"initial = {initial!r} is not one of {list(allowed)} for the {model} model"
+        )
+    dec = int(check_range(decimate, "decimate", 1, None, lo_open=False))
+    records = _records([loop], dec, band_tension)
+    spec = HISTORY_MODELS[model]
+    tr = _Transform(tuple(pos for _, pos in spec), 1.0)  # θ of f0 in physical units here
+    theta = [np.log(v) if pos else v for v, (_, pos) in zip(values, spec)]
+    fn = _HistoryResiduals(model, tr, initial)
+    r = np.asarray(_residuals(fn, jnp.asarray(theta), records))
+    t, u, f, s, _ = records[0]
+    return np.asarray(f) + r * s, _nrmse(r, records)
