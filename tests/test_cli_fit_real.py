@@ -76,3 +76,21 @@ def test_discover_refuses_a_friction_transient_cleanly(tmp_path, capsys):
     assert main(["discover", str(src), "--out", str(tmp_path / "d")]) == 2
     assert "no baseline for a FrictionTransient" in capsys.readouterr().err
     assert not (tmp_path / "d").exists()
+
+
+def test_fit_json_is_the_library_report(tmp_path):
+    """fit.json is `FitReport.as_dict()` (issue 67): the same fit in Python gives the command's
+    dictionary, numbers and keys."""
+    import tribojax as tj
+
+    src = REAL / "screwdrive" / "driveNo2_steady_0.096kg.csv"  # a measured curve (bundled)
+    assert main(["fit", str(src), "--out", str(tmp_path / "o")]) == 0
+    cli = json.loads((tmp_path / "o" / "fit.json").read_text())
+    curve = tj.read_record(src)
+    fit = tj.fit_record(tj.discovery.curve_baseline(curve))
+    label = "Coulomb + viscous friction (the curve's record model)"
+    lib = tj.FitReport.of_record_model(fit, curve, label, units=curve.units).as_dict()
+    assert set(lib) <= set(cli) and set(cli) - set(lib) == {"wall_time_s"}
+    for key in ("parameters", "std_errors", "sigma", "rms_residual", "nrmse", "n_data"):
+        assert lib[key] == pytest.approx(cli[key], rel=1e-12), key
+    assert lib["fitted_model"] == cli["fitted_model"] and lib["sigma_source"] == cli["sigma_source"]

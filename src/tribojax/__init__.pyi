@@ -101,6 +101,7 @@ from ._model import LoopAnalysis as LoopAnalysis
 from ._model import SavedEffect as SavedEffect
 from ._model import analyse_loop as analyse_loop
 from ._model import fit_loop as fit_loop
+from ._model import fit_record as fit_record
 from ._model import fit_slip_run as fit_slip_run
 from ._model import loop_residuals as loop_residuals
 from ._model import slip_run_start as slip_run_start
@@ -115,6 +116,7 @@ from ._model._steady_law import transient_nrmse as transient_nrmse
 from ._model._surface_runs import fit_surface_from_runs as fit_surface_from_runs
 from ._predict import ExtrapolationWarning as ExtrapolationWarning
 from ._predict import Prediction as Prediction
+from ._predict import FitReport as FitReport
 from ._predict import fitted_model as fitted_model
 from ._predict import load_model as load_model
 from ._predict import predict as predict

@@ -8,7 +8,7 @@
 
 The record type comes from the file (`tribojax.read_record`: CSV header, brfd JSON, EPOS export
 or a folder of them) or `--format`; measured records are fitted by `_fit_real`. Writes DIR/fit.json
-(`fit_summary`; "decimation" and "full_record": `_fit_reduced`; "fitted_model": the model as
+(`tribojax.FitReport`; "decimation" and "full_record": `_fit_reduced`; "fitted_model": the model as
 `tribojax predict` takes it) and DIR/fit.png (data and model, residuals). Exit status: 0
 converged, 1 not converged (fit.json still written, with "converged": false), 2 bad input
 (malformed file, fewer data than parameters, an output that exists or would overwrite the input).
@@ -20,16 +20,13 @@ import math
 import time
 from pathlib import Path
 
-import numpy as np
-
-from .._fit._measures import nrmse
 from .._io._records import read_record
 from .._limits import MAX_STEPS
 from .._model import (
     curve_baseline,
     fit_record,
 )
-from .._predict import RECORD_KINDS, SAVED_KEY, fitted_model, load_model, refit
+from .._predict import RECORD_KINDS, SAVED_KEY, FitReport, load_model, refit
 from ._common import (
     FAILED,
     CommandError,
@@ -42,7 +39,7 @@ from ._common import (
     with_band_tension,
     write_json_atomic,
 )
-from ._fit_real import HISTORY_CHOICES, fit_curve_record, fit_history_record, fit_summary
+from ._fit_real import HISTORY_CHOICES, fit_curve_record, fit_history_record
 from ._fit_reduced import fit_loop_reduced, fit_reduced, fit_slip
 
 # record kinds `tribojax fit` does not fit, and what to do instead
@@ -270,26 +267,18 @@ def _fit_from_model(full, args, start, note):
 
 
 def _record_model_result(fit, full, label, **extra):
-    """fit.json and the plot curves of a fit of the record's model (with any effects): the
-    residuals in the model's output unit (a curve's weighted friction)."""
-    base = fit.model
-    kind = RECORD_KINDS[base.kind]
-    data = base.data()
-    x_name, x = kind.axis(base)
-    measured = np.asarray(data.y)
-    resid = fit.prediction - measured
-    unit = kind.unit(base)
-    how = "the record's noise sd" if data.noise_std else "estimated from the residuals"
-    d = fit_summary(fit, full, len(measured), resid, unit, data.noise_std or None, how)
-    saved = fitted_model(fit, str(full.source), [full])
-    d.update(
-        model=label
-        + (f" with {', '.join(e.name for e in saved.effects)}" if saved.effects else ""),
-        nrmse=nrmse(resid, measured),
-        fitted_model=saved.as_dict() if fit.converged else None,
-        **extra,
-    )
+    """fit.json (`FitReport.of_record_model`) and the plot curves of a fit of the record's
+    model (with any effects): the residuals in the model's output unit (a curve's weighted
+    friction)."""
+    report = FitReport.of_record_model(fit, full, label, **extra)
+    x_name, x = RECORD_KINDS[fit.model.kind].axis(fit.model)
     curves = dict(
-        x=x, data=measured, model=fit.prediction, xlabel=x_name, ylabel=unit, resid_x=x, resid=resid
+        x=x,
+        data=report.measured,
+        model=fit.prediction,
+        xlabel=x_name,
+        ylabel=report.unit,
+        resid_x=x,
+        resid=report.residuals,
     )
-    return d, curves
+    return report.as_dict(), curves

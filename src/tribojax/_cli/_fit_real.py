@@ -1,54 +1,21 @@
 """`tribojax fit` on measured records: history fits of loops and friction-curve fits, each the
-fit.json dictionary and the plot curves; `fit_summary` is the part every record kind shares."""
+fit.json dictionary (`tribojax.FitReport`) and the plot curves."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from .._fit._measures import bic, nrmse, rms
+from .._fit._measures import bic
 from .._io._friction_curve import FrictionCurve
 from .._limits import DEVICE_MODELS, ELEMENT_MODELS, MAX_STEPS
 from .._model._history_fit import fit_history, predict_history
 from .._model._history_model import HISTORY_MODELS
 from .._model._steady_law import fit_steady_curve
-from .._predict import SAVED_KEY, fitted_model
+from .._predict import FitReport, saved_if_converged
 from ._common import CommandError
 
 HISTORY_CHOICES = (*ELEMENT_MODELS, *DEVICE_MODELS)
 """`--model` values fitted through a history (`best` chooses among `ELEMENT_MODELS`)."""
-
-
-def fit_summary(fit, record, n_data, resid, unit, sigma, sigma_source) -> dict:
-    """The fit.json entries of a fit of `record` (its kind and source) on `n_data` data with
-    residuals `resid` (model − data, `unit`) and noise sd `sigma` (from `sigma_source`). "sigma"
-    has one meaning on every path: the noise sd the standard errors stand on, the stated one, or
-    when none is stated the residual's, sqrt(RSS/(n_data − parameters)) (what `discover` reports
-    as its estimated noise, within the estimators' difference)."""
-    if sigma is None:
-        sigma = float(np.sqrt(np.sum(resid**2) / max(n_data - len(fit.names), 1)))
-    d = fit.as_dict()
-    d.update(
-        kind=record.kind,
-        source=str(record.source),
-        fitted=list(fit.names),
-        n_data=int(n_data),
-        rms_residual=rms(resid),
-        residual_unit=unit,
-        sigma=sigma,
-        sigma_source=sigma_source,
-        message=fit.message,
-    )
-    if fit.noise_consistent is False and fit.reduced_chi2 < 1.0:
-        d["uncertainty_model"] = (
-            f"the residuals are far below the stated noise ({sigma_source}; reduced chi2 = "
-            f"{fit.reduced_chi2:.4g}): the standard errors, from the stated noise, are too large"
-        )
-    elif fit.noise_consistent is False:
-        d["uncertainty_model"] = (
-            f"the stated noise ({sigma_source}) is contradicted by the residuals (reduced chi2 = "
-            f"{fit.reduced_chi2:.4g}): standard errors are scaled by sqrt(reduced chi2)"
-        )
-    return d
 
 
 def fit_history_record(
@@ -93,10 +60,8 @@ def fit_history_record(
         sigma, how = float(np.sqrt(np.mean(np.square(stated)))), "sidecar noise_std_N"
     else:
         sigma, how = None, "first-difference estimate of each record's residual"
-    d = fit_summary(h.fit, loops[0], n, resid, "N", sigma, how)
     source = "; ".join(str(lp.source) for lp in loops)
-    d.update(
-        model=best,
+    extra = dict(
         nrmse=h.nrmse,
         route="history",
         bic=scores[best],
@@ -105,6 +70,8 @@ def fit_history_record(
         frequency_Hz=loops[0].frequency,
         band_tension_N=h.band_tension,
     )
+    saved = saved_if_converged(h, source, loops)
+    d = FitReport(h.fit, loops[0], best, resid, f, "N", sigma, how, saved, extra).as_dict()
     if len(loops) > 1:
         d.update(
             source=source,
@@ -118,7 +85,6 @@ def fit_history_record(
                 for lp, (_, e) in zip(loops, each[best])
             ],
         )
-    d[SAVED_KEY] = fitted_model(h, source, loops).as_dict() if h.fit.converged else None
     if model == "best":
         d["selected_by"] = "bic"
         d["candidates"] = {
@@ -157,20 +123,23 @@ def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
     resid = fit.residuals * curve.friction_error
     unit = curve.units["friction_unit"]
     sigma = float(np.median(curve.friction_error))
-    d = fit_summary(fit, curve, len(curve), resid, unit, sigma, "per-point scatter / sqrt(samples)")
     sides = {
         side: fit_steady_curve(curve, direction=sign, throw=False, **steps).as_dict()
         for side, sign in (("positive", 1), ("negative", -1))
     }
-    saved = fitted_model(fit, str(curve.source), [curve]) if fit.converged else None
-    d[SAVED_KEY] = None if saved is None else saved.as_dict()
-    d.update(
-        model="lugre",
-        nrmse=nrmse(resid, curve.friction),
-        route="steady law with direction asymmetry T0",
-        units=curve.units,
-        per_direction=sides,
-    )
+    extra = dict(route="steady law with direction asymmetry T0", units=curve.units)
+    d = FitReport(
+        fit,
+        curve,
+        "lugre",
+        resid,
+        curve.friction,
+        unit,
+        sigma,
+        "per-point scatter / sqrt(samples)",
+        saved_if_converged(fit, str(curve.source), [curve]),
+        {**extra, "per_direction": sides},
+    ).as_dict()
     curves = dict(
         x=curve.velocity,
         data=curve.friction,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._fit._measures import nrmse, rms
+from .._fit._measures import rms
 from .._limits import MAX_STEPS
 from .._model import (
     FittedModel,
@@ -16,9 +16,8 @@ from .._model import (
     loop_residuals,
     rebuild,
 )
-from .._predict import RECORD_KINDS, SAVED_KEY, fitted_model
+from .._predict import RECORD_KINDS, SAVED_KEY, FitReport, saved_if_converged
 from ._common import reduce_record
-from ._fit_real import fit_summary
 
 
 def fit_reduced(full, args, start, note, fit):
@@ -87,11 +86,18 @@ def fit_slip(run, args, start, reduction, note):
         run, alpha=alpha, max_steps=steps, start=start or None, progress=note, throw=False
     )
     resid = fit.prediction - run.slip  # model − data, m
-    d = fit_summary(fit, run, len(run), resid, "m", run.noise_std, how)
-    d["model"] = "PreSlipLuGre (wang2022 Eq 27), slip at every sample"
-    d["nrmse"] = nrmse(resid, run.slip)
-    d["mass_kg"] = run.mass
-    d[SAVED_KEY] = fitted_model(fit, str(run.source), [run]).as_dict() if fit.converged else None
+    d = FitReport(
+        fit,
+        run,
+        "PreSlipLuGre (wang2022 Eq 27), slip at every sample",
+        resid,
+        run.slip,
+        "m",
+        run.noise_std,
+        how,
+        saved_if_converged(fit, str(run.source), [run]),
+        {"mass_kg": run.mass},
+    ).as_dict()
     curves = dict(
         x=run.t,
         data=run.slip,
@@ -119,15 +125,17 @@ def fit_loop_reduced(loop, args, start, reduction, note):
     m = len(resid)  # N, on the fitted samples (the last m)
     how = "sidecar noise_std_N" if loop.noise_std is not None else "estimated from the residuals"
     how = _reduced_sigma_source(reduction, how)
-    d = fit_summary(fit, loop, m, resid, "N", loop.noise_std, how)
     eq = 1 if args.element == "jenkins" else 2
-    d["model"] = f"{args.element} ({model} loop, wu2015 Eq {eq})"
-    d["nrmse"] = nrmse(resid, loop.f[-m:])
-    d["normal_load_N"], d["frequency_Hz"] = loop.normal_load, loop.frequency
+    extra = {"normal_load_N": loop.normal_load, "frequency_Hz": loop.frequency}
     if loop.normal_load is not None:
-        d["mu"] = float(fit.values[0] / loop.normal_load)
-    if isinstance(fit, RecordFit) and fit.converged:  # the loop model (not the steady formula)
-        d[SAVED_KEY] = fitted_model(fit, str(loop.source), [loop]).as_dict()
+        extra["mu"] = float(fit.values[0] / loop.normal_load)
+    # the loop model is saved (not wu2015's steady formula)
+    saved = (
+        saved_if_converged(fit, str(loop.source), [loop]) if isinstance(fit, RecordFit) else None
+    )
+    label = f"{args.element} ({model} loop, wu2015 Eq {eq})"
+    d = FitReport(fit, loop, label, resid, loop.f[-m:], "N", loop.noise_std, how, saved, extra)
+    d = d.as_dict()
     curves = dict(
         x=loop.u[-m:],
         data=loop.f[-m:],
