@@ -115,8 +115,8 @@ from ._model._steady_law import fit_transient as fit_transient
 from ._model._steady_law import transient_nrmse as transient_nrmse
 from ._model._surface_runs import fit_surface_from_runs as fit_surface_from_runs
 from ._predict import ExtrapolationWarning as ExtrapolationWarning
-from ._predict import Prediction as Prediction
 from ._predict import FitReport as FitReport
+from ._predict import Prediction as Prediction
 from ._predict import fitted_model as fitted_model
 from ._predict import load_model as load_model
 from ._predict import predict as predict
