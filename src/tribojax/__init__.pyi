@@ -121,6 +121,14 @@ from ._predict import fitted_model as fitted_model
 from ._predict import load_model as load_model
 from ._predict import predict as predict
 from ._predict import refit as refit
+from ._predict._fit_methods import FitMethod as FitMethod
+from ._predict._fit_methods import History as History
+from ._predict._fit_methods import RecordModel as RecordModel
+from ._predict._fit_methods import Saved as Saved
+from ._predict._fit_methods import SteadyLaw as SteadyLaw
+from ._predict._fit_methods import SteadyLoop as SteadyLoop
+from ._predict._fit_methods import Transient as Transient
+from ._predict._fit_methods import fit as fit
 from ._presets import CHAIN_DEFAULTS as CHAIN_DEFAULTS
 from ._presets import FRF_2DOF as FRF_2DOF
 from ._presets import WANG2022_A_MAX as WANG2022_A_MAX

@@ -21,12 +21,8 @@ import time
 from pathlib import Path
 
 from .._io._records import read_record
-from .._limits import MAX_STEPS
-from .._model import (
-    curve_baseline,
-    fit_record,
-)
-from .._predict import RECORD_KINDS, SAVED_KEY, FitReport, load_model, refit
+from .._predict import RECORD_KINDS, SAVED_KEY, FitReport, load_model
+from .._predict._fit_methods import RecordModel, Saved
 from ._common import (
     FAILED,
     CommandError,
@@ -232,7 +228,7 @@ def _fit_curve_record(curve, args, start, note):
                 "--start does not apply to a friction curve's record model (its "
                 "start is the linear least-squares fit)"
             )
-        fit = fit_record(curve_baseline(curve), max_steps=args.max_steps or MAX_STEPS)
+        fit = RecordModel().fit(curve, max_steps=args.max_steps, throw=False)
         return _record_model_result(
             fit, curve, "Coulomb + viscous friction (the curve's record model)", units=curve.units
         )
@@ -260,7 +256,7 @@ def _fit_from_model(full, args, start, note):
             f"--from {args.from_model}: a {model.kind} model; --from takes a "
             "slip, loop or curve model (a history: --model ELEMENT)"
         )
-    fit = refit(model, full, max_steps=args.max_steps or MAX_STEPS, throw=False)
+    fit = Saved(model).fit(full, max_steps=args.max_steps, throw=False)
     return _record_model_result(
         fit, full, f"{model.kind} model from {args.from_model}", start_model=model.as_dict()
     )

@@ -8,10 +8,10 @@ import numpy as np
 from .._fit._measures import bic
 from .._io._friction_curve import FrictionCurve
 from .._limits import DEVICE_MODELS, ELEMENT_MODELS, MAX_STEPS
-from .._model._history_fit import fit_history, predict_history
+from .._model._history_fit import predict_history
 from .._model._history_model import HISTORY_MODELS
-from .._model._steady_law import fit_steady_curve
 from .._predict import FitReport, saved_if_converged
+from .._predict._fit_methods import History, SteadyLaw, fit
 from ._common import CommandError
 
 HISTORY_CHOICES = (*ELEMENT_MODELS, *DEVICE_MODELS)
@@ -36,15 +36,8 @@ def fit_history_record(
     for name in names:
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
         steps = max_steps or MAX_STEPS
-        fits[name] = fit_history(
-            loops,
-            name,
-            start=given or None,
-            max_steps=steps,
-            decimate=decimate,
-            mixed_scales=mixed_scales,
-            throw=False,
-        )
+        method = History(name, decimate=decimate, mixed_scales=mixed_scales)
+        fits[name] = fit(loops, method, start=given or None, max_steps=steps, throw=False)
     each = {k: [predict_history(h, lp) for lp in loops] for k, h in fits.items()}
     pred = {k: np.concatenate([force for force, _ in v]) for k, v in each.items()}
     f = np.concatenate([lp.f[::decimate] for lp in loops])
@@ -118,18 +111,17 @@ def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
     `max_steps` LM steps (None: the curve fit's own budget)."""
     if model not in ("lugre", "best"):
         raise CommandError(f"--model {model} does not apply to a friction curve; use lugre or best")
-    steps = {} if max_steps is None else {"max_steps": max_steps}
-    fit = fit_steady_curve(curve, throw=False, **steps)
-    resid = fit.residuals * curve.friction_error
+    law = fit(curve, SteadyLaw(), max_steps=max_steps, throw=False)
+    resid = law.residuals * curve.friction_error
     unit = curve.units["friction_unit"]
     sigma = float(np.median(curve.friction_error))
     sides = {
-        side: fit_steady_curve(curve, direction=sign, throw=False, **steps).as_dict()
+        side: fit(curve, SteadyLaw(sign), max_steps=max_steps, throw=False).as_dict()
         for side, sign in (("positive", 1), ("negative", -1))
     }
     extra = dict(route="steady law with direction asymmetry T0", units=curve.units)
     d = FitReport(
-        fit,
+        law,
         curve,
         "lugre",
         resid,
@@ -137,7 +129,7 @@ def fit_curve_record(curve: FrictionCurve, model: str, max_steps: int | None):
         unit,
         sigma,
         "per-point scatter / sqrt(samples)",
-        saved_if_converged(fit, str(curve.source), [curve]),
+        saved_if_converged(law, str(curve.source), [curve]),
         {**extra, "per_direction": sides},
     ).as_dict()
     curves = dict(

@@ -11,12 +11,11 @@ from .._model import (
     FittedModel,
     RecordFit,
     evaluate,
-    fit_loop,
-    fit_slip_run,
     loop_residuals,
     rebuild,
 )
 from .._predict import RECORD_KINDS, SAVED_KEY, FitReport, saved_if_converged
+from .._predict._fit_methods import RecordModel, SteadyLoop
 from ._common import reduce_record
 
 
@@ -82,8 +81,8 @@ def fit_slip(run, args, start, reduction, note):
         else "estimated from the residuals"
     )
     steps = args.max_steps or MAX_STEPS
-    fit = fit_slip_run(
-        run, alpha=alpha, max_steps=steps, start=start or None, progress=note, throw=False
+    fit = RecordModel(alpha=alpha).fit(
+        run, start=start or None, max_steps=steps, throw=False, progress=note
     )
     resid = fit.prediction - run.slip  # model − data, m
     d = FitReport(
@@ -115,9 +114,8 @@ def fit_loop_reduced(loop, args, start, reduction, note):
         raise ValueError(f"{loop.source}: {len(loop.t)} samples are too few to fit mu_N and K_d")
     steps = args.max_steps or MAX_STEPS
     model = args.model or "history"
-    fit = fit_loop(
-        loop, args.element, model=model, max_steps=steps, start=start or None, throw=False
-    )
+    method = SteadyLoop(args.element) if model == "steady" else RecordModel(element=args.element)
+    fit = method.fit(loop, start=start or None, max_steps=steps, throw=False)
     if isinstance(fit, RecordFit):  # the loop model: the samples from the first reversal on
         resid = fit.prediction - loop.f[-len(fit.prediction) :]
     else:
