@@ -4,6 +4,7 @@
 import io
 import sys
 
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -89,3 +90,40 @@ def test_fit_command_progress(loop_file, monkeypatch, capsys, terminal, quiet, s
     out = capsys.readouterr().out
     assert ("\r\x1b[Kfit" in err.getvalue()) == shown
     assert "\r" not in out and "mu_N" in out  # the result lines are clean
+
+
+def _exp_residuals(theta, args):
+    t, y, scale = args
+    return scale * (theta[0] * jnp.exp(-theta[1] * t) - y)
+
+
+def test_fits_side_by_side_report_to_their_own_progress():
+    """The progress callable is passed to the solve as an argument (a channel number), not
+    pushed on a shared stack: two fits in threads each hear only their own steps (issue 67)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from tribojax._fit._solver import LevenbergMarquardt
+
+    t = jnp.linspace(0.0, 4.0, 40)
+    y = 2.0 * jnp.exp(-0.7 * t)
+    solver = LevenbergMarquardt.noise_floor(1e-12, 1e-14, report=True)
+    heard = {1.0: [], 1e6: []}
+
+    def run(scale):
+        return tj.least_squares_fit(
+            _exp_residuals,
+            jnp.array([1.0, 0.2]),
+            (t, y, jnp.asarray(scale)),
+            names=("a", "k"),
+            jac="fwd",
+            solver=solver,
+            progress=heard[scale].append,
+        )
+
+    with ThreadPoolExecutor(2) as pool:
+        fits = list(pool.map(run, (1.0, 1e6)))
+    assert all(f.values == pytest.approx([2.0, 0.7], rel=1e-8) for f in fits)
+    for scale, lines in heard.items():
+        assert lines and all(line.startswith("LM: ") for line in lines)
+        first = float(lines[0].split("cost ")[1].split(",")[0])
+        assert (first > 1e6) == (scale == 1e6), lines[0]  # its own fit's cost, not the other's

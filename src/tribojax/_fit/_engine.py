@@ -7,8 +7,6 @@ mapped to the physical ones by a `transform` (`least_squares_fit`, `fit_statisti
 
 from __future__ import annotations
 
-import time
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -20,17 +18,27 @@ from .._limits import MAX_STEPS
 from .._precision import ensure_x64
 from .._results import RESULTS, result_code, result_from_code
 from ._result import FitResult, fit_statistics, thrown
-from ._solver import _PROGRESS, FAILED_RESIDUAL, LevenbergMarquardt, gauss_newton_step
+from ._solver import FAILED_RESIDUAL, LevenbergMarquardt, gauss_newton_step, progress_channel
 
 
 def _solve(
-    residual_fn, theta0, args, solver, max_steps, jac, shared=MAX_STEPS, bar=None, crawl=0.0
+    residual_fn,
+    theta0,
+    args,
+    solver,
+    max_steps,
+    jac,
+    shared=MAX_STEPS,
+    bar=None,
+    crawl=0.0,
+    channel=0,
 ):
     """The least-squares solve: (θ, optimistix result, steps, (r, J) or None). Traced, lowered
     and compiled with failures as NaN (no host callback), and its trace stored (`cached_jit`).
     The library's `LevenbergMarquardt` takes the budget as a run-time value under a static cap
     of max(`max_steps`, `shared`): one compiled solve for every budget up to `shared`, and
-    every `bar` (probe steps, cost limit; default none) and `crawl` (fraction; 0: off)."""
+    every `bar` (probe steps, cost limit; default none) and `crawl` (fraction; 0: off);
+    `channel`: where a reporting solver sends its steps (`progress_channel`), a run-time value."""
     budget = None
     if isinstance(solver, LevenbergMarquardt) and max_steps >= 1:
         probe, limit = (max_steps, np.inf) if bar is None else bar
@@ -38,6 +46,7 @@ def _solve(
             jnp.asarray(max_steps),
             (jnp.asarray(probe), jnp.asarray(limit, dtype=float)),
             jnp.asarray(crawl, dtype=float),
+            jnp.asarray(channel),
         )
         max_steps = max(max_steps, shared, MAX_STEPS)
     with failures_as_nan():
@@ -53,7 +62,7 @@ def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac, budget):
     options = (
         dict(jac=jac)
         if budget is None
-        else dict(jac=jac, budget=budget[0], bar=budget[1], crawl=budget[2])
+        else dict(jac=jac, budget=budget[0], bar=budget[1], crawl=budget[2], channel=budget[3])
     )
     sol = optx.least_squares(
         residual_fn, solver, theta0, args, options=options, max_steps=max_steps, throw=False
@@ -150,15 +159,18 @@ def least_squares_fit(
     theta0 = jnp.asarray(theta0, dtype=jnp.float64)
     if solver is None:
         solver = LevenbergMarquardt(float(rtol), float(atol))
-    if progress is not None:
-        _PROGRESS.append((progress, time.perf_counter()))
-    try:
+    with progress_channel(progress) as channel:
         theta, result, steps, final = _solve(
-            residual_fn, theta0, args, solver, int(max_steps), jac, bar=bar, crawl=crawl
+            residual_fn,
+            theta0,
+            args,
+            solver,
+            int(max_steps),
+            jac,
+            bar=bar,
+            crawl=crawl,
+            channel=channel,
         )
-    finally:
-        if progress is not None:
-            _PROGRESS.pop()
     r, J = final if final is not None else value_and_jacobian(residual_fn, theta, args)
     r, J = np.asarray(r), np.asarray(J)
     message = None

@@ -37,6 +37,8 @@ n and p of s² leave out.
 
 from __future__ import annotations
 
+import contextlib
+import itertools
 import time
 
 import equinox as eqx
@@ -70,18 +72,38 @@ def gauss_newton_step(r, J):
     return jnp.where(se > 0, step / jnp.where(se > 0, se * s, 1.0), jnp.inf)
 
 
-# Progress of the running fit: a solver with `report=True` reports each step through
-# `report_step` (a jax.debug.callback), which forwards to the callable
-# `least_squares_fit(progress=...)` set here (the compiled solve does not depend on it).
-_PROGRESS: list = []
+# Progress of a running fit: a solver with `report=True` reports each step through
+# `report_step` (a jax.debug.callback) on the channel the solve was given as an argument
+# (`options["channel"]`, a run-time number: the compiled solve does not depend on the callable).
+# Each open channel is one fit's `least_squares_fit(progress=...)`: fits running side by side
+# (threads) report to their own callables.
+_CHANNELS: dict[int, tuple] = {}
+_NEXT_CHANNEL = itertools.count(1)
 
 
-def report_step(shown, accepted, steps, cost, gn_step):
-    """Host side of a solver step: steps taken, ½‖r‖² at the last accepted point and, after an
-    accepted step, the Gauss–Newton step left (max over parameters, in standard errors). Under
-    `jax.vmap` the batch is summarised (most steps, summed cost, largest step left)."""
-    if _PROGRESS and np.any(shown):
-        progress, t0 = _PROGRESS[-1]
+@contextlib.contextmanager
+def progress_channel(progress):
+    """The channel number of `progress` (a callable taking one line) while the block runs;
+    0 (no channel) for None."""
+    if progress is None:
+        yield 0
+        return
+    channel = next(_NEXT_CHANNEL)
+    _CHANNELS[channel] = (progress, time.perf_counter())
+    try:
+        yield channel
+    finally:
+        del _CHANNELS[channel]
+
+
+def report_step(channel, shown, accepted, steps, cost, gn_step):
+    """Host side of a solver step on `channel`: steps taken, ½‖r‖² at the last accepted point
+    and, after an accepted step, the Gauss–Newton step left (max over parameters, in standard
+    errors). Under `jax.vmap` the batch is summarised (most steps, summed cost, largest step
+    left)."""
+    target = _CHANNELS.get(int(np.max(channel)))
+    if target is not None and np.any(shown):
+        progress, t0 = target
         gn = f"Gauss-Newton step {np.max(gn_step):.2g} std errors"
         gn = gn if np.all(accepted) else "step rejected"
         progress(
@@ -218,7 +240,10 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
             )
             if self.report:
                 cost = 0.5 * jnp.sum(r**2)
-                jax.debug.callback(report_step, ~state.first_step, fresh, state.num_steps, cost, gn)
+                channel = (options or {}).get("channel", 0)
+                jax.debug.callback(
+                    report_step, channel, ~state.first_step, fresh, state.num_steps, cost, gn
+                )
             stop = stop | (test & (gn < self.step_tol))
         if self.gain_tol is not None:
             J = jac.as_matrix()
