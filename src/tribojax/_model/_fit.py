@@ -18,7 +18,7 @@ from .._limits import MAX_STEPS as MAX_STEPS
 from .._parallel import in_parallel
 from .._precision import ensure_x64
 from .._results import RESULTS
-from ._base import K_MAX
+from ._base import K_MAX, AbstractBaseline
 from ._record_fit import RecordFit, _Physical, record_scale
 from ._residual import _names, _padded, evaluate, padded_residual
 
@@ -104,106 +104,28 @@ def fit_model(
     x0, args = _padded(baseline, designs, theta0, y, scale, weights)
     p, n = len(baseline.param_names), y.shape[0]
     npar = p + sum(d.k for d in designs)
-    names = _names(baseline, designs)
-    extra = dict(
-        result_type=RecordFit,
-        model=baseline,
-        effects=tuple(effects),
-        designs=designs,
-        scale=float(scale),
-    )
-
-    scales = [np.asarray(d.strength_scale, dtype=np.float64) for d in designs]
-    transform = _Physical(baseline, np.concatenate([np.zeros(0), *scales]))
-
-    def failed(result, message, steps=0):
-        return fit_statistics(
-            x0[:npar],
-            np.full(n, np.nan),
-            np.full((n, npar), np.nan),
-            names=names,
-            transform=transform,
-            sigma_known=sigma_known,
-            result=result,
-            steps=steps,
-            message=message,
-            prediction=np.full(n, np.nan),
-            **extra,
-        )
-
+    stats = _Statistics(baseline, designs, tuple(effects), float(scale), sigma_known, n)
     try:
-        # d = 1 here: u = x; the start's linearisation is the fit's own compiled solve
-        r0, J0 = (
-            np.asarray(v)
-            for v in value_and_jacobian(
-                padded_residual, x0, args, solver=SOLVER, max_steps=max_steps
-            )
-        )
-        if not np.all(np.isfinite(r0)):
-            return failed(
-                RESULTS.model_failed_at_start, "the model is not finite at the start values"
-            )
-        # a failed trial point costs more than the start (100x)
-        bad = max(FAILED_RESIDUAL, 10.0 * float(np.max(np.abs(r0))))
-        with np.errstate(over="ignore"):  # an absurd start (a value of 1e300): inf, d = 0
-            norms = np.linalg.norm(J0, axis=0)
-        d = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
-        new = (jnp.asarray(bad, dtype=jnp.float64), jnp.asarray(d, dtype=jnp.float64))
-        args = eqx.tree_at(lambda t: (t.bad, t.d), args, new)
-        res = least_squares_fit(
-            padded_residual,
-            x0 / d,
-            args,
-            names=tuple(f"u{i}" for i in range(p + K_MAX)),
-            jac="fwd",
-            solver=SOLVER,
-            max_steps=max_steps,
-            bar=(min(PROBE_STEPS, max_steps), abandon_above),
-            crawl=CRAWL_FRACTION if stop_crawl else 0.0,
-            throw=False,
+        args, d, norms = _scaled_start(x0, args, max_steps)
+        res = _solve(x0 / d, args, p, max_steps, abandon_above, stop_crawl)
+    except _StartNotFinite:
+        return stats.failed(
+            x0[:npar], RESULTS.model_failed_at_start, "the model is not finite at the start values"
         )
     except eqx.EquinoxRuntimeError as err:  # a check inside the model: not a trial rejection
-        return failed(
-            RESULTS.model_failed, f"the model raised inside the fit: {runtime_message(err)[:300]}"
-        )
+        message = f"the model raised inside the fit: {runtime_message(err)[:300]}"
+        return stats.failed(x0[:npar], RESULTS.model_failed, message)
     x = (d * res.theta)[:npar]
     r, J = res.residuals[:n], (res.jacobian / d)[:n, :npar]
-    if np.all(r == bad):
-        return failed(RESULTS.model_failed, "the model is not finite at the optimum", res.steps)
+    broken = _broken_at_stop(r, J, float(args.bad))
+    if broken:
+        return stats.failed(x0[:npar], RESULTS.model_failed, broken, res.steps)
     cost = float(r @ r)
-    g, JTJ = J.T @ r, J.T @ J
-    if not (np.all(np.isfinite(JTJ)) and np.all(np.isfinite(g)) and np.isfinite(cost)):
-        return failed(
-            RESULTS.model_failed, "the model's Jacobian is not finite at the optimum", res.steps
-        )
-    pred = float(g @ np.linalg.lstsq(JTJ, g, rcond=1e-12)[0])
+    gain = _gain_left(r, J)
     s2 = max(cost / max(n - npar, 1), 1.0)
-    result, message = res.result, res.message
-    if res.result == RESULTS.nonlinear_max_steps_reached and res.steps < max_steps:
-        message = (
-            (
-                f"abandoned: after {res.steps} steps its cost {cost:.6g} was above "
-                f"{abandon_above:.6g}, reached elsewhere"
-            )
-            if cost > abandon_above
-            else (
-                f"crawling: after {res.steps} steps its cost fell by less than "
-                f"{CRAWL_FRACTION:.0%} in {CRAWL_STEPS} steps, far from a minimum"
-            )
-        )
-    elif res.result == RESULTS.nonlinear_max_steps_reached:
-        message = f"no convergence in max_steps = {max_steps} steps"
-    elif res.converged and pred >= GAIN_TOL * s2:
-        message = f"stationary: no descent step (predicted gain {pred / s2:.3g} s²)"
-    elif res.converged:
-        message = ""
-    if (
-        res.converged
-        and pred >= NOISE_TOL * s2
-        and restarts > 0
-        and cost < ceiling - NOISE_TOL * s2
-        and _rescaled(norms[:npar], J)
-    ):
+    message = _stop_message(res, cost, gain / s2, max_steps, abandon_above)
+    short = res.converged and gain >= NOISE_TOL * s2 and cost < ceiling - NOISE_TOL * s2
+    if short and restarts > 0 and _rescaled(norms[:npar], J):
         # stopped by rejections far from a minimum: go on rescaled here (a nuisance shift's
         # column was zero at the start) with the model's larger solver budget, if any
         wider = baseline.more_steps() or baseline
@@ -229,21 +151,135 @@ def fit_model(
         noise_consistent = False if noise_consistent is None else noise_consistent
     if noise_consistent is None and baseline.noise_gate:
         noise_consistent = baseline.noise_test(scale * r, npar)[0]
-    return fit_statistics(
-        x,
-        r,
-        J,
-        names=names,
-        transform=transform,
-        sigma_known=sigma_known,
-        result=result,
-        steps=res.steps,
-        message=message,
-        noise_consistent=noise_consistent,
-        prediction=prediction,
-        gain_left=pred / s2,
-        **extra,
+    return stats.at(
+        x, r, J, res.result, res.steps, message, noise_consistent, prediction, gain / s2
     )
+
+
+class _StartNotFinite(Exception):
+    """The model is not finite at the start values."""
+
+
+def _scaled_start(x0, args, max_steps):
+    """The padded residual's args with the failed-point cost and Marquardt's variable scaling
+    (1/column norms of the start Jacobian, `d`), and those norms. The start's linearisation is
+    the fit's own compiled solve (d = 1 there)."""
+    r0, J0 = (
+        np.asarray(v)
+        for v in value_and_jacobian(padded_residual, x0, args, solver=SOLVER, max_steps=max_steps)
+    )
+    if not np.all(np.isfinite(r0)):
+        raise _StartNotFinite
+    bad = max(FAILED_RESIDUAL, 10.0 * float(np.max(np.abs(r0))))  # a failed trial: 100x the cost
+    with np.errstate(over="ignore"):  # an absurd start (a value of 1e300): inf, d = 0
+        norms = np.linalg.norm(J0, axis=0)
+    d = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
+    new = (jnp.asarray(bad, dtype=jnp.float64), jnp.asarray(d, dtype=jnp.float64))
+    return eqx.tree_at(lambda t: (t.bad, t.d), args, new), d, norms
+
+
+def _solve(u0, args, p, max_steps, abandon_above, stop_crawl):
+    """The record solver (`SOLVER`) from the scaled start `u0`, with the probe and crawl stops."""
+    return least_squares_fit(
+        padded_residual,
+        u0,
+        args,
+        names=tuple(f"u{i}" for i in range(p + K_MAX)),
+        jac="fwd",
+        solver=SOLVER,
+        max_steps=max_steps,
+        bar=(min(PROBE_STEPS, max_steps), abandon_above),
+        crawl=CRAWL_FRACTION if stop_crawl else 0.0,
+        throw=False,
+    )
+
+
+def _broken_at_stop(r, J, bad) -> str:
+    """Why the model cannot be judged at the stop ("" when it can)."""
+    if np.all(r == bad):
+        return "the model is not finite at the optimum"
+    g, JTJ = J.T @ r, J.T @ J
+    if not (np.all(np.isfinite(JTJ)) and np.all(np.isfinite(g)) and np.isfinite(float(r @ r))):
+        return "the model's Jacobian is not finite at the optimum"
+    return ""
+
+
+def _gain_left(r, J) -> float:
+    """The decrease of ‖r‖² a Gauss–Newton step still predicts, gᵀ(JᵀJ)⁻¹g."""
+    g = J.T @ r
+    return float(g @ np.linalg.lstsq(J.T @ J, g, rcond=1e-12)[0])
+
+
+def _stop_message(res, cost, gain_s2, max_steps, abandon_above):
+    """The message of the solver's stop: abandoned or crawling (the budget's early stops), out
+    of steps, stationary short of `GAIN_TOL`, or "" at a minimum."""
+    if res.result == RESULTS.nonlinear_max_steps_reached and res.steps < max_steps:
+        if cost > abandon_above:
+            return (
+                f"abandoned: after {res.steps} steps its cost {cost:.6g} was above "
+                f"{abandon_above:.6g}, reached elsewhere"
+            )
+        return (
+            f"crawling: after {res.steps} steps its cost fell by less than "
+            f"{CRAWL_FRACTION:.0%} in {CRAWL_STEPS} steps, far from a minimum"
+        )
+    if res.result == RESULTS.nonlinear_max_steps_reached:
+        return f"no convergence in max_steps = {max_steps} steps"
+    if res.converged and gain_s2 >= GAIN_TOL:
+        return f"stationary: no descent step (predicted gain {gain_s2:.3g} s²)"
+    return "" if res.converged else res.message
+
+
+@dataclasses.dataclass(frozen=True)
+class _Statistics:
+    """The `RecordFit` of a record model's fit at its stop, or of a failed one."""
+
+    baseline: AbstractBaseline
+    designs: tuple
+    effects: tuple
+    scale: float
+    sigma_known: bool
+    n: int
+
+    def _extra(self):
+        scales = [np.asarray(d.strength_scale, dtype=np.float64) for d in self.designs]
+        return dict(
+            names=_names(self.baseline, self.designs),
+            transform=_Physical(self.baseline, np.concatenate([np.zeros(0), *scales])),
+            sigma_known=self.sigma_known,
+            result_type=RecordFit,
+            model=self.baseline,
+            effects=self.effects,
+            designs=self.designs,
+            scale=self.scale,
+        )
+
+    def at(self, x, r, J, result, steps, message, noise_consistent, prediction, gain_left):
+        return fit_statistics(
+            x,
+            r,
+            J,
+            result=result,
+            steps=steps,
+            message=message,
+            noise_consistent=noise_consistent,
+            prediction=prediction,
+            gain_left=gain_left,
+            **self._extra(),
+        )
+
+    def failed(self, x, result, message, steps=0):
+        n, npar = self.n, x.size
+        return fit_statistics(
+            x,
+            np.full(n, np.nan),
+            np.full((n, npar), np.nan),
+            result=result,
+            steps=steps,
+            message=message,
+            prediction=np.full(n, np.nan),
+            **self._extra(),
+        )
 
 
 def fit_record(
