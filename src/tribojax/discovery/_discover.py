@@ -188,74 +188,103 @@ def discover(
         DiscoveryReport (check `.converged`: False when the baseline fit failed).
     """
     effects = _checked(baseline, effects, max_effects, alpha)
-    by_name = {e.name: e for e in effects}
-    state = fit_record(baseline, None if theta0 is None else [theta0])
+    state = fit_record(baseline, None if theta0 is None else [theta0])  # step 1
     data = baseline.data()
     run = _Run(baseline, data, np.asarray(data.y, dtype=float), state.scale, alpha, n_windows)
     run.rebase(state)
-    base_ok = run.consistent(state)  # then the candidates are ranked, none is refitted or added
-    started = (
-        fit_saved(start, baseline, sigma_known=False)
-        if start is not None and state.converged
-        else None
-    )
-    state = state if started is None or not started.converged else started
-    moves, rounds = 0, []
-    grids = {e.name: e.designs(baseline) for e in effects}
-    while state.converged and len(state.effects) < max_effects and not (rounds and base_ok):
-        ranking = rank(baseline, effects, grids, state, run.y, run.scale, n_starts)
-        if not ranking.candidates:
-            break
-        if not base_ok:  # the report and the first choice need the baseline's held-out check:
-            run.prefetch(run.base_state)  # on the threads the first Gauss–Newton start leaves
-        accepted = refit_round(run, state, ranking, n_refit, delta_bic_threshold, by_name, base_ok)
-        picked = (
-            pick(run, state, accepted, delta_bic_threshold, moves < MAX_MOVES) if accepted else None
-        )
-        if picked is not None:
-            best_c, best, moved = picked
-            if moved is not None:  # a better optimum of the current model
-                moves, best_c.refit_message, best = moves + 1, _MOVED, moved
-        if picked is None and len(state.effects) + 2 <= max_effects:
-            paired = pair_round(run, state, ranking, delta_bic_threshold, by_name)
-            if paired is not None:  # two effects at once
-                rounds.append([c.public() for c in ranking.candidates])
-                state = paired
-                if run.consistent(state):
-                    break
-                continue
-        rounds.append([c.public() for c in ranking.candidates])
-        if picked is None:
-            break
-        if best is not moved or state is not run.base_state:
-            state = best
-        else:  # a better optimum of the baseline itself
-            state = run.rebase(moved)
-            base_ok = run.consistent(state)
-        if run.consistent(state):  # explained: nothing is left to name
-            break
+    started = _from_saved(start, baseline, state)
+    search = _Search(run, effects, max_effects, n_refit, n_starts, delta_bic_threshold)
+    state, rounds = search.search(state if started is None or not started.converged else started)
     state, dropped = (
         drop_redundant(run, state, delta_bic_threshold) if state.converged else (state, [])
     )
-    settings = {
-        "criterion": "Rao score (chi2, Bonferroni over grid and candidates) then "
-        "Delta BIC (AR(1)-inflated) below threshold and a lower held-out "
-        "excess (two-fold)",
-        "delta_bic_threshold": delta_bic_threshold,
-        "alpha": alpha,
-        "max_effects": max_effects,
-        "n_refit": n_refit,
-        "n_windows": n_windows,
-        "candidates_offered": list(by_name),
-        "effects_dropped": dropped,
-    }
+    settings = search.settings(dropped)
     if start is not None:
         settings["start_model"] = {
             "source": start.source,
             "effects": [e.name for e in start.effects],
             "refit": "none" if started is None else started.message or "converged",
         }
-    return report(run, state, rounds, settings)
+    return report(run, state, rounds, settings)  # step 5
+
+
+def _from_saved(start, baseline, state):
+    """The saved model `start` refitted on this record (None: none given, or the baseline fit
+    failed)."""
+    if start is None or not state.converged:
+        return None
+    return fit_saved(start, baseline, sigma_known=False)
+
+
+@dataclasses.dataclass
+class _Search:
+    """Steps 2–4 of `discover`: rounds of ranking and refitting the candidates until none
+    qualifies, `max_effects` are in, or the model is consistent with the noise."""
+
+    run: _Run
+    effects: list
+    max_effects: int
+    n_refit: int
+    n_starts: int
+    threshold: float
+
+    def search(self, state):
+        """(the final state, each round's public candidates)."""
+        run, threshold = self.run, self.threshold
+        by_name = {e.name: e for e in self.effects}
+        base_ok = run.consistent(run.base_state)  # then candidates are ranked, none refitted
+        moves, rounds = 0, []
+        grids = {e.name: e.designs(run.baseline) for e in self.effects}
+        while (
+            state.converged and len(state.effects) < self.max_effects and not (rounds and base_ok)
+        ):
+            ranking = rank(
+                run.baseline, self.effects, grids, state, run.y, run.scale, self.n_starts
+            )
+            if not ranking.candidates:
+                break
+            if not base_ok:  # the report and the first choice need the baseline's held-out
+                run.prefetch(run.base_state)  # check: on the threads the first start leaves
+            accepted = refit_round(run, state, ranking, self.n_refit, threshold, by_name, base_ok)
+            picked = pick(run, state, accepted, threshold, moves < MAX_MOVES) if accepted else None
+            if picked is not None:
+                best_c, best, moved = picked
+                if moved is not None:  # a better optimum of the current model
+                    moves, best_c.refit_message, best = moves + 1, _MOVED, moved
+            if picked is None and len(state.effects) + 2 <= self.max_effects:
+                paired = pair_round(run, state, ranking, threshold, by_name)
+                if paired is not None:  # two effects at once
+                    rounds.append([c.public() for c in ranking.candidates])
+                    state = paired
+                    if run.consistent(state):
+                        break
+                    continue
+            rounds.append([c.public() for c in ranking.candidates])
+            if picked is None:
+                break
+            if best is not moved or state is not run.base_state:
+                state = best
+            else:  # a better optimum of the baseline itself
+                state = run.rebase(moved)
+                base_ok = run.consistent(state)
+            if run.consistent(state):  # explained: nothing is left to name
+                break
+        return state, rounds
+
+    def settings(self, dropped) -> dict:
+        """The report's "settings": the criterion and the search's limits."""
+        return {
+            "criterion": "Rao score (chi2, Bonferroni over grid and candidates) then "
+            "Delta BIC (AR(1)-inflated) below threshold and a lower held-out "
+            "excess (two-fold)",
+            "delta_bic_threshold": self.threshold,
+            "alpha": self.run.alpha,
+            "max_effects": self.max_effects,
+            "n_refit": self.n_refit,
+            "n_windows": self.run.n_windows,
+            "candidates_offered": [e.name for e in self.effects],
+            "effects_dropped": dropped,
+        }
 
 
 def _checked(baseline, effects, max_effects, alpha) -> list:
