@@ -16,10 +16,10 @@ import pytest
 
 import tribojax as tj
 from tribojax._cli import _fit as cli_fit
-from tribojax._cli import _fit_reduced as cli_fit_reduced
 from tribojax._cli._main import main
 from tribojax._fit._result import fit_statistics
 from tribojax._io._files import write_json_atomic
+from tribojax._predict import _fit_methods as fit_methods
 
 MU, N, KD, OMEGA = 0.3, 2.94, 1.2e6, 2 * np.pi * 22
 SHARED = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "topography"
@@ -47,13 +47,13 @@ def _one_error_line(err: str, cmd: str) -> str:
 
 def test_a_second_writer_to_the_same_out_refuses(tmp_path, capsys, monkeypatch):
     src, out = _loop(tmp_path), tmp_path / "out"
-    real, inner = cli_fit_reduced.fit_loop, []
+    real, inner = fit_methods.fit_loop, []
 
     def racing_fit(*a, **k):  # a second run with the same --out starts while the first fits
         inner.append(main(["fit", str(src), "--out", str(out)]))
         return real(*a, **k)
 
-    monkeypatch.setattr(cli_fit_reduced, "fit_loop", racing_fit)
+    monkeypatch.setattr(fit_methods, "fit_loop", racing_fit)
     assert main(["fit", str(src), "--out", str(out)]) == 0
     assert inner == [2]
     err = capsys.readouterr().err
@@ -73,7 +73,7 @@ def test_exclusive_write_never_replaces_a_file(tmp_path):
 
 def test_bad_destination_is_refused_before_the_fit(tmp_path, capsys, monkeypatch):
     src = _loop(tmp_path)
-    monkeypatch.setattr(cli_fit_reduced, "fit_loop", lambda *a, **k: pytest.fail("fitted anyway"))
+    monkeypatch.setattr(fit_methods, "fit_loop", lambda *a, **k: pytest.fail("fitted anyway"))
     afile = tmp_path / "afile"
     afile.write_text("x")
     assert main(["fit", str(src), "--out", str(afile)]) == 2
@@ -345,7 +345,7 @@ def test_ctrl_c_is_one_line_and_130(tmp_path, capsys, monkeypatch):
     def interrupted(*a, **k):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(cli_fit_reduced, "fit_loop", interrupted)
+    monkeypatch.setattr(fit_methods, "fit_loop", interrupted)
     assert main(["fit", str(src), "--out", str(tmp_path / "o")]) == 130
     err = capsys.readouterr().err
     assert err.strip() == "tribojax fit: interrupted (Ctrl-C)"

@@ -20,10 +20,10 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import tribojax as tj  # noqa: E402
-from tribojax._cli import _fit as cli_fit  # noqa: E402
 from tribojax._cli._main import main  # noqa: E402
 from tribojax._io._records import read_record  # noqa: E402
 from tribojax._limits import SAMPLE_FLOORS  # noqa: E402
+from tribojax._predict import _fit_methods as fit_methods  # noqa: E402
 from tribojax._tables import read_table  # noqa: E402
 
 FAST = settings(
@@ -182,7 +182,7 @@ def test_cli_on_corrupted_records_exits_cleanly(folder, c):
         raise KeyboardInterrupt
 
     with pytest.MonkeyPatch.context() as mp, _Capture() as cap:
-        mp.setattr(cli_fit, "fit_slip_run", stop)
+        mp.setattr(fit_methods, "fit_slip_run", stop)
         code = main(["fit", str(path), "--out", str(out)])
     err = cap.err
     assert "Traceback" not in err

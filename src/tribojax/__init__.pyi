@@ -2,6 +2,7 @@
 
 from . import discovery as discovery
 from ._cache import use_compilation_cache as use_compilation_cache
+from ._chain import chain_phase_slips as chain_phase_slips
 from ._chain import mu_min as chain_mu_min  # noqa: F401
 from ._chain import to_physical as chain_physical  # noqa: F401
 from ._chain import to_theta as chain_theta  # noqa: F401
@@ -139,7 +140,6 @@ from ._reproduce._chain_fit import DEFAULT_FREE as CHAIN_DEFAULT_FREE  # noqa: F
 from ._reproduce._chain_fit import PARAMETERS as CHAIN_PARAMETERS  # noqa: F401
 from ._reproduce._chain_fit import ChainFit as ChainFit
 from ._reproduce._chain_fit import ChainFitError as ChainFitError
-from ._reproduce._chain_fit import chain_phase_slips as chain_phase_slips
 from ._reproduce._chain_fit import fit_measured_slips as fit_measured_slips
 from ._reproduce._chain_fit import measured_slips as wang2022_measured_slips  # noqa: F401
 from ._reproduce._chain_fit import paper_theory_slips as wang2022_theory_slips  # noqa: F401

@@ -23,18 +23,14 @@ Eq 27's pre-sliding model) or the contact fails get the residual `FAILED_RESIDUA
 from __future__ import annotations
 
 import dataclasses
-import functools
-import math
-import sys
 import time
 
-import diffrax as dfx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .._chain import chain_contact as chain_contact
-from .._chain import chain_phase_slips, mu_min, to_physical, to_theta, wang2022_loads
+from .._chain import mu_min, to_physical, to_theta, wang2022_loads
 from .._checks import as_f64, runtime_message
 from .._fit._engine import FAILED_RESIDUAL, gauss_newton_step, least_squares_fit
 from .._fit._measures import rms
@@ -43,11 +39,9 @@ from .._fit._solver import LevenbergMarquardt
 from .._presets import CHAIN_DEFAULTS
 from .._results import RESULTS, result_name
 from .._tables import wang2022_table
-from ._student_t import student_t_parameters, student_t_residuals, student_t_residuals_inverse
+from ._chain_residuals import _RESIDUALS, PARAMETERS, _shown_run
+from ._student_t import student_t_parameters, student_t_residuals_inverse
 
-PARAMETERS = ("D", "G_m", "mu_t", "sigma_s_Pa", "alpha")
-"""Parameters of the full chain, in order: D, G (m), μ_t, σ_s (Pa) of the contact model (wang2022
-Eqs 5–24) and the bristle exponent α of the pre-slip element (Eq 27)."""
 DEFAULTS = dict(CHAIN_DEFAULTS)
 DEFAULT_FREE = ("D", "G_m", "mu_t")
 """The parameters `fit_measured_slips` frees by default (σ_s and α stay at `CHAIN_DEFAULTS`)."""
@@ -94,51 +88,6 @@ def symmetric_bound(measured=None) -> dict:
 
 class ChainFitError(RuntimeError):
     """The full-chain fit could not be carried out (names the trial point and the cause)."""
-
-
-_PROGRESS = {"on": False, "n": 0, "t0": 0.0, "size": 1}
-
-
-def _report(rss, phys):
-    _PROGRESS["n"] += 1
-    if _PROGRESS["on"]:
-        values = ", ".join(f"{k} {v:.6g}" for k, v in zip(PARAMETERS, phys.tolist()))
-        line = (
-            f"  fit_measured: evaluation {_PROGRESS['n']:3d}, RMS rel. residual "
-            f"{math.sqrt(float(rss) / _PROGRESS['size']):.5f} at {values}; "
-            f"{time.perf_counter() - _PROGRESS['t0']:.1f} s"
-        )
-        sink = _PROGRESS.get("sink")
-        if callable(sink):
-            sink(line)
-        else:
-            print(line, file=sys.stderr, flush=True)
-
-
-def _residuals(theta, args, adjoint, shown=False):
-    # ψ (`student_t_residuals`; identity at inv_nu = 0, s = 1) of (model − y)/σ·√w per cell, or of
-    # (ln|model| − ln|y|)/σ·√w: the robust fit's σ, form, w or (ν, s) (one compiled solve for all)
-    theta_full0, idx, mu_min_, y, sigma, sqrt_w, log_form, inv_nu, t_scale, loads = args
-    phys = to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_min_)
-    if shown:  # host callbacks (never cached); "last" names the trial point if the chain raises
-        jax.debug.callback(lambda p: _PROGRESS.update(last=p.tolist()), jax.lax.stop_gradient(phys))
-    slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
-    safe = jnp.where(slips == 0, 1.0, slips)  # double-where: ln|0| is not used
-    d = jnp.where(log_form > 0.5, jnp.log(jnp.abs(safe)) - jnp.log(jnp.abs(y)), slips - y)
-    psi = student_t_residuals(sqrt_w * d / sigma, t_scale, inv_nu)
-    r = jnp.where(ok[:, None], psi, FAILED_RESIDUAL).ravel()
-    if shown:
-        jax.debug.callback(_report, jax.lax.stop_gradient(r @ r), jax.lax.stop_gradient(phys))
-    return r
-
-
-# The residual functions by (jac, progress shown): module-level objects, so each compiles once;
-# the quiet ones hold no host callback and are kept in the persistent compilation cache.
-_RESIDUALS = {
-    (jac, shown): functools.partial(_residuals, adjoint=adjoint, shown=shown)
-    for jac, adjoint in (("fwd", dfx.ForwardMode()), ("bwd", dfx.RecursiveCheckpointAdjoint()))
-    for shown in (False, True)
-}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -293,6 +242,69 @@ def fit_measured_slips(
             (the message names it).
     """
     free = tuple(free)
+    loads, target, sigma, weights = _checked_data(free, jac, loads, target, sigma, weights)
+    inv_nu, t_scale = student_t_parameters(student_t)
+    start_full = _full_start(start)
+    mu_lo = mu_min(loads)
+    theta_full0 = jnp.asarray(to_theta([start_full[k] for k in PARAMETERS], PARAMETERS, mu_lo))
+    idx = jnp.array([PARAMETERS.index(n) for n in free])
+    data = (jnp.asarray(a) for a in (target, sigma, np.sqrt(weights), float(log_residuals)))
+    spread = (jnp.asarray(inv_nu), jnp.asarray(t_scale))
+
+    def transform(theta):
+        return to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo)[idx]
+
+    with _shown_run(progress, target.size) as (number, run):
+        args = (theta_full0, idx, jnp.asarray(mu_lo), *data, *spread, loads, jnp.asarray(number))
+        t0 = time.perf_counter()
+        try:
+            fit = least_squares_fit(
+                _RESIDUALS[(jac, bool(progress))],
+                theta_full0[idx],
+                args,
+                names=free,
+                transform=transform,
+                rtol=rtol,
+                atol=atol,
+                max_steps=max_steps,
+                jac=jac,
+                solver=LevenbergMarquardt.noise_floor(float(rtol), float(atol), report=False),
+                optimum_tol=GN_STEP_TOL,
+                throw=False,
+            )
+        except RuntimeError as err:  # equinox runtime errors inside the compiled fit
+            last = dict(zip(PARAMETERS, run.get("last", [])))
+            raise ChainFitError(
+                f"the full-chain fit failed at the trial point {last}: {runtime_message(err)} "
+                "(a runtime check inside the chain failed at this trial point; try another start)"
+            ) from err
+        wall = time.perf_counter() - t0
+        evaluations = run["n"] if progress else fit.steps + 1
+    phys = np.asarray(
+        to_physical(theta_full0.at[idx].set(jnp.asarray(fit.theta)), PARAMETERS, mu_lo)
+    )
+    model = _model_at_optimum(fit, target, sigma, weights, log_residuals, inv_nu, t_scale)
+    sv, vt = _elasticities(fit, transform)
+    return ChainFit(
+        fit=fit,
+        parameters=dict(zip(PARAMETERS, phys.tolist())),
+        free=free,
+        model_nm=model,
+        target_nm=np.asarray(target),
+        scaled_singular_values=sv,
+        scaled_right_vectors=vt,
+        wall_s=wall,
+        evaluations=evaluations,
+        start=start_full,
+        gauss_newton_step=float(
+            np.max(np.abs(np.asarray(gauss_newton_step(fit.residuals, fit.jacobian))))
+        ),
+    )
+
+
+def _checked_data(free, jac, loads, target, sigma, weights):
+    """(loads, target, sigma, weights) of `fit_measured_slips`, checked (ValueError naming the
+    parameter) and defaulted (Table 3's loads, Tables 4–7, relative residuals, weights 1)."""
     bad = [n for n in free if n not in PARAMETERS]
     if bad or len(set(free)) != len(free) or not free:
         raise ValueError(f"free = {free!r}: names must be distinct, from {PARAMETERS}")
@@ -317,83 +329,32 @@ def fit_measured_slips(
             raise ValueError(f"{name} must be finite with the target's shape {target.shape}")
     if np.any(sigma == 0) or np.any(weights <= 0):
         raise ValueError("sigma must be non-zero and weights > 0 in every cell")
-    inv_nu, t_scale = student_t_parameters(student_t)
-    start_full = dict(DEFAULTS)
+    return loads, target, sigma, weights
+
+
+def _full_start(start) -> dict:
+    """All five physical start values: `start`'s, the others from `DEFAULTS`."""
+    full = dict(DEFAULTS)
     for k, v in dict(start or {}).items():
         if k not in PARAMETERS:
             raise ValueError(f"start has unknown parameter {k!r}; allowed: {PARAMETERS}")
-        start_full[k] = float(v)
-    mu_lo = mu_min(loads)
-    theta_full0 = jnp.asarray(to_theta([start_full[k] for k in PARAMETERS], PARAMETERS, mu_lo))
-    idx = jnp.array([PARAMETERS.index(n) for n in free])
-    args = (
-        theta_full0,
-        idx,
-        jnp.asarray(mu_lo),
-        jnp.asarray(target),
-        jnp.asarray(sigma),
-        jnp.asarray(np.sqrt(weights)),
-        jnp.asarray(float(log_residuals)),
-        jnp.asarray(inv_nu),
-        jnp.asarray(t_scale),
-        loads,
-    )
-    residuals = _RESIDUALS[(jac, bool(progress))]
+        full[k] = float(v)
+    return full
 
-    def transform(theta):
-        return to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo)[idx]
 
-    _PROGRESS.update(
-        on=bool(progress), n=0, t0=time.perf_counter(), size=target.size, sink=progress
-    )
-    t0 = time.perf_counter()
-    try:
-        fit = least_squares_fit(
-            residuals,
-            theta_full0[idx],
-            args,
-            names=free,
-            transform=transform,
-            rtol=rtol,
-            atol=atol,
-            max_steps=max_steps,
-            jac=jac,
-            solver=LevenbergMarquardt.noise_floor(float(rtol), float(atol), report=bool(progress)),
-            optimum_tol=GN_STEP_TOL,
-            throw=False,
-        )
-    except RuntimeError as err:  # equinox runtime errors inside the compiled fit
-        _PROGRESS["on"] = False
-        last = dict(zip(PARAMETERS, _PROGRESS.get("last", [])))
-        raise ChainFitError(
-            f"the full-chain fit failed at the trial point {last}: {runtime_message(err)} "
-            "(a runtime check inside the chain failed at this trial point; try another start)"
-        ) from err
-    wall = time.perf_counter() - t0
-    evaluations = _PROGRESS["n"] if progress else fit.steps + 1
-    _PROGRESS["on"] = False
-    theta = jnp.asarray(fit.theta)
-    phys = np.asarray(to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_lo))
-    r, J = fit.residuals, fit.jacobian  # at the optimum, from least_squares_fit's statistics
-    failed = (r == FAILED_RESIDUAL).reshape(target.shape)  # cells not evaluated: NaN model
+def _model_at_optimum(fit, target, sigma, weights, log_residuals, inv_nu, t_scale):
+    """The (n, 4) model slips (nm) from the residuals at the optimum (NaN: not evaluated)."""
+    r = fit.residuals
+    failed = (r == FAILED_RESIDUAL).reshape(target.shape)
     d = student_t_residuals_inverse(np.where(failed.ravel(), 0.0, r), t_scale, inv_nu)
     d = d.reshape(target.shape) / np.sqrt(weights) * sigma
-    model = np.where(failed, np.nan, target * np.exp(d) if log_residuals else d + target)
-    # scaled Jacobian: ∂r/∂log p = J_θ (dp/dθ)^-1 diag(p) (transform is diagonal)
+    return np.asarray(np.where(failed, np.nan, target * np.exp(d) if log_residuals else d + target))
+
+
+def _elasticities(fit, transform):
+    """SVD (singular values, right vectors) of ∂r/∂log p = J_θ (dp/dθ)⁻¹ diag(p) (the transform
+    is diagonal)."""
     dpdth = np.diag(np.asarray(jax.jacfwd(transform)(jnp.asarray(fit.theta))))
-    S = J / dpdth[None, :] * np.asarray(fit.values)[None, :]
+    S = fit.jacobian / dpdth[None, :] * np.asarray(fit.values)[None, :]
     _, sv, vt = np.linalg.svd(S, full_matrices=False)
-    gn_step = float(np.max(np.abs(np.asarray(gauss_newton_step(r, J)))))
-    return ChainFit(
-        fit=fit,
-        parameters=dict(zip(PARAMETERS, phys.tolist())),
-        free=free,
-        model_nm=np.asarray(model),
-        target_nm=np.asarray(target),
-        scaled_singular_values=sv,
-        scaled_right_vectors=vt,
-        wall_s=wall,
-        evaluations=evaluations,
-        start=start_full,
-        gauss_newton_step=gn_step,
-    )
+    return sv, vt
