@@ -23,9 +23,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
-from test_architecture import LAYER_OF  # noqa: E402
-
 import tribojax as tj  # noqa: E402
+from test_architecture import LAYER_OF  # noqa: E402
 
 
 def _unit(filename: str) -> tuple[str, str] | None:
