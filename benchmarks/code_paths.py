@@ -65,7 +65,14 @@ def trace(argv: list[str]) -> dict:
         status = main(argv)
     finally:
         sys.setprofile(None)
-    return {"status": status, "stops": len(stops), "files": len(files), "climbs": len(climbs)}
+    return {
+        "status": status,
+        "stops": len(stops),
+        "files": len(files),
+        "climbs": len(climbs),
+        "climb_pairs": sorted(f"{a} -> {b[0]}.{b[1]}" for a, b in climbs),
+        "file_list": sorted(files),
+    }
 
 
 def records(folder: Path) -> dict:
@@ -89,7 +96,8 @@ def main() -> None:
             for command in ("fit", "discover"):
                 out = Path(tmp) / f"{command}-{label}"
                 rows[f"{command} {label}"] = row = trace([command, str(path), "--out", str(out)])
-                print(f"{command:8s} {label:6s} {row}", flush=True)
+                brief = {k: v for k, v in row.items() if k not in ("climb_pairs", "file_list")}
+                print(f"{command:8s} {label:6s} {brief}", flush=True)
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1) + "\n")
 

@@ -13,7 +13,9 @@ import numpy as np
 import pytest
 
 import tribojax as tj
+from tribojax import _chain as chain
 from tribojax._reproduce import _chain_fit as fc
+from tribojax._reproduce import _chain_result as cr
 from tribojax._tables import wang2022_table
 
 P0 = np.array([fc.DEFAULTS[k] for k in fc.PARAMETERS])  # D, G, μ_t, σ_s, α
@@ -27,24 +29,24 @@ TIGHT = dict(atol=1e-17, rtol=1e-9, max_steps=20_000)  # FD needs smooth, accura
 
 def test_paper_theory_metric_matches_the_papers_error_columns():
     # the tables print |theory - measured| / |measured| in percent: an independent check
-    err = np.concatenate([wang2022_table(n)["error_percent"] for n in fc.TABLES]) / 100
+    err = np.concatenate([wang2022_table(n)["error_percent"] for n in cr.TABLES]) / 100
     want = float(np.sqrt(np.mean(err**2)))
-    got = fc.rms_relative(fc.paper_theory_slips(), fc.measured_slips())
+    got = cr.rms_relative(cr.paper_theory_slips(), cr.measured_slips())
     assert got == pytest.approx(want, rel=2e-3)
     assert got == pytest.approx(0.8515, abs=1e-3)  # dominated by T5 at 20 kPa (404 %)
 
 
 def test_symmetric_bound_is_optimal_and_below_the_paper():
-    m = fc.measured_slips()
-    bound = fc.symmetric_bound(m)
+    m = cr.measured_slips()
+    bound = cr.symmetric_bound(m)
     best = np.asarray(bound["best_symmetric_nm"])
     assert np.allclose(best[:, 2], -best[:, 0]) and np.allclose(best[:, 3], -best[:, 1])
     rng = np.random.default_rng(0)
     for _ in range(20):  # any other symmetric model is worse
         x = best[:, :2] * (1 + 0.05 * rng.standard_normal((6, 2)))
         other = np.concatenate([x, -x], axis=1)
-        assert fc.rms_relative(other, m) > bound["rms_relative_residual"]
-    assert bound["rms_relative_residual"] < fc.rms_relative(fc.paper_theory_slips(), m)
+        assert cr.rms_relative(other, m) > bound["rms_relative_residual"]
+    assert bound["rms_relative_residual"] < cr.rms_relative(cr.paper_theory_slips(), m)
 
 
 # --- bad input ------------------------------------------------------------------------------------
@@ -76,7 +78,7 @@ def test_bad_input_is_refused(kwargs, match):
 @pytest.mark.slow
 def test_contact_custom_jvp_matches_finite_differences():
     p = jnp.asarray(P0)
-    f = jax.jit(lambda p: fc.chain_contact(p, TWO_LOADS)[0])
+    f = jax.jit(lambda p: chain.chain_contact(p, TWO_LOADS)[0])
     Jf = np.asarray(jax.jacfwd(f)(p))[..., :4]  # reverse mode: see the slip gradient test
     y = np.asarray(f(p))
     for i in range(4):
@@ -95,7 +97,7 @@ def slip_derivatives():
     p = jnp.asarray(P0)
 
     def slips(p, adjoint=dfx.RecursiveCheckpointAdjoint()):
-        return fc.chain_phase_slips(p, ONE_LOAD, adjoint=adjoint, **TIGHT)[0][0]
+        return chain.chain_phase_slips(p, ONE_LOAD, adjoint=adjoint, **TIGHT)[0][0]
 
     f = jax.jit(slips)
     J = np.asarray(jax.jit(jax.jacfwd(lambda p: slips(p, dfx.ForwardMode())))(p))
@@ -143,7 +145,7 @@ FREE = ("G_m", "mu_t")
 def synthetic():
     """Model-generated phase slips at two loads with 1 % relative noise (seed 0)."""
     p = np.array([TRUE.get(k, fc.DEFAULTS[k]) for k in fc.PARAMETERS])
-    clean = np.asarray(fc.chain_phase_slips(jnp.asarray(p), TWO_LOADS)[0])
+    clean = np.asarray(chain.chain_phase_slips(jnp.asarray(p), TWO_LOADS)[0])
     rng = np.random.default_rng(0)
     return clean * (1 + 0.01 * rng.standard_normal(clean.shape))
 
@@ -205,3 +207,68 @@ def test_non_convergence_is_reported(synthetic):
         max_steps=2,
     )
     assert not fit.converged and "maximum number of steps" in fit.fit.message
+
+
+def _stand_in(rms, converged, values, se=(0.1, 0.1)):
+    """A ChainFit whose model misses every cell by `rms` (relative), at `values` of (D, mu_t)."""
+    from tribojax._fit._result import FitResult
+
+    target = cr.measured_slips()
+    fit = FitResult(
+        names=("D", "mu_t"),
+        values=np.asarray(values, float),
+        std_errors=np.asarray(se, float),
+        covariance=np.diag(np.square(se)),
+        correlation=np.eye(2),
+        theta=np.zeros(2),
+        residuals=np.zeros(24),
+        singular_values=np.ones(2),
+        converged=converged,
+    )
+    return cr.ChainFit(
+        fit=fit,
+        parameters={**fc.DEFAULTS, "D": values[0], "mu_t": values[1]},
+        free=("D", "mu_t"),
+        model_nm=target * (1 + rms),
+        target_nm=target,
+        scaled_singular_values=np.ones(2),
+        scaled_right_vectors=np.eye(2),
+        wall_s=1.0,
+        evaluations=1,
+        start={"D": values[0]},
+    )
+
+
+def test_restarts_keep_the_lowest_converged_misfit_and_report_a_ridge():
+    """issue 68: of a stalled fit and its restarts the lowest converged misfit is kept (not the
+    lowest cost of a fit that did not converge); converged fits of the same misfit (within 0.5 %)
+    whose parameters lie more than 0.1 s.e. apart make the fit not identified."""
+    stalled = _stand_in(0.55, False, (2.95, 0.09))
+    far = _stand_in(0.70, True, (2.80, 0.05))
+    best = _stand_in(0.575, True, (2.93, 0.089))
+    near = _stand_in(0.5752, True, (2.935, 0.0895))  # 0.05 s.e. away: the same optimum
+    kept = fc._kept([stalled, far, best, near])
+    assert kept.converged and kept.parameters["D"] == 2.93
+    assert kept.start == stalled.start and len(kept.restarts) == 4 and kept.wall_s == 4.0
+    assert kept.spread == pytest.approx({"D": 0.05, "mu_t": 0.005}) and kept.identified
+    ridge = _stand_in(0.5755, True, (2.96, 0.089))  # same misfit, 0.3 s.e. away in D
+    kept = fc._kept([stalled, best, ridge])
+    assert kept.spread["D"] == pytest.approx(0.3) and not kept.identified
+    d = kept.as_dict()
+    assert d["identified"] is False and d["spread_over_std_error"]["D"] == pytest.approx(0.3)
+    assert [r["converged"] for r in d["restarts"]] == [False, True, True]
+    # nothing converged: the lowest misfit, flagged
+    assert not fc._kept([stalled, _stand_in(0.6, False, (2.9, 0.1))]).converged
+
+
+@pytest.mark.slow
+def test_a_stalled_fit_restarts_and_reaches_the_optimum():
+    """issue 68: with the unrolled LU the measured-table fit from the default start stops on a
+    ridge (RMS 0.591, D 2.949: measured before restarts); its restarts reach the optimum that
+    LAPACK's LU reaches (RMS 0.5750, D 2.9306, within 0.1 s.e.)."""
+    fit = fc.fit_measured_slips(lu="auto")
+    assert fit.converged and fit.rms_relative_residual < 0.5755
+    assert len(fit.restarts) == 5 and not fit.restarts[0]["converged"]
+    se = dict(zip(fit.fit.names, fit.fit.std_errors))
+    ref = {"D": 2.93059, "G_m": 1.32972e-08, "mu_t": 0.0888743}  # lu="lapack", default start
+    assert all(abs(fit.parameters[k] - v) < 0.1 * se[k] for k, v in ref.items())

@@ -138,14 +138,14 @@ from ._presets import WANG2022_RETICLE_MASS_KG as WANG2022_RETICLE_MASS_KG
 from ._presets import WANG2022_TANGENTIAL_LOAD_N as WANG2022_TANGENTIAL_LOAD_N
 from ._reproduce._chain_fit import DEFAULT_FREE as CHAIN_DEFAULT_FREE  # noqa: F401
 from ._reproduce._chain_fit import PARAMETERS as CHAIN_PARAMETERS  # noqa: F401
-from ._reproduce._chain_fit import ChainFit as ChainFit
-from ._reproduce._chain_fit import ChainFitError as ChainFitError
 from ._reproduce._chain_fit import fit_measured_slips as fit_measured_slips
-from ._reproduce._chain_fit import measured_slips as wang2022_measured_slips  # noqa: F401
-from ._reproduce._chain_fit import paper_theory_slips as wang2022_theory_slips  # noqa: F401
-from ._reproduce._chain_fit import rms_relative as rms_relative
-from ._reproduce._chain_fit import symmetric_bound as symmetric_bound
 from ._reproduce._chain_fit import wang2022_loads as wang2022_loads
+from ._reproduce._chain_result import ChainFit as ChainFit
+from ._reproduce._chain_result import ChainFitError as ChainFitError
+from ._reproduce._chain_result import measured_slips as wang2022_measured_slips  # noqa: F401
+from ._reproduce._chain_result import paper_theory_slips as wang2022_theory_slips  # noqa: F401
+from ._reproduce._chain_result import rms_relative as rms_relative
+from ._reproduce._chain_result import symmetric_bound as symmetric_bound
 from ._reproduce._fit_figure import plot_fit_measured as plot_fit_measured
 from ._reproduce._profile_likelihood import profile_likelihood as chain_profile_likelihood  # noqa: F401
 from ._reproduce._robust_fit import NOISE_MODELS as CHAIN_NOISE_MODELS  # noqa: F401

@@ -208,8 +208,12 @@ def chain_phase_slips(
     atol=SLIP_ATOL,
     rtol=SLIP_RTOL,
     max_steps=SLIP_MAX_STEPS,
+    lu="lapack",
 ):
     """Phase slips [T4, T5, T6, T7] (nm) at `loads` for params (D, G m, μ_t, σ_s Pa, α).
+    `lu`: the slip solver's factorisation (`Rodas4.lu`; the arithmetic setting, "lapack" as
+    `PAPER_SOLVER`).
+
 
     The whole chain (wang2022 Eqs 5–24, 26–27 and the phase windows of docs/reproduction.md),
     vmapped over the loads. Returns (slips (n, 4) in nm, ok (n,)): ok is False where the contact
@@ -231,6 +235,7 @@ def chain_phase_slips(
         rtol=rtol,
         max_steps=max_steps,
         throw=False,
+        solver=Rodas4(lu=lu),
     )
     ok = ok & jnp.all(jnp.isfinite(slips), axis=-1)
     return slips, ok

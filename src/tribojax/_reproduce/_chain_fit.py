@@ -33,162 +33,20 @@ from .._chain import chain_contact as chain_contact
 from .._chain import mu_min, to_physical, to_theta, wang2022_loads
 from .._checks import as_f64, runtime_message
 from .._fit._engine import FAILED_RESIDUAL, gauss_newton_step, least_squares_fit
-from .._fit._measures import rms
-from .._fit._result import FitResult
 from .._fit._solver import LevenbergMarquardt
+from .._parallel import in_parallel
 from .._presets import CHAIN_DEFAULTS
-from .._results import RESULTS, result_name
-from .._tables import wang2022_table
-from ._chain_residuals import _RESIDUALS, PARAMETERS, _shown_run
+from ._chain_residuals import _RESIDUALS, CHAIN_LU, PARAMETERS, _shown_run
+from ._chain_result import ChainFit, ChainFitError, measured_slips
 from ._student_t import student_t_parameters, student_t_residuals_inverse
 
 DEFAULTS = dict(CHAIN_DEFAULTS)
 DEFAULT_FREE = ("D", "G_m", "mu_t")
 """The parameters `fit_measured_slips` frees by default (σ_s and α stay at `CHAIN_DEFAULTS`)."""
-TABLES = (4, 5, 6, 7)
 GN_STEP_TOL = 0.1  # converged: the remaining Gauss–Newton step < 0.1 standard errors
-
-
-def measured_slips() -> np.ndarray:
-    """Measured [T4, T5, T6, T7] (nm) of wang2022 Tables 4–7, shape (6, 4) (rows: Table 3's)."""
-    return np.stack([wang2022_table(n)["measured_nm"] for n in TABLES], axis=1)
-
-
-def paper_theory_slips() -> np.ndarray:
-    """The paper's theoretical [T4, T5, T6, T7] (nm), shape (6, 4)."""
-    return np.stack([wang2022_table(n)["theory_nm"] for n in TABLES], axis=1)
-
-
-def rms_relative(model, measured, keep=None) -> float:
-    """√mean((model/measured − 1)²) over all cells (or those where `keep` is True): the
-    acceptance metric."""
-    r = np.asarray(model, dtype=float) / np.asarray(measured, dtype=float) - 1.0
-    return rms(r if keep is None else r[np.asarray(keep, dtype=bool)])
-
-
-def symmetric_bound(measured=None) -> dict:
-    """Best RMS relative residual that any model with T6 = −T4 and T7 = −T5 can reach.
-
-    For a measured pair (a, b) and model (x, −x) the relative squared error (x/a − 1)² +
-    (x/b + 1)² is least at x* = (1/a − 1/b)/(1/a² + 1/b²). Returns the bound over the 24 cells
-    and the per-pair optimum (nm). The chain is symmetric to ~1e-3 (|T4 + T6|/|T4|), so this
-    bounds what it can reach.
-    """
-    m = measured_slips() if measured is None else np.asarray(measured, dtype=float)
-    model = np.empty_like(m)
-    for i, j in ((0, 2), (1, 3)):
-        a, b = m[:, i], m[:, j]
-        x = (1 / a - 1 / b) / (1 / a**2 + 1 / b**2)
-        model[:, i], model[:, j] = x, -x
-    return {"rms_relative_residual": rms_relative(model, m), "best_symmetric_nm": model.tolist()}
-
-
-# --- the fit -----------------------------------------------------------------------------------
-
-
-class ChainFitError(RuntimeError):
-    """The full-chain fit could not be carried out (names the trial point and the cause)."""
-
-
-@dataclasses.dataclass(frozen=True)
-class ChainFit:
-    """A full-chain fit: the `FitResult` (free parameters) plus the chain's view of it.
-
-    Attributes:
-        fit: FitResult over the free parameters (θ statistics, covariance by the delta method).
-        parameters: all five physical parameters (free and fixed), dict.
-        free: names of the free parameters.
-        model_nm, target_nm: (n, 4) phase slips at the optimum (NaN: not evaluated), the data.
-        scaled_singular_values, scaled_right_vectors: SVD of the Jacobian of the residuals with
-            respect to log p (elasticities); rows of the right vectors are parameter combinations,
-            largest singular value first.
-        wall_s: wall time of the fit (s). evaluations: residual evaluations (incl. Jacobians),
-            counted when progress is shown; else LM steps + 1 (one evaluation per trial point:
-            the count itself is a host callback, which would keep the fit out of the cache).
-        start: the physical start.
-        gauss_newton_step: the Gauss–Newton step left at the end, max |δp|/std error (module
-            docstring, Convergence).
-    """
-
-    fit: FitResult
-    parameters: dict
-    free: tuple
-    model_nm: np.ndarray
-    target_nm: np.ndarray
-    scaled_singular_values: np.ndarray
-    scaled_right_vectors: np.ndarray
-    wall_s: float
-    evaluations: int
-    start: dict
-    gauss_newton_step: float = float("nan")
-
-    @property
-    def converged(self) -> bool:
-        return self.fit.converged
-
-    @property
-    def result(self) -> RESULTS:
-        """The outcome (`tribojax.RESULTS`), that of `fit`."""
-        return self.fit.result
-
-    @property
-    def rms_relative_residual(self) -> float:
-        return rms_relative(self.model_nm, self.target_nm)
-
-    def combinations(self, tol=1e-3) -> list[dict]:
-        """Parameter combinations (in log p) the data determine, best first; `determined` is
-        False for singular values below `tol` × the largest."""
-        sv = self.scaled_singular_values
-        return [
-            {
-                "singular_value": float(s),
-                "determined": bool(s > tol * sv[0]),
-                "log_combination": {
-                    k: float(c) for k, c in sorted(zip(self.free, v), key=lambda t: -abs(t[1]))
-                },
-            }
-            for s, v in zip(sv, self.scaled_right_vectors)
-        ]
-
-    def as_dict(self) -> dict:
-        """JSON-ready report (the `fit_measured` block of reproduction.json)."""
-        f = self.fit
-        resid = self.model_nm / self.target_nm - 1.0
-        vac = wang2022_table(3)["vacuum_kPa"]
-        cells = [
-            {
-                "table": n,
-                "vacuum_kPa": float(vac[i]) if self.target_nm.shape[0] == len(vac) else i,
-                "measured_nm": float(self.target_nm[i, j]),
-                "model_nm": float(self.model_nm[i, j]),
-                "rel_residual": float(resid[i, j]),
-            }
-            for i in range(self.target_nm.shape[0])
-            for j, n in enumerate(TABLES)
-        ]
-        return {
-            "parameters": dict(self.parameters),
-            "free_parameters": list(self.free),
-            "std_errors": dict(zip(f.names, f.std_errors.tolist())),
-            "correlation": f.correlation.tolist(),
-            "rms_relative_residual": self.rms_relative_residual,
-            "converged": f.converged,
-            "message": f.message,
-            "result": result_name(f.result),
-            "steps": f.steps,
-            "residual_evaluations": self.evaluations,
-            "gauss_newton_step_over_std_error": self.gauss_newton_step,
-            "wall_s": self.wall_s,
-            "relative_scatter": float(
-                np.sqrt(np.sum(f.residuals**2) / max(f.residuals.size - len(f.names), 1))
-            ),
-            "singular_values_theta": f.singular_values.tolist(),
-            "scaled_singular_values": self.scaled_singular_values.tolist(),
-            "identifiability": self.combinations(),
-            "cells": cells,
-            "start": dict(self.start),
-            "fixed": {k: v for k, v in self.parameters.items() if k not in self.free},
-        }
+RESTART_STEP = 1e-2  # a stalled fit restarts from its start moved by ±1 % per free parameter
+RESTART_SIGNS = ((1, 1, 1), (-1, -1, -1), (1, -1, 1), (-1, 1, -1))  # cycled over the free ones
+SAME_MISFIT = 5e-3  # fits within 0.5 % RMS of the best reach the same misfit
 
 
 def fit_measured_slips(
@@ -206,6 +64,8 @@ def fit_measured_slips(
     weights=None,
     log_residuals=False,
     student_t=None,
+    lu="lapack",
+    restarts=True,
 ) -> ChainFit:
     """Fit the free chain parameters to measured phase slips by Levenberg–Marquardt.
 
@@ -232,6 +92,11 @@ def fit_measured_slips(
             (a relative error model whose heavy-tailed form is a proper density).
         student_t: (ν, s), ν > 0 (inf: Gaussian), s > 0: minimise those residuals' Student-t
             −log-likelihood at the scale s (`student_t_residuals`; `fit.residuals` are ψ).
+        lu: the slip solver's factorisation, "lapack" (default) or "auto" (`CHAIN_LU`): the
+            two arithmetic settings of the chain.
+        restarts: when the fit from `start` stops short of an optimum (the objective's noise
+            floor or a ridge), fit again from the starts `start`·(1 ± `RESTART_STEP`) in the
+            sign patterns `RESTART_SIGNS` and keep the lowest misfit (False: the one fit).
     Returns:
         ChainFit; `result` a `tribojax.RESULTS` member, `converged` False (with `fit.message`)
         when LM did not succeed or stopped short of the optimum (module docstring,
@@ -241,7 +106,74 @@ def fit_measured_slips(
         ChainFitError: an `equinox` runtime check inside the chain failed at a trial point
             (the message names it).
     """
+    kw = dict(free=free, target=target, loads=loads, jac=jac, max_steps=max_steps, rtol=rtol)
+    kw.update(atol=atol, progress=progress, sigma=sigma, weights=weights, lu=lu)
+    kw.update(log_residuals=log_residuals, student_t=student_t)
+    first = _fit_once(start, **kw)
+    if first.converged or not restarts:
+        return first
+    starts = [_moved(first.start, first.free, signs) for signs in RESTART_SIGNS]
+    fits = [first, *in_parallel([lambda s=s: _fit_once(s, **kw) for s in starts])]
+    return _kept(fits)
+
+
+def _moved(start: dict, free, signs) -> dict:
+    """`start` with each free parameter k moved by the factor 1 + `RESTART_STEP`·signs[k]."""
+    return {
+        k: v * (1.0 + RESTART_STEP * signs[free.index(k) % len(signs)]) if k in free else v
+        for k, v in start.items()
+    }
+
+
+def _kept(fits) -> ChainFit:
+    """The fit of lowest misfit (a converged one first), with every start's outcome and the
+    spread of the converged fits of the same misfit around it (`ChainFit.spread`)."""
+    ok = [f for f in fits if f.converged and np.isfinite(f.rms_relative_residual)]
+    best = min(ok or fits, key=lambda f: f.rms_relative_residual)
+    same = [
+        f for f in ok if f.rms_relative_residual <= (1 + SAME_MISFIT) * best.rms_relative_residual
+    ]
+    se = dict(zip(best.fit.names, best.fit.std_errors.tolist()))
+    spread = {  # (none when no fit converged)
+        k: max(abs(f.parameters[k] - best.parameters[k]) / se[k] for f in same)
+        for k in (best.free if same else ())
+    }
+    summary = tuple(
+        {
+            "start": dict(f.start),
+            "converged": f.converged,
+            "rms_relative_residual": f.rms_relative_residual,
+            "parameters": {k: f.parameters[k] for k in f.free},
+        }
+        for f in fits
+    )
+    wall = sum(f.wall_s for f in fits)
+    return dataclasses.replace(
+        best, start=fits[0].start, restarts=summary, spread=spread, wall_s=wall
+    )
+
+
+def _fit_once(
+    start=None,
+    *,
+    free=DEFAULT_FREE,
+    target=None,
+    loads=None,
+    jac="fwd",
+    max_steps=60,
+    rtol=1e-3,
+    atol=1e-4,
+    progress=False,
+    sigma=None,
+    weights=None,
+    log_residuals=False,
+    student_t=None,
+    lu="lapack",
+) -> ChainFit:
+    """One chain fit from `start` (`fit_measured_slips` without restarts)."""
     free = tuple(free)
+    if lu not in CHAIN_LU:
+        raise ValueError(f"lu = {lu!r} is outside the allowed values {CHAIN_LU}")
     loads, target, sigma, weights = _checked_data(free, jac, loads, target, sigma, weights)
     inv_nu, t_scale = student_t_parameters(student_t)
     start_full = _full_start(start)
@@ -259,7 +191,7 @@ def fit_measured_slips(
         t0 = time.perf_counter()
         try:
             fit = least_squares_fit(
-                _RESIDUALS[(jac, bool(progress))],
+                _RESIDUALS[(jac, bool(progress), lu)],
                 theta_full0[idx],
                 args,
                 names=free,

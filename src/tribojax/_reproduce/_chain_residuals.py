@@ -66,14 +66,14 @@ def _last_point(number, phys):
         run["last"] = phys.tolist()
 
 
-def _residuals(theta, args, adjoint, shown=False):
+def _residuals(theta, args, adjoint, shown=False, lu="lapack"):
     # ψ (`student_t_residuals`; identity at inv_nu = 0, s = 1) of (model − y)/σ·√w per cell, or of
     # (ln|model| − ln|y|)/σ·√w: the robust fit's σ, form, w or (ν, s) (one compiled solve for all)
     theta_full0, idx, mu_min_, y, sigma, sqrt_w, log_form, inv_nu, t_scale, loads, run = args
     phys = to_physical(theta_full0.at[idx].set(theta), PARAMETERS, mu_min_)
     if shown:  # host callbacks (never cached); "last" names the trial point if the chain raises
         jax.debug.callback(_last_point, run, jax.lax.stop_gradient(phys))
-    slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint)
+    slips, ok = chain_phase_slips(phys, loads, adjoint=adjoint, lu=lu)
     safe = jnp.where(slips == 0, 1.0, slips)  # double-where: ln|0| is not used
     d = jnp.where(log_form > 0.5, jnp.log(jnp.abs(safe)) - jnp.log(jnp.abs(y)), slips - y)
     psi = student_t_residuals(sqrt_w * d / sigma, t_scale, inv_nu)
@@ -83,10 +83,15 @@ def _residuals(theta, args, adjoint, shown=False):
     return r
 
 
-# The residual functions by (jac, progress shown): module-level objects, so each compiles once;
-# the quiet ones hold no host callback and are kept in the persistent compilation cache.
+CHAIN_LU = ("lapack", "auto")
+"""The slip solver's factorisations the chain fit offers (`Rodas4.lu`): LAPACK's LU (the
+default) and the unrolled one (another rounding of the same arithmetic)."""
+
+# The residual functions by (jac, progress shown, LU): module-level objects, so each compiles
+# once; the quiet ones hold no host callback and are kept in the persistent compilation cache.
 _RESIDUALS = {
-    (jac, shown): functools.partial(_residuals, adjoint=adjoint, shown=shown)
+    (jac, shown, lu): functools.partial(_residuals, adjoint=adjoint, shown=shown, lu=lu)
     for jac, adjoint in (("fwd", dfx.ForwardMode()), ("bwd", dfx.RecursiveCheckpointAdjoint()))
     for shown in (False, True)
+    for lu in CHAIN_LU
 }

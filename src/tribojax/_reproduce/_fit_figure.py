@@ -6,7 +6,7 @@ import numpy as np
 
 from .._plot import figure, save_figure
 from .._tables import wang2022_table
-from ._chain_fit import TABLES, measured_slips, paper_theory_slips, rms_relative
+from ._chain_result import TABLES, measured_slips, paper_theory_slips, rms_relative
 
 
 def plot_fit_measured(plain_nm, robust_nm, flagged, path=None, *, files=True):

@@ -18,7 +18,8 @@ import numpy as np
 from scipy import stats
 
 from .._results import RESULTS
-from ._chain_fit import fit_measured_slips, rms_relative
+from ._chain_fit import fit_measured_slips
+from ._chain_result import rms_relative
 from ._robust_fit import RobustChainFit, residual_form, robust_fit_measured_slips
 
 CHI2_95 = float(stats.chi2.ppf(0.95, 1))  # 3.84

@@ -35,14 +35,8 @@ from scipy import stats
 from .._fit._measures import bic
 from .._results import RESULTS, result_name
 from .._tables import wang2022_table
-from ._chain_fit import (
-    TABLES,
-    ChainFit,
-    fit_measured_slips,
-    measured_slips,
-    paper_theory_slips,
-    rms_relative,
-)
+from ._chain_fit import fit_measured_slips
+from ._chain_result import TABLES, ChainFit, measured_slips, paper_theory_slips, rms_relative
 from ._student_t import _lin_resid, _log_resid, student_t_loglik, student_t_ml, t_scale
 
 NOISE_MODELS = ("relative", "absolute", "mixed")

@@ -24,7 +24,7 @@ from .._friction._lugre import PreSlipLuGre
 from .._plot import figure, save_figure
 from .._presets import WANG2022_RETICLE_MASS_KG
 from .._tables import wang2022_table
-from ._chain_fit import TABLES, measured_slips
+from ._chain_result import TABLES, measured_slips
 
 
 def table3_phase_slips(alpha, adjoint=dfx.RecursiveCheckpointAdjoint()):
