@@ -47,6 +47,7 @@ GN_STEP_TOL = 0.1  # converged: the remaining Gauss–Newton step < 0.1 standard
 RESTART_STEP = 1e-2  # a stalled fit restarts from its start moved by ±1 % per free parameter
 RESTART_SIGNS = ((1, 1, 1), (-1, -1, -1), (1, -1, 1), (-1, 1, -1))  # cycled over the free ones
 SAME_MISFIT = 5e-3  # fits within 0.5 % RMS of the best reach the same misfit
+_SOLVE = ("jac", "lu", "progress", "max_steps", "rtol", "atol")
 
 
 def fit_measured_slips(
@@ -109,11 +110,11 @@ def fit_measured_slips(
     kw = dict(free=free, target=target, loads=loads, jac=jac, max_steps=max_steps, rtol=rtol)
     kw.update(atol=atol, progress=progress, sigma=sigma, weights=weights, lu=lu)
     kw.update(log_residuals=log_residuals, student_t=student_t)
-    first = _fit_once(start, **kw)
+    first = _fit_once(start, kw)
     if first.converged or not restarts:
         return first
     starts = [_moved(first.start, first.free, signs) for signs in RESTART_SIGNS]
-    fits = [first, *in_parallel([lambda s=s: _fit_once(s, **kw) for s in starts])]
+    fits = [first, *in_parallel([lambda s=s: _fit_once(s, kw) for s in starts])]
     return _kept(fits)
 
 
@@ -153,25 +154,13 @@ def _kept(fits) -> ChainFit:
     )
 
 
-def _fit_once(
-    start=None,
-    *,
-    free=DEFAULT_FREE,
-    target=None,
-    loads=None,
-    jac="fwd",
-    max_steps=60,
-    rtol=1e-3,
-    atol=1e-4,
-    progress=False,
-    sigma=None,
-    weights=None,
-    log_residuals=False,
-    student_t=None,
-    lu="lapack",
-) -> ChainFit:
-    """One chain fit from `start` (`fit_measured_slips` without restarts)."""
-    free = tuple(free)
+def _fit_once(start, options: dict) -> ChainFit:
+    """One chain fit from `start` with `fit_measured_slips`' `options` (no restarts)."""
+    o = options
+    target, loads, sigma, weights = o["target"], o["loads"], o["sigma"], o["weights"]
+    jac, lu, progress, max_steps, rtol, atol = (o[k] for k in _SOLVE)
+    log_residuals, student_t = o["log_residuals"], o["student_t"]
+    free = tuple(o["free"])
     if lu not in CHAIN_LU:
         raise ValueError(f"lu = {lu!r} is outside the allowed values {CHAIN_LU}")
     loads, target, sigma, weights = _checked_data(free, jac, loads, target, sigma, weights)
