@@ -11,6 +11,7 @@ from pathlib import Path
 from .. import __version__
 from .._plot import figure, save_figure
 from .._reproduce import _chain_fit as chain_fit
+from .._reproduce import _chain_result as tables
 from .._reproduce import _robust_fit as robust_fit
 from .._reproduce._fit_figure import plot_fit_measured
 from .._reproduce._table3 import calibrate_table3, max_rel_error, reproduce_table3
@@ -82,9 +83,9 @@ def _reproduce_fit_measured(result: dict, out_dir: Path | None = None, bar=None)
     print("wang2022 Tables 4-7 (measured): full-chain fit of D, G, mu_t (LM through diffrax) ...")
     fit = chain_fit.fit_measured_slips()
     block = fit.as_dict()
-    measured, paper = chain_fit.measured_slips(), chain_fit.paper_theory_slips()
-    block["paper_theory_rms_relative_residual"] = chain_fit.rms_relative(paper, measured)
-    block["symmetric_model_bound_rms_relative_residual"] = chain_fit.symmetric_bound()[
+    measured, paper = tables.measured_slips(), tables.paper_theory_slips()
+    block["paper_theory_rms_relative_residual"] = tables.rms_relative(paper, measured)
+    block["symmetric_model_bound_rms_relative_residual"] = tables.symmetric_bound()[
         "rms_relative_residual"
     ]
     block["uncertainty_model"] = (
@@ -128,7 +129,7 @@ def _reproduce_fit_measured(result: dict, out_dir: Path | None = None, bar=None)
         "paper_theory_rms_relative_residual_unflagged",
     ):
         block[key] = rd[key]
-    block["plain_rms_relative_residual_unflagged"] = chain_fit.rms_relative(
+    block["plain_rms_relative_residual_unflagged"] = tables.rms_relative(
         fit.model_nm, measured, keep
     )
     block["robust"] = rd
