@@ -3,7 +3,8 @@ FILE` and `tribojax discover FILE` run on one record, counted from a trace.
 
 For each command, every call between two tribojax functions is recorded (`sys.setprofile`, the
 whole run: command line, record, model, fit, statistics, report). Printed per command:
-- stops: distinct tribojax functions entered;
+- stops: distinct tribojax functions entered (named functions and methods; module and class
+  bodies, which run at import, and comprehensions and lambdas are not counted);
 - files: distinct modules they live in;
 - climbs: distinct caller → callee pairs where the callee's package sits in a higher layer
   than the caller's (`tests/test_architecture.py`'s `LAYERS`): the reader climbs back up,
@@ -19,6 +20,7 @@ import argparse
 import json
 import sys
 import tempfile
+from inspect import CO_NEWLOCALS
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,7 +51,10 @@ def trace(argv: list[str]) -> dict:
             here = _unit(frame.f_code.co_filename)
             caller = stack[-1] if stack else None
             stack.append(here)
-            if here is None:
+            code = frame.f_code
+            # functions only: module and class bodies run at import, comprehensions and lambdas
+            # are parts of the function that holds them
+            if here is None or not code.co_flags & CO_NEWLOCALS or code.co_name.startswith("<"):
                 return
             name = (here[0], frame.f_code.co_qualname)
             stops.add(name)
@@ -72,6 +77,7 @@ def trace(argv: list[str]) -> dict:
         "climbs": len(climbs),
         "climb_pairs": sorted(f"{a} -> {b[0]}.{b[1]}" for a, b in climbs),
         "file_list": sorted(files),
+        "stop_list": sorted(".".join(s) for s in stops),
     }
 
 
@@ -96,7 +102,7 @@ def main() -> None:
             for command in ("fit", "discover"):
                 out = Path(tmp) / f"{command}-{label}"
                 rows[f"{command} {label}"] = row = trace([command, str(path), "--out", str(out)])
-                brief = {k: v for k, v in row.items() if k not in ("climb_pairs", "file_list")}
+                brief = {k: v for k, v in row.items() if not k.endswith(("_pairs", "_list"))}
                 print(f"{command:8s} {label:6s} {brief}", flush=True)
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1) + "\n")
