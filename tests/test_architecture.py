@@ -46,10 +46,11 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 # - model chain: wang2022's one path parameters → contact → element → phase slips (`_chain`);
 # - model analyses: sweeps and sensitivities of the model, which need no records;
 # - records: user records and files (`_io`);
-# - fit engine: the one least-squares engine, its solver, noise model and measures, and the fits
-#   of models that are not record models (a steady friction law, a history element) (`_fit`);
-# - record models: the one model of each record kind, its fit, saved models, and the fits built on
-#   them (a surface from slip runs at several loads) (`_model`), strictly above the engine;
+# - fit engine: the one least-squares engine, its result and statistics, solver, noise model and
+#   measures, and nothing that knows a model (`_fit`);
+# - record models: the one model of each record kind, its fit, saved models, the fits built on
+#   them (a surface from slip runs at several loads) and the separately named fits (history
+#   elements, the steady friction law) (`_model`), strictly above the engine;
 # - record reduction (`_decimate`), which states its noise with the fit's noise model;
 # - paper studies: the reproduced tables and the fits of wang2022's measured slips (`_reproduce`);
 # - discovery; prediction with saved models (`_predict`: rebuilds a model with its discovered

@@ -1,5 +1,6 @@
 """One model per record kind: the record models that `fit`, `predict` and `discover`
-share, the contract of their effects, and the one fit of a model with its effects."""
+share, the contract of their effects, and the one fit of a model with its effects (`RecordFit`);
+beside them the separately named products, the history fits and the LuGre steady law."""
 
 from ._base import ALPHA as ALPHA
 from ._base import K_MAX as K_MAX
