@@ -9,9 +9,11 @@ whole run: command line, record, model, fit, statistics, report). Printed per co
 - climbs: distinct caller → callee pairs where the callee's package sits in a higher layer
   than the caller's (`tests/test_architecture.py`'s `LAYERS`): the reader climbs back up,
   e.g. an engine calling a model's method it was handed.
-Run against any checkout (`PYTHONPATH=OTHER/src python benchmarks/code_paths.py`) to compare.
+It reads the package's internals (layers, the command's in-process entry), as
+`test_architecture.py` does, so it lives beside it, not among the benchmarks of the public API.
+Run against any checkout (`PYTHONPATH=OTHER/src python tests/code_paths.py`) to compare.
 
-    python benchmarks/code_paths.py [--json OUT]
+    python tests/code_paths.py [--json OUT]
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from inspect import CO_NEWLOCALS
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "tests"))  # beside test_architecture, whose layers it reads
 import tribojax as tj  # noqa: E402
 from test_architecture import LAYER_OF  # noqa: E402
 
