@@ -30,6 +30,7 @@ MAX_LINES = 400
 OPTIONAL = {
     "matplotlib": {"tribojax._plot"},
     "SurfaceTopography": {"tribojax._roughness._topography"},
+    "distributed": {"tribojax._batch._run", "tribojax._batch._task"},
 }
 # distribution name -> import name where they differ
 IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
@@ -55,7 +56,7 @@ IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}
 # - paper studies: the reproduced tables and the fits of wang2022's measured slips (`_reproduce`);
 # - discovery; prediction with saved models (`_predict`: rebuilds a model with its discovered
 #   effects); the public re-exports (tribojax/__init__.py); the command line, which nothing
-#   else imports.
+#   else imports but the batch runner above it (`_batch`: the commands on many records).
 LAYERS = (
     (
         "foundation",
@@ -85,6 +86,7 @@ LAYERS = (
     ("prediction", {"_predict"}),
     ("public API", {""}),
     ("command line", {"_cli", "__main__"}),
+    ("batch", {"_batch"}),
 )
 LAYER_OF = {unit: (i, name) for i, (name, units) in enumerate(LAYERS) for unit in units}
 
@@ -200,8 +202,10 @@ def test_no_import_cycles():
 
 
 # The command-line dispatcher imports a subcommand's module (and the library) only when it runs,
-# so that `tribojax --help` and argument errors start without JAX (issue 31); nothing else may.
-DEFERRED = ("tribojax/_cli/_main.py:",)
+# so that `tribojax --help` and argument errors start without JAX (issue 31); a batch worker's
+# record task likewise, after it has made the command's process settings (EQX_ON_ERROR is read
+# when equinox is imported). Nothing else may.
+DEFERRED = ("tribojax/_cli/_main.py:", "tribojax/_batch/_task.py:")
 
 
 def test_no_function_level_imports_of_tribojax():

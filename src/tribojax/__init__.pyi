@@ -1,6 +1,7 @@
 """Type stub of tribojax's public namespace: also the table the lazy `__getattr__` reads."""
 
 from . import discovery as discovery
+from ._batch import batch as batch
 from ._cache import use_compilation_cache as use_compilation_cache
 from ._chain import chain_phase_slips as chain_phase_slips
 from ._chain import mu_min as chain_mu_min  # noqa: F401

@@ -142,16 +142,20 @@ def _band_tension_argument(parser) -> None:
     )
 
 
-def fit_arguments(parser) -> None:
-    parser.add_argument(
-        "file",
+def fit_arguments(parser, batch: bool = False) -> None:
+    _record_argument(
+        parser,
+        batch,
         nargs="+",
         help="CSV: a slip run (time_s,stage_accel_m_s2,slip_m) or a loop "
         "(time_s,displacement_m,force_N), each with its <stem>.json sidecar; a brfd JSON; an "
         "EPOS export or a folder of EPOS steady-state exports (one friction curve); several "
         "loops or histories: one parameter set fitted to all (--model an element or best)",
     )
-    parser.add_argument("--out", default=None, help="output folder (default tribojax-out/fit-STEM)")
+    if not batch:
+        parser.add_argument(
+            "--out", default=None, help="output folder (default tribojax-out/fit-STEM)"
+        )
     parser.add_argument(
         "--alpha",
         default=None,
@@ -210,21 +214,26 @@ def fit_arguments(parser) -> None:
         help=f"LM step budget (default {MAX_STEPS} for slip runs and loops; "
         "friction curves: the steady-law fit's own budget)",
     )
-    parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
+    if not batch:
+        parser.add_argument("--force", action="store_true", help="replace an existing DIR/fit.json")
     _band_tension_argument(parser)
     add_decimation_arguments(parser)
 
 
-def discover_arguments(parser) -> None:
-    parser.add_argument(
-        "file",
+def discover_arguments(parser, batch: bool = False) -> None:
+    _record_argument(
+        parser,
+        batch,
         help="record (slip run or loop CSV, brfd JSON, friction curve or a "
         "folder of EPOS steady-state exports)",
     )
-    parser.add_argument(
-        "--out", default="discovery-out", help="output folder (default discovery-out)"
-    )
-    parser.add_argument("--force", action="store_true", help="replace an existing discovery.json")
+    if not batch:
+        parser.add_argument(
+            "--out", default="discovery-out", help="output folder (default discovery-out)"
+        )
+        parser.add_argument(
+            "--force", action="store_true", help="replace an existing discovery.json"
+        )
     parser.add_argument(
         "--format",
         choices=RECORD_FORMATS,
@@ -252,23 +261,27 @@ def discover_arguments(parser) -> None:
     )
 
 
-def predict_arguments(parser) -> None:
-    parser.add_argument(
-        "model", help="fit.json or discovery.json (its fitted_model), or a saved model"
-    )
-    parser.add_argument("file", help="the record to predict (any format `fit` reads)")
-    parser.add_argument(
-        "--out", default=None, help="output folder (default tribojax-out/predict-STEM)"
-    )
+def predict_arguments(parser, batch: bool = False) -> None:
+    model_help = "fit.json or discovery.json (its fitted_model), or a saved model"
+    if batch:
+        parser.add_argument("--model", required=True, metavar="MODEL.json", help=model_help)
+    else:
+        parser.add_argument("model", help=model_help)
+    _record_argument(parser, batch, help="the record to predict (any format `fit` reads)")
+    if not batch:
+        parser.add_argument(
+            "--out", default=None, help="output folder (default tribojax-out/predict-STEM)"
+        )
     parser.add_argument(
         "--format",
         choices=RECORD_FORMATS,
         default=None,
         help="the record's format (default: detected)",
     )
-    parser.add_argument(
-        "--force", action="store_true", help="replace an existing DIR/prediction.json"
-    )
+    if not batch:
+        parser.add_argument(
+            "--force", action="store_true", help="replace an existing DIR/prediction.json"
+        )
     parser.add_argument(
         "--initial",
         choices=("rest", "measured"),
@@ -278,6 +291,83 @@ def predict_arguments(parser) -> None:
         "band_brake); default: as the model was fitted (rest)",
     )
     _band_tension_argument(parser)
+
+
+def _record_argument(parser, batch: bool, help: str, nargs=None) -> None:
+    """The record positional: the single command's `file`, or batch's `records` (several)."""
+    if batch:
+        parser.add_argument(
+            "records",
+            nargs="+",
+            metavar="RECORD",
+            help="records: files, folders (their records, a folder of EPOS steady-state "
+            "exports as one) or quoted globs ('runs/*.csv')",
+        )
+    else:
+        parser.add_argument("file", nargs=nargs, help=help)
+
+
+# the subcommands `tribojax batch` runs on each record (their arguments, in batch form)
+BATCH_COMMANDS = {
+    "fit": fit_arguments,
+    "discover": discover_arguments,
+    "predict": predict_arguments,
+}
+
+
+def batch_arguments(parser) -> None:
+    sub = parser.add_subparsers(dest="batch_command", required=True, metavar="COMMAND")
+    for name, add_arguments in BATCH_COMMANDS.items():
+        cmd = sub.add_parser(name, help=f"`tribojax {name}` on each record")
+        add_arguments(cmd, batch=True)
+        cmd.add_argument(
+            "--out",
+            required=True,
+            help="output folder: DIR/<record stem>/ as the single command writes it, "
+            "DIR/batch.csv and DIR/batch.json",
+        )
+        where = cmd.add_mutually_exclusive_group()
+        where.add_argument(
+            "--workers",
+            type=_whole_number("--workers"),
+            default=None,
+            help="worker processes of the local cluster (default: one per core, "
+            "at most one per 2 GiB of memory)",
+        )
+        where.add_argument(
+            "--scheduler",
+            default=None,
+            metavar="ADDRESS",
+            help="an existing Dask scheduler (tcp://HOST:PORT)",
+        )
+        where.add_argument(
+            "--scheduler-file",
+            default=None,
+            metavar="FILE",
+            help="an existing Dask scheduler's file (`dask scheduler --scheduler-file FILE`)",
+        )
+        cmd.add_argument(
+            "--force",
+            action="store_true",
+            help="run every record again (default: a record whose outputs are complete "
+            "from an earlier run with the same options is not run again)",
+        )
+        cmd.add_argument(
+            "--quiet",
+            action="store_true",
+            help="no progress display (it is shown only on a terminal)",
+        )
+
+
+def _whole_number(name: str):
+    def parse(text: str) -> int:
+        if not (text.strip().isdigit() and int(text) >= 1):
+            raise argparse.ArgumentTypeError(
+                f"{name} = {text!r} is outside the allowed range: a whole number >= 1"
+            )
+        return int(text)
+
+    return parse
 
 
 def frf_arguments(parser) -> None:

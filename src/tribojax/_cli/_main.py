@@ -18,8 +18,9 @@ from . import _arguments as A
 __all__ = ["SUBCOMMANDS", "build_parser", "main"]
 
 # The subcommands: (name, help, add_arguments(parser), "module:function" that runs it, imported
-# only when it runs). A new subcommand is one line here, its arguments in `_arguments` and one
-# module in this package; errors go through `_common.run_command`.
+# only when it runs; relative to this package unless it starts with "tribojax."). A new
+# subcommand is one line here, its arguments in `_arguments` and one module in this package;
+# errors go through `_common.run_command`.
 SUBCOMMANDS = [
     (
         "reproduce",
@@ -62,6 +63,12 @@ SUBCOMMANDS = [
         "forced response of a structure with friction contacts",
         A.frf_arguments,
         "_frf:run_frf",
+    ),
+    (
+        "batch",
+        "fit, discover or predict many records on a Dask cluster",
+        A.batch_arguments,
+        "tribojax._batch._command:run_batch_command",  # the batch layer, above the command line
     ),
 ]
 
@@ -145,7 +152,8 @@ def main(argv=None, *, configure: bool = False) -> int:
     from ._common import run_command
 
     module, function = args.target.split(":")
-    run = getattr(importlib.import_module(f"{__package__}.{module}"), function)
+    module = module if module.startswith("tribojax.") else f"{__package__}.{module}"
+    run = getattr(importlib.import_module(module), function)
     if _CONSOLE[0]:  # the imports are over: from here an interrupt raises (`console`)
         _RAISE[0] = True
         if _INTERRUPTS:
