@@ -115,7 +115,11 @@ def command_options(command: str, options: dict) -> dict:
                 value = [f"{k}={v}" for k, v in value.items()]
             many = isinstance(value, list | tuple)
             tokens += [flag, *map(str, value)] if many else [flag, str(value)]
-    return strip_batch_keys(vars(parser.parse_args([*tokens, "--", "RECORD"])))
+    parsed = vars(parser.parse_args([*tokens, "--", "RECORD"]))
+    extra = [v for v in parsed["records"] if v != "RECORD"]
+    if extra:
+        raise BatchUsageError(f"{command}: values {extra} belong to no option (one value each?)")
+    return strip_batch_keys(parsed)
 
 
 def strip_batch_keys(parsed: dict) -> dict:
