@@ -31,6 +31,7 @@ OPTIONAL = {
     "matplotlib": {"tribojax._plot"},
     "SurfaceTopography": {"tribojax._roughness._topography"},
     "distributed": {"tribojax._batch._run", "tribojax._batch._task"},
+    "dask": {"tribojax._batch._run"},
 }
 # distribution name -> import name where they differ
 IMPORT_NAMES = {"jax": {"jax", "jaxlib"}}

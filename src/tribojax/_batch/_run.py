@@ -15,6 +15,7 @@ import time
 import uuid
 from pathlib import Path
 
+from .._cli._arguments import BATCH_COMMANDS  # (argparse only: no JAX)
 from .._io._files import write_json_atomic, write_text_atomic
 from ._records import BatchUsageError, expand_records, unique_stems
 from ._task import MAIN_OUTPUT, STATE, row_path, run_record
@@ -94,8 +95,6 @@ def command_options(command: str, options: dict) -> dict:
     """A record command's arguments (`tribojax COMMAND`'s parsed options, its defaults filled
     in) from Python keywords named as the options' destinations (`alpha="free"`,
     `max_effects=2`, `start={"F_s": 0.5}`), checked by the command's own parser."""
-    from .._cli._arguments import BATCH_COMMANDS
-
     if command not in BATCH_COMMANDS:
         raise BatchUsageError(f"command = {command!r} is not one of {list(BATCH_COMMANDS)}")
     parser = _Strict(prog=f"tribojax batch {command}")
