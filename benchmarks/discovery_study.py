@@ -1,12 +1,16 @@
 """Confusion study of `discover` on independent hidden-effect slip and loop records (issue 14).
 
-    python benchmarks/discovery_study.py [--out DIR] [--subset ci] [--labels FILE] [--resume]
+    python benchmarks/discovery_study.py [--out DIR] [--subset ci] [--labels FILE]
+        [--workers N | --scheduler-file F] [--force]
 
 Records: `benchmarks.discovery_records.study_specs()` (slip runs, SciPy-generated) and
 `benchmarks.discovery_loop_records.loop_study_specs()` (loops, own NumPy hysteresis models);
 seeds in the specs.
-Writes DIR/discovery_study.jsonl (one line per record, appended as it goes), and at the end
-DIR/discovery_study.json (rows + summary) and DIR/discovery_study.md (the confusion table).
+Each record is written as a user's file (DIR/discovery_records/, CSV + sidecar) and discovered
+by `tribojax.batch(files, "discover")` — `tribojax discover`'s defaults, one Dask worker process
+a core (or an existing cluster), DIR/discovery_runs/<record>/discovery.json as the command writes
+it; a rerun skips the records already discovered. Writes DIR/discovery_study.json (rows +
+summary) and DIR/discovery_study.md (the confusion table).
 Default DIR: benchmarks/ (the stored table that notebooks/05_discovery.ipynb reads).
 
 Scoring (issue 14 targets):
@@ -28,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+import tribojax as tj
 import tribojax.discovery as disc
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -81,13 +86,36 @@ def spec_noise(spec) -> float | None:
     return None if getattr(spec, "kind", "slip") == "loop" else float(dr.NOISE[spec.noise])
 
 
+def safe_name(label: str) -> str:
+    """A record's file stem from its study label."""
+    return "".join(c if c.isalnum() or c in "._-" else "_" for c in label)
+
+
+def write_record(spec, folder: Path) -> Path:
+    """The spec's record as a user's file (CSV + sidecar, 17 digits: read back bit for bit)."""
+    path = folder / f"{safe_name(spec.label)}.csv"
+    if not path.exists():
+        if getattr(spec, "kind", "slip") == "loop":
+            tj.write_loop(dlr.make_loop_record(spec), path)
+        else:
+            tj.write_slip_run(dr.make_record(spec), path)
+    return path
+
+
 def run_one(spec) -> dict:
+    """One record discovered in this process (`tribojax.discover` on its baseline, as the
+    command does): its study row (the tests' form; the study itself runs `tribojax.batch`)."""
     loop = getattr(spec, "kind", "slip") == "loop"
     rec = dlr.make_loop_record(spec) if loop else dr.make_record(spec)
     t0 = time.perf_counter()
     rep = disc.discover_loop(rec) if loop else disc.discover(disc.slip_baseline(rec))
-    wall = time.perf_counter() - t0
-    sd = rep.noise_std
+    return study_row(spec, rep.as_dict(), time.perf_counter() - t0)
+
+
+def study_row(spec, rep: dict, wall: float) -> dict:
+    """A study row from the record's discovery.json (`tribojax discover`'s answer)."""
+    loop = getattr(spec, "kind", "slip") == "loop"
+    sd = rep["noise_std"]
     row = {
         "label": spec.label,
         "kind": "loop" if loop else "slip",
@@ -98,27 +126,29 @@ def run_one(spec) -> dict:
         "noise": spec.noise,
         "sidecar": spec.sidecar,
         "seed": spec.seed,
-        "verdict": rep.verdict,
-        "effect": rep.effect,
-        "effects": list(rep.effects),
-        "excess_before_sd": rep.excess_rmse_before / sd,
-        "excess_after_sd": rep.excess_rmse_after / sd,
-        "F_s": rep.baseline_fit["parameters"].get("F_s"),
-        "converged": rep.converged,
+        "verdict": rep["verdict"],
+        "effect": rep["effect"],
+        "effects": list(rep["effects"]),
+        "excess_before_sd": rep["excess_rmse_before"] / sd,
+        "excess_after_sd": rep["excess_rmse_after"] / sd,
+        "F_s": rep["baseline_fit"]["parameters"].get("F_s"),
+        "converged": rep["converged"],
         "noise_std": sd,
         "noise_std_true": spec_noise(spec),
         "seconds": wall,
     }
-    h0, h1 = rep.heldout_excess_before, rep.heldout_excess_after
+    h0, h1 = rep["heldout_excess_before"], rep["heldout_excess_after"]
     row["heldout_before_sd"] = None if h0 is None else h0 / sd
     row["heldout_after_sd"] = None if h1 is None else h1 / sd
-    row["final_consistent"] = rep.misfit.get("final_consistent")
-    row["effects_dropped"] = list(rep.settings.get("effects_dropped") or [])
-    corr = rep.misfit.get("correlations") or []
-    row["misfit_signals"] = [c["signal"] for c in corr]  # largest |correlation| first
-    fix = rep.misfit.get("correction") or {}
+    misfit = rep["misfit"] or {}
+    row["final_consistent"] = misfit.get("final_consistent")
+    row["effects_dropped"] = list((rep["settings"] or {}).get("effects_dropped") or [])
+    row["misfit_signals"] = [c["signal"] for c in misfit.get("correlations") or []]
+    fix = misfit.get("correction") or {}
     row["correction"] = {k: fix.get(k) for k in ("signal", "gap_closed")} if fix else None
-    row["ok"] = score(spec, rep.verdict, rep.effect, rep.excess_rmse_before, rep.excess_rmse_after)
+    row["ok"] = score(
+        spec, rep["verdict"], rep["effect"], rep["excess_rmse_before"], rep["excess_rmse_after"]
+    )
     return row
 
 
@@ -211,26 +241,20 @@ def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent))
     ap.add_argument("--subset", choices=["all", "ci"], default="all")
-    ap.add_argument("--resume", action="store_true")
     ap.add_argument(
         "--labels",
-        help="file of record labels, one a line: run those, in that order "
-        "(a re-run of chosen records; write it to another --out)",
+        help="file of record labels, one a line: run those (a re-run of chosen records; write "
+        "it to another --out)",
     )
     ap.add_argument(
-        "--reverse",
-        action="store_true",
-        help="last record first, skipping those any log in --out holds already",
+        "--workers", type=int, default=None, help="Dask worker processes (default: one a core)"
     )
-    ap.add_argument("--shard", default="0/1", help="i/n: run records i, i+n, ... (one log each)")
     ap.add_argument(
-        "--table-only",
-        action="store_true",
-        help="write the table from the records in the .jsonl so far",
+        "--scheduler-file", default=None, help="run on an existing Dask cluster instead"
     )
+    ap.add_argument("--force", action="store_true", help="discover every record again")
     args = ap.parse_args(argv)
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     specs = all_specs()
     if args.subset == "ci":
         specs = [s for s in specs if any(s.label.startswith(c) for c in CI_LABELS)]
@@ -241,34 +265,33 @@ def main(argv=None):
         if missing:
             raise SystemExit(f"{args.labels}: labels not in study_specs(): {missing}")
         specs = [by_label[x] for x in wanted]
-    i_shard, n_shard = (int(v) for v in args.shard.split("/"))
-    log = out / ("discovery_study.jsonl" if n_shard == 1 else f"discovery_study.{i_shard}.jsonl")
-    done = {}
-    if args.resume or args.table_only:
-        for f in out.glob("discovery_study*.jsonl"):
-            done.update({json.loads(x)["label"]: json.loads(x) for x in f.read_text().splitlines()})
-    elif log.exists():
-        log.unlink()
-    if not args.table_only:
-        specs = specs[i_shard::n_shard]
-    if args.reverse:
-        specs = specs[::-1]
-        log = out / "discovery_study.rev.jsonl"
-    if args.table_only:
-        specs = [s for s in specs if s.label in done]
+    # the records as a user's files, discovered by `tribojax batch discover` (one run per
+    # record in DIR/discovery_runs/<stem>/; a rerun skips the records already complete)
+    folder = out / "discovery_records"
+    folder.mkdir(parents=True, exist_ok=True)
+    files = [write_record(spec, folder) for spec in specs]
+    client = None
+    if args.scheduler_file:
+        from distributed import Client
+
+        client = Client(scheduler_file=args.scheduler_file)
+    table = tj.batch(
+        files,
+        "discover",
+        out=out / "discovery_runs",
+        client=client,
+        workers=args.workers,
+        force=args.force,
+    )
     rows = []
-    for spec in specs:
-        if args.reverse:
-            for f in out.glob("discovery_study*.jsonl"):
-                done.update(
-                    {json.loads(x)["label"]: json.loads(x) for x in f.read_text().splitlines()}
-                )
-            if spec.label in done:
-                continue
-        row = done.get(spec.label) or run_one(spec)
-        if spec.label not in done:
-            with log.open("a") as fh:
-                fh.write(json.dumps(row) + "\n")
+    for spec, result in zip(specs, table):
+        if result["status"] != "ok":
+            print(f"{spec.label}: {result['message']}", flush=True)
+            continue
+        rep = json.loads(
+            (out / "discovery_runs" / safe_name(spec.label) / "discovery.json").read_text()
+        )
+        row = study_row(spec, rep, result["wall_s"])
         rows.append(row)
         print(
             f"{row['label']:55s} {row['verdict']:17s} {row['effect']:17s} "
