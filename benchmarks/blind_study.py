@@ -2,10 +2,12 @@
 written outside the project from a physical description only (benchmarks/blind/, frozen).
 
     python benchmarks/blind/generate.py --out DIR           # the records and DIR/manifest.json
-    python benchmarks/blind_study.py DIR [--out OUT] [--resume] [--kind slip|loop]
+    python benchmarks/blind_study.py DIR [--out OUT] [--kind slip|loop] [--workers N] [--force]
 
-Each record is read as a user's file (`tribojax.read_record`: CSV + sidecar) and discovered with
-the defaults of `tribojax discover` (the record's baseline, `discover`, at most 3 effects).
+Each record is a user's file (CSV + sidecar) discovered by `tribojax batch discover`
+(`tribojax.batch`: the command's defaults — the record's baseline, at most 3 effects — one Dask
+worker process a core; OUT/discovery_runs/<record>/discovery.json as the command writes it; a
+rerun skips the records already discovered).
 Scoring, from the manifest's hidden effects only (no setting is tuned on these records):
 - clean: the verdict is "none";
 - one hidden effect: it is named first and the excess misfit is at least halved;
@@ -21,8 +23,8 @@ deflection taken up by F_s, K_τ, C_τ), and then no residual test can see it, a
 of out-of-vocabulary effects. The summary also scores the one-effect records whose baseline
 refit leaves an excess of at least `VISIBLE_SD` noise sd (any baseline fit, this one or a better
 one, can only lower that excess, so a record below it is invisible to every residual method).
-Writes OUT/blind_study.jsonl (a line per record, as it goes), OUT/blind_study.json (rows and
-summary) and OUT/blind_study.md (the table). Default OUT: DIR.
+Writes OUT/blind_study.json (rows and summary) and OUT/blind_study.md (the table). Default OUT:
+DIR. The stored .jsonl files below were written by the earlier in-process form of this script.
 
 benchmarks/blind_study_before.jsonl: the rows of the code before any issue-32 change (stop 31,
 all 45 records; 4,019 s of discovery on this 2-core machine, partly under load).
@@ -36,14 +38,9 @@ from __future__ import annotations
 import argparse
 import collections
 import json
-import time
 from pathlib import Path
 
 import tribojax as tj
-import tribojax.discovery as disc
-
-BASELINES = {"slip_run": disc.slip_baseline, "loop": disc.loop_baseline}
-
 
 VISIBLE_SD = 1.0
 """An effect is visible to a residual test when the baseline refitted to the record leaves an
@@ -60,35 +57,31 @@ def score(hidden: list, effects: list, verdict: str, e0: float, e1: float) -> bo
     return set(effects) == set(hidden) and len(effects) == len(hidden) and halved
 
 
-def run_one(entry: dict, folder: Path) -> dict:
-    record = tj.read_record(folder / entry["file"])
-    t0 = time.perf_counter()
-    rep = disc.discover(BASELINES[record.kind](record))
-    wall = time.perf_counter() - t0
-    sd = rep.noise_std
+def study_row(entry: dict, rep: dict, wall: float) -> dict:
+    """A study row from the record's discovery.json (`tribojax discover`'s answer)."""
+    sd = rep["noise_std"]
     hidden = list(entry["hidden"])
+    e0, e1 = rep["excess_rmse_before"], rep["excess_rmse_after"]
     row = {
         "label": entry["label"],
         "kind": entry["kind"],
         "hidden": hidden,
         "drive": entry.get("drive"),
         "visibility_sd": entry.get("visibility_sd"),
-        "verdict": rep.verdict,
-        "effects": list(rep.effects),
-        "effect": rep.effect,
-        "excess_before_sd": rep.excess_rmse_before / sd,
-        "excess_after_sd": rep.excess_rmse_after / sd,
-        "converged": rep.converged,
-        "heldout_before_sd": _sd(rep.heldout_excess_before, sd),
-        "heldout_after_sd": _sd(rep.heldout_excess_after, sd),
-        "final_consistent": rep.misfit.get("final_consistent"),
+        "verdict": rep["verdict"],
+        "effects": list(rep["effects"]),
+        "effect": rep["effect"],
+        "excess_before_sd": e0 / sd,
+        "excess_after_sd": e1 / sd,
+        "converged": rep["converged"],
+        "heldout_before_sd": _sd(rep["heldout_excess_before"], sd),
+        "heldout_after_sd": _sd(rep["heldout_excess_after"], sd),
+        "final_consistent": (rep["misfit"] or {}).get("final_consistent"),
         "noise_std": sd,
         "seconds": wall,
-        "extra": [e for e in rep.effects if e not in hidden],
+        "extra": [e for e in rep["effects"] if e not in hidden],
     }
-    row["ok"] = bool(
-        score(hidden, row["effects"], rep.verdict, rep.excess_rmse_before, rep.excess_rmse_after)
-    )
+    row["ok"] = bool(score(hidden, row["effects"], rep["verdict"], e0, e1))
     h0, h1 = row["heldout_before_sd"], row["heldout_after_sd"]
     row["ok_heldout"] = bool(
         row["ok"] and (not hidden or (h0 is not None and h1 is not None and h1 <= 0.5 * h0))
@@ -151,26 +144,25 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("records", help="the folder generate.py wrote (with manifest.json)")
     ap.add_argument("--out", default=None, help="output folder (default: the records' folder)")
-    ap.add_argument("--resume", action="store_true", help="keep the rows already in the log")
     ap.add_argument("--kind", choices=("slip", "loop"), default=None, help="only this kind")
+    ap.add_argument("--workers", type=int, default=None, help="Dask worker processes")
+    ap.add_argument("--force", action="store_true", help="discover every record again")
     args = ap.parse_args(argv)
     folder = Path(args.records)
     out = Path(args.out) if args.out else folder
     out.mkdir(parents=True, exist_ok=True)
     manifest = json.loads((folder / "manifest.json").read_text())
     entries = [e for e in manifest if args.kind in (None, e["kind"])]
-    log = out / "blind_study.jsonl"
-    done = {}
-    if args.resume and log.exists():
-        done = {json.loads(x)["label"]: json.loads(x) for x in log.read_text().splitlines()}
-    elif log.exists():
-        log.unlink()
+    runs = out / "discovery_runs"
+    files = [folder / e["file"] for e in entries]
+    table = tj.batch(files, "discover", out=runs, workers=args.workers, force=args.force)
     rows = []
-    for entry in entries:
-        row = done.get(entry["label"]) or run_one(entry, folder)
-        if entry["label"] not in done:
-            with log.open("a") as fh:
-                fh.write(json.dumps(row) + "\n")
+    for entry, result in zip(entries, table):
+        if result["status"] != "ok":
+            print(f"{entry['label']}: {result['message']}", flush=True)
+            continue
+        rep = json.loads((runs / Path(entry["file"]).stem / "discovery.json").read_text())
+        row = study_row(entry, rep, result["wall_s"])
         rows.append(row)
         print(
             f"{row['label']:50s} {'+'.join(row['hidden']) or 'none':32s} {row['verdict']:17s} "
