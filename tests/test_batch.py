@@ -129,7 +129,7 @@ def test_usage_errors_run_nothing(tmp_path, argv, said):
     assert not (tmp_path / "o" / "batch.csv").exists()
 
 
-def test_the_python_entry_on_a_users_client(tmp_path, single):
+def test_the_python_entry_on_a_users_client(tmp_path, single, monkeypatch):
     rec = _copy_loop(tmp_path / "records", "sine")
     with (
         distributed.LocalCluster(
@@ -145,6 +145,15 @@ def test_the_python_entry_on_a_users_client(tmp_path, single):
             max_steps=200,
         )
         assert client.status == "running"  # the user's client is left open
+        model = tmp_path / "o" / "sine" / "fit.json"  # relative to the caller: made absolute
+        monkeypatch.chdir(tmp_path)
+        (pred,) = tj.batch(
+            [rec], "predict", out="p", client=client, model=model.relative_to(tmp_path)
+        )
+    assert pred["status"] == "ok", pred
+    # the record predicted by the model fitted to it: the fit's own NRMSE
+    assert pred["figures"]["nrmse"] == pytest.approx(single["nrmse"], rel=1e-9)
+    assert (tmp_path / "p" / "sine" / "prediction.json").is_file()
     (row,) = rows
     assert row["record"] == str(rec) and row["status"] == "ok" and not row["reused"]
     assert row["figures"]["mu_N"] == single["parameters"]["mu_N"]

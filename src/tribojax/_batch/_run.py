@@ -131,10 +131,21 @@ def _stamp(path: Path) -> list:
     return [[p.name, p.stat().st_size, p.stat().st_mtime_ns] for p in files if p.is_file()]
 
 
+def _file_options(command: str) -> tuple[str, ...]:
+    """The command's options that name a file (a saved model)."""
+    return ("from_model", "model") if command == "predict" else ("from_model",)
+
+
+def _absolute(command: str, options: dict) -> dict:
+    """`options` with the files they name as absolute paths (a worker's folder may differ)."""
+    files = {k: str(Path(options[k]).resolve()) for k in _file_options(command) if options.get(k)}
+    return options | files
+
+
 def _request(command, options, path: Path) -> dict:
     """What a record's result depends on: the command, its options, the record's path and the
     stamps of its files and of the files the options name (a model)."""
-    named = [Path(v) for v in options.values() if isinstance(v, str) and Path(v).is_file()]
+    named = [Path(options[k]) for k in _file_options(command) if options.get(k)]
     stamps = [_stamp(p) for p in [path, *named]]
     request = {"command": command, "options": options, "record": str(path.resolve())}
     return json.loads(json.dumps(request | {"stamps": stamps}))
@@ -174,6 +185,7 @@ def run_batch(command, options, records, out, *, cluster=None, force=False, prog
     `force`; the cluster (`dask_client(**cluster)`) is started only if a record is left to run.
     `progress`: an object with `total` and `step(note)` (the command's display)."""
     out = Path(out).resolve()
+    options = _absolute(command, options)
     paths = expand_records(records, out)
     stems = unique_stems(paths)
     rows: dict[int, dict] = {}
