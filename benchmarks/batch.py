@@ -1,13 +1,13 @@
 """`tribojax batch` against the shell loop of single commands (issue 70), end to end, each
 command a fresh process (what a user runs).
 
-    python benchmarks/batch.py [--out DIR] [--records N] [--quick]
+    python benchmarks/batch.py [--out DIR] [--records N] [--command fit|discover] [--quick]
 
 Records: the first N slip runs and loops of the discovery study (`benchmarks/discovery_study.py`:
 SciPy- and NumPy-made records, written as a user's files). Measured in one run on this machine:
 
-- `serial`: `tribojax fit RECORD --out D` for each record in turn (a process, start-up and
-  compilation per record; the compilation cache warm, as a user's second day);
+- `serial`: `tribojax fit RECORD --out D` (or `discover`) for each record in turn (a process,
+  start-up and compilation per record; the compilation cache warm, as a user's second day);
 - `batch_1`, `batch_2`: `tribojax batch fit RECORDS --out D --workers 1|2` (a local cluster,
   start-up and compilation once per worker process);
 - `rerun`: the same batch again (every record complete: nothing runs);
@@ -15,7 +15,8 @@ SciPy- and NumPy-made records, written as a user's files). Measured in one run o
   (SIGKILL) while both run a record, plus a corrupt record: the rows, and whether every good
   record's parameters equal the single command's to the last bit; then the rerun's time.
 
-Writes DIR/batch.json (default benchmarks/) and prints the table. Records per hour =
+Writes DIR/batch.json (default benchmarks/; under the command's key, the other kept) and prints
+it. Records per hour =
 records / wall time of the whole command(s).
 """
 
@@ -47,7 +48,11 @@ def _run(cmd, **kw) -> float:
 
 
 def _params(folder: Path) -> dict:
-    return json.loads((folder / "fit.json").read_text())["parameters"]
+    """A record's answer: fit.json's parameters, or discovery.json's verdict, effects, excess."""
+    if (folder / "fit.json").exists():
+        return json.loads((folder / "fit.json").read_text())["parameters"]
+    d = json.loads((folder / "discovery.json").read_text())
+    return {k: d[k] for k in ("verdict", "effects", "excess_rmse_before", "excess_rmse_after")}
 
 
 def _rows(out: Path) -> list[dict]:
@@ -121,8 +126,15 @@ def main(argv=None) -> dict:
     ap.add_argument("--out", default=str(HERE))
     ap.add_argument("--records", type=int, default=24)
     ap.add_argument("--quick", action="store_true", help="4 records (a smoke run)")
+    ap.add_argument(
+        "--command",
+        choices=("fit", "discover"),
+        default="fit",
+        help="the command timed (discover: no killed-worker run); results go under its key",
+    )
     args = ap.parse_args(argv)
     n = 4 if args.quick else args.records
+    command = args.command
     work = Path(args.out) / "batch_work"
     shutil.rmtree(work, ignore_errors=True)
     files = records(n, work / "records")
@@ -131,16 +143,17 @@ def main(argv=None) -> dict:
     corrupt.write_text("\n".join(text[:40] + [text[40].replace(",", ",x", 1)] + text[41:]) + "\n")
     shutil.copy(files[0].with_suffix(".json"), corrupt.with_suffix(".json"))
 
-    _run([*TRIBOJAX, "fit", str(files[0]), "--out", str(work / "warm")])  # the cache warm
+    _run([*TRIBOJAX, command, str(files[0]), "--out", str(work / "warm")])  # the cache warm
     t0 = time.perf_counter()
     for f in files:
-        _run([*TRIBOJAX, "fit", str(f), "--out", str(work / "serial" / f.stem), "--quiet"])
+        _run([*TRIBOJAX, command, str(f), "--out", str(work / "serial" / f.stem), "--quiet"])
     timings = {"serial": time.perf_counter() - t0}
     serial = {str(f): _params(work / "serial" / f.stem) for f in files}
     same = {}
     for w in (1, 2):
         out = work / f"batch_{w}"
-        cmd = [*TRIBOJAX, "batch", "fit", *map(str, files), "--out", str(out), "--workers", str(w)]
+        cmd = [*TRIBOJAX, "batch", command, *map(str, files), "--out", str(out)]
+        cmd += ["--workers", str(w)]
         timings[f"batch_{w}"] = _run(cmd)
         same[f"batch_{w}"] = all(_params(out / f.stem) == serial[str(f)] for f in files)
         if w == 2:
@@ -148,14 +161,17 @@ def main(argv=None) -> dict:
     result = {
         "machine": f"{platform.machine()}, {os.cpu_count()} cores",
         "records": n,
-        "command": "fit",
+        "command": command,
         "wall_s": timings,
         "records_per_hour": {k: 3600 * n / v for k, v in timings.items() if k != "rerun"},
         "speedup_over_serial": {k: timings["serial"] / timings[k] for k in ("batch_1", "batch_2")},
         "same_parameters_as_single_command": same,
-        "killed": killed_worker_run(files, corrupt, work, serial),
     }
-    Path(args.out, "batch.json").write_text(json.dumps(result, indent=1) + "\n")
+    if command == "fit":
+        result["killed"] = killed_worker_run(files, corrupt, work, serial)
+    target = Path(args.out, "batch.json")
+    stored = json.loads(target.read_text()) if target.exists() else {}
+    target.write_text(json.dumps(stored | {command: result}, indent=1) + "\n")
     print(json.dumps(result, indent=1))
     shutil.rmtree(work, ignore_errors=True)
     return result

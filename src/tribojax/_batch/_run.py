@@ -60,16 +60,18 @@ def default_workers() -> int:
 
 @contextlib.contextmanager
 def dask_client(client=None, *, workers=None, scheduler=None, scheduler_file=None):
-    """The client a batch runs on: `client` as given, one connected to an existing scheduler
-    (`scheduler` address or `scheduler_file`), or a local cluster of `workers` processes (one
-    thread each) on the loopback address, closed on exit."""
+    """(the client a batch runs on, the fit threads of each worker process or None): `client`
+    as given, one connected to an existing scheduler (`scheduler` address or `scheduler_file`),
+    or a local cluster of `workers` processes (one task at a time each, the cores shared out
+    among them for the threads that run a record's independent fits side by side) on the
+    loopback address, closed on exit."""
     if client is not None:
-        yield client
+        yield client, None
         return
     d = _distributed()
     if scheduler is not None or scheduler_file is not None:
         with d.Client(scheduler, scheduler_file=scheduler_file) as c:
-            yield c
+            yield c, None
         return
     n = workers or default_workers()
     with (
@@ -83,7 +85,7 @@ def dask_client(client=None, *, workers=None, scheduler=None, scheduler_file=Non
         ) as cluster,
         d.Client(cluster) as c,
     ):
-        yield c
+        yield c, max(1, (os.cpu_count() or 1) // n)
 
 
 class _Strict(argparse.ArgumentParser):
@@ -199,11 +201,12 @@ def run_batch(command, options, records, out, *, cluster=None, force=False, prog
             todo.append((i, request))
     if todo:
         (out / STATE / "tmp").mkdir(parents=True, exist_ok=True)
-        with dask_client(**(cluster or {})) as client:
+        with dask_client(**(cluster or {})) as (client, threads):
             futures = {}
+            settings = {"caller_pid": os.getpid(), "fit_threads": threads}
             for i, request in todo:
                 key = f"tribojax-{command}-{stems[i]}-{uuid.uuid4().hex[:8]}"
-                args = (command, options, request, stems[i], str(out), os.getpid())
+                args = (command, options, request, stems[i], str(out), settings)
                 futures[client.submit(run_record, *args, key=key, pure=False)] = i
             if progress is not None:
                 progress.total = len(futures)

@@ -38,9 +38,11 @@ _ONE_AT_A_TIME = threading.Lock()
 _CONFIGURED: list[bool] = []
 
 
-def _configure_once(caller_pid: int) -> None:
-    if _CONFIGURED or os.getpid() == caller_pid:
+def _configure_once(settings: dict) -> None:
+    if _CONFIGURED or os.getpid() == settings["caller_pid"]:
         return
+    if settings["fit_threads"]:  # a local cluster's share of the cores (read on import)
+        os.environ.setdefault("TRIBOJAX_FIT_WORKERS", str(settings["fit_threads"]))
     with contextlib.suppress(RuntimeError):  # a worker whose JAX had started: as it is
         configure_process()
     _CONFIGURED.append(True)
@@ -91,14 +93,15 @@ def _last_error(text: str) -> str:
     return lines[-1] if lines else ""
 
 
-def run_record(command: str, options: dict, request: dict, stem: str, out: str, caller_pid: int):
+def run_record(command: str, options: dict, request: dict, stem: str, out: str, settings: dict):
     """Run `tribojax COMMAND` on the record `request["record"]` (an absolute path) with
     `options` (the command's parsed arguments), writing DIR/<stem>/ as the command writes its
     --out folder; the record's row (also kept in DIR/.batch/rows/<stem>.json with the `request`,
-    so that a rerun with the same request can skip a complete record)."""
+    so that a rerun with the same request can skip a complete record). `settings`: the
+    caller's process id (never configured) and the fit threads of a local cluster's worker."""
     record = request["record"]
     with _ONE_AT_A_TIME:
-        _configure_once(caller_pid)
+        _configure_once(settings)
         from .._cli._common import run_command  # after the settings: it imports equinox
 
         out = Path(out)
