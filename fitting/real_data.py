@@ -353,7 +353,7 @@ def main(argv=None) -> None:
     if not args.prediction_only:
         study["screwdrive"] = screwdrive_study(args.src, log)
         study["discovery"] = {  # issue 15 point 5: every brfd test and both screw drives
-            "brfd": brfd_discovery(args.src, args.short, log),
+            "brfd": brfd_discovery(args.src, args.short, log, out=args.out),
             "screwdrive": screwdrive_discovery(args.src, log, args.out),
         }
     study["seconds"] = time.perf_counter() - t0

@@ -2,7 +2,9 @@
 
     python -m fitting.real_data --out DIR      # the "discovery" → "brfd" part of real_data.json
 
-Each brfd test goes through the same path as `tribojax discover FILE --out DIR`: `read_record`,
+Each brfd test is run by `tribojax batch discover` (`tribojax.batch`: the command's own path,
+one Dask worker process a core; `discover_brfd_test` is the same steps in this process):
+`read_record`,
 `decimate_record(..., whole_cycles=True)` to at most `DISCOVER_MAX_SAMPLES` samples (blocks of
 ≥ 4 samples, at least 256 per cycle; a loop whose cycles do not fit keeps its first whole
 cycles), `loop_baseline` (the Jenkins element driven by the measured displacement; an
@@ -19,6 +21,8 @@ clearance at reversal is expected: the device has backlash).
 
 from __future__ import annotations
 
+import json
+import tempfile
 import time
 from pathlib import Path
 
@@ -76,11 +80,11 @@ def _test_info(path: Path) -> dict:
     }
 
 
-def _where(report, t) -> dict:
+def _where(misfit: dict, t) -> dict:
     """Where a misfit remains: the regions still flagged after the added effects (branch,
     displacement range in mm, time range in s, RMS over the noise sd), and the share of samples
     they cover."""
-    regions = report.misfit.get("regions", [])
+    regions = misfit.get("regions", [])
     rows = [
         {
             "branch": BRANCH.get(rg.get("branch"), rg.get("branch")),
@@ -111,26 +115,31 @@ def physical_sense(effects) -> str:
 def discover_brfd_test(
     path: Path, *, record=None, factor=None, max_samples: int = tj.DISCOVER_MAX_SAMPLES
 ) -> dict:
-    """One row of the table: `tribojax discover`'s steps on one brfd file (or on `record`, e.g.
-    an excerpt, named after `path`); `factor`: decimation blocks (None: automatic, as the CLI)."""
+    """One row of the table: `tribojax discover`'s steps on one brfd file in this process (or on
+    `record`, e.g. an excerpt, named after `path`); `factor`: decimation blocks (None:
+    automatic, as the CLI)."""
     t0 = time.perf_counter()
     record = tj.read_record(path) if record is None else record
     reduced, how = tj.decimate_record(record, factor, max_samples=max_samples, whole_cycles=True)
-    baseline = loop_baseline(reduced)
-    report = discover(baseline)
-    d = report.as_dict()
+    report = discover(loop_baseline(reduced))
+    return table_row(path, record, reduced, how, report.as_dict(), time.perf_counter() - t0)
+
+
+def table_row(path, record, reduced, how, d: dict, seconds: float) -> dict:
+    """A row of the table from a discovery's dictionary (discovery.json) on `reduced`, the
+    record as `decimate_record` (`how`) reduced it."""
     strengths = d.get("strengths", {})
     gap = strengths.get("backlash", {}).get("nuisance", {}).get("gap_m")
     depth = strengths.get("backlash", {}).get("depth", {}).get("value")
-    row = {
+    return {
         "test": path.stem,
         "file": str(path),
         **_test_info(path),
         "samples_in_record": len(record.t),
-        "samples": len(report.y),
+        "samples": len(reduced.t),
         "decimation": how.as_dict(),
         "noise_sd_N": d.get("noise_std"),
-        "effects": list(report.effects),
+        "effects": list(d["effects"]),
         "verdict": d["verdict"],
         "excess_rmse_before_N": d["excess_rmse_before"],
         "excess_rmse_after_N": d["excess_rmse_after"],
@@ -142,32 +151,45 @@ def discover_brfd_test(
         ],
         "backlash_depth": depth,
         "strengths": strengths,
-        "misfit": _where(report, np.asarray(baseline.t)),
-        "physical_sense": physical_sense(report.effects),
-        "converged": report.converged,
-        "seconds": time.perf_counter() - t0,
+        "misfit": _where(d["misfit"], np.asarray(reduced.t)),
+        "physical_sense": physical_sense(d["effects"]),
+        "converged": d["converged"],
+        "seconds": seconds,
     }
-    return row
 
 
-def brfd_discovery(src, short: bool, log) -> list[dict]:
+def brfd_discovery(src, short: bool, log, out=None) -> list[dict]:
     """Discovery on every brfd test under `src` (the bundled excerpts without it); `short`: the
-    tests at 1 Hz and above only. One row per test (see the module docstring)."""
-    rows = []
-    for path in brfd_files(Path(src)):
-        info = _test_info(path)
-        if short and info.get("frequency_Hz", 0.0) < 1.0:
-            continue
-        row = discover_brfd_test(path)
-        rows.append(row)
-        gap = row["backlash_gap_mm"]
-        log(
-            f"discover {row['test']:34s} {'+'.join(row['effects']) or 'none':36s} "
-            f"{row['verdict']:16s} excess {row['excess_rmse_before_N']:.3g} -> "
-            f"{row['excess_rmse_after_N']:.3g} N"
-            + ("" if gap is None else f", gap {gap:.3g} mm")
-            + f" ({row['seconds']:.1f} s)"
-        )
+    tests at 1 Hz and above only. `tribojax batch discover` runs them (`tribojax.batch`, each
+    test's discovery.json in `out`/discovery_brfd/<test>/, a temporary folder by default); one
+    row per test (see the module docstring)."""
+    files = [
+        p
+        for p in brfd_files(Path(src))
+        if not (short and _test_info(p).get("frequency_Hz", 0.0) < 1.0)
+    ]
+    with tempfile.TemporaryDirectory() as tmp:
+        runs = Path(out or tmp) / "discovery_brfd"
+        table = tj.batch(files, "discover", out=runs)
+        rows = []
+        for path, result in zip(files, table):
+            if result["status"] != "ok":
+                raise RuntimeError(f"{path}: {result['message']}")
+            d = json.loads((runs / path.stem / "discovery.json").read_text())
+            record = tj.read_record(path)
+            reduced, how = tj.decimate_record(
+                record, None, max_samples=tj.DISCOVER_MAX_SAMPLES, whole_cycles=True
+            )
+            row = table_row(path, record, reduced, how, d, result["wall_s"])
+            rows.append(row)
+            gap = row["backlash_gap_mm"]
+            log(
+                f"discover {row['test']:34s} {'+'.join(row['effects']) or 'none':36s} "
+                f"{row['verdict']:16s} excess {row['excess_rmse_before_N']:.3g} -> "
+                f"{row['excess_rmse_after_N']:.3g} N"
+                + ("" if gap is None else f", gap {gap:.3g} mm")
+                + f" ({row['seconds']:.1f} s)"
+            )
     return rows
 
 
