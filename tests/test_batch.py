@@ -10,6 +10,7 @@ worker killed mid-run on a cluster started with the `dask` command.
 
 import csv
 import json
+import os
 import shutil
 import signal
 import subprocess
@@ -17,6 +18,7 @@ import sys
 import time
 from pathlib import Path
 
+import jax
 import pytest
 
 import tribojax as tj
@@ -131,12 +133,16 @@ def test_usage_errors_run_nothing(tmp_path, argv, said):
 
 def test_the_python_entry_on_a_users_client(tmp_path, single, monkeypatch):
     rec = _copy_loop(tmp_path / "records", "sine")
+    environ, x64 = dict(os.environ), jax.config.jax_enable_x64
+    with pytest.raises(ValueError, match="nothing.csv: no such file"):
+        tj.batch([tmp_path / "nothing.csv"], "fit", out=tmp_path / "o")
     with (
         distributed.LocalCluster(
             n_workers=1, threads_per_worker=1, host="127.0.0.1", dashboard_address=None
         ) as cluster,
         distributed.Client(cluster) as client,
     ):
+        environ = dict(os.environ)  # as the user's own cluster left it (Dask's nanny sets some)
         rows = tj.batch(
             [str(tmp_path / "records" / "*.csv")],
             "fit",
@@ -151,6 +157,8 @@ def test_the_python_entry_on_a_users_client(tmp_path, single, monkeypatch):
             [rec], "predict", out="p", client=client, model=model.relative_to(tmp_path)
         )
     assert pred["status"] == "ok", pred
+    # the workers made the command's settings in their processes, not in this one
+    assert dict(os.environ) == environ and jax.config.jax_enable_x64 == x64
     # the record predicted by the model fitted to it: the fit's own NRMSE
     assert pred["figures"]["nrmse"] == pytest.approx(single["nrmse"], rel=1e-9)
     assert (tmp_path / "p" / "sine" / "prediction.json").is_file()
@@ -255,3 +263,24 @@ def test_a_worker_killed_mid_run(tmp_path, single):
                 p.send_signal(signal.SIGTERM)
         for p in procs:
             p.wait(timeout=30)
+
+
+def test_the_python_entry_leaves_the_callers_process_alone(tmp_path):
+    """`tj.batch` on its own local cluster: Dask's nannies set OMP_NUM_THREADS and others in the
+    process that spawns them; the caller's environment and JAX settings are as before."""
+    rec = _copy_loop(tmp_path, "sine")
+    code = (
+        "import os, sys, jax, tribojax as tj\n"
+        "before, flags = dict(os.environ), jax.config.jax_enable_x64\n"
+        f"(row,) = tj.batch([{str(rec)!r}], 'fit', out={str(tmp_path / 'o')!r}, workers=1)\n"
+        "assert row['status'] == 'ok', row\n"
+        "keys = set(before) | set(os.environ)\n"
+        "changed = {k for k in keys if before.get(k) != os.environ.get(k)}\n"
+        "print(sorted(changed), jax.config.jax_enable_x64 == flags)\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "OMP_NUM_THREADS")}
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=600
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "[] True"

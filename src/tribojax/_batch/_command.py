@@ -36,6 +36,7 @@ def run_batch_command(args) -> int:
     lock = _held(out)
     try:
         cluster = {k: getattr(args, k) for k in ("workers", "scheduler", "scheduler_file")}
+        cluster["quiet"] = True
         with progress(args, f"batch {command}") as shown:
             rows = run_batch(
                 command,

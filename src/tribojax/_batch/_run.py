@@ -59,12 +59,13 @@ def default_workers() -> int:
 
 
 @contextlib.contextmanager
-def dask_client(client=None, *, workers=None, scheduler=None, scheduler_file=None):
+def dask_client(client=None, *, workers=None, scheduler=None, scheduler_file=None, quiet=False):
     """(the client a batch runs on, the fit threads of each worker process or None): `client`
     as given, one connected to an existing scheduler (`scheduler` address or `scheduler_file`),
     or a local cluster of `workers` processes (one task at a time each, the cores shared out
     among them for the threads that run a record's independent fits side by side) on the
-    loopback address, closed on exit."""
+    loopback address, closed on exit. `quiet`: the cluster logs errors only (the command's
+    choice for its process; else Dask's default)."""
     if client is not None:
         yield client, None
         return
@@ -74,18 +75,29 @@ def dask_client(client=None, *, workers=None, scheduler=None, scheduler_file=Non
             yield c, None
         return
     n = workers or default_workers()
-    with (
-        d.LocalCluster(
-            n_workers=n,
-            threads_per_worker=1,
-            processes=True,
-            host="127.0.0.1",
-            dashboard_address=None,
-            silence_logs=logging.ERROR,
-        ) as cluster,
-        d.Client(cluster) as c,
-    ):
-        yield c, max(1, (os.cpu_count() or 1) // n)
+    before = dict(os.environ)  # Dask's nannies set OMP_NUM_THREADS & co in the spawning process
+    try:
+        with (
+            d.LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+                **({"silence_logs": logging.ERROR} if quiet else {}),
+            ) as cluster,
+            d.Client(cluster) as c,
+        ):
+            _restore(before)  # the workers have them; this process is left as it was
+            yield c, max(1, (os.cpu_count() or 1) // n)
+    finally:
+        _restore(before)
+
+
+def _restore(environ: dict) -> None:
+    for k in set(os.environ) - set(environ):
+        del os.environ[k]
+    os.environ.update({k: v for k, v in environ.items() if os.environ.get(k) != v})
 
 
 class _Strict(argparse.ArgumentParser):
