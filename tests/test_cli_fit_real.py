@@ -94,3 +94,33 @@ def test_fit_json_is_the_library_report(tmp_path):
     for key in ("parameters", "std_errors", "sigma", "rms_residual", "nrmse", "n_data"):
         assert lib[key] == pytest.approx(cli[key], rel=1e-12), key
     assert lib["fitted_model"] == cli["fitted_model"] and lib["sigma_source"] == cli["sigma_source"]
+
+
+def test_best_considers_the_band_brake_on_a_band_brakes_records():
+    # issue 69: `--model best` compares every model that applies to the record
+    import dataclasses
+
+    import tribojax as tj
+    from tribojax._cli._fit_real import best_candidates
+
+    loop = tj.read_record(REAL / "brfd" / "2Hz30lbtension0.5amplitude.csv")
+    assert loop.band_tension is not None  # from the file name (30 lb)
+    assert best_candidates([loop]) == ("jenkins", "mindlin", "lugre", "bouc_wen", "band_brake")
+    plain = dataclasses.replace(loop, band_tension=None)
+    assert best_candidates([plain]) == ("jenkins", "mindlin", "lugre", "bouc_wen")
+    assert best_candidates([loop, plain]) == ("jenkins", "mindlin", "lugre", "bouc_wen")
+
+
+@pytest.mark.slow
+def test_best_on_the_damper_chooses_by_bic_and_prints_the_candidates(tmp_path, capsys):
+    out = tmp_path / "o"
+    src = REAL / "brfd" / "2Hz30lbtension0.5amplitude.csv"
+    assert main(["fit", str(src), "--out", str(out), "--model", "best", "--decimate", "2"]) == 0
+    res = json.loads((out / "fit.json").read_text())
+    cands = res["candidates"]
+    assert set(cands) == {"jenkins", "mindlin", "lugre", "bouc_wen", "band_brake"}
+    assert res["model"] == min(cands, key=lambda k: cands[k]["bic"])
+    said = capsys.readouterr().out
+    table = [line.split() for line in said.splitlines() if line.startswith("    ")]
+    assert sorted(row[-5] for row in table) == sorted(cands)  # model NRMSE x BIC y
+    assert [row[1] for row in table if row[0] == "*"] == [res["model"]]

@@ -182,9 +182,11 @@ def fit_arguments(parser, batch: bool = False) -> None:
         help="loops: 'history' (default for a periodic loop: the loop model that discover also "
         "fits) or 'steady' (wu2015's steady-loop formula) fit --element; "
         "jenkins|mindlin|lugre|bouc_wen|band_brake drive that element (+ force offset) through "
-        "the measured history, best: the first four, lowest BIC (default for a non-periodic "
-        "history); friction curves: record (Coulomb + viscous, the model discover starts from; "
-        "default) or lugre (the steady law with a direction asymmetry; best: the same)",
+        "the measured history, best: the first four, and band_brake on a band brake's records "
+        "(band tension known), lowest BIC over the records together (default for a "
+        "non-periodic history); friction curves: record (Coulomb + viscous, the model "
+        "discover starts from; default) or lugre (the steady law with a direction "
+        "asymmetry; best: the same)",
     )
     parser.add_argument(
         "--mixed-scales",

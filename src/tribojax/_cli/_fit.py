@@ -107,6 +107,12 @@ def run_fit(args) -> int:
         v, s = result["parameters"][name], result["std_errors"][name]
         print(f"  {name:6s} = {v:.6g} ± {math.inf if name in flat else s:.2g}")
     unit = result["residual_unit"]
+    if result.get("selected_by") == "bic":  # --model best: every candidate, the chosen marked
+        print("  candidates, the lowest BIC chosen (*):")
+        for name, c in sorted(result["candidates"].items(), key=lambda kv: kv[1]["bic"]):
+            mark = "*" if name == result["model"] else " "
+            note = "" if c["converged"] else "  (not converged)"
+            print(f"    {mark} {name:10s} NRMSE {c['nrmse']:.4f}  BIC {c['bic']:.6g}{note}")
     print(
         f"  rms residual {result['rms_residual']:.4g} {unit}; converged: "
         f"{result['converged']} ({result['steps']} steps, {result['wall_time_s']:.1f} s)"

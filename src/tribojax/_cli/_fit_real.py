@@ -15,7 +15,14 @@ from .._predict._fit_methods import History, SteadyLaw, fit
 from ._common import CommandError
 
 HISTORY_CHOICES = (*ELEMENT_MODELS, *DEVICE_MODELS)
-"""`--model` values fitted through a history (`best` chooses among `ELEMENT_MODELS`)."""
+"""`--model` values fitted through a history (`best` chooses among `best_candidates`)."""
+
+
+def best_candidates(loops) -> tuple[str, ...]:
+    """The models `--model best` compares on these records: every element, and the band brake
+    when every record is a band brake's (its set tension known)."""
+    device = all(lp.band_tension is not None for lp in loops)
+    return (*ELEMENT_MODELS, *DEVICE_MODELS) if device else ELEMENT_MODELS
 
 
 def fit_history_record(
@@ -26,12 +33,13 @@ def fit_history_record(
     decimate: int = 1,
     mixed_scales: bool = False,
 ):
-    """Fit `model` (or every element for "best", chosen by the lowest BIC) through the
+    """Fit `model` (or every candidate for "best", `best_candidates`, chosen by the lowest BIC
+    over the records together) through the
     displacement history of a loop or of several loops together (one parameter set), on every
     `decimate`-th sample, with at most `max_steps` LM steps (None: `MAX_STEPS`) from the
     `start` values given."""
     loops = list(loops) if isinstance(loops, list | tuple) else [loops]
-    names = ELEMENT_MODELS if model == "best" else (model,)
+    names = best_candidates(loops) if model == "best" else (model,)
     fits = {}
     for name in names:
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
