@@ -153,3 +153,34 @@ def test_cli_fits_several_records_together(tmp_path):
     assert main(["fit", files[0], str(tmp_path / "slip.csv"), "--out", str(bad)]) == 2
     assert main(["fit", *files, "--model", "steady", "--out", str(bad)]) == 2
     assert not bad.exists() or not (bad / "fit.json").exists()
+
+
+def _drag_record(seed):
+    """A slack band (0 lb): the stop operator with a fixed drag slip force (the backlash drag
+    that remains without tension), not c·T."""
+    t = np.arange(int(2.25 * FS / F_HZ) + 1) / FS
+    u = 15e-3 * np.sin(2 * np.pi * F_HZ * t)
+    f = _stop(u, K, 400.0) + np.random.default_rng(seed).normal(0.0, 2.0, t.size)
+    return tj.HysteresisLoop(t, u, f, frequency=F_HZ, source="<0 lb>", band_tension=0.0)
+
+
+def test_a_slack_band_is_a_record_of_its_own(tmp_path):
+    # issue 69: a record at 0 lb (a real setting of the device) is read and fitted; the capstan
+    # scaling cannot carry slip forces between 0 and a tension, which is refused by name
+    slack = _drag_record(7)
+    fit0 = tj.fit_history(slack, "jenkins")
+    assert fit0.band_tension == 0.0 and fit0.nrmse < 0.02
+    assert fit0.fit.values[0] == pytest.approx(400.0, rel=0.01)  # the drag's slip force
+    with pytest.raises(ValueError, match=r"band_tension = 0 N with slip forces at 133\.4"):
+        tj.fit_history([_record(30, 15e-3, 1), slack], "jenkins")
+    fit30 = tj.fit_history(_record(30, 15e-3, 1), "jenkins")
+    with pytest.raises(ValueError, match="band_tension = 0 N with slip forces"):
+        tj.predict_history(fit30, slack)
+    with pytest.raises(ValueError, match=r"band_tension = -1 N is outside the allowed range \[0"):
+        tj.HysteresisLoop(slack.t, slack.u, slack.f, band_tension=-1.0)
+    tj.write_loop(slack, tmp_path / "slack.csv")
+    assert tj.read_loop(tmp_path / "slack.csv").band_tension == 0.0
+    out = tmp_path / "o"
+    args = ["fit", str(tmp_path / "slack.csv"), "--model", "jenkins", "--out", str(out)]
+    assert main([*args, "--band-tension", "0lb"]) == 0
+    assert json.loads((out / "fit.json").read_text())["band_tension_N"] == 0.0

@@ -122,10 +122,10 @@ def band_tension(text: str) -> float:
         value = float(number) * (P.LBF_N if lbf else 1.0)
     except ValueError:
         value = math.nan
-    if not (math.isfinite(value) and value > 0):
+    if not (math.isfinite(value) and value >= 0):
         raise argparse.ArgumentTypeError(
             f"--band-tension = {text!r} is outside the allowed range: "
-            "a tension > 0 in N, or in lbf as '30lb'"
+            "a tension >= 0 in N (0: a slack band), or in lbf as '30lb'"
         )
     return value
 

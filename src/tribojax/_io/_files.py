@@ -20,8 +20,9 @@ from .._limits import SAMPLE_FLOORS, SAMPLE_LIMITS
 from .._tables import DataFileError, read_json, read_text
 
 
-def positive_or_none(value, name: str, source: str, unit: str, *, required=False):
-    """A finite float > 0 (or None where allowed); ValueError naming the field otherwise."""
+def positive_or_none(value, name: str, source: str, unit: str, *, required=False, zero=False):
+    """A finite float > 0 (≥ 0 with `zero`; or None where allowed); ValueError naming the field
+    otherwise."""
     if value is None:
         if required:
             raise ValueError(f"{source}: {name} is required ({unit})")
@@ -29,9 +30,10 @@ def positive_or_none(value, name: str, source: str, unit: str, *, required=False
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
         raise ValueError(f"{source}: {name} must be a number ({unit}), got {value!r}")
     value = float(value)
-    if not (math.isfinite(value) and value > 0):
+    if not (math.isfinite(value) and (value > 0 or zero and value == 0)):
+        low = "[0" if zero else "(0"
         raise ValueError(
-            f"{source}: {name} = {value:g} {unit} is outside the allowed range (0, inf)"
+            f"{source}: {name} = {value:g} {unit} is outside the allowed range {low}, inf)"
         )
     return value
 
@@ -135,9 +137,16 @@ def sidecar_text(csv_path, key: str, allowed: tuple[str, ...]) -> str | None:
 
 
 def read_sidecar(
-    csv_path, schema: dict[str, bool], units: dict[str, str], *, required=True, text_keys=()
+    csv_path,
+    schema: dict[str, bool],
+    units: dict[str, str],
+    *,
+    required=True,
+    text_keys=(),
+    zero_keys=(),
 ):
-    """Read and validate the sidecar of `csv_path`: a JSON object of positive numbers.
+    """Read and validate the sidecar of `csv_path`: a JSON object of positive numbers (0 allowed
+    for `zero_keys`).
 
     Args:
         schema: key -> whether it is required. Keys outside it (and "comment") are refused.
@@ -177,7 +186,10 @@ def read_sidecar(
         if value is None and key in data:
             value = "null"  # an explicit null is not a number
         try:
-            out[key] = positive_or_none(value, f"{key!r}", where, units[key], required=req)
+            zero = key in zero_keys
+            out[key] = positive_or_none(
+                value, f"{key!r}", where, units[key], required=req, zero=zero
+            )
         except ValueError as err:
             raise DataFileError(str(err)) from None
     return out

@@ -49,9 +49,10 @@ class HysteresisLoop(AbstractRecord):
     Optional metadata (keyword-only): `normal_load` (N) of the contact, the drive `frequency`
     (Hz) and `noise_std` (N), the standard deviation of the force noise (`fit_loop` uses it as
     the residual scale when given), and `band_tension` (N), the set tension of a band brake (the
-    friction damper's load knob: `fit_history` scales the slip forces with it). Construction
-    checks lengths, finiteness, increasing time, positive metadata and that at least one whole
-    cycle of u is present (ValueError). `source` names the file it came from, if any.
+    friction damper's load knob: `fit_history` scales the slip forces with it; 0 for a slack
+    band). Construction checks lengths, finiteness, increasing time, positive metadata and
+    that at least one whole cycle of u is present (ValueError). `source` names the file it
+    came from, if any.
     `periodic=False` marks an arbitrary displacement history (an earthquake record, a ramped
     sine): no whole cycle is required, and only the history (time-domain) route applies to it
     (`fit_loop(model="history")`, `fit_history`).
@@ -74,8 +75,9 @@ class HysteresisLoop(AbstractRecord):
 
     def __post_init__(self):
         self._set_series(("t", "u", "f"), time="t")
-        for name, (_, unit) in _METADATA.items():
-            value = positive_or_none(getattr(self, name), name, self.source, unit)
+        for name, (_, unit) in _METADATA.items():  # a band may be slack: 0 N
+            zero = name == "band_tension"
+            value = positive_or_none(getattr(self, name), name, self.source, unit, zero=zero)
             object.__setattr__(self, name, value)
         object.__setattr__(self, "periodic", bool(self.periodic))
         if self.periodic and len(cycle_starts(self.t, self.u)) < 2:
@@ -131,7 +133,7 @@ def read_loop(path) -> HysteresisLoop:
     """Load a loop: CSV `time_s,displacement_m,force_N` plus sidecar `<stem>.json`, or legacy.
 
     The sidecar holds {"frequency_Hz" (required, > 0), "normal_load_N", "noise_std_N" and
-    "band_tension_N" (optional, > 0)}; the legacy columns `t_s,u_m,f_N` take the same sidecar
+    "band_tension_N" (optional, ≥ 0)}; the legacy columns `t_s,u_m,f_N` take the same sidecar
     if present. SI units, `#` comment lines allowed. The sidecar's frequency must agree with the
     record's cycle spacing within 10 % (catches rad/s given as Hz). A sidecar with `"drive":
     "history"` marks an arbitrary displacement history (`periodic=False`): then "normal_load_N"
@@ -159,7 +161,10 @@ def read_loop(path) -> HysteresisLoop:
         )
     drive = sidecar_text(path, "drive", LOOP_DRIVES) or "harmonic"
     schema = _LOOP_SIDECAR if drive == "harmonic" else _HISTORY_SIDECAR
-    side = read_sidecar(path, schema, _LOOP_UNITS, required=new, text_keys=("drive",)) or {}
+    side = read_sidecar(
+        path, schema, _LOOP_UNITS, required=new, text_keys=("drive",), zero_keys=("band_tension_N",)
+    )
+    side = side or {}
     try:
         loop = HysteresisLoop(
             t,

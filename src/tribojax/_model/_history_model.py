@@ -123,11 +123,19 @@ def _records(loops, decimate: int, band_tension=None):
             "forces with the band tension; name the file <f>Hz<T>lbtension<A>amplitude.json or "
             "earthquake_<name>_<T>lb.json, or give it (band_tension=..., N; --band-tension)"
         )
+    slack = [lp for lp in loops if ref is not None and (lp.band_tension == 0) != (ref == 0)]
+    if slack:
+        raise ValueError(
+            f"{slack[0].source}: band_tension = {slack[0].band_tension:g} N with slip forces "
+            f"at {ref:g} N: they scale with the tension (capstan law), which has no friction "
+            "at 0 N (a slack band) and so leaves out the drag that remains there; fit the "
+            "records at 0 N on their own"
+        )
     out = []
     for loop in loops:
         sl = slice(None, None, decimate)
         f = jnp.asarray(loop.f[sl])
-        ratio = 1.0 if ref is None else loop.band_tension / ref
+        ratio = 1.0 if not ref else loop.band_tension / ref
         out.append((jnp.asarray(loop.t[sl]), jnp.asarray(loop.u[sl]), f, float(jnp.std(f)), ratio))
     return tuple(out)
 
