@@ -85,6 +85,13 @@ API_PAGES = [
         "on other records (`load_model`, `predict`), and sensitivities.",
     ),
     (
+        "batch",
+        "Many records",
+        ("_batch",),
+        "`tribojax.batch`: the `fit`, `discover` and `predict` commands on many records over a "
+        "Dask cluster, one table row per record (the guide page Many records).",
+    ),
+    (
         "reproduce",
         "Reproduction and presets",
         ("_reproduce", "_presets", "_limits", "_results", "_sweep", "_chain", "_cache", "_xla"),

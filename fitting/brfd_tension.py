@@ -1,0 +1,135 @@
+"""Study: how the band brake's parameters depend on the band tension, and what changes between
+two test campaigns of the same damper (issue 69, the measurement behind a tension law).
+
+    python -m fitting.brfd_tension --out DIR [--src PATH/TO/real] [--workers N]
+
+Data (../shared/data/real): `brfd/` (campaign 1: ten sine tests at 30 lb) and
+`brfd/campaign2/` (sine tests at 0 lb — a slack band: the backlash drag alone —, at 30 lb, and one
+at 36 lb). Every sine test is fitted on its own with the band brake (`tribojax batch fit
+--model band_brake --decimate 2`: a play operator with a clearance, a capstan rise A(e^{β(e−g)}
+− 1) and a slip force per direction; `tj.BandBrake`), and with Jenkins at 0 lb (a slack band has
+no capstan rise to fit).
+
+Reported per tension and campaign: the median and spread of each direction's slip force F±,
+rise scale A± and rate β±, the clearances and the drag stiffness; then the affine law per
+direction F±(T) = D± + c±·T fitted to the 0 lb and 30 lb tests of campaign 2 (D± the drag at a
+slack band, c± the capstan slope), its prediction of the 36 lb test's fitted F± against the
+proportional law F±(30 lb)·36/30; and campaign 1 against campaign 2 at 30 lb (ratio of medians).
+Writes DIR/brfd_tension.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+
+import tribojax as tj
+
+NAME = re.compile(r"(?P<f>[\d.]+)Hz(?P<T>[\d.]+)lbtension(?P<A>[\d.]+)amplitude")
+BAND = ("F_pos", "F_neg", "A_pos", "A_neg", "beta_pos", "beta_neg", "gap_pos", "gap_neg", "k_gap")
+
+
+def _tests(src: Path) -> list[dict]:
+    out = []
+    for campaign, folder in (("1", src / "brfd"), ("2", src / "brfd" / "campaign2")):
+        for path in sorted(folder.glob("*Hz*lbtension*amplitude.json")):
+            m = NAME.match(path.stem)
+            out.append(
+                {
+                    "campaign": campaign,
+                    "file": path,
+                    "frequency_Hz": float(m["f"]),
+                    "tension_lb": float(m["T"]),
+                    "amplitude_in": float(m["A"]),
+                }
+            )
+    return out
+
+
+def _fits(tests, model: str, out: Path, workers) -> list[dict]:
+    files = [t["file"] for t in tests]
+    rows = tj.batch(files, "fit", out=out / model, model=model, decimate=2, workers=workers)
+    for t, row in zip(tests, rows):
+        if row["status"] != "ok":
+            t[model] = {"error": row["message"]}
+            continue
+        fit = json.loads((out / model / row["stem"] / "fit.json").read_text())
+        t[model] = {
+            "parameters": fit["parameters"],
+            "std_errors": fit["std_errors"],
+            "nrmse": fit["nrmse"],
+            "converged": fit["converged"],
+        }
+    return tests
+
+
+def _summary(tests, name: str) -> dict:
+    v = np.array([t["band_brake"]["parameters"][name] for t in tests])
+    return {"median": float(np.median(v)), "min": float(v.min()), "max": float(v.max())}
+
+
+def tension_law(tests) -> dict:
+    """Per direction, F(T) = D + c·T (least squares over campaign 2's 0 and 30 lb tests; the
+    0 lb slip force from the band brake where it converged, else Jenkins' μN) and its
+    prediction of the 36 lb test, against the proportional law from the 30 lb median."""
+    c2 = [t for t in tests if t["campaign"] == "2" and "parameters" in t.get("band_brake", {})]
+    held = [t for t in c2 if t["tension_lb"] == 36.0]
+    train = [t for t in c2 if t["tension_lb"] in (0.0, 30.0)]
+    law = {}
+    for side in ("pos", "neg"):
+        T = np.array([t["tension_lb"] for t in train])
+        F = np.array([t["band_brake"]["parameters"][f"F_{side}"] for t in train])
+        (c, D), *_ = np.linalg.lstsq(np.stack([T, np.ones_like(T)], 1), F, rcond=None)
+        at30 = float(np.median(F[T == 30.0]))
+        row = {"drag_N": float(D), "slope_N_per_lb": float(c), "F_30lb_median_N": at30}
+        if held:
+            measured = held[0]["band_brake"]["parameters"][f"F_{side}"]
+            row |= {
+                "F_36lb_fitted_N": measured,
+                "affine_prediction_N": float(D + 36.0 * c),
+                "proportional_prediction_N": at30 * 36.0 / 30.0,
+            }
+        law[side] = row
+    return law
+
+
+def main(argv=None) -> dict:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("fitting-out/brfd_tension"))
+    here = Path(__file__).resolve().parents[1]
+    ap.add_argument("--src", type=Path, default=here.parent / "shared" / "data" / "real")
+    ap.add_argument("--workers", type=int, default=None)
+    args = ap.parse_args(argv)
+    tests = _fits(_tests(args.src), "band_brake", args.out, args.workers)
+    slack = [t for t in tests if t["tension_lb"] == 0.0]
+    _fits(slack, "jenkins", args.out, args.workers)
+    groups = {}
+    for t in tests:
+        if "parameters" in t["band_brake"]:
+            groups.setdefault(f"campaign {t['campaign']}, {t['tension_lb']:g} lb", []).append(t)
+    table = {k: {"n": len(v), **{p: _summary(v, p) for p in BAND}} for k, v in groups.items()}
+    c1, c2 = groups.get("campaign 1, 30 lb", []), groups.get("campaign 2, 30 lb", [])
+    campaigns = {
+        p: _summary(c2, p)["median"] / _summary(c1, p)["median"] for p in BAND if c1 and c2
+    }
+    result = {
+        "tests": [{**t, "file": str(t["file"])} for t in tests],
+        "by_tension_and_campaign": table,
+        "tension_law": tension_law(tests),
+        "campaign2_over_campaign1_at_30lb": campaigns,
+    }
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "brfd_tension.json").write_text(json.dumps(result, indent=1) + "\n")
+    for k, v in table.items():
+        print(k, {p: round(v[p]["median"], 4) for p in BAND})
+    print(json.dumps(result["tension_law"], indent=1))
+    print(json.dumps(campaigns, indent=1))
+    return result
+
+
+if __name__ == "__main__":
+    main()
