@@ -72,27 +72,40 @@ def _summary(tests, name: str) -> dict:
     return {"median": float(np.median(v)), "min": float(v.min()), "max": float(v.max())}
 
 
+def _slip_forces(t) -> dict | None:
+    """(F+, F−) of a test: the band brake's, or at 0 lb Jenkins' μN ± f0 (a slack band has no
+    capstan rise; the band brake's fit there rarely converges)."""
+    if t["tension_lb"] == 0.0:
+        p = t.get("jenkins", {}).get("parameters")
+        return None if p is None else {"pos": p["mu_N"] + p["f0"], "neg": p["mu_N"] - p["f0"]}
+    p = t["band_brake"].get("parameters")
+    return None if p is None else {"pos": p["F_pos"], "neg": p["F_neg"]}
+
+
 def tension_law(tests) -> dict:
-    """Per direction, F(T) = D + c·T (least squares over campaign 2's 0 and 30 lb tests; the
-    0 lb slip force from the band brake where it converged, else Jenkins' μN) and its
-    prediction of the 36 lb test, against the proportional law from the 30 lb median."""
-    c2 = [t for t in tests if t["campaign"] == "2" and "parameters" in t.get("band_brake", {})]
+    """Per direction, F(T) = D + c·T (least squares over campaign 2's 0 and 30 lb tests,
+    `_slip_forces`) and its prediction of the 36 lb test, against the proportional law from
+    the 30 lb median; and the same-condition pair (1 Hz, 1 in) at 30 and 36 lb."""
+    c2 = [t for t in tests if t["campaign"] == "2" and _slip_forces(t) is not None]
     held = [t for t in c2 if t["tension_lb"] == 36.0]
     train = [t for t in c2 if t["tension_lb"] in (0.0, 30.0)]
+    same = [t for t in c2 if (t["frequency_Hz"], t["amplitude_in"]) == (1.0, 1.0)]
     law = {}
     for side in ("pos", "neg"):
         T = np.array([t["tension_lb"] for t in train])
-        F = np.array([t["band_brake"]["parameters"][f"F_{side}"] for t in train])
+        F = np.array([_slip_forces(t)[side] for t in train])
         (c, D), *_ = np.linalg.lstsq(np.stack([T, np.ones_like(T)], 1), F, rcond=None)
         at30 = float(np.median(F[T == 30.0]))
         row = {"drag_N": float(D), "slope_N_per_lb": float(c), "F_30lb_median_N": at30}
+        row["tests"] = {"0 lb": int(np.sum(T == 0)), "30 lb": int(np.sum(T == 30))}
         if held:
-            measured = held[0]["band_brake"]["parameters"][f"F_{side}"]
             row |= {
-                "F_36lb_fitted_N": measured,
+                "F_36lb_fitted_N": _slip_forces(held[0])[side],
                 "affine_prediction_N": float(D + 36.0 * c),
                 "proportional_prediction_N": at30 * 36.0 / 30.0,
             }
+        pair = {f"{t['tension_lb']:g} lb": _slip_forces(t)[side] for t in same}
+        row["same_condition_1Hz_1in"] = pair
         law[side] = row
     return law
 
