@@ -284,3 +284,14 @@ def test_the_python_entry_leaves_the_callers_process_alone(tmp_path):
     )
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip().splitlines()[-1] == "[] True"
+
+
+def test_without_dask_the_command_says_what_to_install(tmp_path, monkeypatch, capsys):
+    # the core install does not bring Dask: `batch` says which extra does (exit 2)
+    from tribojax._cli import main
+
+    rec = _copy_loop(tmp_path, "sine")
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed → ImportError
+    assert main(["batch", "fit", str(rec), "--out", str(tmp_path / "o")]) == 2
+    assert "pip install 'tribojax[distributed]'" in capsys.readouterr().err
+    assert not (tmp_path / "o" / "sine").exists()

@@ -54,7 +54,7 @@ def run_batch_command(args) -> int:
     failed = [r for r in rows if r["status"] != "ok"]
     reused = sum(bool(r.get("reused")) for r in rows)
     print(
-        f"{len(rows)} records: {len(rows) - len(failed)} ok, {len(failed)} failed ({reused} not "
+        f"{len(rows)} record{'s' * (len(rows) != 1)}: {len(rows) - len(failed)} ok, {len(failed)} failed ({reused} not "
         f"run again: complete from an earlier run); wrote {out / 'batch.csv'} and "
         f"{out / 'batch.json'}"
     )
