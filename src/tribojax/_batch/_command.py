@@ -53,10 +53,10 @@ def run_batch_command(args) -> int:
         lock.unlink(missing_ok=True)
     failed = [r for r in rows if r["status"] != "ok"]
     reused = sum(bool(r.get("reused")) for r in rows)
+    n = f"{len(rows)} record" + "s" * (len(rows) != 1)
     print(
-        f"{len(rows)} record{'s' * (len(rows) != 1)}: {len(rows) - len(failed)} ok, {len(failed)} failed ({reused} not "
-        f"run again: complete from an earlier run); wrote {out / 'batch.csv'} and "
-        f"{out / 'batch.json'}"
+        f"{n}: {len(rows) - len(failed)} ok, {len(failed)} failed ({reused} not run again: "
+        f"complete from an earlier run); wrote {out / 'batch.csv'} and {out / 'batch.json'}"
     )
     for r in failed:
         said = r["message"] if r["record"] in r["message"] else f"{r['record']}: {r['message']}"
