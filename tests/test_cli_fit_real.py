@@ -103,10 +103,9 @@ def test_best_considers_the_band_brake_on_a_band_brakes_records():
     import tribojax as tj
     from tribojax._cli._fit_real import best_candidates
 
-    loop = tj.read_record(REAL / "brfd" / "2Hz30lbtension0.5amplitude.csv")
-    assert loop.band_tension is not None  # from the file name (30 lb)
+    plain = tj.read_record(REAL / "brfd" / "2Hz30lbtension0.5amplitude.csv")  # no tension
+    loop = dataclasses.replace(plain, band_tension=133.4)
     assert best_candidates([loop]) == ("jenkins", "mindlin", "lugre", "bouc_wen", "band_brake")
-    plain = dataclasses.replace(loop, band_tension=None)
     assert best_candidates([plain]) == ("jenkins", "mindlin", "lugre", "bouc_wen")
     assert best_candidates([loop, plain]) == ("jenkins", "mindlin", "lugre", "bouc_wen")
 
@@ -115,7 +114,8 @@ def test_best_considers_the_band_brake_on_a_band_brakes_records():
 def test_best_on_the_damper_chooses_by_bic_and_prints_the_candidates(tmp_path, capsys):
     out = tmp_path / "o"
     src = REAL / "brfd" / "2Hz30lbtension0.5amplitude.csv"
-    assert main(["fit", str(src), "--out", str(out), "--model", "best", "--decimate", "2"]) == 0
+    args = ["--model", "best", "--decimate", "2", "--band-tension", "30lb"]
+    assert main(["fit", str(src), "--out", str(out), *args]) == 0
     res = json.loads((out / "fit.json").read_text())
     cands = res["candidates"]
     assert set(cands) == {"jenkins", "mindlin", "lugre", "bouc_wen", "band_brake"}
