@@ -12,7 +12,6 @@ import csv
 import json
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import time
@@ -195,74 +194,19 @@ def test_records_and_their_names(tmp_path):
 @pytest.mark.slow
 def test_a_worker_killed_mid_run(tmp_path, single):
     """A scheduler and two workers started with the `dask` command; one worker is killed while
-    it runs a record: every good record still gets the single command's answer."""
-    records = tmp_path / "records"
-    for i in range(4):
-        _copy_loop(records, f"loop{i}")
-    _corrupt(records)
-    sched_file = tmp_path / "scheduler.json"
-    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
-    procs = [
-        subprocess.Popen(
-            [*dask, "--host", "127.0.0.1", "--no-dashboard", "--scheduler-file", sched_file],
-            stderr=subprocess.DEVNULL,
-        )
-    ]
-    try:
-        for _ in range(60):
-            if sched_file.exists():
-                break
-            time.sleep(0.5)
-        worker = [
-            sys.executable,
-            "-m",
-            "distributed.cli.dask_worker",
-            "--scheduler-file",
-            str(sched_file),
-            "--nthreads",
-            "1",
-            "--no-nanny",
-            "--host",
-            "127.0.0.1",
-            "--no-dashboard",
-        ]
-        procs += [subprocess.Popen(worker, stderr=subprocess.DEVNULL) for _ in range(2)]
-        out = tmp_path / "out"
-        cmd = [
-            sys.executable,
-            "-m",
-            "tribojax",
-            "batch",
-            "fit",
-            str(records),
-            "--out",
-            str(out),
-            "--scheduler-file",
-            str(sched_file),
-        ]
-        batch = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        for _ in range(600):  # both workers running a record
-            if len(list((out / ".batch" / "tmp").glob("*"))) >= 2:
-                break
-            time.sleep(0.1)
-        procs[1].send_signal(signal.SIGKILL)
-        stdout, stderr = batch.communicate(timeout=600)
-        assert batch.returncode == 1, stderr
-        rows = _table(out)
-        assert {k: r["status"] for k, r in rows.items()} == {
-            **{f"records/loop{i}.csv": "ok" for i in range(4)},
-            "records/bad.csv": "error",
-        }
-        for i in range(4):
-            fit = json.loads((out / f"loop{i}" / "fit.json").read_text())
-            assert fit["parameters"] == single["parameters"]
-        assert procs[1].wait(timeout=5) == -signal.SIGKILL
-    finally:
-        for p in procs:
-            if p.poll() is None:
-                p.send_signal(signal.SIGTERM)
-        for p in procs:
-            p.wait(timeout=30)
+    both run a record (benchmarks/batch.py's scenario): every good record still gets the single
+    command's answer, the corrupt one is a row naming its file and line, the rerun runs
+    nothing."""
+    from benchmarks.batch import killed_worker_run
+
+    files = [_copy_loop(tmp_path / "records", f"loop{i}") for i in range(4)]
+    corrupt = _corrupt(tmp_path / "records")
+    serial = {str(f): single["parameters"] for f in files}
+    got = killed_worker_run(files, corrupt, tmp_path, serial)
+    assert (got["exit_status"], got["ok"], got["error"]) == (1, 4, 1), got
+    assert got["good_records_same_parameters_as_single_command"], got
+    assert "bad.csv, line 3" in got["corrupt_row_message"]
+    assert got["rerun_ran_nothing"] and got["rerun_s"] < 20
 
 
 def test_the_python_entry_leaves_the_callers_process_alone(tmp_path):
