@@ -102,12 +102,15 @@ def killed_worker_run(files, corrupt: Path, work: Path, serial: dict) -> dict:
         ]
         again = _run(cmd)
         reused = all(r["reused"] == "True" for r in _rows(out))
-    finally:
-        for p in procs:
+    finally:  # the workers first (without their scheduler they wait to reconnect), then it
+        for p in procs[::-1]:
             if p.poll() is None:
                 p.send_signal(signal.SIGTERM)
-        for p in procs:
-            p.wait(timeout=30)
+            try:
+                p.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
     bad = next(r for r in rows if r["record"] == str(corrupt))
     return {
         "exit_status": batch.returncode,

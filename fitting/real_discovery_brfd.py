@@ -121,13 +121,16 @@ def discover_brfd_test(
     t0 = time.perf_counter()
     record = tj.read_record(path) if record is None else record
     reduced, how = tj.decimate_record(record, factor, max_samples=max_samples, whole_cycles=True)
-    report = discover(loop_baseline(reduced))
-    return table_row(path, record, reduced, how, report.as_dict(), time.perf_counter() - t0)
+    baseline = loop_baseline(reduced)
+    report = discover(baseline)
+    t = np.asarray(baseline.t)
+    return table_row(path, record, t, how, report.as_dict(), time.perf_counter() - t0)
 
 
-def table_row(path, record, reduced, how, d: dict, seconds: float) -> dict:
-    """A row of the table from a discovery's dictionary (discovery.json) on `reduced`, the
-    record as `decimate_record` (`how`) reduced it."""
+def table_row(path, record, t, how, d: dict, seconds: float) -> dict:
+    """A row of the table from a discovery's dictionary (discovery.json) on the record reduced
+    by `decimate_record` (`how`); `t`: the times of its baseline's samples (what the flagged
+    regions index)."""
     strengths = d.get("strengths", {})
     gap = strengths.get("backlash", {}).get("nuisance", {}).get("gap_m")
     depth = strengths.get("backlash", {}).get("depth", {}).get("value")
@@ -136,7 +139,7 @@ def table_row(path, record, reduced, how, d: dict, seconds: float) -> dict:
         "file": str(path),
         **_test_info(path),
         "samples_in_record": len(record.t),
-        "samples": len(reduced.t),
+        "samples": len(t),
         "decimation": how.as_dict(),
         "noise_sd_N": d.get("noise_std"),
         "effects": list(d["effects"]),
@@ -151,7 +154,7 @@ def table_row(path, record, reduced, how, d: dict, seconds: float) -> dict:
         ],
         "backlash_depth": depth,
         "strengths": strengths,
-        "misfit": _where(d["misfit"], np.asarray(reduced.t)),
+        "misfit": _where(d["misfit"], t),
         "physical_sense": physical_sense(d["effects"]),
         "converged": d["converged"],
         "seconds": seconds,
@@ -180,7 +183,8 @@ def brfd_discovery(src, short: bool, log, out=None) -> list[dict]:
             reduced, how = tj.decimate_record(
                 record, None, max_samples=tj.DISCOVER_MAX_SAMPLES, whole_cycles=True
             )
-            row = table_row(path, record, reduced, how, d, result["wall_s"])
+            t = np.asarray(loop_baseline(reduced).t)  # (cheap: no fit)
+            row = table_row(path, record, t, how, d, result["wall_s"])
             rows.append(row)
             gap = row["backlash_gap_mm"]
             log(
