@@ -23,15 +23,11 @@ import time
 import uuid
 from pathlib import Path
 
-from .._cli._main import configure_process  # (argparse only: no JAX, no equinox)
+from .._cli._main import SUBCOMMANDS, configure_process  # (argparse only: no JAX, no equinox)
 from .._io._files import write_json_atomic
 
 MAIN_OUTPUT = {"fit": "fit.json", "discover": "discovery.json", "predict": "prediction.json"}
-TARGETS = {
-    "fit": "_fit:run_fit",
-    "discover": "_discover:run_discover",
-    "predict": "_predict:run_predict",
-}
+TARGETS = {name: target for name, _, _, target in SUBCOMMANDS if name in MAIN_OUTPUT}
 STATE = ".batch"  # DIR/.batch/rows/<stem>.json: each record's row; DIR/.batch/tmp: runs under way
 
 _ONE_AT_A_TIME = threading.Lock()
