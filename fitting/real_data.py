@@ -8,7 +8,8 @@ Data (../shared/data/real by default; see data/README.md for sources and licence
   0.25–2 Hz) and two earthquake displacement histories. Every sinusoidal test is fitted with
   Jenkins, Mindlin (Iwan form), LuGre, Bouc–Wen and the band brake (`tribojax.BandBrake`:
   clearance + capstan rise + slip force per direction) through the measured displacement history
-  (`tribojax.fit_history`, + a force offset f0), at 512 Hz (every 2nd sample). Then
+  (+ a force offset f0), at 512 Hz (every 2nd sample), by `tribojax batch fit` (one worker
+  process per core; DIR/brfd_fits/<model>/<test>/fit.json). Then
   (a) fit on the 0.25 and 1 Hz tests, predict the 0.5 and 2 Hz tests; (b) fit on the 0.5 and
   1.5 in tests, predict the 1 in tests; (c) fit on all ten sinusoidal tests, predict the two
   earthquake histories. NRMSE = rms(model − measured)/std(measured) per test and model; on the
@@ -30,6 +31,7 @@ Writes DIR/real_data.json (keys "brfd_fits", "slip_force_vs_test", "prediction",
 
 import argparse
 import json
+import tempfile
 import time
 from pathlib import Path
 
@@ -41,6 +43,8 @@ from fitting.real_discovery_screw import screwdrive_discovery
 
 MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen", "band_brake")
 DECIMATE = 2
+MAX_STEPS = 300
+"""The LM step budget of each per-test fit (`tribojax fit --max-steps`)."""
 SCORING_WINDOWS = {
     "earthquake_ImperialValleyDBE_30lb": (3072, 7680),
     "earthquake_KocaeliDBE_30lb": (6144, 14336),
@@ -82,19 +86,46 @@ def _summary(h) -> dict:
     }
 
 
-def brfd_study(src: Path, short: bool, log, models=MODELS, prediction_only=False) -> dict:
+def _per_test_fits(src: Path, names, models, out: Path, log, workers=None) -> dict:
+    """Every test fitted alone with every model by `tribojax batch fit` (`tribojax.batch`: the
+    single command in worker processes; Bouc–Wen from `BOUC_WEN_STARTS`), read back from each
+    test's fit.json: {test: {model: summary}}."""
+    files = [src / "brfd" / f"{name}.json" for name in names]
+    fits = {name: {} for name in names}
+    for model in models:
+        runs = out / "brfd_fits" / model
+        opts = dict(model=model, decimate=DECIMATE, max_steps=MAX_STEPS, **_starts(model))
+        table = tj.batch(files, "fit", out=runs, workers=workers, **opts)
+        for name, row in zip(names, table):
+            if not (runs / name / "fit.json").is_file():  # not fitted (a not converged fit is)
+                raise RuntimeError(f"{name} {model}: {row['message']}")
+            d = json.loads((runs / name / "fit.json").read_text())
+            fits[name][model] = {
+                "model": d["model"],
+                "nrmse": d["nrmse"],
+                "converged": d["converged"],
+                "result": d["message"],
+                "parameters": d["parameters"],
+                "std_errors": d["std_errors"],
+                "steps": d["steps"],
+                "seconds": row["wall_s"],
+            }
+            log(f"{name:34s} {model:9s} NRMSE {d['nrmse']:.3f} {d['message'][:40]}")
+    return fits
+
+
+def brfd_study(
+    src: Path, short: bool, log, models=MODELS, prediction_only=False, out=None, workers=None
+) -> dict:
     sines, quakes = _load_brfd(src)
     if short:
         sines = {k: v for k, v in sines.items() if _test_key(k)[0] >= 1.0}
-    fits, trend = {}, []
-    for name, loop in ({} if prediction_only else sines).items():
+    trend, fits = [], {}
+    if not prediction_only:
+        with tempfile.TemporaryDirectory() as tmp:
+            fits = _per_test_fits(src, list(sines), models, Path(out or tmp), log, workers)
+    for name in fits:
         f_hz, a_in = _test_key(name)
-        fits[name] = {}
-        for model in models:
-            t0 = time.perf_counter()
-            h = tj.fit_history(loop, model, decimate=DECIMATE, **_starts(model), throw=False)
-            fits[name][model] = {**_summary(h), "seconds": time.perf_counter() - t0}
-            log(f"{name:34s} {model:9s} NRMSE {h.nrmse:.3f} {h.fit.message[:40]}")
         p = {m: fits[name][m]["parameters"] for m in models}
         if not set(MODELS[:4]) <= set(p):
             continue
@@ -330,6 +361,9 @@ def main(argv=None) -> None:
     parser.add_argument("--src", type=Path, default=shared)
     parser.add_argument("--short", action="store_true", help="1 and 2 Hz tests only, no splits")
     parser.add_argument("--skip-brfd", action="store_true")
+    parser.add_argument(
+        "--workers", type=int, default=None, help="worker processes of the per-test fits' batch"
+    )
     parser.add_argument("--models", nargs="+", choices=MODELS, default=list(MODELS))
     parser.add_argument(
         "--prediction-only",
@@ -347,7 +381,15 @@ def main(argv=None) -> None:
     study = (
         {}
         if args.skip_brfd
-        else brfd_study(args.src, args.short, log, tuple(args.models), args.prediction_only)
+        else brfd_study(
+            args.src,
+            args.short,
+            log,
+            tuple(args.models),
+            args.prediction_only,
+            out=args.out,
+            workers=args.workers,
+        )
     )
     study["decimate"] = DECIMATE
     if not args.prediction_only:

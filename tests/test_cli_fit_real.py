@@ -1,5 +1,6 @@
 """`tribojax fit` on measured records (issue 15): format detection, --model, --format, fit.json."""
 
+import contextlib
 import json
 from pathlib import Path
 
@@ -124,3 +125,44 @@ def test_best_on_the_damper_chooses_by_bic_and_prints_the_candidates(tmp_path, c
     table = [line.split() for line in said.splitlines() if line.startswith("    ")]
     assert sorted(row[-5] for row in table) == sorted(cands)  # model NRMSE x BIC y
     assert [row[1] for row in table if row[0] == "*"] == [res["model"]]
+
+
+@pytest.mark.slow
+def test_n_starts_fits_bouc_wen_from_each_start_as_the_library(tmp_path):
+    # issue 70: the study's thorough Bouc–Wen fit (three starts of n) through the command
+    import numpy as np
+
+    import tribojax as tj
+    from tribojax._limits import MAX_STEPS
+
+    src = REAL / "brfd" / "2Hz30lbtension0.5amplitude.csv"
+    starts = [str(v) for v in tj.BOUC_WEN_STARTS]
+    args = ["--model", "bouc_wen", "--decimate", "4", "--n-starts", *starts]
+    main(["fit", str(src), "--out", str(tmp_path / "o"), *args])
+    cli = json.loads((tmp_path / "o" / "fit.json").read_text())
+    assert cli["n_starts"] == list(tj.BOUC_WEN_STARTS)
+    loop = tj.read_record(src)
+    kw = dict(decimate=4, max_steps=MAX_STEPS, throw=False)
+    lib = tj.fit_history(loop, "bouc_wen", n_starts=tj.BOUC_WEN_STARTS, **kw)
+    for name, value in zip(lib.fit.names, lib.fit.values):
+        assert cli["parameters"][name] == pytest.approx(float(value), rel=1e-8), name
+    one = tj.fit_history(loop, "bouc_wen", **kw)  # the default: one start, n = 2
+    rss = [float(np.sum(np.square(h.fit.residuals))) for h in (lib, one)]
+    assert rss[0] <= rss[1] * (1 + 1e-12)  # the best of three starts is never worse
+
+
+@pytest.mark.parametrize(
+    "args, said",
+    [
+        (["--model", "jenkins", "--n-starts", "2"], "--n-starts applies to a history fit"),
+        (["--model", "bouc_wen", "--n-starts", "0"], "--n-starts = '0' is outside"),
+        (["--model", "bouc_wen", "--n-starts", "nan"], "--n-starts = 'nan' is outside"),
+    ],
+)
+def test_n_starts_refused_where_it_does_not_apply(tmp_path, capsys, args, said):
+    src = REAL / "brfd" / "2Hz30lbtension0.5amplitude.csv"
+    with pytest.raises(SystemExit) if "outside" in said else contextlib.nullcontext():
+        status = main(["fit", str(src), "--out", str(tmp_path / "o"), *args])
+        assert status == 2
+    assert said in capsys.readouterr().err
+    assert not (tmp_path / "o" / "fit.json").exists()

@@ -97,6 +97,7 @@ from ._io._slip_run import read_slip_run as read_slip_run
 from ._io._slip_run import simulate_run as simulate_run
 from ._io._slip_run import synthetic_slip_run as synthetic_slip_run
 from ._io._slip_run import write_slip_run as write_slip_run
+from ._limits import BOUC_WEN_STARTS as BOUC_WEN_STARTS
 from ._limits import DISCOVER_MAX_SAMPLES as DISCOVER_MAX_SAMPLES
 from ._model import FittedModel as FittedModel
 from ._model import LoopAnalysis as LoopAnalysis
@@ -107,7 +108,6 @@ from ._model import fit_record as fit_record
 from ._model import fit_slip_run as fit_slip_run
 from ._model import loop_residuals as loop_residuals
 from ._model import slip_run_start as slip_run_start
-from ._model._history_fit import BOUC_WEN_STARTS as BOUC_WEN_STARTS
 from ._model._history_fit import HistoryFit as HistoryFit
 from ._model._history_fit import fit_history as fit_history
 from ._model._history_fit import predict_history as predict_history

@@ -19,6 +19,11 @@ chooses among these."""
 DEVICE_MODELS = ("band_brake",)
 """Device models a history is also fitted with when named (`--model band_brake`)."""
 
+BOUC_WEN_STARTS = (0.5, 2.0, 10.0)
+"""Starts of the Bouc–Wen sharpness n for a thorough history fit (`fit_history(n_starts=)`,
+`tribojax fit --n-starts`): its optima fall in separate families (n < 1, soft; n of tens, close
+to Jenkins), so one start can miss the better one; the lowest residual is kept."""
+
 MAX_STEPS = 128
 """Step budget of every record-model fit (accepted and rejected steps; one compile)."""
 

@@ -12,6 +12,7 @@ import math
 
 from .. import _presets as P
 from .._limits import (
+    BOUC_WEN_STARTS,
     DECIMATION_MAX_SAMPLES,
     DEVICE_MODELS,
     ELEMENT_MODELS,
@@ -113,6 +114,23 @@ def hysteresis_arguments(parser) -> None:
     )
 
 
+def _positive_float(flag: str):
+    """An argparse type: a finite number > 0, refused naming `flag`, the value and the range."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if not (math.isfinite(value) and value > 0):
+            raise argparse.ArgumentTypeError(
+                f"{flag} = {text!r} is outside the allowed range (0, inf)"
+            )
+        return value
+
+    return parse
+
+
 def band_tension(text: str) -> float:
     """A band tension for `--band-tension`: N, or lbf with an `lb` suffix (`30lb`)."""
     raw = text.strip().lower()
@@ -187,6 +205,17 @@ def fit_arguments(parser, batch: bool = False) -> None:
         "non-periodic history); friction curves: record (Coulomb + viscous, the model "
         "discover starts from; default) or lugre (the steady law with a direction "
         "asymmetry; best: the same)",
+    )
+    parser.add_argument(
+        "--n-starts",
+        type=_positive_float("--n-starts"),
+        nargs="+",
+        default=None,
+        metavar="N",
+        help="--model bouc_wen or best: starts of the Bouc–Wen sharpness n, the lowest "
+        "residual kept (default one start, n = 2; a thorough fit: "
+        + " ".join(f"{v:g}" for v in BOUC_WEN_STARTS)
+        + ")",
     )
     parser.add_argument(
         "--mixed-scales",

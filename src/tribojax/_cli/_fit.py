@@ -67,6 +67,7 @@ def run_fit(args) -> int:
             return error(f"--alpha is for slip runs; {path} is {full.description}")
         if len(records) > 1:
             _check_joint(records, paths, args)
+        _check_n_starts(records, args)
         t0 = time.perf_counter()
         fits = _fit_from_model if args.from_model else _FITS[full.kind]
         with progress(args, "fit") as bar:
@@ -78,6 +79,7 @@ def run_fit(args) -> int:
                     start,
                     decimate_factor(args) or 1,
                     args.mixed_scales,
+                    args.n_starts,
                 )
             else:
                 result, curves = fits(full, args, start, bar.note)
@@ -213,13 +215,32 @@ def _check_joint(records, paths, args) -> None:
         )
 
 
+def _check_n_starts(records, args) -> None:
+    """`--n-starts` only where a Bouc–Wen history fit runs (bouc_wen, or best's candidates)."""
+    if args.n_starts is None:
+        return
+    full = records[0]
+    by_default = len(records) > 1 or (full.kind == "loop" and not full.periodic)
+    model = args.model or ("best" if by_default else None)
+    if full.kind != "loop" or model not in ("bouc_wen", "best"):
+        raise CommandError(
+            "--n-starts applies to a history fit with --model bouc_wen or best, not to "
+            f"{full.description} with --model {args.model or 'its default'}"
+        )
+
+
 def _fit_loop_record(loop, args, start, note):
     """A loop: through its history (`--model` an element or best; default for a non-periodic
     history), else reduced as `--decimate` asks and fitted with the loop model of --element."""
     model = args.model
     if model in (*HISTORY_CHOICES, "best") or (model is None and not loop.periodic):
         return fit_history_record(
-            loop, model or "best", args.max_steps, start, decimate_factor(args) or 1
+            loop,
+            model or "best",
+            args.max_steps,
+            start,
+            decimate_factor(args) or 1,
+            n_starts=args.n_starts,
         )
     return fit_reduced(loop, args, start, note, fit_loop_reduced)
 

@@ -32,19 +32,21 @@ def fit_history_record(
     start: dict,
     decimate: int = 1,
     mixed_scales: bool = False,
+    n_starts=None,
 ):
     """Fit `model` (or every candidate for "best", `best_candidates`, chosen by the lowest BIC
     over the records together) through the
     displacement history of a loop or of several loops together (one parameter set), on every
     `decimate`-th sample, with at most `max_steps` LM steps (None: `MAX_STEPS`) from the
-    `start` values given."""
+    `start` values given; `n_starts`: Bouc–Wen's starts of n (None: its default)."""
     loops = list(loops) if isinstance(loops, list | tuple) else [loops]
     names = best_candidates(loops) if model == "best" else (model,)
     fits = {}
     for name in names:
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
         steps = max_steps or MAX_STEPS
-        method = History(name, decimate=decimate, mixed_scales=mixed_scales)
+        starts = None if n_starts is None else tuple(n_starts)
+        method = History(name, decimate=decimate, mixed_scales=mixed_scales, n_starts=starts)
         fits[name] = fit(loops, method, start=given or None, max_steps=steps, throw=False)
     each = {k: [predict_history(h, lp) for lp in loops] for k, h in fits.items()}
     pred = {k: np.concatenate([force for force, _ in v]) for k, v in each.items()}
@@ -71,6 +73,8 @@ def fit_history_record(
         frequency_Hz=loops[0].frequency,
         band_tension_N=h.band_tension,
     )
+    if "bouc_wen" in names and n_starts is not None:
+        extra["n_starts"] = [float(v) for v in n_starts]
     saved = saved_if_converged(h, source, loops)
     d = FitReport(h.fit, loops[0], best, resid, f, "N", sigma, how, saved, extra).as_dict()
     if len(loops) > 1:

@@ -243,6 +243,17 @@ def noise_consistent(
     window (`find_regions`) and no periodic line (Fisher's g), each at level α/3.
     `estimated`: σ is the first-difference estimate from r itself, not a stated noise. Used by
     every fit (`FitResult.noise_consistent`), `discover`'s verdicts and the decimation check."""
+    parts = noise_test_parts(r, sigma, rho, segment, x, n_params, alpha, n_windows, estimated)
+    p_global, p_line, regions = parts["p_whole"], parts["p_line"], parts["regions"]
+    ok = p_global >= alpha / 3 and p_line >= alpha / 3 and not regions
+    return bool(ok), min(1.0, 3 * min(p_global, p_line)), regions
+
+
+def noise_test_parts(
+    r, sigma, rho=0.0, segment=None, x=None, n_params=0, alpha=ALPHA, n_windows=32, estimated=False
+) -> dict:
+    """The parts of `noise_consistent`'s test, each uncorrected: "p_whole" (the whole-record
+    test), "p_line" (Fisher's g; 1.0 without `x`) and "regions" (windows flagged at α/3)."""
     r = np.asarray(r, dtype=float)
     n = r.size
     rho = float(np.clip(rho, 0.0, 0.95))
@@ -257,12 +268,10 @@ def noise_consistent(
     else:
         p_global = chi2_sf(q / c, max(n - n_params, 1) / c)
     if x is None:  # a few values (a table, block sums): the χ² test alone
-        return bool(p_global >= alpha / 3), min(1.0, 3 * p_global), []
+        return {"p_whole": p_global, "p_line": 1.0, "regions": []}
     segment = np.zeros(n, int) if segment is None else segment
     regions = find_regions(r, x, segment, sigma, rho, n_windows=n_windows, alpha=alpha / 3)
-    p_line = fisher_g(r[1:] - rho * r[:-1])
-    ok = p_global >= alpha / 3 and p_line >= alpha / 3 and not regions
-    return bool(ok), min(1.0, 3 * min(p_global, p_line)), regions
+    return {"p_whole": p_global, "p_line": fisher_g(r[1:] - rho * r[:-1]), "regions": regions}
 
 
 def fisher_g(w) -> float:

@@ -26,10 +26,6 @@ from ._history_model import (
     history_force,
 )
 
-BOUC_WEN_STARTS = (0.5, 2.0, 10.0)
-"""Starts of the Bouc–Wen sharpness n for a thorough history fit: its optima fall in separate
-families (n < 1, soft; n of tens, close to Jenkins), so one start can miss the better one."""
-
 
 def _default_start(model: str, records) -> dict:
     f = np.concatenate([np.asarray(r[2]) for r in records])

@@ -92,13 +92,18 @@ class SteadyLoop(FitMethod):
 class History(FitMethod):
     """A friction element (+ a force offset) driven through the measured displacement history of
     one loop or several fitted together (`fit_history`): jenkins, mindlin, lugre, bouc_wen or
-    band_brake, on every `decimate`-th sample."""
+    band_brake, on every `decimate`-th sample; `n_starts`: Bouc–Wen's starts of n (None: the
+    default one)."""
 
     element: str = "jenkins"
     decimate: int = 1
     mixed_scales: bool = False
+    n_starts: tuple[float, ...] | None = None
 
     def fit(self, record, *, start=None, max_steps=None, throw=True):
+        kw = {} if max_steps is None else {"max_steps": max_steps}
+        if self.n_starts is not None and self.element == "bouc_wen":
+            kw["n_starts"] = self.n_starts
         return fit_history(
             record,
             self.element,
@@ -106,7 +111,7 @@ class History(FitMethod):
             decimate=self.decimate,
             mixed_scales=self.mixed_scales,
             throw=throw,
-            **({} if max_steps is None else {"max_steps": max_steps}),
+            **kw,
         )
 
 

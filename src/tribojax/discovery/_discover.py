@@ -55,6 +55,7 @@ class _Run:
     r0: np.ndarray = None
     regions: list = None
     base_test: tuple = None
+    base_noise: tuple = None
     noise: NoiseModel = None
     _heldout: dict = dataclasses.field(default_factory=dict)
 
@@ -79,6 +80,7 @@ class _Run:
         for g in self.regions:
             g.update(b.region_info(g))
         self.base_state, self.r0, self.base_test = state, r, (ok, p)
+        self.base_noise = (sigma, rho)
         return state
 
     def prefetch(self, state):
@@ -102,6 +104,12 @@ class _Run:
         None when a fold's fit fails."""
         r = self.prefetch(state).result()
         return None if r is None else excess_rmse(r, self.noise.sigma)
+
+    def heldout_ms(self, state) -> float | None:
+        """The mean square of `state`'s held-out residual (output units²; None when a fold's
+        fit fails): what the held-out gate compares, never clipped at the noise."""
+        r = self.prefetch(state).result()
+        return None if r is None else float(np.mean(np.square(r)))
 
     def consistent(self, state) -> bool:
         """The noise test that decides "none" and "explained" (a refit's residual sharpens the

@@ -13,6 +13,7 @@ from .._fit._noise import RHO_MAX, ar1_inflation, ar1_square_inflation, residual
 from .._model import MAX_STEPS, effect_strengths, fit_model
 from .._parallel import in_parallel, speculatively
 from ._fitting import _columns, _delta_bic
+from ._verdict import HELDOUT_TIE
 
 QUICK_STEPS = 16  # steps per start of a refit after a candidate of the round reached the noise
 QUICK_MARGIN = 2.0  # ... continued only within this factor of that candidate's cost (`_refit`)
@@ -331,15 +332,18 @@ def pick(run, state, accepted, threshold, may_move):
 
 
 def _generalises(run, state, new, c) -> bool:
-    """Does the refit `new` lower the held-out excess of the current model `state` (
-    an effect counts only if, fitted on one half of the record, it also lowers the misfit on
-    the other)? True when the current model's held-out residual is unavailable."""
-    before, after = run.heldout(state), run.heldout(new)
-    c.heldout_excess = after
-    if before is None or (after is not None and after < before):
+    """Does the refit `new` lower the held-out mean square of the current model `state` (an
+    effect counts only if, fitted on one half of the record, it also lowers the misfit on the
+    other)? The mean squares, not the excess beyond the noise (clipped at 0, so a misfit
+    within the noise's mean square could never be lowered); lower by more than `HELDOUT_TIE`
+    (relative), else a tie, which keeps the current model (fewer parameters). True when the
+    current model's held-out residual is unavailable."""
+    before, after = run.heldout_ms(state), run.heldout_ms(new)
+    c.heldout_excess = run.heldout(new)
+    if before is None or (after is not None and after < before * (1.0 - HELDOUT_TIE)):
         return True
     c.refit_message = (
-        f"not added: held-out excess {_g(after)} not below the current "
+        f"not added: held-out mean square {_g(after)} not below the current "
         f"model's {_g(before)} (fitted on one half, scored on the other)"
     )
     return False

@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 
 from .._fit._measures import rms
-from .._fit._noise import excess_rmse, noise_consistent
+from .._fit._noise import excess_rmse, noise_consistent, noise_test_parts
 from .._model import FittedModel, effect_strengths, saved_record_model
 from ._verdict import correlations, flexible_correction, verdict
 
@@ -122,6 +122,7 @@ class DiscoveryReport:
             f" (noise sd {self.noise_std:.3g}{' estimated' if self.noise_estimated else ''})",
             f"excess misfit beyond the noise: {self.excess_rmse_before:.3g} -> "
             f"{self.excess_rmse_after:.3g} {unit}" + _heldout_line(self, unit),
+            *_evidence_line(self),
             f"flagged regions: {len(self.regions)}",
         ]
         for rg in self.regions[:6]:
@@ -189,6 +190,7 @@ def _misfit(run, rf, state):
     )
     e0, e1 = excess_rmse(run.r0, nz.sigma), excess_rmse(rf, nz.sigma)
     held = (None, None) if base_ok else (run.heldout(run.base_state), run.heldout(state))
+    held_ms = (None, None) if base_ok else (run.heldout_ms(run.base_state), run.heldout_ms(state))
     v = verdict(
         len(state.effects),
         base_ok,
@@ -197,6 +199,7 @@ def _misfit(run, rf, state):
         e1,
         None if held[0] is None else held,
         sigma=nz.sigma,
+        heldout_ms=None if held_ms[0] is None else held_ms,
     )
     if not baseline.noise_gate:  # no noise test: the ΔBIC selection alone decides
         v = "explained" if state.effects else "none"
@@ -206,6 +209,24 @@ def _misfit(run, rf, state):
         "baseline_consistent": base_ok,
         "final_consistent": final_ok,
     }
+    if held_ms[0] is not None:  # what the held-out gate compares (`_refits._generalises`)
+        misfit["heldout_rms"] = [float(np.sqrt(m)) if m is not None else None for m in held_ms]
+    if not base_ok and baseline.noise_gate:  # which part of the test finds the misfit
+        parts = noise_test_parts(
+            run.r0,
+            *run.base_noise,
+            data.segment,
+            data.x,
+            len(baseline.param_names),
+            run.alpha,
+            run.n_windows,
+            not data.noise_std,
+        )
+        misfit["baseline_evidence"] = {
+            "whole_record_p": parts["p_whole"],
+            "periodic_line_p": parts["p_line"],
+            "windows_flagged": len(parts["regions"]),
+        }
     if v in ("partly_explained", "unexplained"):
         signals = {**baseline.signals(), "model": np.asarray(state.prediction)}
         for rg in remaining:
@@ -216,11 +237,28 @@ def _misfit(run, rf, state):
     return misfit, v, e0, e1, held
 
 
+def _evidence_line(rep) -> list[str]:
+    """Where the baseline fails the noise test with no excess over the noise's mean square
+    (a local or periodic misfit): the part of the test that finds it."""
+    ev = rep.misfit.get("baseline_evidence")
+    if ev is None or rep.excess_rmse_before > 0:
+        return []
+    return [
+        "misfit within the noise's mean square, found by the noise test: whole record p = "
+        f"{ev['whole_record_p']:.2g}, periodic line p = {ev['periodic_line_p']:.2g}, "
+        f"{ev['windows_flagged']} window(s) flagged"
+    ]
+
+
 def _heldout_line(rep, unit):
     if rep.heldout_excess_before is None:
         return ""
     after = "failed" if rep.heldout_excess_after is None else f"{rep.heldout_excess_after:.3g}"
-    return f"; held out: {rep.heldout_excess_before:.3g} -> {after} {unit}"
+    line = f"; held out: {rep.heldout_excess_before:.3g} -> {after} {unit}"
+    rms_ = rep.misfit.get("heldout_rms")
+    if rep.heldout_excess_before == 0 and rms_ and rms_[1] is not None:  # the gate's figures
+        line += f" (rms {rms_[0]:.3g} -> {rms_[1]:.3g} {unit})"
+    return line
 
 
 def report(run, state, rounds: list, settings: dict) -> DiscoveryReport:

@@ -48,6 +48,9 @@ from .._fit._noise import excess_rmse
 N_KNOTS = 12  # knots of the flexible correction
 # noise sd: the most held-out excess beyond the in-sample one for "explained" (module docstring)
 HELDOUT_GAP = 0.6
+# relative: held-out mean squares closer than this are a tie (the fold fits' tolerance, 1e-8 on
+# the parameters, moves a held-out mean square by ~1e-8; a tie keeps the fewer parameters)
+HELDOUT_TIE = 1e-6
 
 
 @dataclasses.dataclass
@@ -76,19 +79,35 @@ class NoiseModel:
 
 
 def verdict(
-    n_effects, base_ok, final_ok, excess_before, excess_after, heldout=None, *, sigma=None
+    n_effects,
+    base_ok,
+    final_ok,
+    excess_before,
+    excess_after,
+    heldout=None,
+    *,
+    sigma=None,
+    heldout_ms=None,
 ) -> str:
     """The verdict (module docstring) from the consistency tests, the excess misfits and
     `heldout` = (h₀, h₁), the held-out excesses (None: not available; h₁ None: the final
     model's held-out fit failed), all in output units; `sigma`: the noise sd (None: the
-    held-out gap is not checked)."""
+    held-out gap is not checked); `heldout_ms` = (m₀, m₁), the held-out mean squares: "lowered"
+    compares them (beyond `HELDOUT_TIE`), and where h₀ = 0 (the held-out misfit within the
+    noise's mean square, so an excess cannot halve) they stand for "halved" too."""
     if base_ok:
         return "none"
     if n_effects == 0:
         return "unexplained"
     h0, h1 = (None, None) if heldout is None else heldout
+    m0, m1 = (None, None) if heldout_ms is None else heldout_ms
+    if h1 is not None and m0 is not None and m1 is not None:
+        lowered = m1 < m0 * (1.0 - HELDOUT_TIE)
+    else:
+        lowered = heldout is None or (h1 is not None and h1 < h0)
     halved = heldout is None or (h1 is not None and h1 <= 0.5 * h0 and h0 > 0)
-    lowered = heldout is None or (h1 is not None and h1 < h0)
+    if heldout is not None and h0 == 0 and m0 is not None:
+        halved = lowered
     close = (
         heldout is None
         or sigma is None

@@ -1,0 +1,71 @@
+"""Issue 68: the held-out gate and the verdict never contradict their own statistics.
+
+A misfit within the noise's mean square (here: a stated noise sd twice the true one, the misfit
+local to the reversals) has an excess over the noise of 0, yet the noise test finds it. The
+held-out gate compares held-out mean squares, so the right effect is added; the verdict follows.
+The record is made by `tests/blind_gate/generate_loops.py`, written without the library's code.
+"""
+
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+from tribojax._cli import main
+from tribojax.discovery._verdict import HELDOUT_TIE, verdict
+
+_GEN = Path(__file__).resolve().parent / "blind_gate" / "generate_loops.py"
+
+
+def _generator():
+    spec = importlib.util.spec_from_file_location("blind_generate_loops", _GEN)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_misfit_within_the_noise_mean_square_is_found_and_explained(tmp_path, capsys):
+    csv = _generator().write_record(tmp_path, "partial_slip", 1, delta_star=3e-6, sigma_N=1.0)
+    side = csv.with_suffix(".json")
+    meta = json.loads(side.read_text())
+    meta["noise_std_N"] = 2.0  # a conservative user: twice the true 1 N
+    side.write_text(json.dumps(meta))
+    out = tmp_path / "d"
+    assert main(["discover", str(csv), "--out", str(out)]) == 0
+    d = json.loads((out / "discovery.json").read_text())
+    m = d["misfit"]
+    assert not m["baseline_consistent"]  # the test finds the misfit ...
+    assert d["excess_rmse_before"] == 0.0  # ... which is within the noise's mean square
+    ev = m["baseline_evidence"]
+    assert min(ev["periodic_line_p"], ev["whole_record_p"]) < 1e-6 or ev["windows_flagged"] > 0
+    assert d["effects"] == ["microslip"] and d["verdict"] == "explained"
+    before, after = m["heldout_rms"]
+    assert after < 0.8 * before  # what the gate compared: the held-out mean square fell
+    said = capsys.readouterr().out
+    assert "found by the noise test" in said and "(rms " in said
+
+
+@pytest.mark.parametrize(
+    "ms, expected",
+    [
+        ((4.0, 1.0), "explained"),  # h₀ = 0: the held-out mean square stands for "halved"
+        ((4.0, 4.0 * (1 - 0.5 * HELDOUT_TIE)), "unexplained"),  # a tie: not lowered
+    ],
+)
+def test_verdict_compares_heldout_mean_squares_where_the_excess_is_zero(ms, expected):
+    v = verdict(1, False, True, 0.0, 0.0, (0.0, 0.0), sigma=2.0, heldout_ms=ms)
+    assert v == expected
+    # the rule before issue 68 ("halved" needs h₀ > 0) called both "unexplained"
+    assert verdict(1, False, True, 0.0, 0.0, (0.0, 0.0), sigma=2.0) == "unexplained"
+
+
+def test_verdict_unchanged_where_the_heldout_excess_is_positive():
+    # h₀ > 0: the held-out mean squares order the models as the excesses do
+    sig = 1.0
+    for h, ms, want in [
+        ((2.0, 0.5), (5.0, 1.25), "explained"),
+        ((2.0, 1.5), (5.0, 3.25), "partly_explained"),  # held out lowered, not halved
+    ]:
+        assert verdict(1, False, True, 1.0, 0.0, h, sigma=sig, heldout_ms=ms) == want
+        assert verdict(1, False, True, 1.0, 0.0, h, sigma=sig) == want
