@@ -1,13 +1,12 @@
 """The arguments of every `tribojax` subcommand, declared without importing the library.
 
 `tribojax --help`, a subcommand's `--help` and argument errors are answered from this module
-alone (standard library and `tribojax._limits`/`_presets` constants), without JAX; the subcommand's
+alone (standard library, `tribojax._limits`/`_presets` constants and `_argument_types`), without JAX; the subcommand's
 own module is imported only to run it.
 """
 
 from __future__ import annotations
 
-import argparse
 import math
 
 from .. import _presets as P
@@ -20,6 +19,7 @@ from .._limits import (
     RECORD_FORMATS,
     ROUGHNESS_METHODS,
 )
+from ._argument_types import band_tension, positive_float, whole_number
 
 CONTACT_DEFAULTS = dict(
     M=P.CALIBRATED_M,
@@ -114,40 +114,6 @@ def hysteresis_arguments(parser) -> None:
     )
 
 
-def _positive_float(flag: str):
-    """An argparse type: a finite number > 0, refused naming `flag`, the value and the range."""
-
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            value = math.nan
-        if not (math.isfinite(value) and value > 0):
-            raise argparse.ArgumentTypeError(
-                f"{flag} = {text!r} is outside the allowed range (0, inf)"
-            )
-        return value
-
-    return parse
-
-
-def band_tension(text: str) -> float:
-    """A band tension for `--band-tension`: N, or lbf with an `lb` suffix (`30lb`)."""
-    raw = text.strip().lower()
-    lbf = raw.endswith(("lbf", "lb"))
-    number = raw.removesuffix("lbf").removesuffix("lb").strip() if lbf else raw.removesuffix("n")
-    try:
-        value = float(number) * (P.LBF_N if lbf else 1.0)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(
-            f"--band-tension = {text!r} is outside the allowed range: "
-            "a tension >= 0 in N (0: a slack band), or in lbf as '30lb'"
-        )
-    return value
-
-
 def _band_tension_argument(parser) -> None:
     parser.add_argument(
         "--band-tension",
@@ -208,7 +174,7 @@ def fit_arguments(parser, batch: bool = False) -> None:
     )
     parser.add_argument(
         "--n-starts",
-        type=_positive_float("--n-starts"),
+        type=positive_float("--n-starts"),
         nargs="+",
         default=None,
         metavar="N",
@@ -360,7 +326,7 @@ def batch_arguments(parser) -> None:
         where = cmd.add_mutually_exclusive_group()
         where.add_argument(
             "--workers",
-            type=_whole_number("--workers"),
+            type=whole_number("--workers"),
             default=None,
             help="worker processes of the local cluster (default: one per core, "
             "at most one per 2 GiB of memory)",
@@ -388,17 +354,6 @@ def batch_arguments(parser) -> None:
             action="store_true",
             help="no progress display (it is shown only on a terminal)",
         )
-
-
-def _whole_number(name: str):
-    def parse(text: str) -> int:
-        if not (text.strip().isdigit() and int(text) >= 1):
-            raise argparse.ArgumentTypeError(
-                f"{name} = {text!r} is outside the allowed range: a whole number >= 1"
-            )
-        return int(text)
-
-    return parse
 
 
 def frf_arguments(parser) -> None:
