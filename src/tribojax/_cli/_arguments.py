@@ -1,8 +1,8 @@
 """The arguments of every `tribojax` subcommand, declared without importing the library.
 
 `tribojax --help`, a subcommand's `--help` and argument errors are answered from this module
-alone (standard library, `tribojax._limits`/`_presets` constants and `_argument_types`), without JAX; the subcommand's
-own module is imported only to run it.
+alone (standard library, `tribojax._limits`/`_presets` constants and `_argument_types`), without
+JAX; the subcommand's own module is imported only to run it.
 """
 
 from __future__ import annotations
