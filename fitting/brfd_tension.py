@@ -14,8 +14,8 @@ Reported per tension and campaign: the median and spread of each direction's sli
 rise scale A± and rate β±, the clearances and the drag stiffness; then the affine law per
 direction F±(T) = D± + c±·T fitted to the 0 lb and 30 lb tests of campaign 2 (D± the drag at a
 slack band, c± the capstan slope), its prediction of the 36 lb test's fitted F± against the
-proportional law F±(30 lb)·36/30; and campaign 1 against campaign 2 at 30 lb (ratio of medians).
-Writes DIR/brfd_tension.json.
+proportional law F±(30 lb)·36/30; campaign 1 against campaign 2 at 30 lb (ratio of medians); and
+how well one test calibrates a campaign (`one_test_calibration`). Writes DIR/brfd_tension.json.
 """
 
 from __future__ import annotations
@@ -110,6 +110,32 @@ def tension_law(tests) -> dict:
     return law
 
 
+def one_test_calibration(src: Path, setting="1Hz30lbtension1amplitude") -> dict:
+    """Campaign to campaign with one test (deliverable 2's question, at 30 lb where campaign 2 has
+    six tests): campaign 2's other 30 lb tests predicted (NRMSE, from rest) by the band brake
+    fitted on (a) campaign 2's `setting` test alone, (b) campaign 1's ten tests together, (c) (b)
+    and the `setting` test together (one parameter set)."""
+    c2 = {p.stem: tj.read_brfd(p) for p in sorted((src / "brfd" / "campaign2").glob("*30lb*.json"))}
+    c1 = [tj.read_brfd(p) for p in sorted((src / "brfd").glob("*30lbtension*.json"))]
+    fits = {
+        "one_test": [c2[setting]],
+        "campaign1": c1,
+        "campaign1_and_one_test": [*c1, c2[setting]],
+    }
+    out = {"setting": setting, "predicted": [k for k in c2 if k != setting]}
+    for name, records in fits.items():
+        h = tj.fit_history(records, "band_brake", decimate=2, throw=False)
+        e = {k: float(tj.predict_history(h, lp)[1]) for k, lp in c2.items() if k != setting}
+        v = np.array(list(e.values()))
+        out[name] = {
+            "converged": h.fit.converged,
+            "nrmse": e,
+            "median": float(np.median(v)),
+            "worst": float(v.max()),
+        }
+    return out
+
+
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("fitting-out/brfd_tension"))
@@ -134,6 +160,7 @@ def main(argv=None) -> dict:
         "by_tension_and_campaign": table,
         "tension_law": tension_law(tests),
         "campaign2_over_campaign1_at_30lb": campaigns,
+        "one_test_calibration": one_test_calibration(args.src),
     }
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "brfd_tension.json").write_text(json.dumps(result, indent=1) + "\n")

@@ -10,6 +10,7 @@ import importlib.util
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from tribojax._cli import main
@@ -69,3 +70,29 @@ def test_verdict_unchanged_where_the_heldout_excess_is_positive():
     ]:
         assert verdict(1, False, True, 1.0, 0.0, h, sigma=sig, heldout_ms=ms) == want
         assert verdict(1, False, True, 1.0, 0.0, h, sigma=sig) == want
+
+
+def test_a_tie_in_the_choice_goes_to_fewer_parameters_then_the_name():
+    # issue 68: two refits at the same cost to the last bits (loop s2035: microslip and backlash,
+    # ΔBIC −94.197905263078 both) are chosen by a stated rule, not by their last bits
+    import types
+
+    from tribojax.discovery import _refits as R
+    from tribojax.discovery._verdict import BIC_TIE
+
+    n, rss0 = 1000, 1000.0
+    state = types.SimpleNamespace(rss=rss0)
+
+    def cand(name, rss, dk):
+        return (types.SimpleNamespace(name=name), types.SimpleNamespace(rss=rss), dk, 1.0)
+
+    for order in (1, -1):  # either order, either last bit
+        a = [cand("zeta", 500.0 * (1 - 1e-15), 1), cand("alpha", 500.0, 1)][::order]
+        assert R.choose(a, state, n)[0].name == "alpha"  # same parameters: by name
+        b = [cand("alpha", 500.0 * (1 - 1e-15), 2), cand("zeta", 500.0, 1)][::order]
+        assert R.choose(b, state, n)[0].name == "zeta"  # fewer parameters first
+    # beyond the tie band the lower ΔBIC wins, whatever its name
+    far = 500.0 * float(np.exp(-4 * BIC_TIE / n))  # ΔBIC lower by 4 BIC_TIE
+    c = [cand("alpha", 500.0, 1), cand("zeta", far, 1)]
+    assert R.choose(c, state, n)[0].name == "zeta"
+    assert c[1][0].delta_bic_common < c[0][0].delta_bic_common - 3 * BIC_TIE

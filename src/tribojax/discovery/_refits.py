@@ -13,7 +13,7 @@ from .._fit._noise import RHO_MAX, ar1_inflation, ar1_square_inflation, residual
 from .._model import MAX_STEPS, effect_strengths, fit_model
 from .._parallel import in_parallel, speculatively
 from ._fitting import _columns, _delta_bic
-from ._verdict import HELDOUT_TIE
+from ._verdict import BIC_TIE, HELDOUT_TIE
 
 QUICK_STEPS = 16  # steps per start of a refit after a candidate of the round reached the noise
 QUICK_MARGIN = 2.0  # ... continued only within this factor of that candidate's cost (`_refit`)
@@ -361,9 +361,13 @@ def choose(accepted, state, n):
     """The accepted candidate to add: each was accepted on its own ΔBIC (AR(1) inflation of its
     own residual); the choice between them uses one inflation for all, that of the one with the
     lowest RSS (the error correlation estimated from the fullest model), recorded as
-    `delta_bic_common`. Otherwise a candidate that leaves a smooth misfit is charged more than
-    one that leaves a rough one (docs/discovery.md). Returns (candidate, refit)."""
+    `delta_bic_common`; candidates within `BIC_TIE` of the lowest are a tie, which goes to the
+    fewer added parameters, then the name (never to the last bits). Otherwise a candidate that
+    leaves a smooth misfit is charged more than one that leaves a rough one (docs/discovery.md).
+    Returns (candidate, refit)."""
     c_common = min(accepted, key=lambda a: a[1].rss)[3]
     for c, new, dk, _ in accepted:
         c.delta_bic_common = delta_bic(new.rss, state.rss, n, dk, c_common)
-    return min(accepted, key=lambda a: a[0].delta_bic_common)[:2]
+    best = min(a[0].delta_bic_common for a in accepted)
+    tied = [a for a in accepted if a[0].delta_bic_common <= best + BIC_TIE]
+    return min(tied, key=lambda a: (a[2], a[0].name))[:2]  # a tie: fewer parameters, the name

@@ -51,6 +51,10 @@ HELDOUT_GAP = 0.6
 # relative: held-out mean squares closer than this are a tie (the fold fits' tolerance, 1e-8 on
 # the parameters, moves a held-out mean square by ~1e-8; a tie keeps the fewer parameters)
 HELDOUT_TIE = 1e-6
+# BIC units: candidates whose ΔBIC differ by less are a tie (each refit's cost stops within
+# GAIN_TOL = 0.01 residual variances of its minimum, so a ΔBIC within ~0.02 of another is noise);
+# a tie goes to the fewer added parameters, then the name (`_refits.choose`)
+BIC_TIE = 0.05
 
 
 @dataclasses.dataclass
