@@ -128,3 +128,23 @@ def test_history_fit_handles_a_drifting_amplitude():
     assert np.all(np.abs(z) < 4), z
     with pytest.raises(ValueError, match="model must be"):
         tj.fit_loop(loop, "jenkins", model="transient")
+
+
+@pytest.mark.parametrize("eps", [1e-12, -1e-12, 3e-9])
+def test_whole_cycles_do_not_hang_on_the_last_bits_of_a_sample_at_the_mean(eps):
+    # a record that starts on its mean (a sine from u = 0): whether the first sample is a
+    # crossing must not turn on its last bits (issue 68: the study's loop s2003, moved by 1e-3 of
+    # its noise, lost a whole cycle, 601 -> 401 samples fitted, and its verdict)
+    from tribojax._io._hysteresis_loop import cycle_starts
+
+    w, n = 2 * np.pi * 5.0, 3 * 200 + 50 + 1
+    t = np.arange(n) / 200 / 5.0
+    u = 1e-6 * np.sin(w * t)
+    f = 2.0 * np.tanh(u / 2e-7)
+    moved = u.copy()
+    moved[0] += eps * 1e-6
+    a, b = cycle_starts(t, u), cycle_starts(t, moved)
+    assert len(a) == len(b) == 4 and np.allclose(a, b, atol=1e-9)
+    la = tj.analyse_loop(tj.HysteresisLoop(t, u, f))
+    lb = tj.analyse_loop(tj.HysteresisLoop(t, moved, f))
+    assert la.omega == pytest.approx(w, rel=1e-6) and lb.omega == pytest.approx(la.omega, rel=1e-9)

@@ -54,6 +54,20 @@ import optimistix as optx
 FAILED_RESIDUAL = 1e6
 
 
+RESTART_STEP = 1e-2  # a stalled fit restarts from points moved by ±1 % per free parameter
+RESTART_SIGNS = ((1, 1, 1), (-1, -1, -1), (1, -1, 1), (-1, 1, -1))  # cycled over the parameters
+
+
+def restart_factors(p: int) -> list:
+    """The factors 1 + `RESTART_STEP`·sign of p parameters around which a stalled fit restarts,
+    one array per pattern of `RESTART_SIGNS` (parameter k takes sign k mod 3): the restarts of
+    the chain fit and of a record model's fit."""
+    return [
+        1.0 + RESTART_STEP * np.array([signs[k % len(signs)] for k in range(p)], dtype=float)
+        for signs in RESTART_SIGNS
+    ]
+
+
 def gauss_newton_step(r, J):
     """The Gauss–Newton step −(JᵀJ)⁺Jᵀr from θ, in units of θ's standard errors; traceable.
 

@@ -227,11 +227,18 @@ def write_loop(
     )
 
 
+CROSSING_BAND = 1e-4  # of u's peak to peak: a sample this close to the mean is on it
+
+
 def cycle_starts(t, u) -> np.ndarray:
-    """Times of the upward crossings of u's mean (linear interpolation between samples)."""
+    """Times of the upward crossings of u's mid-range (linear interpolation between samples).
+    A sample within `CROSSING_BAND`·(peak to peak) of it counts as on it, so that a record
+    that starts (or passes a sample) at its mean finds the same cycles whatever the last bits."""
     x = u - 0.5 * (u.max() + u.min())
-    i = np.flatnonzero((x[:-1] <= 0) & (x[1:] > 0))
-    return t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i])
+    on = np.abs(x) <= CROSSING_BAND * (u.max() - u.min())
+    xs = np.where(on, 0.0, x)
+    i = np.flatnonzero((xs[:-1] <= 0) & (xs[1:] > 0))
+    return np.maximum(t[i], t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i]))
 
 
 def synthetic_loop(

@@ -13,7 +13,7 @@ import numpy as np
 from .._checks import runtime_message
 from .._fit._engine import FAILED_RESIDUAL, least_squares_fit, value_and_jacobian
 from .._fit._result import fit_statistics, thrown
-from .._fit._solver import CRAWL_STEPS, LevenbergMarquardt
+from .._fit._solver import CRAWL_STEPS, LevenbergMarquardt, restart_factors
 from .._limits import MAX_STEPS as MAX_STEPS
 from .._parallel import in_parallel
 from .._precision import ensure_x64
@@ -283,32 +283,41 @@ class _Statistics:
 
 
 def fit_record(
-    baseline, starts=None, *, scale=None, max_steps=MAX_STEPS, sigma_known=None, throw=False
+    baseline,
+    starts=None,
+    *,
+    scale=None,
+    max_steps=MAX_STEPS,
+    sigma_known=None,
+    restarts=True,
+    throw=False,
 ):
     """Fit a record model alone (no effects): the fit that `fit` reports and `discover` starts
-    from. From each of `starts` (θ; default `baseline.starts()`) in turn until one converges at
-    a minimum, which is kept; else the first that converged; else the lowest cost. A stationary
-    stop short of a minimum (a Gauss–Newton step still promising `NOISE_TOL` residual variances or
-    more: the trust region collapsed under the ODE's evaluation noise or at a kink) does not end the
-    starts. A stop at a bound of the parameters (`baseline.at_bound`) is not a minimum. When no
-    start reaches one, costs are not compared (a lower stop may be a bound's, from which no effect
-    applies). A later start still above the first one's cost after `PROBE_STEPS` steps is abandoned
-    (`fit_model`'s `abandon_above`; also when the first did not converge), so a later start is kept
-    only where it comes below the first or stops at a minimum within those steps. A start that
-    crawls far from any minimum is stopped (`fit_model`'s `stop_crawl`; the records behind these
-    rules: docs/discovery.md). `scale`: the residual unit (default the record's noise sd, else the
-    first-difference estimate `noise_estimate` of the data, else its sd); `sigma_known` (default:
-    the record states its noise) makes the statistics use the stated noise when the residual is
-    consistent with it. `throw`: raise `FitError` when no start succeeded (default: return the
-    failed fit, `result` says why)."""
+    from. From every one of `starts` (θ; default `baseline.starts()`: the slip model's cost has
+    separate minima in C_τ), and the best kept (`_kept`): the lowest cost among the fits that
+    converged away from a bound of the parameters (`baseline.at_bound`), fits within `COST_TIE`
+    residual variances of it counting as a tie that goes to the earlier start; else the first
+    that converged; else the lowest cost. When the fit kept stopped short of a minimum (a
+    stationary stop whose Gauss–Newton step still promises `NOISE_TOL` residual variances or more:
+    the trust region collapsed under the ODE's evaluation noise or at a kink) and `restarts`, it
+    is fitted again from the points around its stop with each parameter ×(1 ± 1 %)
+    (`restart_factors`, the chain fit's restarts), with `baseline.more_steps()`, and the best of
+    all is kept by the same rule. A start or restart still above the first one's cost after
+    `PROBE_STEPS` steps is abandoned (`fit_model`'s `abandon_above`); one that crawls far from any
+    minimum is stopped (`stop_crawl`; the records behind these rules: docs/discovery.md).
+    `scale`: the residual unit (default the record's noise sd, else the first-difference estimate
+    `noise_estimate` of the data, else its sd); `sigma_known` (default: the record states its
+    noise) makes the statistics use the stated noise when the residual is consistent with it.
+    `throw`: raise `FitError` when no start succeeded (default: return the failed fit, `result`
+    says why)."""
     data = baseline.data()
     y = np.asarray(data.y, dtype=float)
     scale = record_scale(baseline) if scale is None else scale
     known = bool(data.noise_std) if sigma_known is None else sigma_known
 
-    def call(th, above=np.inf):
+    def call(th, above=np.inf, model=baseline):
         return lambda: fit_model(
-            baseline,
+            model,
             (),
             np.asarray(th, dtype=float),
             y,
@@ -320,24 +329,56 @@ def fit_record(
         )
 
     thetas = list(baseline.starts() if starts is None else starts)
+    first = in_parallel([call(thetas[0])])[0]
+    above = first.rss if np.isfinite(first.rss) else np.inf  # a cost reached, converged or not
+    fits = [first, *in_parallel([call(th, above) for th in thetas[1:]])]
+    best = _kept(baseline, fits)
+    if restarts and _stalled(best) and not baseline.at_bound(best.theta[: _p(baseline)]):
+        wider = baseline.more_steps() or baseline
+        around = _around(baseline, best)
+        more = in_parallel([call(th, best.rss, wider) for th in around])
+        more = [dataclasses.replace(f, model=baseline) for f in more]
+        best = _kept(baseline, [best, *more])
+    return thrown(best, throw)
 
-    # the first start alone; when it is not at a minimum, the others side by side, read in order
-    def in_order():
-        first = in_parallel([call(thetas[0])])[0]
-        yield first
-        above = first.rss if np.isfinite(first.rss) else np.inf  # a cost reached, converged or not
-        yield from (
-            fut.result() for fut in in_parallel([call(th, above) for th in thetas[1:]], wait=False)
-        )
 
-    fits = []
-    for f in in_order():
-        fits.append(f)
-        if (
-            f.converged
-            and not (f.gain_left or 0.0) >= NOISE_TOL
-            and not baseline.at_bound(f.theta[: len(baseline.param_names)])
-        ):
-            return thrown(f, throw)  # at a minimum: the next starts are not needed
+COST_TIE = NOISE_TOL  # fits whose costs differ by less (residual variances) are a tie
+
+
+def _p(baseline) -> int:
+    return len(baseline.param_names)
+
+
+def _stalled(fit) -> bool:
+    """Converged as stationary, short of a minimum (`NOISE_TOL` or more still promised)."""
+    return bool(fit.converged) and (fit.gain_left or 0.0) >= NOISE_TOL
+
+
+def _kept(baseline, fits):
+    """The lowest cost of the fits that converged away from a bound, fits within `COST_TIE`
+    residual variances (s² = cost/(n − p), at least 1) of it a tie going to the earlier one;
+    else the first that converged (a lower stop at a bound is not compared); else the lowest
+    cost."""
+    p = _p(baseline)
+    ok = [f for f in fits if f.converged and not baseline.at_bound(f.theta[:p])]
+    if ok:
+        low = min(f.rss for f in ok)
+        n = np.asarray(ok[0].residuals).size
+        s2 = max(low / max(n - p, 1), 1.0)
+        return next(f for f in ok if f.rss <= low + COST_TIE * s2)
     converged = [f for f in fits if f.converged]
-    return thrown(converged[0] if converged else min(fits, key=lambda f: f.rss), throw)
+    return converged[0] if converged else min(fits, key=lambda f: f.rss)
+
+
+def _around(baseline, fit) -> list:
+    """Start points around a fit's stop: its parameters ×(1 ± `RESTART_STEP`) in the sign
+    patterns of `restart_factors`, as θ (`baseline.theta_of`); none where the model cannot
+    map values back or a moved value leaves its range."""
+    values = np.asarray(fit.values[: _p(baseline)], dtype=float)
+    points = []
+    for factors in restart_factors(values.size):
+        try:
+            points.append(np.asarray(baseline.theta_of(values * factors), dtype=float))
+        except (NotImplementedError, ValueError):
+            continue
+    return points

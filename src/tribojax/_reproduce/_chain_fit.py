@@ -33,7 +33,7 @@ from .._chain import chain_contact as chain_contact
 from .._chain import mu_min, to_physical, to_theta, wang2022_loads
 from .._checks import as_f64, runtime_message
 from .._fit._engine import FAILED_RESIDUAL, gauss_newton_step, least_squares_fit
-from .._fit._solver import LevenbergMarquardt
+from .._fit._solver import LevenbergMarquardt, restart_factors
 from .._parallel import in_parallel
 from .._presets import CHAIN_DEFAULTS
 from ._chain_residuals import _RESIDUALS, CHAIN_LU, PARAMETERS, _shown_run
@@ -44,8 +44,6 @@ DEFAULTS = dict(CHAIN_DEFAULTS)
 DEFAULT_FREE = ("D", "G_m", "mu_t")
 """The parameters `fit_measured_slips` frees by default (σ_s and α stay at `CHAIN_DEFAULTS`)."""
 GN_STEP_TOL = 0.1  # converged: the remaining Gauss–Newton step < 0.1 standard errors
-RESTART_STEP = 1e-2  # a stalled fit restarts from its start moved by ±1 % per free parameter
-RESTART_SIGNS = ((1, 1, 1), (-1, -1, -1), (1, -1, 1), (-1, 1, -1))  # cycled over the free ones
 SAME_MISFIT = 5e-3  # fits within 0.5 % RMS of the best reach the same misfit
 _SOLVE = ("jac", "lu", "progress", "max_steps", "rtol", "atol")
 
@@ -113,17 +111,14 @@ def fit_measured_slips(
     first = _fit_once(start, kw)
     if first.converged or not restarts:
         return first
-    starts = [_moved(first.start, first.free, signs) for signs in RESTART_SIGNS]
+    starts = [_moved(first.start, first.free, f) for f in restart_factors(len(first.free))]
     fits = [first, *in_parallel([lambda s=s: _fit_once(s, kw) for s in starts])]
     return _kept(fits)
 
 
-def _moved(start: dict, free, signs) -> dict:
-    """`start` with each free parameter k moved by the factor 1 + `RESTART_STEP`·signs[k]."""
-    return {
-        k: v * (1.0 + RESTART_STEP * signs[free.index(k) % len(signs)]) if k in free else v
-        for k, v in start.items()
-    }
+def _moved(start: dict, free, factors) -> dict:
+    """`start` with the i-th free parameter multiplied by factors[i] (`restart_factors`)."""
+    return {k: v * factors[free.index(k)] if k in free else v for k, v in start.items()}
 
 
 def _kept(fits) -> ChainFit:
