@@ -128,7 +128,8 @@ def test_baseline_starts_all_run_and_the_lowest_cost_is_kept(monkeypatch):
         starts,
     )
     assert len(tried) == 7 and fit.rss == pytest.approx(450.0)
-    assert models[3:] == [base.more_steps().max_steps] * 4 and bars[3:] == [pytest.approx(500.0)] * 4
+    assert models[3:] == [base.more_steps().max_steps] * 4
+    assert bars[3:] == [pytest.approx(500.0)] * 4
     moved = [base.physical(th) / base.physical(real.theta) for th in thetas0[3:]]
     assert np.allclose(np.abs(np.asarray(moved) - 1.0), 0.01, rtol=1e-6)
     assert fit.model.max_steps == base.max_steps  # the restarted fit reports the record's model
