@@ -302,9 +302,10 @@ def fit_record(
     the trust region collapsed under the ODE's evaluation noise or at a kink) and `restarts`, it
     is fitted again from the points around its stop with each parameter ×(1 ± 1 %)
     (`restart_factors`, the chain fit's restarts), with `baseline.more_steps()`, and the best of
-    all is kept by the same rule. A start or restart still above the first one's cost after
-    `PROBE_STEPS` steps is abandoned (`fit_model`'s `abandon_above`); one that crawls far from any
-    minimum is stopped (`stop_crawl`; the records behind these rules: docs/discovery.md).
+    all is kept by the same rule. A later start still above the first one's cost (a restart: the
+    kept fit's) after `PROBE_STEPS` steps is abandoned (`fit_model`'s `abandon_above`); one that
+    crawls far from any minimum is stopped (`stop_crawl`; the records behind these rules:
+    docs/discovery.md).
     `scale`: the residual unit (default the record's noise sd, else the first-difference estimate
     `noise_estimate` of the data, else its sd); `sigma_known` (default: the record states its
     noise) makes the statistics use the stated noise when the residual is consistent with it.
