@@ -31,7 +31,7 @@ import numpy as np
 from jaxtyping import Array
 
 from .._dynamics._profiles import MeasuredProfile
-from .._dynamics._slip import simulate_slip
+from .._dynamics._slip import DEFAULT_ATOL, simulate_slip
 from .._friction._lugre import PreSlipLuGre
 from .._io._slip_run import SlipRun
 from ._base import AbstractBaseline, RecordData
@@ -52,10 +52,14 @@ KNOBS = (
 )
 ZETA_MAX = 0.3  # damping ratio bound of a structural mode (above: a low-pass of a(t), not a mode)
 N_ODE_KNOBS = 4  # the knobs of the friction element; the mode's knobs act on the reading
-ODE_MAX_STEPS = 20_000  # ODE step budget of the model's slip solve (`simulate_slip`'s)
-# x `ODE_MAX_STEPS`: the budget of a stalled fit's restarts and of a held-out check where a
-# solve ran out (docs/discovery.md, "The slip model's ODE budget")
-ODE_RETRY_FACTOR = 3
+# relative tolerance of the model's slip solve (atol scaled with it): at simulate_slip's 1e-6 a
+# fit's cost moved by ±0.3 noise variances between neighbouring points and fits stalled where
+# rounding left them; ±0.015 at 1e-7 (docs/discovery.md, "Stability")
+ODE_RTOL = 1e-7
+ODE_MAX_STEPS = 60_000  # ODE step budget of one solve of the model
+# the least budget of a stalled fit's restarts and of a held-out check where a solve ran out
+# (docs/discovery.md, "The slip model's ODE budget"): at rtol 1e-8 the model's own
+ODE_RETRY_STEPS = 60_000
 F_CAP_NEAR = 0.9  # F_s above this fraction of its bound: at the bound (not identified)
 F_MAX_OVER_DRIVE = 100.0  # bound of F_s in units of m·max|a| (beyond: slip ∝ (m a/F_s)², tiny)
 LOG10_VS_RANGE = (-12.0, 3.0)  # bound of log10 v_s (m/s) in the fit
@@ -107,6 +111,7 @@ class SlipBaseline(AbstractBaseline):
     alpha: float = eqx.field(static=True, default=1.0)  # bristle exponent (start when free)
     free_alpha: bool = eqx.field(static=True, default=False)
     max_steps: int = eqx.field(static=True, default=ODE_MAX_STEPS)  # ODE steps of one solve
+    rtol: float = eqx.field(static=True, default=ODE_RTOL)  # the ODE's relative tolerance
 
     @property
     def param_names(self):
@@ -178,9 +183,15 @@ class SlipBaseline(AbstractBaseline):
             }
         return {}
 
+    @property
+    def atol(self) -> float:
+        """The ODE's absolute tolerance of slip and deflection, m: `simulate_slip`'s default
+        scaled with `rtol` (1e-15 m at 1e-6)."""
+        return DEFAULT_ATOL * self.rtol / 1e-6
+
     def more_steps(self):
-        """This model with `ODE_RETRY_FACTOR` x `ODE_MAX_STEPS` ODE steps (at least its own)."""
-        steps = max(self.max_steps, ODE_RETRY_FACTOR * ODE_MAX_STEPS)
+        """This model with `ODE_RETRY_STEPS` ODE steps (at least its own)."""
+        steps = max(self.max_steps, ODE_RETRY_STEPS)
         return dataclasses.replace(self, max_steps=steps)
 
     def at_bound(self, theta) -> bool:
@@ -214,6 +225,8 @@ class SlipBaseline(AbstractBaseline):
             adjoint=dfx.ForwardMode(),
             throw=False,
             max_steps=self.max_steps,
+            rtol=self.rtol,
+            atol=self.atol,
         )
 
     def _mode(self, km):
@@ -245,6 +258,8 @@ class SlipBaseline(AbstractBaseline):
             adjoint=dfx.ForwardMode(),
             throw=False,
             max_steps=self.max_steps,
+            rtol=self.rtol,
+            atol=self.atol,
         ).slip
 
     def value_and_jacobian(self, theta, null=None):
