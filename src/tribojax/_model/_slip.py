@@ -58,7 +58,7 @@ N_ODE_KNOBS = 4  # the knobs of the friction element; the mode's knobs act on th
 ODE_RTOL = 1e-7
 ODE_MAX_STEPS = 60_000  # ODE step budget of one solve of the model
 # the least budget of a stalled fit's restarts and of a held-out check where a solve ran out
-# (docs/discovery.md, "The slip model's ODE budget"): at rtol 1e-8 the model's own
+# (docs/discovery.md, "The slip model's ODE budget"); at rtol 1e-7 the model's own
 ODE_RETRY_STEPS = 60_000
 F_CAP_NEAR = 0.9  # F_s above this fraction of its bound: at the bound (not identified)
 F_MAX_OVER_DRIVE = 100.0  # bound of F_s in units of m·max|a| (beyond: slip ∝ (m a/F_s)², tiny)
@@ -94,7 +94,8 @@ def slip_start(t, accel, slip, mass) -> np.ndarray:
 class SlipBaseline(AbstractBaseline):
     """wang2022's pre-slip model of one slip run (Eq 27, consistent reading): F_s, K_τ, C_τ
     fitted, the bristle exponent α held at `alpha` (1: the paper's law, discovery's baseline) or
-    fitted as a fourth parameter (`free_alpha`)."""
+    fitted as a fourth parameter (`free_alpha`). The ODE is solved at `rtol` (default
+    `ODE_RTOL` = 1e-7, atol scaled with it) with `max_steps` steps."""
 
     kind: ClassVar[str] = "slip"
     knob_names: ClassVar[tuple] = KNOBS
