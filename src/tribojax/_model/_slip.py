@@ -216,9 +216,10 @@ class SlipBaseline(AbstractBaseline):
             alpha=self.bristle_exponent(theta),
         )
 
-    def _solve(self, theta, knobs):
+    def _simulate(self, element):
+        """The slip solve of `element` on the record's drive, at the model's tolerances."""
         return simulate_slip(
-            self.element(theta, knobs),
+            element,
             self.profile,
             self.mass,
             ts=self.t,
@@ -229,6 +230,9 @@ class SlipBaseline(AbstractBaseline):
             rtol=self.rtol,
             atol=self.atol,
         )
+
+    def _solve(self, theta, knobs):
+        return self._simulate(self.element(theta, knobs))
 
     def _mode(self, km):
         """The mode term of the reading: A_q·q_s/rms(q_s) + A_q̇·q̇/rms(q̇), m, for knobs
@@ -249,19 +253,7 @@ class SlipBaseline(AbstractBaseline):
         """The paper's element alone (`PreSlipLuGre(F_s, K_τ, C_τ, α)`, state z only): the
         model with every knob at its null, without the knob states (a smaller program)."""
         F_s, K, C = self.physical(theta)[:3]
-        element = PreSlipLuGre(F_s, K, C, self.bristle_exponent(theta))
-        return simulate_slip(
-            element,
-            self.profile,
-            self.mass,
-            ts=self.t,
-            t_end=self.t_end,
-            adjoint=dfx.ForwardMode(),
-            throw=False,
-            max_steps=self.max_steps,
-            rtol=self.rtol,
-            atol=self.atol,
-        ).slip
+        return self._simulate(PreSlipLuGre(F_s, K, C, self.bristle_exponent(theta))).slip
 
     def value_and_jacobian(self, theta, null=None):
         def f(tb):
