@@ -26,22 +26,9 @@ GAIN_TOL = 1e-2  # converged: a Gauss–Newton step would lower the cost by < 0.
 NOISE_TOL = 1.0  # stationary: a rejected step promised < 1 residual variance (evaluation noise)
 PROBE_STEPS = 8  # steps after which a start above a cost reached elsewhere is abandoned
 CRAWL_FRACTION = 0.01  # a baseline start whose cost fell < 1 % in `CRAWL_STEPS` steps: crawling
-RESCALE_FACTOR = 10.0  # a column norm this much off its start value: a restart rescales
 SOLVER = LevenbergMarquardt.record(
     1e-8, 1e-10, gain_tol=GAIN_TOL, noise_tol=NOISE_TOL, max_rejections=12, padded=K_MAX
 )
-
-
-def _rescaled(norms0, J) -> bool:
-    """Whether a restart from the stop would scale the variables differently: some column of
-    the Jacobian (per unit of x) was zero at the start and is not now, or changed its norm by
-    more than `RESCALE_FACTOR` either way."""
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        now = np.linalg.norm(J, axis=0)
-        far = np.abs(np.log(now / norms0)) > np.log(RESCALE_FACTOR)
-    woke = (norms0 == 0) & (now > 0)
-    far &= (norms0 > 0) & np.isfinite(now)
-    return bool(np.any(woke | far))
 
 
 def fit_model(
@@ -66,13 +53,14 @@ def fit_model(
     norms (Marquardt's scaling, so the damping is relative to the curvature). Converged when the
     predicted decrease of a Gauss–Newton step gᵀ(JᵀJ)⁻¹g at the optimum is below `GAIN_TOL`
     residual variances (s² = cost/(n − p), at least 1), or, as "stationary" (successful, with a
-    message), when no trial step lowered the cost (a local minimum of the cost as evaluated: ODE
-    evaluation noise, or a kink where contacts start sliding). A trial point where the model is
+    message), when no trial step lowered the cost (a rejected step had promised less than
+    `NOISE_TOL` residual variances, or 12 rejections in a row). A trial point where the model is
     not finite counts as a rejected step. A stationary stop whose Gauss–Newton step still
-    promises at least `NOISE_TOL` residual variances goes on from where it stopped with the
-    variables rescaled there (up to `restarts` times, while each lowers the cost by more than
-    `NOISE_TOL` residual variances, and only where the scaling would change, `_rescaled`; kept
-    when it lowers the cost, also when it then ran out of steps). No restart for a stop above
+    promises at least `NOISE_TOL` residual variances (in a curved valley the trust region shrinks
+    below the steps that would descend) goes on from where it stopped with the variables
+    rescaled there and the trust region reset (up to `restarts` times, while each lowers the
+    cost by more than `NOISE_TOL` residual variances; kept when it lowers the cost, also when it
+    then ran out of steps). No restart for a stop above
     `ceiling` − `NOISE_TOL` s²: a refit passes the current model's cost, which its start from zero
     new strengths reaches, so a start stopped above it has failed. A restart runs with
     `baseline.more_steps()` (the stalls it mends came from ODE solves out of steps).
@@ -106,7 +94,7 @@ def fit_model(
     npar = p + sum(d.k for d in designs)
     stats = _Statistics(baseline, designs, tuple(effects), float(scale), sigma_known, n)
     try:
-        args, d, norms = _scaled_start(x0, args, max_steps)
+        args, d = _scaled_start(x0, args, max_steps)
         res = _solve(x0 / d, args, p, max_steps, abandon_above, stop_crawl)
     except _StartNotFinite:
         return stats.failed(
@@ -125,9 +113,10 @@ def fit_model(
     s2 = max(cost / max(n - npar, 1), 1.0)
     message = _stop_message(res, cost, gain / s2, max_steps, abandon_above)
     short = res.converged and gain >= NOISE_TOL * s2 and cost < ceiling - NOISE_TOL * s2
-    if short and restarts > 0 and _rescaled(norms[:npar], J):
+    if short and restarts > 0:
         # stopped by rejections far from a minimum: go on rescaled here (a nuisance shift's
-        # column was zero at the start) with the model's larger solver budget, if any
+        # column was zero at the start, or the valley curved away) with the model's larger
+        # solver budget, if any
         wider = baseline.more_steps() or baseline
         again = fit_model(
             wider,
@@ -162,7 +151,7 @@ class _StartNotFinite(Exception):
 
 def _scaled_start(x0, args, max_steps):
     """The padded residual's args with the failed-point cost and Marquardt's variable scaling
-    (1/column norms of the start Jacobian, `d`), and those norms. The start's linearisation is
+    (1/column norms of the start Jacobian, `d`). The start's linearisation is
     the fit's own compiled solve (d = 1 there)."""
     r0, J0 = (
         np.asarray(v)
@@ -175,7 +164,7 @@ def _scaled_start(x0, args, max_steps):
         norms = np.linalg.norm(J0, axis=0)
     d = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
     new = (jnp.asarray(bad, dtype=jnp.float64), jnp.asarray(d, dtype=jnp.float64))
-    return eqx.tree_at(lambda t: (t.bad, t.d), args, new), d, norms
+    return eqx.tree_at(lambda t: (t.bad, t.d), args, new), d
 
 
 def _solve(u0, args, p, max_steps, abandon_above, stop_crawl):
