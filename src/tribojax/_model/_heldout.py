@@ -23,7 +23,8 @@ def heldout_residual(baseline, designs, x0, y=None, scale=1.0, effects=(), max_s
     `FOLD_SHARE_MIN` of its Jacobian energy at x0 (Σ (∂r/∂x)², where it has any) in either
     fold: that fold cannot determine it, so its fit keeps the start value, which saw the
     held-out samples (why at x0: docs/discovery.md, "Held-out evidence"). Where the model is not
-    finite (a solve ran out of steps) the check is done again once with `baseline.more_steps()`."""
+    finite (a solve ran out of steps) the check is done again once with `baseline.more_steps()`.
+    Each fold's fit restarts and goes on as `_fold_fit` says."""
     y = np.asarray(baseline.data().y if y is None else y, dtype=float)
     if baseline.folds() is None:  # no held-out check for this model
         return None
@@ -52,16 +53,8 @@ def _heldout(baseline, designs, x0, y, scale, effects, max_steps):
     out = np.empty_like(y)
     fold_fits = in_parallel(
         [
-            lambda k=k: fit_model(
-                baseline,
-                designs,
-                x0,
-                y,
-                scale,
-                effects,
-                max_steps=max_steps,
-                restarts=0,
-                weights=(folds != k).astype(float),
+            lambda k=k: _fold_fit(
+                baseline, designs, x0, y, scale, effects, max_steps, (folds != k).astype(float)
             )
             for k in (0, 1)
         ]
@@ -75,3 +68,16 @@ def _heldout(baseline, designs, x0, y, scale, effects, max_steps):
             return None
         out[folds == k] = (y - f.prediction)[folds == k]
     return out
+
+
+def _fold_fit(baseline, designs, x0, y, scale, effects, max_steps, weights):
+    """One fold's fit, as every record-model fit: a stationary stop short of a minimum goes on
+    rescaled (`fit_model`'s restarts), and one that ran out of steps goes on once from where it
+    stopped (a fold fit left short would make the held-out verdict turn on where it stopped)."""
+    f = fit_model(baseline, designs, x0, y, scale, effects, max_steps=max_steps, weights=weights)
+    if f.result == RESULTS.nonlinear_max_steps_reached and np.all(np.isfinite(f.theta)):
+        more = fit_model(
+            baseline, designs, f.theta, y, scale, effects, max_steps=max_steps, weights=weights
+        )
+        f = more if np.isfinite(more.rss) else f
+    return f
