@@ -32,13 +32,15 @@ def _solve(
     bar=None,
     crawl=0.0,
     channel=0,
+    floor=1.0,
 ):
     """The least-squares solve: (θ, optimistix result, steps, (r, J) or None). Traced, lowered
     and compiled with failures as NaN (no host callback), and its trace stored (`cached_jit`).
     The library's `LevenbergMarquardt` takes the budget as a run-time value under a static cap
     of max(`max_steps`, `shared`): one compiled solve for every budget up to `shared`, and
     every `bar` (probe steps, cost limit; default none) and `crawl` (fraction; 0: off);
-    `channel`: where a reporting solver sends its steps (`progress_channel`), a run-time value."""
+    `channel`: where a reporting solver sends its steps (`progress_channel`), a run-time value;
+    `floor`: the least s² of the solver's gain and noise stops (run-time)."""
     budget = None
     if isinstance(solver, LevenbergMarquardt) and max_steps >= 1:
         probe, limit = (max_steps, np.inf) if bar is None else bar
@@ -47,6 +49,7 @@ def _solve(
             (jnp.asarray(probe), jnp.asarray(limit, dtype=float)),
             jnp.asarray(crawl, dtype=float),
             jnp.asarray(channel),
+            jnp.asarray(floor, dtype=float),
         )
         max_steps = max(max_steps, shared, MAX_STEPS)
     with failures_as_nan():
@@ -62,7 +65,14 @@ def _solve_jit(residual_fn, theta0, args, solver, max_steps, jac, budget):
     options = (
         dict(jac=jac)
         if budget is None
-        else dict(jac=jac, budget=budget[0], bar=budget[1], crawl=budget[2], channel=budget[3])
+        else dict(
+            jac=jac,
+            budget=budget[0],
+            bar=budget[1],
+            crawl=budget[2],
+            channel=budget[3],
+            floor=budget[4],
+        )
     )
     sol = optx.least_squares(
         residual_fn, solver, theta0, args, options=options, max_steps=max_steps, throw=False
@@ -122,6 +132,7 @@ def least_squares_fit(
     progress=None,
     bar: tuple | None = None,
     crawl: float = 0.0,
+    floor: float = 1.0,
     throw: bool = True,
 ) -> FitResult:
     """Fit θ minimising ½‖residual_fn(θ, args)‖² with an optimistix least-squares solver.
@@ -145,6 +156,9 @@ def least_squares_fit(
         bar, crawl: the `LevenbergMarquardt` stops `options["bar"]` ((probe, limit): after
             `probe` steps a cost ‖r‖² above `limit` stops the fit) and `options["crawl"]` (a
             fraction; 0: off) of the solver module's docstring.
+        floor: the least s² (RSS/(n − p), units of the residual) of the `LevenbergMarquardt`
+            `gain_tol` and `noise_tol` stops (1: the residual's unit is the noise sd; 0: the
+            stops count in residual variances whatever the unit).
         throw: raise `FitError` when the fit does not succeed (the default, as
             `optimistix.least_squares`); False returns the flagged `FitResult`.
     The solve is compiled once per `residual_fn` object: pass a module-level function (data in
@@ -170,6 +184,7 @@ def least_squares_fit(
             bar=bar,
             crawl=crawl,
             channel=channel,
+            floor=floor,
         )
     r, J = final if final is not None else value_and_jacobian(residual_fn, theta, args)
     r, J = np.asarray(r), np.asarray(J)

@@ -26,7 +26,7 @@ Stops (each off when None), besides optimistix's Cauchy test on `rtol`, `atol`:
   standard errors in every parameter (s² = RSS/(n − p)); not tried while a residual equals
   `FAILED_RESIDUAL`.
 - `gain_tol`: after an accepted step, the Gauss–Newton gain gᵀ(JᵀJ)⁻¹g < `gain_tol`·s²
-  (s² = RSS/(n − p), at least 1): converged.
+  (s² = RSS/(n − p), at least `options["floor"]`, default 1): converged.
 - `noise_tol`: after a rejected step whose predicted gain was < `noise_tol`·s²: the improvement
   left is below the evaluation noise of an adaptive ODE solve (stationary).
 - `max_rejections`: that many rejected steps in a row (the trust region shrank under the
@@ -264,7 +264,8 @@ class LevenbergMarquardt(optx.AbstractGaussNewton):
             k = self.padded
             held = jnp.sum(jnp.diagonal(J[r.size - k :, J.shape[1] - k :]) != 0) if k else 0
             n, p = r.size - k, J.shape[1] - held
-            s2 = jnp.maximum(r @ r / jnp.maximum(n - p, 1), 1.0)
+            floor = (options or {}).get("floor", 1.0)
+            s2 = jnp.maximum(r @ r / jnp.maximum(n - p, 1), floor)
             gain = jnp.sum((jnp.linalg.qr(J)[0].T @ r) ** 2)
             # after a rejection: the decrease the rejected step promised (`RelativeTrustRegion`)
             rejected = state.search_state.tried_gain

@@ -38,6 +38,7 @@ from ._loop_model import loop_baseline as loop_baseline
 from ._loop_model import loop_residuals as loop_residuals
 from ._modes import golden_max as golden_max
 from ._modes import oscillator as oscillator
+from ._polish import polish as polish
 from ._rebuild import RECORD_KINDS as RECORD_KINDS
 from ._rebuild import fit_saved as fit_saved
 from ._rebuild import rebuild as rebuild

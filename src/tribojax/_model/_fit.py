@@ -46,14 +46,15 @@ def fit_model(
     ceiling=np.inf,
     abandon_above=np.inf,
     stop_crawl=False,
+    floor=1.0,
 ):
     """Fit [θ_b, s] of `baseline` with the effects' `designs`, minimising ‖(model − y)/scale‖².
 
     Solver `LevenbergMarquardt.record`; the variables are scaled by the start Jacobian's column
     norms (Marquardt's scaling, so the damping is relative to the curvature). Converged when the
     predicted decrease of a Gauss–Newton step gᵀ(JᵀJ)⁻¹g at the optimum is below `GAIN_TOL`
-    residual variances (s² = cost/(n − p), at least 1), or, as "stationary" (successful, with a
-    message), when no trial step lowered the cost (a rejected step had promised less than
+    residual variances (s² = cost/(n − p), at least `floor`), or, as "stationary" (successful,
+    with a message), when no trial step lowered the cost (a rejected step had promised less than
     `NOISE_TOL` residual variances, or 12 rejections in a row). A trial point where the model is
     not finite counts as a rejected step. A stationary stop whose Gauss–Newton step still
     promises at least `NOISE_TOL` residual variances (in a curved valley the trust region shrinks
@@ -71,6 +72,8 @@ def fit_model(
     `stop_crawl`: stop a start that crawls far from any minimum (the solver's `crawl` stop with
     `CRAWL_FRACTION`: the cost fell by less than 1 % over `CRAWL_STEPS` steps while a
     Gauss–Newton step still promises more than half of it); the same result and a message.
+    `floor`: the least s² of the stops, units of `scale`² (1: `scale` is about the noise sd; 0:
+    the stops count in residual variances whatever the unit, as `polish` asks).
 
     Args:
         theta0: start [θ_b, s] (default `baseline.start()` and zero strengths); y: the data
@@ -95,7 +98,7 @@ def fit_model(
     stats = _Statistics(baseline, designs, tuple(effects), float(scale), sigma_known, n)
     try:
         args, d = _scaled_start(x0, args, max_steps)
-        res = _solve(x0 / d, args, p, max_steps, abandon_above, stop_crawl)
+        res = _solve(x0 / d, args, p, max_steps, abandon_above, stop_crawl, floor)
     except _StartNotFinite:
         return stats.failed(
             x0[:npar], RESULTS.model_failed_at_start, "the model is not finite at the start values"
@@ -110,7 +113,7 @@ def fit_model(
         return stats.failed(x0[:npar], RESULTS.model_failed, broken, res.steps)
     cost = float(r @ r)
     gain = _gain_left(r, J)
-    s2 = max(cost / max(n - npar, 1), 1.0)
+    s2 = max(cost / max(n - npar, 1), floor) or 1.0
     message = _stop_message(res, cost, gain / s2, max_steps, abandon_above)
     short = res.converged and gain >= NOISE_TOL * s2 and cost < ceiling - NOISE_TOL * s2
     if short and restarts > 0:
@@ -131,6 +134,7 @@ def fit_model(
             weights,
             restarts - 1,
             cost,
+            floor=floor,
         )
         if again.rss < cost:  # kept also when it ran out of steps still descending
             return dataclasses.replace(again, steps=again.steps + res.steps, model=baseline)
@@ -167,7 +171,7 @@ def _scaled_start(x0, args, max_steps):
     return eqx.tree_at(lambda t: (t.bad, t.d), args, new), d
 
 
-def _solve(u0, args, p, max_steps, abandon_above, stop_crawl):
+def _solve(u0, args, p, max_steps, abandon_above, stop_crawl, floor=1.0):
     """The record solver (`SOLVER`) from the scaled start `u0`, with the probe and crawl stops."""
     return least_squares_fit(
         padded_residual,
@@ -179,6 +183,7 @@ def _solve(u0, args, p, max_steps, abandon_above, stop_crawl):
         max_steps=max_steps,
         bar=(min(PROBE_STEPS, max_steps), abandon_above),
         crawl=CRAWL_FRACTION if stop_crawl else 0.0,
+        floor=floor,
         throw=False,
     )
 

@@ -22,6 +22,7 @@ from .._model import (
     fit_record,
     fit_saved,
     heldout_residual,
+    polish,
 )
 from .._parallel import in_background
 from ._candidates import rank
@@ -58,6 +59,8 @@ class _Run:
     base_noise: tuple = None
     noise: NoiseModel = None
     _heldout: dict = dataclasses.field(default_factory=dict)
+    _polished: set = dataclasses.field(default_factory=set)
+    _keep: list = dataclasses.field(default_factory=list)
 
     def rebase(self, state):
         """Make `state` the baseline fit: its residual, noise model, regions and noise test."""
@@ -110,6 +113,17 @@ class _Run:
         fit fails): what the held-out gate compares, never clipped at the noise."""
         r = self.prefetch(state).result()
         return None if r is None else float(np.mean(np.square(r)))
+
+    def polished(self, state):
+        """`state` taken on to its minimum in residual variances (`polish`: a record without a
+        stated noise, whose fits' stops count in a unit the signal inflates); the baseline fit
+        and a state already polished are returned as they are."""
+        if state is self.base_state or id(state) in self._polished:
+            return state
+        out = polish(self.baseline, state, self.y)
+        self._polished.update({id(state), id(out)})
+        self._keep.extend([state, out])  # ids stay unique while the run holds them
+        return out
 
     def consistent(self, state) -> bool:
         """The noise test that decides "none" and "explained" (a refit's residual sharpens the
@@ -166,7 +180,9 @@ def discover(
        instead (at most `MAX_MOVES` times); else the first one that, fitted on one half of
        the record (`folds()`), lowers the current model's misfit on the other half
        (`_Run.heldout`, both ways) is added. Repeat until none qualifies, `max_effects` are
-       in, or the model is consistent with the noise ("explained"). A round that adds nothing
+       in, or the model is consistent with the noise ("explained"). Every state carried
+       forward, and the one reported, is first taken on to its minimum in residual variances
+       where its residual unit is not a stated noise sd (`polish`). A round that adds nothing
        tries its best single refits jointly in pairs (`_effect_sets.pair_round`: two hidden effects
        whose single refits each leave the other's misfit). When the baseline itself
        is consistent with the noise the candidates are ranked, not refitted (verdict "none").
@@ -206,6 +222,7 @@ def discover(
     state, dropped = (
         drop_redundant(run, state, delta_bic_threshold) if state.converged else (state, [])
     )
+    state = run.polished(state)
     settings = search.settings(dropped)
     if start is not None:
         settings["start_model"] = {
@@ -263,7 +280,7 @@ class _Search:
                 paired = pair_round(run, state, ranking, threshold, by_name)
                 if paired is not None:  # two effects at once
                     rounds.append([c.public() for c in ranking.candidates])
-                    state = paired
+                    state = run.polished(paired)
                     if run.consistent(state):
                         break
                     continue
@@ -271,7 +288,7 @@ class _Search:
             if picked is None:
                 break
             if best is not moved or state is not run.base_state:
-                state = best
+                state = run.polished(best)
             else:  # a better optimum of the baseline itself
                 state = run.rebase(moved)
                 base_ok = run.consistent(state)
