@@ -59,8 +59,7 @@ class _Run:
     base_noise: tuple = None
     noise: NoiseModel = None
     _heldout: dict = dataclasses.field(default_factory=dict)
-    _polished: set = dataclasses.field(default_factory=set)
-    _keep: list = dataclasses.field(default_factory=list)
+    _polished: dict = dataclasses.field(default_factory=dict)  # id → (state, polished state)
 
     def rebase(self, state):
         """Make `state` the baseline fit: its residual, noise model, regions and noise test."""
@@ -118,12 +117,13 @@ class _Run:
         """`state` taken on to its minimum in residual variances (`polish`: a record without a
         stated noise, whose fits' stops count in a unit the signal inflates); the baseline fit
         and a state already polished are returned as they are."""
-        if state is self.base_state or id(state) in self._polished:
+        if state is self.base_state:
             return state
-        out = polish(self.baseline, state, self.y)
-        self._polished.update({id(state), id(out)})
-        self._keep.extend([state, out])  # ids stay unique while the run holds them
-        return out
+        if id(state) not in self._polished:  # the pair held: its ids stay unique
+            out = polish(self.baseline, state, self.y)
+            self._polished[id(state)] = (state, out)
+            self._polished[id(out)] = (out, out)
+        return self._polished[id(state)][1]
 
     def consistent(self, state) -> bool:
         """The noise test that decides "none" and "explained" (a refit's residual sharpens the
