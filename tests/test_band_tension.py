@@ -165,14 +165,12 @@ def _drag_record(seed):
 
 
 def test_a_slack_band_is_a_record_of_its_own(tmp_path):
-    # issue 69: a record at 0 lb (a real setting of the device) is read and fitted; the capstan
-    # scaling cannot carry slip forces between 0 and a tension, which is refused by name
+    # issue 69: a record at 0 lb (a real setting of the device) is read and fitted; the
+    # proportional scaling of a one-tension fit cannot carry slip forces to 0 N: refused by name
     slack = _drag_record(7)
     fit0 = tj.fit_history(slack, "jenkins")
     assert fit0.band_tension == 0.0 and fit0.nrmse < 0.02
     assert fit0.fit.values[0] == pytest.approx(400.0, rel=0.01)  # the drag's slip force
-    with pytest.raises(ValueError, match=r"band_tension = 0 N with slip forces at 133\.4"):
-        tj.fit_history([_record(30, 15e-3, 1), slack], "jenkins")
     fit30 = tj.fit_history(_record(30, 15e-3, 1), "jenkins")
     with pytest.raises(ValueError, match="band_tension = 0 N with slip forces"):
         tj.predict_history(fit30, slack)
@@ -184,3 +182,72 @@ def test_a_slack_band_is_a_record_of_its_own(tmp_path):
     args = ["fit", str(tmp_path / "slack.csv"), "--model", "jenkins", "--out", str(out)]
     assert main([*args, "--band-tension", "0lb"]) == 0
     assert json.loads((out / "fit.json").read_text())["band_tension_N"] == 0.0
+
+
+def _law_record(tension_lbf, seed, drag=400.0, growth=0.0):
+    """The stop operator whose slip force is a drag plus a capstan part c·T that grows by
+    e^{growth·(T − 30 lb)} (growth per lbf): the device's two tension effects, written here."""
+    t = np.arange(int(2.25 * FS / F_HZ) + 1) / FS
+    u = 15e-3 * np.sin(2 * np.pi * F_HZ * t)
+    slip = drag + C_SLIP * tension_lbf * LBF * np.exp(growth * (tension_lbf - 30.0))
+    f = _stop(u, K, slip) + 5.0 + np.random.default_rng(seed).normal(0.0, 2.0, t.size)
+    src = f"<{tension_lbf} lb>"
+    return tj.HysteresisLoop(t, u, f, frequency=F_HZ, source=src, band_tension=tension_lbf * LBF)
+
+
+def test_the_tension_law_carries_a_drag_and_a_growing_wrap_to_a_tension_not_fitted():
+    # two tensions: the law's residual tension T_res takes the drag that remains at 0 lb, so
+    # the 0 and 30 lb records fitted together predict 36 lb; the proportional law cannot
+    both = tj.fit_history([_law_record(30, 1), _law_record(0, 2)], "jenkins")
+    assert both.fit.names == ("mu_N", "K_d", "f0", "T_res")
+    assert both.band_tension == pytest.approx(30 * LBF) and both.nrmse < 0.01
+    # slip force 400 + c·T: a residual tension of 400/c at 30 lb's slip force, T_res = 400/c
+    assert both.fit.values[3] == pytest.approx(400.0 / C_SLIP, rel=0.05)
+    held = _law_record(36, 3)
+    assert tj.predict_history(both, held)[1] < 0.01
+    only30 = tj.fit_history(_law_record(30, 1), "jenkins")
+    assert tj.predict_history(only30, held)[1] > 3 * tj.predict_history(both, held)[1]
+    # three tensions and a wrap that grows with the tension: γ (1/N) follows, and the law
+    # predicts 33 lb, between the fitted ones, where γ = 0 misses
+    g = 0.03  # per lbf
+    three = [_law_record(T, s, growth=g) for T, s in ((30, 4), (0, 5), (36, 6))]
+    fit3 = tj.fit_history(three, "jenkins")
+    assert fit3.fit.names[3:] == ("T_res", "gamma") and fit3.nrmse < 0.01
+    assert fit3.fit.values[4] == pytest.approx(g / LBF, rel=0.1)
+    mid = _law_record(33, 7, growth=g)
+    assert tj.predict_history(fit3, mid)[1] < 0.01
+    two = tj.fit_history(three[:2], "jenkins")
+    assert tj.predict_history(two, mid)[1] > 3 * tj.predict_history(fit3, mid)[1]
+
+
+def test_the_law_is_saved_and_the_cli_fits_a_slack_band_with_a_tension(tmp_path):
+    # `tribojax fit` on records at 0 and 30 lb (refused before the law) writes the law's T_res;
+    # `predict` of a 36 lb record from that fit.json gives the Python prediction
+    for name, rec in (("a", _law_record(30, 1)), ("b", _law_record(0, 2))):
+        tj.write_loop(rec, tmp_path / f"{name}.csv")
+    out = tmp_path / "fit"
+    files = [str(tmp_path / "a.csv"), str(tmp_path / "b.csv")]
+    assert main(["fit", *files, "--model", "jenkins", "--out", str(out)]) == 0
+    saved = json.loads((out / "fit.json").read_text())
+    assert saved["parameters"]["T_res"] == pytest.approx(400.0 / C_SLIP, rel=0.05)
+    assert saved["fitted_model"]["units"]["T_res"] == "N"
+    held = _law_record(36, 3)
+    tj.write_loop(held, tmp_path / "held.csv")
+    assert (
+        main(
+            [
+                "predict",
+                str(out / "fit.json"),
+                str(tmp_path / "held.csv"),
+                "--out",
+                str(tmp_path / "p"),
+            ]
+        )
+        == 0
+    )
+    pred = json.loads((tmp_path / "p" / "prediction.json").read_text())
+    both = tj.fit_history([_law_record(30, 1), _law_record(0, 2)], "jenkins")
+    assert pred["nrmse"] == pytest.approx(tj.predict_history(both, held)[1], rel=1e-6)
+    assert pred["nrmse"] < 0.01
+    with pytest.raises(ValueError, match=r"tension_law = 'growing' needs records at 3"):
+        tj.fit_history([_law_record(30, 1), _law_record(0, 2)], "jenkins", tension_law="growing")

@@ -46,6 +46,27 @@ def test_jenkins_recovered_from_numpy_stepping():
     assert h.nrmse == pytest.approx(50.0 / np.std(loop.f), rel=0.1)
 
 
+def test_held_parameters_stay_and_the_others_are_fitted():
+    # a calibration with most parameters held (`fixed=`): the held value is kept exactly, the
+    # free ones recovered, the prediction and the saved model use both; the user's dict untouched
+    F, K, f0 = 8.0e3, 3.0e6, 500.0
+    loop = _numpy_jenkins(F, K, f0)
+    held = {"K_d": K}
+    h = tj.fit_history(loop, "jenkins", fixed=held)
+    assert held == {"K_d": K} and h.fit.names == ("mu_N", "f0") and h.fit.fixed == held
+    assert h.names == ("mu_N", "K_d", "f0") and h.values[1] == K
+    for value, se, true in zip(h.fit.values, h.fit.std_errors, (F, f0)):
+        assert abs(value - true) < 4 * se
+    assert tj.predict_history(h, loop)[1] == pytest.approx(h.nrmse, rel=1e-9)
+    assert tj.fitted_model(h).parameters["K_d"] == K
+    off = tj.fit_history(loop, "jenkins", fixed={"K_d": 0.5 * K})  # held wrong: a worse fit
+    assert off.nrmse > 1.5 * h.nrmse
+    with pytest.raises(ValueError, match=r"fixed\['K_d'\] = -1"):
+        tj.fit_history(loop, "jenkins", fixed={"K_d": -1.0})
+    with pytest.raises(ValueError, match=r"fixed has unknown key\(s\) \['k'\]"):
+        tj.fit_history(loop, "jenkins", fixed={"k": 1.0})
+
+
 @pytest.mark.parametrize(
     "stated, chi2, consistent",
     [

@@ -24,6 +24,7 @@ from ._history_model import (
     _records,
     _Transform,
     history_force,
+    law_spec,
 )
 
 
@@ -78,6 +79,17 @@ class HistoryFit:
     decimate: int
     band_tension: float | None = None
 
+    @property
+    def names(self) -> tuple:
+        """Every parameter's name (the element's, f0, the tension law's), fitted or held."""
+        return _spec_names(self.model, self.fit)
+
+    @property
+    def values(self) -> np.ndarray:
+        """Every parameter's value in the order of `names` (held ones from `fit.fixed`)."""
+        got = {**dict(zip(self.fit.names, np.asarray(self.fit.values).tolist())), **self.fit.fixed}
+        return np.asarray([got[n] for n in self.names], dtype=float)
+
     def as_dict(self) -> dict:
         return {
             "model": self.model,
@@ -104,9 +116,10 @@ def _refuse_repeats(loops) -> None:
 
 
 def _refuse_mixed_scales(loops, records) -> None:
-    """ValueError when two records' force scales (sd of the force over the band-tension ratio)
-    differ by more than `JOINT_SCALE_RATIO`."""
-    scales = [rec[3] / rec[4] for rec in records]
+    """ValueError when two records' force scales (sd of the force over the band-tension ratio,
+    taken as 1 at a slack band) differ by more than `JOINT_SCALE_RATIO`."""
+    top = max(rec[4] for rec in records)
+    scales = [rec[3] / (rec[4] / top if rec[4] > 0 else 1.0) for rec in records]
     hi, lo = int(np.argmax(scales)), int(np.argmin(scales))
     if scales[lo] > 0 and scales[hi] / scales[lo] > JOINT_SCALE_RATIO:
         raise ValueError(
@@ -127,6 +140,8 @@ def fit_history(
     rtol: float = 1e-8,
     n_starts=(2.0,),
     mixed_scales: bool = False,
+    tension_law: str = "auto",
+    fixed=None,
     throw: bool = True,
 ) -> HistoryFit:
     """Fit one friction element (+ a force offset f0, N) to one or several measured histories.
@@ -146,8 +161,13 @@ def fit_history(
             the lowest residual is kept (default one start, n = 2; `BOUC_WEN_STARTS` for a
             thorough fit, three times the work).
         decimate: keep every `decimate`-th sample (1: all). Records with a `band_tension` (all
-            or none) share one parameter set, the slip forces at the first record's tension
-            (module docstring).
+            or none) share one parameter set, the slip forces at the first record's tension;
+            records at two or more tensions add the tension law's parameters after f0
+            (`law_spec`: T_res, and γ from three tensions on; `_history_model` docstring).
+        tension_law: "auto" (the fullest law the records' tensions determine), "proportional"
+            (T/T_ref), "residual" (T_res) or "growing" (T_res and γ); `law_spec`.
+        fixed: dict of parameters held at the values given, not fitted (a new campaign
+            calibrated by one test: every parameter but those that move, from an earlier fit).
         max_steps, rtol: the budget and relative tolerance (atol 1e-3 rtol) of
             `LevenbergMarquardt.noise_floor`.
         mixed_scales: fit records whose force scales (sd of the force, at the reference band
@@ -165,27 +185,43 @@ def fit_history(
     decimate = int(check_range(decimate, "decimate", 1, None, lo_open=False))
     loops = [loops] if isinstance(loops, HysteresisLoop) else list(loops)
     _refuse_repeats(loops)
-    records = _records(loops, decimate)
+    tensions = {lp.band_tension for lp in loops if lp.band_tension is not None}
+    law = law_spec(model, len(tensions), tension_law)
+    records, ref = _records(loops, decimate, law=tuple(n for n, _ in law))
     if not mixed_scales:
         _refuse_mixed_scales(loops, records)
-    spec = HISTORY_MODELS[model]
-    init = _default_start(model, records)
+    spec = HISTORY_MODELS[model] + law
+    init = {**_default_start(model, records), **_law_start(law, tensions)}
     if model != "jenkins" and set(init) - set(start or {}):
         # the Jenkins fit (exact increments, fast) gives the slip force, stiffness and offset
-        mu_N, K_d, f0 = fit_history(
-            loops, "jenkins", decimate=decimate, mixed_scales=True, throw=False
-        ).fit.values
+        jenkins = fit_history(
+            loops,
+            "jenkins",
+            decimate=decimate,
+            mixed_scales=True,
+            tension_law=tension_law,
+            throw=False,
+        )
+        mu_N, K_d, f0 = jenkins.fit.values[:3]
         init.update({k: v for k, v in _starts(mu_N, K_d, f0, records).items() if k in init})
+        for name, v in zip(jenkins.fit.names[3:], jenkins.fit.values[3:]):
+            init.update({k: float(v) for k, _ in law if k.startswith(name)})
     init.update(start or {})
-    unknown = set(init) - {n for n, _ in spec}
-    if unknown:
-        raise ValueError(f"start has unknown key(s) {sorted(unknown)} for model {model!r}")
-    scale = float(max(abs(init["f0"]), max(r[3] for r in records)))
+    for what, given in (("start", start), ("fixed", fixed)):
+        unknown = set(given or {}) - {n for n, _ in spec}
+        if unknown:
+            raise ValueError(f"{what} has unknown key(s) {sorted(unknown)} for model {model!r}")
+    held = _held(spec, fixed or {})
+    spec = tuple(kv for kv in spec if kv[0] not in (fixed or {}))
+    force_scale = float(max(abs(init["f0"]), max(r[3] for r in records)))
+    scale = tuple(1.0 / max(tensions) if n.startswith("gamma") else force_scale for n, _ in spec)
     tr = _Transform(tuple(pos for _, pos in spec), scale)
-    fn = _HistoryResiduals(model, tr)
+    fn = _HistoryResiduals(model, tr, law=tuple(n for n, _ in law), reference=ref, held=held)
 
     def solve(values):
-        theta = jnp.asarray([np.log(values[n]) if pos else values[n] / scale for n, pos in spec])
+        theta = jnp.asarray(
+            [np.log(values[n]) if pos else values[n] / c for (n, pos), c in zip(spec, scale)]
+        )
         for _ in range(3):  # a noise-floor stop short of the optimum restarts where it stopped
             fit = least_squares_fit(
                 fn,
@@ -210,8 +246,30 @@ def fit_history(
     else:
         fit = solve(init)
     nrmse_all = _nrmse(fit.residuals, records)
-    fit = _noise_rule(fit, records, loops, tr)
+    fit = dataclasses.replace(_noise_rule(fit, records, loops, tr), fixed=dict(fixed or {}))
     return HistoryFit(model, thrown(fit, throw), nrmse_all, decimate, loops[0].band_tension)
+
+
+def _held(spec, fixed: dict) -> tuple:
+    """(index, value) of the held parameters; ValueError for a positive one at or below 0."""
+    out = []
+    for i, (name, positive) in enumerate(spec):
+        if name in fixed:
+            lo = 0.0 if positive else None
+            out.append((i, float(check_range(fixed[name], f"fixed[{name!r}]", lo, None))))
+    return tuple(out)
+
+
+def _spec_names(model: str, fit: FitResult) -> tuple:
+    every = {*fit.names, *fit.fixed}
+    law = [n for n, _ in law_spec(model, 3) if n in every]
+    return tuple(n for n, _ in HISTORY_MODELS[model]) + tuple(law)
+
+
+def _law_start(law, tensions) -> dict:
+    """Start values of the tension law (`law_spec`): a residual tension of a quarter of the
+    highest set tension, no growth of the wrap."""
+    return {n: 0.25 * max(tensions) if pos else 0.0 for n, pos in law}
 
 
 def _noise_rule(fit: FitResult, records, loops, transform) -> FitResult:
@@ -267,4 +325,5 @@ def predict_history(fit: HistoryFit, loop: HysteresisLoop, *, decimate=None, ini
     or "measured" (`INITIAL_STATES`).
     """
     dec = fit.decimate if decimate is None else int(decimate)
-    return history_force(fit.model, fit.fit.values, loop, dec, fit.band_tension, initial)
+    law = fit.names[len(HISTORY_MODELS[fit.model]) :]
+    return history_force(fit.model, fit.values, loop, dec, fit.band_tension, initial, law)

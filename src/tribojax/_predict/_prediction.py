@@ -24,7 +24,7 @@ from .._model import (
     saved_record_model,
 )
 from .._model._history_fit import HistoryFit
-from .._model._history_model import HISTORY_MODELS, HISTORY_UNITS, history_force
+from .._model._history_model import HISTORY_MODELS, HISTORY_UNITS, history_force, law_spec
 from .._tables import read_json
 from ..discovery import DiscoveryReport
 
@@ -94,8 +94,8 @@ def _fitted_model(result, source) -> FittedModel:
             raise ValueError("the discovery's baseline fit failed: it has no model to save")
         return dataclasses.replace(result.fitted, source=source or result.fitted.source)
     if isinstance(result, HistoryFit):
-        names = [n for n, _ in HISTORY_MODELS[result.model]]
-        params = dict(zip(names, np.asarray(result.fit.values, float).tolist()))
+        names = list(result.names)  # the element's, f0, then any tension law's
+        params = dict(zip(names, result.values.tolist()))
         return FittedModel(
             "history",
             params,
@@ -285,32 +285,36 @@ def _check_kind(model, record, need, verb):
 
 
 def _check_history(model, where) -> list:
-    """The parameter names of a saved history model; ValueError naming `where` and the field
-    (the element, a missing parameter, a band tension that is not > 0)."""
+    """The parameter names of a saved history model (the element's, f0, then the tension
+    law's it has: `law_spec`); ValueError naming `where` and the field (the element, a missing
+    parameter, a band tension that is not > 0, or < 0 with a tension law)."""
     element = model.options.get("element")
     if element not in HISTORY_MODELS:
         raise ValueError(
             f"{where}: field 'options.element' is {element!r}; one of "
             f"{sorted(HISTORY_MODELS)} expected"
         )
-    names = [n for n, _ in HISTORY_MODELS[element]]
-    missing = [n for n in names if n not in model.parameters]
+    spec = HISTORY_MODELS[element]
+    spec += tuple(kv for kv in law_spec(element, 3) if kv[0] in model.parameters)
+    names = [n for n, _ in spec]
+    missing = [n for n in names[: len(HISTORY_MODELS[element])] if n not in model.parameters]
     if missing:
         raise ValueError(f"{where}: field 'parameters' lacks {missing} of the {element} model")
     check_values(
         model,
         names,
         [HISTORY_UNITS[n] for n in names],
-        [
-            (0.0, np.inf) if positive else (-np.inf, np.inf)
-            for _, positive in HISTORY_MODELS[element]
-        ],
+        [(0.0, np.inf) if positive else (-np.inf, np.inf) for _, positive in spec],
         where,
     )
     tension = model.options.get("band_tension_N")
-    if tension is not None and not (isinstance(tension, int | float) and tension > 0):
+    law = len(spec) > len(HISTORY_MODELS[element])
+    if tension is not None and not (
+        isinstance(tension, int | float) and (tension >= 0 if law else tension > 0)
+    ):
         raise ValueError(
-            f"{where}: field 'options.band_tension_N' is {tension!r}; a tension > 0 (N) expected"
+            f"{where}: field 'options.band_tension_N' is {tension!r}; a tension "
+            f"{'>= 0' if law else '> 0'} (N) expected"
         )
     return names
 
@@ -320,5 +324,7 @@ def _history(model, loop, initial):
     dec = int(model.options.get("decimate", 1))
     values = [model.parameters[n] for n in names]
     tension = model.options.get("band_tension_N")
-    force, _ = history_force(model.options["element"], values, loop, dec, tension, initial)
+    element = model.options["element"]
+    law = names[len(HISTORY_MODELS[element]) :]
+    force, _ = history_force(element, values, loop, dec, tension, initial, law)
     return np.asarray(loop.t[::dec]), np.asarray(loop.f[::dec]), force
