@@ -249,5 +249,10 @@ def test_the_law_is_saved_and_the_cli_fits_a_slack_band_with_a_tension(tmp_path)
     both = tj.fit_history([_law_record(30, 1), _law_record(0, 2)], "jenkins")
     assert pred["nrmse"] == pytest.approx(tj.predict_history(both, held)[1], rel=1e-6)
     assert pred["nrmse"] < 0.01
+    assert saved["tension_law"] == "residual"
+    prop = tmp_path / "prop"
+    args = ["fit", *files, "--model", "jenkins", "--tension-law", "proportional"]
+    assert main([*args, "--out", str(prop)]) == 2  # 0 N in proportion: refused, named
+    assert not (prop / "fit.json").exists()
     with pytest.raises(ValueError, match=r"tension_law = 'growing' needs records at 3"):
         tj.fit_history([_law_record(30, 1), _law_record(0, 2)], "jenkins", tension_law="growing")

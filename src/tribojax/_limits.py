@@ -17,6 +17,9 @@ ELEMENT_MODELS = ("jenkins", "mindlin", "lugre", "bouc_wen")
 """Friction elements a displacement history is fitted with (`tribojax.fit_history`); `best`
 chooses among these."""
 DEVICE_MODELS = ("band_brake",)
+TENSION_LAWS = {"proportional": 1, "residual": 2, "growing": 3}
+"""A history fit's band-tension laws and the distinct tensions each needs (`law_spec`): T/T_ref;
+with a residual tension T_res; with T_res and a wrap that grows with the tension (γ)."""
 """Device models a history is also fitted with when named (`--model band_brake`)."""
 
 BOUC_WEN_STARTS = (0.5, 2.0, 10.0)

@@ -18,6 +18,7 @@ from .._limits import (
     MAX_STEPS,
     RECORD_FORMATS,
     ROUGHNESS_METHODS,
+    TENSION_LAWS,
 )
 from ._argument_types import band_tension, positive_float, whole_number
 
@@ -182,6 +183,14 @@ def fit_arguments(parser, batch: bool = False) -> None:
         "residual kept (default one start, n = 2; a thorough fit: "
         + " ".join(f"{v:g}" for v in BOUC_WEN_STARTS)
         + ")",
+    )
+    parser.add_argument(
+        "--tension-law",
+        choices=("auto", *TENSION_LAWS),
+        default="auto",
+        help="history fits of a band brake's records: how the slip forces follow the band "
+        "tension (default auto: in proportion at one tension, with a residual tension from "
+        "two, and a wrap growing with the tension from three)",
     )
     parser.add_argument(
         "--mixed-scales",

@@ -80,6 +80,7 @@ def run_fit(args) -> int:
                     decimate_factor(args) or 1,
                     args.mixed_scales,
                     args.n_starts,
+                    args.tension_law,
                 )
             else:
                 result, curves = fits(full, args, start, bar.note)
@@ -241,6 +242,7 @@ def _fit_loop_record(loop, args, start, note):
             start,
             decimate_factor(args) or 1,
             n_starts=args.n_starts,
+            tension_law=args.tension_law,
         )
     return fit_reduced(loop, args, start, note, fit_loop_reduced)
 

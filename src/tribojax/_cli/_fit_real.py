@@ -25,6 +25,13 @@ def best_candidates(loops) -> tuple[str, ...]:
     return (*ELEMENT_MODELS, *DEVICE_MODELS) if device else ELEMENT_MODELS
 
 
+def _law_name(names) -> str:
+    """The tension law a history fit has (`TENSION_LAWS`), from its parameter names."""
+    if any(n.startswith("gamma") for n in names):
+        return "growing"
+    return "residual" if any(n.startswith("T_res") for n in names) else "proportional"
+
+
 def fit_history_record(
     loops,
     model: str,
@@ -33,12 +40,14 @@ def fit_history_record(
     decimate: int = 1,
     mixed_scales: bool = False,
     n_starts=None,
+    tension_law: str = "auto",
 ):
     """Fit `model` (or every candidate for "best", `best_candidates`, chosen by the lowest BIC
     over the records together) through the
     displacement history of a loop or of several loops together (one parameter set), on every
     `decimate`-th sample, with at most `max_steps` LM steps (None: `MAX_STEPS`) from the
-    `start` values given; `n_starts`: Bouc–Wen's starts of n (None: its default)."""
+    `start` values given; `n_starts`: Bouc–Wen's starts of n (None: its default);
+    `tension_law`: how the slip forces follow the band tension (`fit_history`)."""
     loops = list(loops) if isinstance(loops, list | tuple) else [loops]
     names = best_candidates(loops) if model == "best" else (model,)
     fits = {}
@@ -46,7 +55,13 @@ def fit_history_record(
         given = {k: v for k, v in start.items() if k in dict(HISTORY_MODELS[name])}
         steps = max_steps or MAX_STEPS
         starts = None if n_starts is None else tuple(n_starts)
-        method = History(name, decimate=decimate, mixed_scales=mixed_scales, n_starts=starts)
+        method = History(
+            name,
+            decimate=decimate,
+            mixed_scales=mixed_scales,
+            n_starts=starts,
+            tension_law=tension_law,
+        )
         fits[name] = fit(loops, method, start=given or None, max_steps=steps, throw=False)
     each = {k: [predict_history(h, lp) for lp in loops] for k, h in fits.items()}
     pred = {k: np.concatenate([force for force, _ in v]) for k, v in each.items()}
@@ -72,6 +87,7 @@ def fit_history_record(
         normal_load_N=loops[0].normal_load,
         frequency_Hz=loops[0].frequency,
         band_tension_N=h.band_tension,
+        tension_law=_law_name(h.names) if h.band_tension is not None else None,
     )
     if "bouc_wen" in names and n_starts is not None:
         extra["n_starts"] = [float(v) for v in n_starts]

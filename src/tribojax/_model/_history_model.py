@@ -34,6 +34,7 @@ from .._friction._bouc_wen import BoucWen
 from .._friction._lugre import LuGre
 from .._friction._rate_independent import Jenkins, Mindlin
 from .._io._hysteresis_loop import HysteresisLoop
+from .._limits import TENSION_LAWS
 
 HISTORY_MODELS = {
     "jenkins": (("mu_N", True), ("K_d", True), ("f0", False)),
@@ -57,11 +58,6 @@ TENSION_SCALED = ("mu_N", "F_c", "F_s", "F_y", "F_pos", "F_neg", "A_pos", "A_neg
 """Slip-force parameters, scaled by the tension law (module docstring)."""
 LAW_SIDES = {"band_brake": ("_pos", "_neg")}
 """A model whose two directions each have their own tension law (the band brake's two ends)."""
-
-
-TENSION_LAWS = {"proportional": 1, "residual": 2, "growing": 3}
-"""The tension laws (`law_spec`) and the distinct tensions each needs: T/T_ref; with a residual
-tension T_res; with T_res and a wrap that grows with the tension (γ)."""
 
 
 def law_spec(model: str, n_tensions: int, law: str = "auto") -> tuple:
