@@ -99,6 +99,7 @@ from ._io._slip_run import synthetic_slip_run as synthetic_slip_run
 from ._io._slip_run import write_slip_run as write_slip_run
 from ._limits import BOUC_WEN_STARTS as BOUC_WEN_STARTS
 from ._limits import DISCOVER_MAX_SAMPLES as DISCOVER_MAX_SAMPLES
+from ._limits import STEADY_STARTS as STEADY_STARTS
 from ._model import FittedModel as FittedModel
 from ._model import LoopAnalysis as LoopAnalysis
 from ._model import SavedEffect as SavedEffect

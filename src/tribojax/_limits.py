@@ -22,6 +22,11 @@ TENSION_LAWS = {"proportional": 1, "residual": 2, "growing": 3}
 with a residual tension T_res; with T_res and a wrap that grows with the tension (γ)."""
 """Device models a history is also fitted with when named (`--model band_brake`)."""
 
+STEADY_STARTS = tuple((b, f) for b in (2.0, 0.5, 8.0) for f in (1.0, 0.3, 3.0))
+"""Starts of the LuGre steady-law fit (`tribojax.fit_steady_curve`): (β, factor on the data's
+v_s estimate). The law has separate optima (a Stribeck step, β → ∞, beside a smooth rise or dip:
+driveNo2's curve converges to either from nearby starts), so one start can stop in the worse;
+the lowest misfit of the converged fits is kept."""
 BOUC_WEN_STARTS = (0.5, 2.0, 10.0)
 """Starts of the Bouc–Wen sharpness n for a thorough history fit (`fit_history(n_starts=)`,
 `tribojax fit --n-starts`): its optima fall in separate families (n < 1, soft; n of tens, close

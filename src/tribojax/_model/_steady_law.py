@@ -27,6 +27,7 @@ from .._fit._result import FitResult, thrown
 from .._fit._solver import LevenbergMarquardt
 from .._friction._lugre import LuGre, stribeck_curve
 from .._io._friction_curve import FrictionCurve, FrictionTransient
+from .._limits import STEADY_STARTS
 
 # the noise-floor LM (docs/fitting.md, "Why some fit rules are set where they are")
 _SOLVER = LevenbergMarquardt.noise_floor(1e-10, 1e-12)
@@ -46,16 +47,16 @@ class _SteadyResiduals(eqx.Module):
         return (model - f) / err
 
 
-def _steady_start(v, f) -> np.ndarray:
+def _steady_start(v, f, beta=2.0, v_factor=1.0) -> np.ndarray:
     a, s = np.abs(v), np.abs(f)
     order = np.argsort(a)
     F_c = float(np.min(s))
     F_s = float(max(s[order[0]], 1.05 * F_c))
-    v_s = float(max(a[np.argmin(s)] / 2.0, a[order[0]]))
+    v_s = v_factor * float(max(a[np.argmin(s)] / 2.0, a[order[0]]))
     top = order[-max(3, len(a) // 4) :]
     slope = np.polyfit(a[top], s[top], 1)[0] if len(top) > 1 else 0.0
     sigma2 = float(max(slope, 1e-3 * F_c / a.max()))
-    return np.log([F_c, F_s, v_s, 2.0, sigma2])
+    return np.log([F_c, F_s, v_s, beta, sigma2])
 
 
 def fit_steady_curve(
@@ -69,7 +70,9 @@ def fit_steady_curve(
             velocity unit, β dimensionless).
         direction: +1 or −1 fits the points of that velocity sign alone; None fits both
             directions with the asymmetry T0.
-        max_steps: LM budget (the noise-floor LM, `_SOLVER`; a step costs microseconds).
+        max_steps: LM budget of each start (the noise-floor LM, `_SOLVER`; a step costs
+            microseconds). Fitted from each of `STEADY_STARTS`; the lowest misfit of the
+            converged fits is kept (of all, if none converged).
         throw: raise `FitError` if the fit does not converge (False: return it flagged).
     Returns:
         FitResult with names (F_c, F_s, v_s, beta, sigma2) [+ T0]; positive parameters fitted
@@ -85,31 +88,35 @@ def fit_steady_curve(
     v, f, err = (jnp.asarray(x) for x in (c.velocity, c.friction, c.friction_error))
     joint = direction is None
     scale = float(np.std(c.friction))  # θ of T0 in units of the friction's sd
-    theta0 = _steady_start(np.asarray(v), np.asarray(f))
+    T0 = []
     if joint:
         pos, neg = np.abs(c.friction[c.velocity > 0]), np.abs(c.friction[c.velocity < 0])
         if not (pos.size and neg.size):
             raise ValueError(f"{curve.source}: a joint fit needs points in both directions")
-        T0 = 0.5 * (np.median(pos) - np.median(neg))
-        theta0 = np.append(theta0, T0 / scale)
+        T0 = [0.5 * (np.median(pos) - np.median(neg)) / scale]
     names = STEADY_NAMES + (("T0",) if joint else ())
 
     def tr(theta):  # T0 in the friction unit
         out = jnp.exp(theta[:5])
         return jnp.concatenate([out, theta[5:] * scale]) if joint else out
 
-    fit = least_squares_fit(
-        _SteadyResiduals(joint),
-        jnp.asarray(theta0),
-        (v, f, err),
-        names=names,
-        transform=tr,
-        sigma_known=True,
-        max_steps=max_steps,
-        jac="fwd",
-        solver=_SOLVER,
-        throw=False,
-    )
+    fits = [
+        least_squares_fit(
+            _SteadyResiduals(joint),
+            jnp.asarray(np.append(_steady_start(np.asarray(v), np.asarray(f), b, k), T0)),
+            (v, f, err),
+            names=names,
+            transform=tr,
+            sigma_known=True,
+            max_steps=max_steps,
+            jac="fwd",
+            solver=_SOLVER,
+            throw=False,
+        )
+        for b, k in STEADY_STARTS
+    ]
+    kept = [ft for ft in fits if ft.converged] or fits
+    fit = min(kept, key=lambda ft: float(np.sum(np.square(ft.residuals))))
     fixed = {"direction": "both" if joint else int(direction), **c.units}
     return thrown(dataclasses.replace(fit, fixed=fixed), throw)
 
