@@ -1,6 +1,7 @@
 """History (time-domain) fits of friction elements: recovery on data made by independent code,
 and a fit of each model to a short excerpt of the measured friction-damper data."""
 
+import dataclasses
 import json
 import os
 from pathlib import Path
@@ -173,3 +174,37 @@ def test_a_joint_fit_of_records_far_apart_is_refused_unless_asked(tmp_path, caps
     worse = [r["source"] for r in d["records"] if r["nrmse"] >= 1.0]
     err = capsys.readouterr().err
     assert worse and all(f"{w}: NRMSE" in err and "worse than its mean" in err for w in worse)
+
+
+@pytest.mark.parametrize("gain, converged", [(0.3, True), (50.0, False)])
+def test_a_restart_that_gains_less_than_a_residual_variance_is_a_stationary_stop(
+    monkeypatch, gain, converged
+):
+    # the rule, on the solver's outcomes: every solve stops short of the optimum; a restart
+    # that lowers the cost by less than one residual variance is stationary (a play operator's
+    # kink: the Gauss–Newton promise is not kept), one that keeps gaining is not converged
+    import tribojax._model._history_fit as hf
+
+    real = hf.least_squares_fit
+    calls = []
+
+    def short(fn, theta, records, **kw):
+        fit = real(fn, theta, records, **kw)
+        n, dof = fit.residuals.size, fit.residuals.size - len(fit.names)
+        cost = 1000.0 * (1.0 - gain * len(calls) / dof)  # each pass gains `gain` variances
+        r = np.full(n, np.sqrt(cost / n))
+        calls.append(1)
+        return dataclasses.replace(
+            fit,
+            residuals=r,
+            result=tj.RESULTS.short_of_optimum,
+            converged=False,
+            message="short",
+        )
+
+    monkeypatch.setattr(hf, "least_squares_fit", short)
+    h = tj.fit_history(_numpy_jenkins(), "jenkins", throw=False)
+    assert h.fit.converged is converged
+    assert len(calls) == (2 if converged else 3)
+    if converged:
+        assert h.fit.message.startswith("stationary: no descent step (a restart from the stop")

@@ -222,6 +222,7 @@ def fit_history(
         theta = jnp.asarray(
             [np.log(values[n]) if pos else values[n] / c for (n, pos), c in zip(spec, scale)]
         )
+        before = np.inf
         for _ in range(3):  # a noise-floor stop short of the optimum restarts where it stopped
             fit = least_squares_fit(
                 fn,
@@ -237,7 +238,11 @@ def fit_history(
             )
             if fit.result != RESULTS.short_of_optimum:
                 break
-            theta = jnp.asarray(fit.theta)
+            cost = float(np.sum(np.square(fit.residuals)))
+            s2 = cost / max(fit.residuals.size - len(spec), 1)
+            if before - cost < STATIONARY_GAIN * s2:
+                return _stationary(fit, before - cost, s2)
+            before, theta = cost, jnp.asarray(fit.theta)
         return fit
 
     if model == "bouc_wen" and "n" not in (start or {}):
@@ -264,6 +269,23 @@ def _spec_names(model: str, fit: FitResult) -> tuple:
     every = {*fit.names, *fit.fixed}
     law = [n for n, _ in law_spec(model, 3) if n in every]
     return tuple(n for n, _ in HISTORY_MODELS[model]) + tuple(law)
+
+
+STATIONARY_GAIN = 1.0
+"""A restarted history fit that lowers its cost by less than this many residual variances has
+stopped where no step descends (the play operators' kinks leave the Gauss–Newton model's
+promise unkept): stationary, as a record model's fit (`_model._fit.NOISE_TOL`)."""
+
+
+def _stationary(fit: FitResult, gain: float, s2: float) -> FitResult:
+    """`fit` as a stationary stop: successful, its message saying so and what the last pass
+    gained."""
+    note = (
+        f"stationary: no descent step (a restart from the stop gained {max(gain, 0.0) / s2:.3g} "
+        f"residual variances, less than {STATIONARY_GAIN:g}; the Gauss–Newton step left, which "
+        f"no trial step realises: {fit.message})"
+    )
+    return dataclasses.replace(fit, result=RESULTS.successful, converged=True, message=note)
 
 
 def _law_start(law, tensions) -> dict:
