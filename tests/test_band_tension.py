@@ -218,6 +218,15 @@ def test_the_tension_law_carries_a_drag_and_a_growing_wrap_to_a_tension_not_fitt
     assert tj.predict_history(fit3, mid)[1] < 0.01
     two = tj.fit_history(three[:2], "jenkins")
     assert tj.predict_history(two, mid)[1] > 3 * tj.predict_history(fit3, mid)[1]
+    # the law held (one tension cannot fit it): a record at 33 lb refits f0 alone, at the
+    # reference tension of the fit it holds
+    held = {n: v for n, v in zip(fit3.names, fit3.values) if n != "f0"}
+    one = tj.fit_history(mid, "jenkins", fixed=held, band_tension=fit3.band_tension)
+    assert one.names == fit3.names and one.fit.names == ("f0",)
+    assert one.band_tension == fit3.band_tension and one.nrmse < 0.01
+    with pytest.raises(ValueError, match=r"fixed holds the tension law's \['T_res', 'gamma'\]"):
+        bare = tj.HysteresisLoop(mid.t, mid.u, mid.f, frequency=F_HZ)
+        tj.fit_history(bare, "jenkins", fixed=held)
 
 
 def test_the_law_is_saved_and_the_cli_fits_a_slack_band_with_a_tension(tmp_path):
@@ -256,3 +265,54 @@ def test_the_law_is_saved_and_the_cli_fits_a_slack_band_with_a_tension(tmp_path)
     assert not (prop / "fit.json").exists()
     with pytest.raises(ValueError, match=r"tension_law = 'growing' needs records at 3"):
         tj.fit_history([_law_record(30, 1), _law_record(0, 2)], "jenkins", tension_law="growing")
+
+
+def _campaign_record(slip, offset, amplitude, seed, tension_lbf=30):
+    """The stop operator of a campaign: its own slip force and offset (the band re-seated), the
+    same stiffness (the rig)."""
+    t = np.arange(int(2.25 * FS / F_HZ) + 1) / FS
+    u = amplitude * np.sin(2 * np.pi * F_HZ * t)
+    f = _stop(u, K, slip) + offset + np.random.default_rng(seed).normal(0.0, 2.0, t.size)
+    src = f"<campaign, {amplitude * 1e3:g} mm, seed {seed}>"
+    return tj.HysteresisLoop(t, u, f, frequency=F_HZ, source=src, band_tension=tension_lbf * LBF)
+
+
+def test_a_new_campaign_is_calibrated_by_one_test_from_the_cli(tmp_path):
+    # campaign A fitted on two records; campaign B (slip force −15 %, another offset) calibrated
+    # from A's fit.json by one record with only mu_N and f0 refitted (`--from ... --free`): K_d
+    # is held at A's, and B's other record is predicted as well as by a fit of that record
+    a = [_campaign_record(3000.0, 5.0, amp, s) for amp, s in ((15e-3, 1), (25e-3, 2))]
+    b1, b2 = _campaign_record(2550.0, -40.0, 15e-3, 3), _campaign_record(2550.0, -40.0, 25e-3, 4)
+    for name, rec in (("a1", a[0]), ("a2", a[1]), ("b1", b1), ("b2", b2)):
+        tj.write_loop(rec, tmp_path / f"{name}.csv")
+    fa = tmp_path / "A"
+    files = [str(tmp_path / "a1.csv"), str(tmp_path / "a2.csv")]
+    assert main(["fit", *files, "--model", "jenkins", "--out", str(fa)]) == 0
+    ka = json.loads((fa / "fit.json").read_text())["parameters"]["K_d"]
+    fb = tmp_path / "B"
+    args = ["fit", str(tmp_path / "b1.csv"), "--from", str(fa / "fit.json")]
+    assert main([*args, "--free", "mu_N", "f0", "--out", str(fb)]) == 0
+    got = json.loads((fb / "fit.json").read_text())
+    assert got["fitted"] == ["mu_N", "f0"] and got["fixed"] == {"K_d": ka}
+    assert got["free"] == ["mu_N", "f0"] and got["start_model"]["kind"] == "history"
+    assert got["parameters"]["mu_N"] == pytest.approx(2550.0, rel=0.01)
+    assert got["parameters"]["f0"] == pytest.approx(-40.0, abs=2.0)
+    assert (
+        main(
+            [
+                "predict",
+                str(fb / "fit.json"),
+                str(tmp_path / "b2.csv"),
+                "--out",
+                str(tmp_path / "p"),
+            ]
+        )
+        == 0
+    )
+    pred = json.loads((tmp_path / "p" / "prediction.json").read_text())
+    assert pred["nrmse"] < 0.01
+    # a name the model does not have, or --free without a history model, is refused by name
+    bad = tmp_path / "bad"
+    assert main([*args, "--free", "mu", "--out", str(bad)]) == 2
+    assert main(["fit", str(tmp_path / "b1.csv"), "--free", "mu_N", "--out", str(bad)]) == 2
+    assert not (bad / "fit.json").exists()

@@ -208,6 +208,15 @@ def fit_arguments(parser, batch: bool = False) -> None:
         "values",
     )
     parser.add_argument(
+        "--free",
+        nargs="+",
+        default=None,
+        metavar="NAME",
+        help="with --from a history model (a fit.json of --model ELEMENT): the parameters "
+        "refitted, the rest held at the saved values (a new campaign calibrated by one or two "
+        "tests; default: the element's and f0)",
+    )
+    parser.add_argument(
         "--format",
         choices=RECORD_FORMATS,
         default=None,

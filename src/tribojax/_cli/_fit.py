@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 from .._io._records import read_record
+from .._model._history_model import HISTORY_MODELS
 from .._predict import RECORD_KINDS, SAVED_KEY, FitReport, load_model
 from .._predict._fit_methods import RecordModel, Saved
 from ._common import (
@@ -70,8 +71,13 @@ def run_fit(args) -> int:
         _check_n_starts(records, args)
         t0 = time.perf_counter()
         fits = _fit_from_model if args.from_model else _FITS[full.kind]
+        saved = load_model(args.from_model) if args.from_model else None
+        if args.free and (saved is None or saved.kind != "history"):
+            return error("--free is for --from MODEL.json of a history model (--model ELEMENT)")
         with progress(args, "fit") as bar:
-            if len(records) > 1:  # one element's parameters (+ f0) for all of them
+            if saved is not None and saved.kind == "history":
+                result, curves = _fit_from_history(records, saved, args, start)
+            elif len(records) > 1:  # one element's parameters (+ f0) for all of them
                 result, curves = fit_history_record(
                     records,
                     args.model or "best",
@@ -289,6 +295,38 @@ def _fit_from_model(full, args, start, note):
     return _record_model_result(
         fit, full, f"{model.kind} model from {args.from_model}", start_model=model.as_dict()
     )
+
+
+def _fit_from_history(records, saved, args, start):
+    """`--from MODEL.json` of a history model: its element refitted on the records from the
+    saved values, `--free` refitted and the rest held there (default: the element's parameters
+    and f0 free, a tension law held), the slip forces at the saved model's tension."""
+    if start:
+        raise CommandError("--start does not apply with --from (the saved model is the start)")
+    names = list(saved.parameters)  # the element's, f0, any tension law's (`load_model` checked)
+    element = saved.options["element"]
+    own = [n for n, _ in HISTORY_MODELS[element]]
+    free = list(args.free or own)
+    wrong = [n for n in free if n not in names]
+    if wrong:
+        raise CommandError(
+            f"--free {' '.join(wrong)}: not a parameter of {args.from_model} ({', '.join(names)})"
+        )
+    fixed = {n: saved.parameters[n] for n in names if n not in free}
+    result, curves = fit_history_record(
+        records,
+        element,
+        args.max_steps,
+        {n: saved.parameters[n] for n in free},
+        decimate_factor(args) or int(saved.options.get("decimate", 1)),
+        args.mixed_scales,
+        None,
+        args.tension_law,
+        fixed=fixed,
+        band_tension=saved.options.get("band_tension_N"),
+    )
+    result.update(start_model=saved.as_dict(), free=free)
+    return result, curves
 
 
 def _record_model_result(fit, full, label, **extra):

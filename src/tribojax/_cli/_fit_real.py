@@ -41,13 +41,16 @@ def fit_history_record(
     mixed_scales: bool = False,
     n_starts=None,
     tension_law: str = "auto",
+    fixed=None,
+    band_tension=None,
 ):
     """Fit `model` (or every candidate for "best", `best_candidates`, chosen by the lowest BIC
     over the records together) through the
     displacement history of a loop or of several loops together (one parameter set), on every
     `decimate`-th sample, with at most `max_steps` LM steps (None: `MAX_STEPS`) from the
     `start` values given; `n_starts`: Bouc–Wen's starts of n (None: its default);
-    `tension_law`: how the slip forces follow the band tension (`fit_history`)."""
+    `tension_law`: how the slip forces follow the band tension; `fixed`, `band_tension`: the
+    parameters held and the tension the slip forces belong to (`fit_history`)."""
     loops = list(loops) if isinstance(loops, list | tuple) else [loops]
     names = best_candidates(loops) if model == "best" else (model,)
     fits = {}
@@ -61,6 +64,8 @@ def fit_history_record(
             mixed_scales=mixed_scales,
             n_starts=starts,
             tension_law=tension_law,
+            fixed=tuple((fixed or {}).items()),
+            band_tension=band_tension,
         )
         fits[name] = fit(loops, method, start=given or None, max_steps=steps, throw=False)
     each = {k: [predict_history(h, lp) for lp in loops] for k, h in fits.items()}

@@ -142,6 +142,7 @@ def fit_history(
     mixed_scales: bool = False,
     tension_law: str = "auto",
     fixed=None,
+    band_tension=None,
     throw: bool = True,
 ) -> HistoryFit:
     """Fit one friction element (+ a force offset f0, N) to one or several measured histories.
@@ -167,7 +168,10 @@ def fit_history(
         tension_law: "auto" (the fullest law the records' tensions determine), "proportional"
             (T/T_ref), "residual" (T_res) or "growing" (T_res and γ); `law_spec`.
         fixed: dict of parameters held at the values given, not fitted (a new campaign
-            calibrated by one test: every parameter but those that move, from an earlier fit).
+            calibrated by one test: every parameter but those that move, from an earlier fit);
+            a tension law's parameters held need no second tension.
+        band_tension: the tension (N) the slip forces are fitted at (default: the first
+            record's; an earlier fit's `band_tension` when its values are held or started from).
         max_steps, rtol: the budget and relative tolerance (atol 1e-3 rtol) of
             `LevenbergMarquardt.noise_floor`.
         mixed_scales: fit records whose force scales (sd of the force, at the reference band
@@ -187,7 +191,14 @@ def fit_history(
     _refuse_repeats(loops)
     tensions = {lp.band_tension for lp in loops if lp.band_tension is not None}
     law = law_spec(model, len(tensions), tension_law)
-    records, ref = _records(loops, decimate, law=tuple(n for n, _ in law))
+    held_law = {n for n, _ in law_spec(model, 3, "growing")} & set(fixed or {})
+    law = tuple(kv for kv in law_spec(model, 3, "growing") if kv in law or kv[0] in held_law)
+    if held_law and any(lp.band_tension is None for lp in loops):
+        raise ValueError(
+            f"fixed holds the tension law's {sorted(held_law)}, but a record has no "
+            "band_tension: give each record's (band_tension=..., N; --band-tension)"
+        )
+    records, ref = _records(loops, decimate, band_tension, law=tuple(n for n, _ in law))
     if not mixed_scales:
         _refuse_mixed_scales(loops, records)
     spec = HISTORY_MODELS[model] + law
@@ -252,7 +263,8 @@ def fit_history(
         fit = solve(init)
     nrmse_all = _nrmse(fit.residuals, records)
     fit = dataclasses.replace(_noise_rule(fit, records, loops, tr), fixed=dict(fixed or {}))
-    return HistoryFit(model, thrown(fit, throw), nrmse_all, decimate, loops[0].band_tension)
+    t_ref = loops[0].band_tension if band_tension is None else float(band_tension)
+    return HistoryFit(model, thrown(fit, throw), nrmse_all, decimate, t_ref)
 
 
 def _held(spec, fixed: dict) -> tuple:

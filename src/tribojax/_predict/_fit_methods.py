@@ -93,13 +93,17 @@ class History(FitMethod):
     """A friction element (+ a force offset) driven through the measured displacement history of
     one loop or several fitted together (`fit_history`): jenkins, mindlin, lugre, bouc_wen or
     band_brake, on every `decimate`-th sample; `n_starts`: Bouc–Wen's starts of n (None: the
-    default one); `tension_law`: how the slip forces follow the band tension (`fit_history`)."""
+    default one); `tension_law`: how the slip forces follow the band tension; `fixed`: (name,
+    value) pairs held; `band_tension`: the tension (N) the slip forces are fitted at
+    (`fit_history`)."""
 
     element: str = "jenkins"
     decimate: int = 1
     mixed_scales: bool = False
     n_starts: tuple[float, ...] | None = None
     tension_law: str = "auto"
+    fixed: tuple[tuple[str, float], ...] = ()
+    band_tension: float | None = None
 
     def fit(self, record, *, start=None, max_steps=None, throw=True):
         kw = {} if max_steps is None else {"max_steps": max_steps}
@@ -112,6 +116,8 @@ class History(FitMethod):
             decimate=self.decimate,
             mixed_scales=self.mixed_scales,
             tension_law=self.tension_law,
+            fixed=dict(self.fixed) or None,
+            band_tension=self.band_tension,
             throw=throw,
             **kw,
         )
