@@ -17,6 +17,7 @@ from .._fit._solver import LevenbergMarquardt
 from .._io._hysteresis_loop import HysteresisLoop
 from .._limits import JOINT_SCALE_RATIO
 from .._results import RESULTS
+from ._fit import NOISE_TOL
 from ._history_model import (
     HISTORY_MODELS,
     _HistoryResiduals,
@@ -251,7 +252,7 @@ def fit_history(
                 break
             cost = float(np.sum(np.square(fit.residuals)))
             s2 = cost / max(fit.residuals.size - len(spec), 1)
-            if before - cost < STATIONARY_GAIN * s2:
+            if before - cost < NOISE_TOL * s2:
                 return _stationary(fit, before - cost, s2)
             before, theta = cost, jnp.asarray(fit.theta)
         return fit
@@ -283,18 +284,14 @@ def _spec_names(model: str, fit: FitResult) -> tuple:
     return tuple(n for n, _ in HISTORY_MODELS[model]) + tuple(law)
 
 
-STATIONARY_GAIN = 1.0
-"""A restarted history fit that lowers its cost by less than this many residual variances has
-stopped where no step descends (the play operators' kinks leave the Gauss–Newton model's
-promise unkept): stationary, as a record model's fit (`_model._fit.NOISE_TOL`)."""
-
-
 def _stationary(fit: FitResult, gain: float, s2: float) -> FitResult:
     """`fit` as a stationary stop: successful, its message saying so and what the last pass
-    gained."""
+    gained. A restart that lowers the cost by less than `NOISE_TOL` residual variances (the
+    record model's stationary rule, `_model._fit`) has stopped where no step descends: at a
+    play operator's kink the Gauss–Newton model promises a step that no trial step realises."""
     note = (
         f"stationary: no descent step (a restart from the stop gained {max(gain, 0.0) / s2:.3g} "
-        f"residual variances, less than {STATIONARY_GAIN:g}; the Gauss–Newton step left, which "
+        f"residual variances, less than {NOISE_TOL:g}; the Gauss–Newton step left, which "
         f"no trial step realises: {fit.message})"
     )
     return dataclasses.replace(fit, result=RESULTS.successful, converged=True, message=note)
