@@ -314,5 +314,13 @@ def test_a_new_campaign_is_calibrated_by_one_test_from_the_cli(tmp_path):
     # a name the model does not have, or --free without a history model, is refused by name
     bad = tmp_path / "bad"
     assert main([*args, "--free", "mu", "--out", str(bad)]) == 2
+    both = tmp_path / "both"  # a law fitted on 0 and 30 lb cannot be refitted on one record
+    law_files = []
+    for name, rec in (("l30", _law_record(30, 5)), ("l0", _law_record(0, 6))):
+        tj.write_loop(rec, tmp_path / f"{name}.csv")
+        law_files.append(str(tmp_path / f"{name}.csv"))
+    assert main(["fit", *law_files, "--model", "jenkins", "--out", str(both)]) == 0
+    one = ["fit", law_files[0], "--from", str(both / "fit.json"), "--out", str(bad)]
+    assert main([*one, "--free", "mu_N", "T_res"]) == 2
     assert main(["fit", str(tmp_path / "b1.csv"), "--free", "mu_N", "--out", str(bad)]) == 2
     assert not (bad / "fit.json").exists()

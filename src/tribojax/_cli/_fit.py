@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 from .._io._records import read_record
-from .._model._history_model import HISTORY_MODELS
+from .._model._history_model import HISTORY_MODELS, law_spec
 from .._predict import RECORD_KINDS, SAVED_KEY, FitReport, load_model
 from .._predict._fit_methods import RecordModel, Saved
 from ._common import (
@@ -311,6 +311,14 @@ def _fit_from_history(records, saved, args, start):
     if wrong:
         raise CommandError(
             f"--free {' '.join(wrong)}: not a parameter of {args.from_model} ({', '.join(names)})"
+        )
+    tensions = {r.band_tension for r in records if r.band_tension is not None}
+    fits_law = {n for n, _ in law_spec(element, len(tensions), args.tension_law)}
+    unfit = [n for n in free if n not in own and n not in fits_law]
+    if unfit:
+        raise CommandError(
+            f"--free {' '.join(unfit)}: records at {len(tensions)} band tension(s) do not "
+            f"determine it (tension law {args.tension_law!r}); leave it held"
         )
     fixed = {n: saved.parameters[n] for n in names if n not in free}
     result, curves = fit_history_record(
