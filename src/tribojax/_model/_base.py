@@ -135,6 +135,12 @@ class AbstractBaseline(eqx.Module):
         `[self.start()]`."""
         return [self.start()]
 
+    def restart(self, designs) -> np.ndarray | None:
+        """A start θ (baseline, then the strengths of every design in `designs`) made afresh
+        from the record with the designs in the model, for a refit whose starts from the current
+        fit all stalled; None (the default) when the model has no such rule."""
+        return None
+
     @abc.abstractmethod
     def physical(self, theta):
         """θ → physical parameters (JAX, differentiable)."""

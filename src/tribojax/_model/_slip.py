@@ -37,7 +37,7 @@ from .._io._slip_run import SlipRun
 from ._base import AbstractBaseline, RecordData
 from ._modes import oscillator
 from ._slip_element import AugmentedPreSlip
-from ._start import C_TAU_START_FACTORS, slip_run_start
+from ._start import C_TAU_START_FACTORS, c_tau_start, quasi_static_fit, slip_run_start
 
 KNOBS = (
     "viscous",
@@ -130,11 +130,28 @@ class SlipBaseline(AbstractBaseline):
         return np.array([0.0, 0.0, -5.0, 0.0, 0.0, 0.0, np.log(50.0), 0.0, 1.0])
 
     def start(self):
-        F, K, C = np.asarray(self.start_values, dtype=float)
+        return self._theta_start(*np.asarray(self.start_values, dtype=float))
+
+    def _theta_start(self, F, K, C):
         cap = np.log(float(self.f_max))
         u = min(np.log(F), cap - 0.7)  # invert the cap (F below half the bound)
         th = [cap - np.log(np.expm1(cap - u)), np.log(K), np.log(C)]
         return np.array(th + ([np.log(float(self.alpha))] if self.free_alpha else []))
+
+    def restart(self, designs):
+        """θ (baseline, then every design's strengths) of the quasi-static start fitted jointly
+        with the designs' additive columns (`quasi_static_fit`): an effect that the baseline's
+        own start read as slip (a drift larger than the slip) moves F_s and K_τ far from where
+        the baseline fit stopped. None when a design moves a knob or has no columns."""
+        if any(d.basis is None or d.knob_gain is not None or d.knob_set for d in designs):
+            return None
+        cols = np.concatenate([np.asarray(d.basis, dtype=float) for d in designs], axis=1)
+        slip = np.asarray(self.slip, dtype=float)
+        fit = quasi_static_fit(float(self.mass) * np.asarray(self.accel, dtype=float), slip, cols)
+        if fit is None:
+            return None
+        F, K, s = fit
+        return np.concatenate([self._theta_start(F, K, c_tau_start(K, float(self.mass))), s])
 
     def starts(self):
         """The start and its C_τ multiplied by 0.1 and 10 (`C_TAU_START_FACTORS`), as

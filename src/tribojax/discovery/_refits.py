@@ -94,6 +94,15 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
             message=f"not refitted to the end: after {QUICK_STEPS} steps its cost was above "
             f"{QUICK_MARGIN:g}x that of a candidate that reaches the noise",
         )
+    if not good and target is None:
+        # every start from the current fit stalled: once more from a start made afresh with the
+        # effect in the model (`restart`; s3007: a drift the baseline read as slip)
+        fresh = baseline.restart(designs)
+        if fresh is not None and np.all(np.isfinite(fresh)):
+            fits.append(fit_from(fresh)())
+            good += [f for f in fits[-1:] if f.converged and np.isfinite(f.rss)]
+            ran_out += [f for f in fits[-1:] if np.isfinite(f.rss) and not f.converged]
+            run = ran_out
     if run and min(f.rss for f in run) < min((f.rss for f in good), default=np.inf):
         # a fit that ran out of steps while still descending, below every converged one (e.g.
         # an unidentified F_s walking to its bound), goes on from where it stopped, once
