@@ -324,3 +324,41 @@ def test_a_new_campaign_is_calibrated_by_one_test_from_the_cli(tmp_path):
     assert main([*one, "--free", "mu_N", "T_res"]) == 2
     assert main(["fit", str(tmp_path / "b1.csv"), "--free", "mu_N", "--out", str(bad)]) == 2
     assert not (bad / "fit.json").exists()
+
+
+@pytest.mark.slow
+def test_tension_discovery_names_the_components_of_the_law_the_records_demand(tmp_path):
+    # a drag at 0 lb and a wrap growing with the tension: `tribojax discover` on the records of
+    # three tensions names both components, with the generator's T_res and γ, each predicting
+    # the last third of every record better than the law before it; predict takes its model
+    g = 0.03  # per lbf
+    files = []
+    for T, seed in ((30, 4), (0, 5), (36, 6)):
+        files.append(str(tmp_path / f"{T}lb.csv"))
+        tj.write_loop(_law_record(T, seed, growth=g), files[-1])
+    out = tmp_path / "disc"
+    assert main(["discover", *files, "--model", "jenkins", "--out", str(out), "--quiet"]) == 0
+    d = json.loads((out / "discovery.json").read_text())
+    assert d["kind"] == "tension" and d["verdict"] == "explained"
+    assert d["effects"] == ["residual_tension", "tension_growth"] and d["tension_law"] == "growing"
+    for c in d["candidates"]:
+        assert c["accepted"] and c["delta_bic"] < -100
+        assert c["heldout"]["nrmse_after"] < 0.5 * c["heldout"]["nrmse_before"]
+    (t_res, t_err), (gamma, _) = d["candidates"][1]["parameters"].values()
+    assert t_res == pytest.approx(400.0 / C_SLIP, rel=0.05) and t_err < 0.05 * t_res
+    assert gamma == pytest.approx(g / LBF, rel=0.1)
+    assert all(r["nrmse_final"] < 0.01 < r["nrmse_baseline"] for r in d["records"][1:])
+    tj.write_loop(_law_record(33, 7, growth=g), tmp_path / "33lb.csv")
+    args = ["predict", str(out / "discovery.json"), str(tmp_path / "33lb.csv"), "--out"]
+    assert main([*args, str(tmp_path / "p")]) == 0
+    assert json.loads((tmp_path / "p" / "prediction.json").read_text())["nrmse"] < 0.01
+    # the capstan law alone (no drag, no growth): nothing named, the residual tension refused
+    plain = tj.discovery.discover_tension(
+        [_law_record(30, 8, drag=0.0), _law_record(36, 9, drag=0.0)], "jenkins"
+    )
+    assert plain.effects == () and plain.verdict == "none" and plain.law == "proportional"
+    assert [c["name"] for c in plain.candidates] == ["residual_tension"]
+    assert plain.candidates[0]["delta_bic"] > -10 and not plain.candidates[0]["accepted"]
+    # one tension: refused by name
+    with pytest.raises(ValueError, match="two or more band tensions"):
+        tj.discovery.discover_tension([_law_record(30, 8), _law_record(30, 9)], "jenkins")

@@ -105,7 +105,7 @@ def run_record(command: str, options: dict, request: dict, stem: str, out: str, 
         tmp = out / STATE / "tmp" / f"{stem}.{token}"
         tmp.parent.mkdir(parents=True, exist_ok=True)
         args = argparse.Namespace(**options)
-        args.file = [record] if command == "fit" else record
+        args.file = [record] if command in ("fit", "discover") else record
         args.out, args.force, args.quiet = str(tmp), False, True
         module, function = TARGETS[command].split(":")
         run = getattr(importlib.import_module(f"tribojax._cli.{module}"), function)

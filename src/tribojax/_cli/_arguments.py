@@ -240,8 +240,17 @@ def discover_arguments(parser, batch: bool = False) -> None:
         parser,
         batch,
         help="record (slip run or loop CSV, brfd JSON, friction curve or a "
-        "folder of EPOS steady-state exports)",
+        "folder of EPOS steady-state exports); several loops or histories at two or more "
+        "band tensions: which parts of the tension law they demand",
+        nargs="+",
     )
+    if not batch:
+        parser.add_argument(
+            "--model",
+            choices=(*ELEMENT_MODELS, *DEVICE_MODELS),
+            default=None,
+            help="several records: the history element fitted to them (default band_brake)",
+        )
     if not batch:
         parser.add_argument(
             "--out", default="discovery-out", help="output folder (default discovery-out)"

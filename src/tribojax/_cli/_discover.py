@@ -1,5 +1,10 @@
 """`tribojax discover FILE.csv [--out DIR] [--force]`: the discovery workflow on a user record.
 
+Several records (loops or histories at two or more band tensions, e.g. brfd files) go to the
+tension discovery instead (`tribojax.discovery.discover_tension`, history element `--model`,
+default the band brake): which components of the tension law they demand; discovery.json is
+`TensionDiscovery.as_dict` with "fitted_model" (the final law's model) and "source".
+
 The record (its format detected, or named by `--format`) goes to the baseline of its kind
 (`_DISCOVERY`: a slip run, a loop or history, a friction curve). Writes DIR/discovery.json
 (`DiscoveryReport.as_dict`, with "fitted_model" what `tribojax predict` takes, and "decimation":
@@ -15,10 +20,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._io._records import read_record
-from .._predict import fitted_model, load_model
+from .._predict import fitted_model, load_model, saved_if_converged
 from ..discovery import (
     curve_baseline,
     discover,
+    discover_tension,
     loop_baseline,
     plot_curve_discovery,
     plot_discovery,
@@ -27,6 +33,7 @@ from ..discovery import (
 from ._common import (
     CommandError,
     claim_outputs,
+    decimate_factor,
     error,
     progress,
     reduce_record,
@@ -49,7 +56,12 @@ _DISCOVERY = {
 
 def run_discover(args) -> int:
     """Run `tribojax discover` with parsed `args`; the exit status (see the module docstring)."""
-    src = Path(args.file)
+    files = args.file if isinstance(args.file, list) else [args.file]
+    if len(files) > 1:
+        return _run_tension(args, [Path(f) for f in files])
+    if getattr(args, "model", None) is not None:
+        raise CommandError("--model is for several records (a tension discovery)")
+    src = Path(files[0])
     out_dir = Path(args.out)
     target, figure = out_dir / "discovery.json", out_dir / "discovery.png"
     start = load_model(args.from_model) if args.from_model else None
@@ -94,4 +106,40 @@ def run_discover(args) -> int:
         return error(
             f"the baseline fit did not converge: {report.baseline_fit['message']}", status=3
         )
+    return 0
+
+
+def _run_tension(args, paths) -> int:
+    """`tribojax discover A B ...`: the tension discovery of records at several band tensions."""
+    out_dir = Path(args.out)
+    target = out_dir / "discovery.json"
+    for flag in ("from_model", "initial"):
+        if getattr(args, flag) is not None:
+            raise CommandError(
+                f"--{flag.replace('_', '-').replace('from-model', 'from')} is for "
+                "one record; a tension discovery fits every record from rest"
+            )
+    with claim_outputs(paths[0], [target], force=args.force, inputs=paths[1:]):
+        loops = []
+        for src in paths:
+            record = with_band_tension(read_record(src, args.format), args.band_tension, src)
+            if record.kind != "loop":
+                raise CommandError(
+                    f"{src}: a discovery over several records takes loops or histories (at "
+                    f"several band tensions); this is {record.description}"
+                )
+            loops.append(record)
+        model = getattr(args, "model", None) or "band_brake"
+        with progress(args, "discover"):
+            report = discover_tension(loops, model, decimate=decimate_factor(args) or 1)
+        data = report.as_dict()
+        data["source"] = "; ".join(str(p) for p in paths)
+        saved = saved_if_converged(report.final, data["source"], loops)
+        data["fitted_model"] = None if saved is None else saved.as_dict()
+        write_json_atomic(target, data, exclusive=not args.force)
+    print(f"{len(loops)} records at {len(report.settings['tensions_N'])} band tensions")
+    print(report.summary())
+    print(f"wrote {target}")
+    if not report.converged:
+        return error(f"the final fit did not converge: {report.final.fit.message}", status=3)
     return 0

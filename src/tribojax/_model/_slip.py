@@ -143,7 +143,9 @@ class SlipBaseline(AbstractBaseline):
         with the designs' additive columns (`quasi_static_fit`): an effect that the baseline's
         own start read as slip (a drift larger than the slip) moves F_s and K_τ far from where
         the baseline fit stopped. None when a design moves a knob or has no columns."""
-        if any(d.basis is None or d.knob_gain is not None or d.knob_set for d in designs):
+        if not designs or any(
+            d.basis is None or d.knob_gain is not None or d.knob_set for d in designs
+        ):
             return None
         cols = np.concatenate([np.asarray(d.basis, dtype=float) for d in designs], axis=1)
         slip = np.asarray(self.slip, dtype=float)

@@ -95,6 +95,8 @@ from ._discover_curve import discover_curve as discover_curve
 from ._discover_curve import plot_curve_discovery as plot_curve_discovery
 from ._discover_loop import discover_loop as discover_loop
 from ._discover_loop import plot_loop_discovery as plot_loop_discovery
+from ._discover_tension import TensionDiscovery as TensionDiscovery
+from ._discover_tension import discover_tension as discover_tension
 from ._loop_synthetic import eq7_standin_loop as eq7_standin_loop
 from ._loop_synthetic import eq7_standin_shape as eq7_standin_shape
 from ._loop_synthetic import hidden_effect_loop as hidden_effect_loop

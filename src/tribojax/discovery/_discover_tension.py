@@ -1,0 +1,240 @@
+"""Discovery over records at several band tensions: which parts of the tension law they demand.
+
+A history model (default the band brake) is fitted to all records together with its slip forces
+in proportion to the band tension (the capstan law: the baseline); then, in turn, the law's two
+components are tried as effects (`_history_model` docstring):
+
+    residual_tension   T_res: a slip force that stays when the band is slack (the drag at 0 lb)
+    tension_growth     γ: the wrap μφ grows with the tension (s(T) grows faster than T)
+
+A component is kept when it lowers BIC by more than the threshold and the law with it, fitted to
+the first two thirds of every record, predicts their last third better than the law without it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .._fit._measures import bic, nrmse
+from .._io._hysteresis_loop import HysteresisLoop
+from .._limits import TENSION_LAWS
+from .._model._history_fit import fit_history, predict_history
+from .._model._history_model import HISTORY_MODELS
+from ._discover import DELTA_BIC_THRESHOLD
+
+TENSION_EFFECTS = (("residual_tension", "residual"), ("tension_growth", "growing"))
+HELDOUT_SHARE = 1.0 / 3.0  # the later part of every record, predicted by a fit to the rest
+
+
+@dataclasses.dataclass(frozen=True)
+class TensionDiscovery:
+    """The result of `discover_tension`: the baseline (proportional law) and final fits
+    (`HistoryFit`), the effects kept, each candidate's figures, the records' tensions (N) and
+    the settings."""
+
+    baseline: object
+    final: object
+    effects: tuple
+    candidates: tuple
+    records: tuple
+    settings: dict
+
+    @property
+    def law(self) -> str:
+        return dict(TENSION_EFFECTS).get(self.effects[-1], "") if self.effects else "proportional"
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.final.fit.converged)
+
+    @property
+    def verdict(self) -> str:
+        """ "explained" (effects kept, the final fit consistent with the noise), "partly_explained"
+        (effects kept, a misfit left), "none" (no effect, the baseline consistent) or
+        "unexplained" (no effect, a misfit left)."""
+        consistent = bool(self.final.fit.noise_consistent)
+        if self.effects:
+            return "explained" if consistent else "partly_explained"
+        return "none" if consistent else "unexplained"
+
+    def as_dict(self) -> dict:
+        return {
+            "kind": "tension",
+            "effect": self.effects[0] if self.effects else "none",
+            "verdict": self.verdict,
+            "effects": list(self.effects),
+            "tension_law": self.law,
+            "converged": self.converged,
+            "candidates": [dict(c) for c in self.candidates],
+            "records": [dict(r) for r in self.records],
+            "baseline_fit": self.baseline.as_dict(),
+            "final_fit": self.final.as_dict(),
+            "settings": dict(self.settings),
+        }
+
+    def summary(self) -> str:
+        lines = [f"baseline: {self.settings['model']} with the proportional (capstan) law"]
+        for c in self.candidates:
+            held = c["heldout"]
+            extra = (
+                f", last third of each record held out: NRMSE {held['nrmse_before']:.3g} -> "
+                f"{held['nrmse_after']:.3g}"
+            )
+            keep = "kept" if c["accepted"] else f"not kept ({c['reason']})"
+            lines.append(f"  {c['name']}: dBIC {c['delta_bic']:.4g}{extra}; {keep}")
+        lines.append(f"verdict: {self.verdict}; effects {list(self.effects) or 'none'}")
+        return "\n".join(lines)
+
+
+def _fit_law(loops, model, law, start, kw):
+    """`fit_history` of `loops` under `law`; the proportional law leaves a record at 0 N no slip
+    force (a slack band is its offset alone, `_predict`), so it is fitted to the others."""
+    use = [lp for lp in loops if lp.band_tension > 0] if law == "proportional" else loops
+    return fit_history(use, model, tension_law=law, start=start, **kw)
+
+
+def _predict(fit, lp) -> np.ndarray:
+    """Force (N) of `fit` along record `lp`, every `fit.decimate`-th sample: a record at 0 N
+    under the proportional law is its mean (no slip force; its offset)."""
+    f = np.asarray(lp.f, dtype=float)[:: fit.decimate]
+    if lp.band_tension == 0 and not any(n.startswith("T_res") for n in fit.names):
+        return np.full_like(f, np.mean(f))
+    return np.asarray(predict_history(fit, lp)[0])
+
+
+def _scores(fit, loops) -> tuple:
+    """(BIC, NRMSE of each record) of a history fit: BIC from the residuals in units of each
+    record's force sd (the weighting the fit minimises, fixed by the records: the same for
+    every law)."""
+    rss, n, each = 0.0, 0, []
+    for lp in loops:
+        f = np.asarray(lp.f, dtype=float)[:: fit.decimate]
+        r = _predict(fit, lp) - f
+        rss += float(np.sum((r / np.std(f)) ** 2))
+        n += f.size
+        each.append(nrmse(r, f))
+    return bic(rss, n, len(fit.fit.names)), each
+
+
+def _heldout(loops, model, laws, kw) -> dict:
+    """Mean NRMSE over the records of their last `HELDOUT_SHARE` of samples, predicted by each
+    law in `laws` fitted to the samples before it."""
+    cut = [int(round((1.0 - HELDOUT_SHARE) * lp.t.size)) for lp in loops]
+    first = [
+        dataclasses.replace(lp, t=lp.t[:m], u=lp.u[:m], f=lp.f[:m]) for lp, m in zip(loops, cut)
+    ]
+    out = {}
+    for law in laws:
+        fit = _fit_law(first, model, law, None, kw)
+        errs = []
+        for lp, m in zip(loops, cut):
+            f = np.asarray(lp.f, dtype=float)[:: fit.decimate]
+            k = -(-m // fit.decimate)  # the first decimated sample not fitted
+            errs.append(nrmse(_predict(fit, lp)[k:] - f[k:], f[k:]))
+        out[law] = float(np.mean(errs))
+    return out
+
+
+def discover_tension(
+    loops,
+    model: str = "band_brake",
+    *,
+    decimate: int = 1,
+    delta_bic_threshold: float = DELTA_BIC_THRESHOLD,
+    band_tension=None,
+) -> TensionDiscovery:
+    """Which components of the tension law (module docstring) records at several band tensions
+    demand, as discovery's effects `residual_tension` and `tension_growth`.
+
+    Args:
+        loops: `HysteresisLoop`s (histories), each with its `band_tension` (N), at two or more
+            distinct tensions.
+        model: the history element (`fit_history`'s models; default "band_brake").
+        decimate: every `decimate`-th sample is fitted (1: all).
+        delta_bic_threshold: a component is kept when it changes BIC by less than this
+            (negative, default discovery's −10).
+        band_tension: the tension (N) the slip forces are fitted at (default the first
+            record's).
+    Returns:
+        `TensionDiscovery` (`as_dict()`: the discovery.json of `tribojax discover` given
+        several records).
+    """
+    loops = [loops] if isinstance(loops, HysteresisLoop) else list(loops)
+    if model not in HISTORY_MODELS:
+        raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
+    missing = [str(lp.source) for lp in loops if lp.band_tension is None]
+    if missing:
+        raise ValueError(
+            f"a tension discovery needs each record's band_tension; {missing[0]} has none "
+            "(give it: band_tension=..., N; --band-tension)"
+        )
+    tensions = sorted({float(lp.band_tension) for lp in loops})
+    if len(tensions) < 2:
+        raise ValueError(
+            f"a tension discovery needs records at two or more band tensions; these are all at "
+            f"{tensions[0]:g} N"
+        )
+    count = {t: sum(lp.band_tension == t for lp in loops) for t in tensions}
+    ref = band_tension if band_tension is not None else max(count, key=lambda t: (count[t], t))
+    kw = dict(decimate=decimate, band_tension=ref, throw=False)
+    current = baseline = _fit_law(loops, model, "proportional", None, kw)
+    (current_bic, base_each), law, effects, candidates = (
+        _scores(current, loops),
+        "proportional",
+        [],
+        [],
+    )
+    each = base_each
+    for name, new in TENSION_EFFECTS:
+        if TENSION_LAWS[new] > len(tensions):
+            break
+        start = dict(zip(current.names, current.values.tolist()))
+        fit = _fit_law(loops, model, new, start, kw)
+        new_bic, new_each = _scores(fit, loops)
+        row = {"name": name, "law": new, "converged": bool(fit.fit.converged)}
+        row["delta_bic"] = new_bic - current_bic
+        row["parameters"] = {
+            n: [float(v), float(e)]
+            for n, v, e in zip(fit.fit.names, fit.fit.values, fit.fit.std_errors)
+            if n not in dict(HISTORY_MODELS[model])
+        }
+        nr = _heldout(loops, model, (law, new), kw)
+        held = row["heldout"] = {
+            "share": HELDOUT_SHARE,
+            "nrmse_before": nr[law],
+            "nrmse_after": nr[new],
+        }
+        reason = (
+            "the fit did not converge"
+            if not fit.fit.converged
+            else f"dBIC not below {delta_bic_threshold:g}"
+            if not row["delta_bic"] < delta_bic_threshold
+            else "no better on the records left out"
+            if not held["nrmse_after"] < held["nrmse_before"]
+            else ""
+        )
+        row.update(accepted=not reason, reason=reason)
+        candidates.append(row)
+        if reason:
+            break
+        current, current_bic, law, each = fit, new_bic, new, new_each
+        effects.append(name)
+    records = tuple(
+        {
+            "source": str(lp.source),
+            "band_tension_N": float(lp.band_tension),
+            "nrmse_baseline": float(b),
+            "nrmse_final": float(e),
+        }
+        for lp, b, e in zip(loops, base_each, each)
+    )
+    settings = {
+        "model": model,
+        "decimate": decimate,
+        "delta_bic_threshold": delta_bic_threshold,
+        "tensions_N": tensions,
+        "reference_tension_N": ref,
+    }
+    return TensionDiscovery(baseline, current, tuple(effects), tuple(candidates), records, settings)
