@@ -234,7 +234,7 @@ def fit_history(
         theta = jnp.asarray(
             [np.log(values[n]) if pos else values[n] / c for (n, pos), c in zip(spec, scale)]
         )
-        before = np.inf
+        before, start_theta = np.inf, theta
         for _ in range(3):  # a noise-floor stop short of the optimum restarts where it stopped
             fit = least_squares_fit(
                 fn,
@@ -250,6 +250,10 @@ def fit_history(
             )
             if fit.result != RESULTS.short_of_optimum:
                 break
+            if np.array_equal(np.asarray(fit.theta), np.asarray(start_theta)):
+                # not one step from the start lowered the cost: a failed fit, not a stop
+                message = f"no step from the start lowered the cost: {fit.message}"
+                return dataclasses.replace(fit, message=message)
             cost = float(np.sum(np.square(fit.residuals)))
             s2 = cost / max(fit.residuals.size - len(spec), 1)
             if before - cost < NOISE_TOL * s2:

@@ -118,23 +118,27 @@ def _scores(fit, loops) -> tuple:
     return bic(rss, n, len(fit.fit.names)), each
 
 
-def _heldout(loops, model, laws, kw) -> dict:
-    """Mean NRMSE over the records of their last `HELDOUT_SHARE` of samples, predicted by each
-    law in `laws` fitted to the samples before it."""
+def _first_part(loops) -> tuple:
+    """(each record's first 1 − `HELDOUT_SHARE` of samples as a record, the cut indices)."""
     cut = [int(round((1.0 - HELDOUT_SHARE) * lp.t.size)) for lp in loops]
     first = [
         dataclasses.replace(lp, t=lp.t[:m], u=lp.u[:m], f=lp.f[:m]) for lp, m in zip(loops, cut)
     ]
-    out = {}
-    for law in laws:
-        fit = _fit_law(first, model, law, None, kw)
-        errs = []
-        for lp, m in zip(loops, cut):
-            f = np.asarray(lp.f, dtype=float)[:: fit.decimate]
-            k = -(-m // fit.decimate)  # the first decimated sample not fitted
-            errs.append(nrmse(_predict(fit, lp)[k:] - f[k:], f[k:]))
-        out[law] = float(np.mean(errs))
-    return out
+    return first, cut
+
+
+def _heldout_nrmse(fit, loops, cut) -> float:
+    """Mean NRMSE over the records of the samples after each cut, predicted by `fit`."""
+    errs = []
+    for lp, m in zip(loops, cut):
+        f = np.asarray(lp.f, dtype=float)[:: fit.decimate]
+        k = -(-m // fit.decimate)  # the first decimated sample not fitted
+        errs.append(nrmse(_predict(fit, lp)[k:] - f[k:], f[k:]))
+    return float(np.mean(errs))
+
+
+def _values(fit) -> dict:
+    return dict(zip(fit.names, fit.values.tolist()))
 
 
 def discover_tension(
@@ -180,18 +184,14 @@ def discover_tension(
     ref = band_tension if band_tension is not None else max(count, key=lambda t: (count[t], t))
     kw = dict(decimate=decimate, band_tension=ref, throw=False)
     current = baseline = _fit_law(loops, model, "proportional", None, kw)
-    (current_bic, base_each), law, effects, candidates = (
-        _scores(current, loops),
-        "proportional",
-        [],
-        [],
-    )
-    each = base_each
+    first, cut = _first_part(loops)
+    part_fits = [_fit_law(first, model, "proportional", None, kw)]
+    current_bic, base_each = _scores(current, loops)
+    each, effects, candidates = base_each, [], []
     for name, new in TENSION_EFFECTS:
         if TENSION_LAWS[new] > len(tensions):
             break
-        start = dict(zip(current.names, current.values.tolist()))
-        fit = _fit_law(loops, model, new, start, kw)
+        fit = _fit_law(loops, model, new, _values(current), kw)
         new_bic, new_each = _scores(fit, loops)
         row = {"name": name, "law": new, "converged": bool(fit.fit.converged)}
         row["delta_bic"] = new_bic - current_bic
@@ -200,18 +200,21 @@ def discover_tension(
             for n, v, e in zip(fit.fit.names, fit.fit.values, fit.fit.std_errors)
             if n not in dict(HISTORY_MODELS[model])
         }
-        nr = _heldout(loops, model, (law, new), kw)
+        part = _fit_law(first, model, new, _values(part_fits[-1]), kw)
         held = row["heldout"] = {
             "share": HELDOUT_SHARE,
-            "nrmse_before": nr[law],
-            "nrmse_after": nr[new],
+            "nrmse_before": _heldout_nrmse(part_fits[-1], loops, cut),
+            "nrmse_after": _heldout_nrmse(part, loops, cut),
+            "converged": [bool(part_fits[-1].fit.converged), bool(part.fit.converged)],
         }
         reason = (
             "the fit did not converge"
             if not fit.fit.converged
             else f"dBIC not below {delta_bic_threshold:g}"
             if not row["delta_bic"] < delta_bic_threshold
-            else "no better on the records left out"
+            else "a fit to the first part of the records did not converge"
+            if not all(held["converged"])
+            else "no better on the samples held out"
             if not held["nrmse_after"] < held["nrmse_before"]
             else ""
         )
@@ -219,7 +222,8 @@ def discover_tension(
         candidates.append(row)
         if reason:
             break
-        current, current_bic, law, each = fit, new_bic, new, new_each
+        current, current_bic, each = fit, new_bic, new_each
+        part_fits.append(part)
         effects.append(name)
     records = tuple(
         {

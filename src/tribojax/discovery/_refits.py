@@ -190,7 +190,7 @@ def refit_round(run, state, ranking, n_refit, threshold, by_name, base_ok) -> li
     cands, n, y = ranking.candidates, run.y.size, run.y
     level = run.alpha / len(cands)
     accepted, dk_explains, rss_explains, explains = [], np.inf, None, None
-    before = []  # (candidate, its starts, refit, design) refitted before any reached the noise
+    refitted = []  # (candidate, its starts, refit, design) of every candidate refitted
     to_refit = [c for c in cands if c.p_value < level][:n_refit]
     to_refit += [c for c in cands if not c.gate and c not in to_refit]
     for c in to_refit[: 0 if base_ok else len(to_refit)]:
@@ -220,15 +220,14 @@ def refit_round(run, state, ranking, n_refit, threshold, by_name, base_ok) -> li
             ]
         ) as refits:
             d, new = _best_start(run, starts, (fut.result() for fut in refits), n)
-        if explains is None:
-            before.append((c, starts, new, d))
+        refitted.append((c, starts, new, d))
         if _settle(run, state, c, d, new, threshold, by_name, accepted):
             dk_explains = min(dk_explains, d.k + d.n_nuisance)
             if rss_explains is None or new.rss < rss_explains:
                 rss_explains, explains = new.rss, new
             if accepted and accepted[-1][1] is new:  # the likely choice: its held-out check
                 run.prefetch(new)  # runs while the round goes on (`pick` reads it)
-    for c, starts, new, d in before if explains is not None else ():
+    for c, starts, new, d in refitted if explains is not None else ():
         if c.refit is not None and c.refit[0] is explains or d.k + d.n_nuisance >= dk_explains:
             continue
         again = _from_explaining(run, state, c, starts, explains, dk_explains)
@@ -290,10 +289,12 @@ def _settle(run, state, c, d, new, threshold, by_name, accepted) -> bool:
 
 
 def _from_explaining(run, state, c, starts, explains, dk_explains):
-    """A candidate refitted before another one reached the noise, refitted once more from that
-    one's optimum of the current model's parameters, the candidate's strengths at zero (each of
-    its designs, `QUICK_STEPS` steps): its own starts never saw that basin. Designs with fewer
-    parameters than the explaining one only (`dk_explains`). Returns (design, refit), or None."""
+    """A candidate other than the one that reached the noise at the lowest cost (refitted before
+    it, or after it and cut short by the quick budget), refitted once more from that one's
+    optimum of the current model's parameters, the candidate's strengths at zero (each of its
+    designs, `QUICK_STEPS` steps): its own starts never saw that basin, and which candidate
+    reached the noise first must not decide. Designs with fewer parameters than the explaining
+    one only (`dk_explains`). Returns (design, refit), or None."""
     p = state.theta.size
     starts = [dd for dd in starts if dd.k + dd.n_nuisance < dk_explains]
     if not starts:
