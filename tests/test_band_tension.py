@@ -362,3 +362,20 @@ def test_tension_discovery_names_the_components_of_the_law_the_records_demand(tm
     # one tension: refused by name
     with pytest.raises(ValueError, match="two or more band tensions"):
         tj.discovery.discover_tension([_law_record(30, 8), _law_record(30, 9)], "jenkins")
+
+
+def test_tension_discovery_refuses_what_it_cannot_compare_before_any_fit(tmp_path):
+    with pytest.raises(ValueError, match="two or more band tensions; these are all at 133"):
+        tj.discovery.discover_tension([_law_record(30, 8), _law_record(30, 9)], "jenkins")
+    r = _law_record(36, 9)
+    bare = tj.HysteresisLoop(r.t, r.u, r.f, frequency=F_HZ, source="<bare>")
+    with pytest.raises(ValueError, match="needs each record's band_tension; <bare> has none"):
+        tj.discovery.discover_tension([_law_record(30, 8), bare], "jenkins")
+    tj.write_loop(_law_record(30, 8), tmp_path / "a.csv")
+    run = tj.synthetic_slip_run(tj.PreSlipLuGre(F_s=1.1, K_tau=2.0e7, C_tau=150.0), n=101)
+    tj.write_slip_run(run, tmp_path / "slip.csv")
+    out = tmp_path / "d"
+    files = [str(tmp_path / "a.csv"), str(tmp_path / "slip.csv")]
+    assert main(["discover", *files, "--out", str(out)]) == 2
+    assert main(["discover", files[0], "--model", "jenkins", "--out", str(out)]) == 2
+    assert not (out / "discovery.json").exists()

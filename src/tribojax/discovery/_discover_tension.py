@@ -160,7 +160,7 @@ def discover_tension(
         delta_bic_threshold: a component is kept when it changes BIC by less than this
             (negative, default discovery's −10).
         band_tension: the tension (N) the slip forces are fitted at (default the first
-            record's).
+            record's, the first at a tension above 0).
     Returns:
         `TensionDiscovery` (`as_dict()`: the discovery.json of `tribojax discover` given
         several records).
@@ -180,8 +180,9 @@ def discover_tension(
             f"a tension discovery needs records at two or more band tensions; these are all at "
             f"{tensions[0]:g} N"
         )
-    count = {t: sum(lp.band_tension == t for lp in loops) for t in tensions}
-    ref = band_tension if band_tension is not None else max(count, key=lambda t: (count[t], t))
+    if band_tension is None:  # as `fit_history`: the first record's (the first at a tension)
+        band_tension = next(float(lp.band_tension) for lp in loops if lp.band_tension > 0)
+    ref = float(band_tension)
     kw = dict(decimate=decimate, band_tension=ref, throw=False)
     current = baseline = _fit_law(loops, model, "proportional", None, kw)
     first, cut = _first_part(loops)
