@@ -166,65 +166,34 @@ def discover_tension(
         several records).
     """
     loops = [loops] if isinstance(loops, HysteresisLoop) else list(loops)
-    if model not in HISTORY_MODELS:
-        raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
-    missing = [str(lp.source) for lp in loops if lp.band_tension is None]
-    if missing:
-        raise ValueError(
-            f"a tension discovery needs each record's band_tension; {missing[0]} has none "
-            "(give it: band_tension=..., N; --band-tension)"
-        )
-    tensions = sorted({float(lp.band_tension) for lp in loops})
-    if len(tensions) < 2:
-        raise ValueError(
-            f"a tension discovery needs records at two or more band tensions; these are all at "
-            f"{tensions[0]:g} N"
-        )
+    tensions = _checked_tensions(loops, model)
     if band_tension is None:  # as `fit_history`: the first record's (the first at a tension)
         band_tension = next(float(lp.band_tension) for lp in loops if lp.band_tension > 0)
-    ref = float(band_tension)
-    kw = dict(decimate=decimate, band_tension=ref, throw=False)
+    kw = dict(decimate=decimate, band_tension=float(band_tension), throw=False)
     current = baseline = _fit_law(loops, model, "proportional", None, kw)
     first, cut = _first_part(loops)
-    part_fits = [_fit_law(first, model, "proportional", None, kw)]
+    part = _fit_law(first, model, "proportional", None, kw)
     current_bic, base_each = _scores(current, loops)
     each, effects, candidates = base_each, [], []
-    for name, new in TENSION_EFFECTS:
-        if TENSION_LAWS[new] > len(tensions):
+    for name, law in TENSION_EFFECTS:
+        if TENSION_LAWS[law] > len(tensions):
             break
-        fit = _fit_law(loops, model, new, _values(current), kw)
+        fit = _fit_law(loops, model, law, _values(current), kw)
         new_bic, new_each = _scores(fit, loops)
-        row = {"name": name, "law": new, "converged": bool(fit.fit.converged)}
-        row["delta_bic"] = new_bic - current_bic
-        row["parameters"] = {
-            n: [float(v), float(e)]
-            for n, v, e in zip(fit.fit.names, fit.fit.values, fit.fit.std_errors)
-            if n not in dict(HISTORY_MODELS[model])
-        }
-        part = _fit_law(first, model, new, _values(part_fits[-1]), kw)
-        held = row["heldout"] = {
+        new_part = _fit_law(first, model, law, _values(part), kw)
+        row = _candidate_row(name, law, fit, new_bic - current_bic, model)
+        row["heldout"] = {
             "share": HELDOUT_SHARE,
-            "nrmse_before": _heldout_nrmse(part_fits[-1], loops, cut),
-            "nrmse_after": _heldout_nrmse(part, loops, cut),
-            "converged": [bool(part_fits[-1].fit.converged), bool(part.fit.converged)],
+            "nrmse_before": _heldout_nrmse(part, loops, cut),
+            "nrmse_after": _heldout_nrmse(new_part, loops, cut),
+            "converged": [bool(part.fit.converged), bool(new_part.fit.converged)],
         }
-        reason = (
-            "the fit did not converge"
-            if not fit.fit.converged
-            else f"dBIC not below {delta_bic_threshold:g}"
-            if not row["delta_bic"] < delta_bic_threshold
-            else "a fit to the first part of the records did not converge"
-            if not all(held["converged"])
-            else "no better on the samples held out"
-            if not held["nrmse_after"] < held["nrmse_before"]
-            else ""
-        )
+        reason = _refusal(row, delta_bic_threshold)
         row.update(accepted=not reason, reason=reason)
         candidates.append(row)
         if reason:
             break
-        current, current_bic, each = fit, new_bic, new_each
-        part_fits.append(part)
+        current, current_bic, each, part = fit, new_bic, new_each, new_part
         effects.append(name)
     records = tuple(
         {
@@ -240,6 +209,52 @@ def discover_tension(
         "decimate": decimate,
         "delta_bic_threshold": delta_bic_threshold,
         "tensions_N": tensions,
-        "reference_tension_N": ref,
+        "reference_tension_N": kw["band_tension"],
     }
     return TensionDiscovery(baseline, current, tuple(effects), tuple(candidates), records, settings)
+
+
+def _checked_tensions(loops, model) -> list:
+    """The records' distinct band tensions (N, sorted); ValueError naming what is missing."""
+    if model not in HISTORY_MODELS:
+        raise ValueError(f"model must be one of {sorted(HISTORY_MODELS)}, got {model!r}")
+    missing = [str(lp.source) for lp in loops if lp.band_tension is None]
+    if missing:
+        raise ValueError(
+            f"a tension discovery needs each record's band_tension; {missing[0]} has none "
+            "(give it: band_tension=..., N; --band-tension)"
+        )
+    tensions = sorted({float(lp.band_tension) for lp in loops})
+    if len(tensions) < 2:
+        raise ValueError(
+            f"a tension discovery needs records at two or more band tensions; these are all at "
+            f"{tensions[0]:g} N"
+        )
+    return tensions
+
+
+def _candidate_row(name, law, fit, delta_bic, model) -> dict:
+    """A candidate's figures: its law, convergence, ΔBIC and the law's parameters (± s.e.)."""
+    element = dict(HISTORY_MODELS[model])
+    params = zip(fit.fit.names, fit.fit.values, fit.fit.std_errors)
+    return {
+        "name": name,
+        "law": law,
+        "converged": bool(fit.fit.converged),
+        "delta_bic": float(delta_bic),
+        "parameters": {n: [float(v), float(e)] for n, v, e in params if n not in element},
+    }
+
+
+def _refusal(row, threshold) -> str:
+    """Why a candidate is not kept ("" when it is)."""
+    held = row["heldout"]
+    if not row["converged"]:
+        return "the fit did not converge"
+    if not row["delta_bic"] < threshold:
+        return f"dBIC not below {threshold:g}"
+    if not all(held["converged"]):
+        return "a fit to the first part of the records did not converge"
+    if not held["nrmse_after"] < held["nrmse_before"]:
+        return "no better on the samples held out"
+    return ""
