@@ -43,10 +43,12 @@ class TensionDiscovery:
 
     @property
     def law(self) -> str:
+        """The final tension law: "proportional", "residual" or "growing" (`fit_history`)."""
         return dict(TENSION_EFFECTS).get(self.effects[-1], "") if self.effects else "proportional"
 
     @property
     def converged(self) -> bool:
+        """Whether the final fit converged."""
         return bool(self.final.fit.converged)
 
     @property
@@ -60,6 +62,7 @@ class TensionDiscovery:
         return "none" if consistent else "unexplained"
 
     def as_dict(self) -> dict:
+        """discovery.json's dictionary (`tribojax discover` adds "source" and "fitted_model")."""
         return {
             "kind": "tension",
             "effect": self.effects[0] if self.effects else "none",
@@ -75,6 +78,7 @@ class TensionDiscovery:
         }
 
     def summary(self) -> str:
+        """The lines `tribojax discover` prints."""
         lines = [f"baseline: {self.settings['model']} with the proportional (capstan) law"]
         for c in self.candidates:
             held = c["heldout"]
