@@ -113,11 +113,10 @@ def _run_tension(args, paths) -> int:
     """`tribojax discover A B ...`: the tension discovery of records at several band tensions."""
     out_dir = Path(args.out)
     target = out_dir / "discovery.json"
-    for flag in ("from_model", "initial"):
+    for flag, name in (("from_model", "--from"), ("initial", "--initial")):
         if getattr(args, flag) is not None:
             raise CommandError(
-                f"--{flag.replace('_', '-').replace('from-model', 'from')} is for "
-                "one record; a tension discovery fits every record from rest"
+                f"{name} is for one record; a tension discovery fits every record from rest"
             )
     with claim_outputs(paths[0], [target], force=args.force, inputs=paths[1:]):
         loops = []
