@@ -24,6 +24,7 @@ from ._fit import MAX_STEPS as MAX_STEPS
 from ._fit import SOLVER as SOLVER
 from ._fit import fit_model as fit_model
 from ._fit import fit_record as fit_record
+from ._fit import restarted_around as restarted_around
 from ._heldout import heldout_residual as heldout_residual
 from ._loop_analysis import LoopAnalysis as LoopAnalysis
 from ._loop_analysis import analyse_loop as analyse_loop

@@ -328,13 +328,25 @@ def fit_record(
     above = first.rss if np.isfinite(first.rss) else np.inf  # a cost reached, converged or not
     fits = [first, *in_parallel([call(th, above) for th in thetas[1:]])]
     best = _kept(baseline, fits)
-    if restarts and _stalled(best) and not baseline.at_bound(best.theta[: _p(baseline)]):
-        wider = baseline.more_steps() or baseline
-        around = _around(baseline, best)
-        more = in_parallel([call(th, best.rss, wider) for th in around])
-        more = [dataclasses.replace(f, model=baseline) for f in more]
-        best = _kept(baseline, [best, *more])
+    if restarts:
+        best = restarted_around(baseline, best, call)
     return thrown(best, throw)
+
+
+def restarted_around(baseline, fit, call, ceiling=np.inf):
+    """`fit`, or where it stalled (`_stalled`) below `ceiling` − `NOISE_TOL` s² away from a
+    bound of the record model, the best by `_kept` of it and the fits from the points around its
+    stop (`_around`), each run by `call(θ, abandon_above, model)` (a thunk) with
+    `baseline.more_steps()`: the rule of `fit_record` and of discovery's effect refits."""
+    if not _stalled(fit) or baseline.at_bound(fit.theta[: _p(baseline)]):
+        return fit
+    n = np.asarray(fit.residuals).size
+    if not fit.rss < ceiling - NOISE_TOL * max(fit.rss / max(n - fit.theta.size, 1), 1.0):
+        return fit  # no lower than the cost the refit starts from: it failed, not stalled
+    wider = baseline.more_steps() or baseline
+    more = in_parallel([call(th, fit.rss, wider) for th in _around(baseline, fit)])
+    more = [dataclasses.replace(f, model=baseline) for f in more]
+    return _kept(baseline, [fit, *more])
 
 
 COST_TIE = NOISE_TOL  # fits whose costs differ by less (residual variances) are a tie
@@ -367,13 +379,17 @@ def _kept(baseline, fits):
 
 def _around(baseline, fit) -> list:
     """Start points around a fit's stop: its parameters ×(1 ± `RESTART_STEP`) in the sign
-    patterns of `restart_factors`, as θ (`baseline.theta_of`); none where the model cannot
-    map values back or a moved value leaves its range."""
-    values = np.asarray(fit.values[: _p(baseline)], dtype=float)
+    patterns of `restart_factors`, as θ (`baseline.theta_of`), and the effects' strengths and
+    shifts after them ×(1 ± `RESTART_STEP`) likewise; none where the model cannot map values
+    back or a moved value leaves its range."""
+    p = _p(baseline)
+    values = np.asarray(fit.values[:p], dtype=float)
+    extra = np.asarray(fit.theta, dtype=float)[p:]
     points = []
-    for factors in restart_factors(values.size):
+    for factors in restart_factors(p + extra.size):
         try:
-            points.append(np.asarray(baseline.theta_of(values * factors), dtype=float))
+            theta = np.asarray(baseline.theta_of(values * factors[:p]), dtype=float)
         except (NotImplementedError, ValueError):
             continue
+        points.append(np.concatenate([theta, extra * factors[p:]]))
     return points

@@ -10,7 +10,7 @@ import numpy as np
 
 from .._fit._measures import bic, delta_bic, rms
 from .._fit._noise import RHO_MAX, ar1_inflation, ar1_square_inflation, residual_rho
-from .._model import MAX_STEPS, effect_strengths, fit_model
+from .._model import MAX_STEPS, effect_strengths, fit_model, restarted_around
 from .._parallel import in_parallel, speculatively
 from ._fitting import _columns, _delta_bic
 from ._verdict import BIC_TIE, HELDOUT_TIE
@@ -34,7 +34,8 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
     `floor`: the cost of a fit at the noise (`_noise_floor`); the Gauss–Newton start runs first,
     alone, and when it converges at or below the floor the other starts are not run (no start
     can lower it by more than the noise's own spread). A start stopped above the current cost
-    is not restarted (`fit_model`'s `ceiling`).
+    is not restarted (`fit_model`'s `ceiling`). The kept refit, when it stalled below the current
+    cost, is restarted around its stop as a record model's fit (`restarted_around`).
     """
     zero = np.concatenate([state.theta, np.zeros(design.k)])
     designs, names = state.designs + (design,), state.effects + (name,)
@@ -42,9 +43,9 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
 
     above = _abandon_above(state, target)
 
-    def fit_from(x0, above=above):
+    def fit_from(x0, above=above, model=baseline):
         return lambda: fit_model(
-            baseline,
+            model,
             designs,
             x0,
             y,
@@ -118,7 +119,14 @@ def _refit(baseline, state, design, name, y, scale, r, cache, target=None, floor
             )
         )
         good += [f for f in fits[-1:] if f.converged and np.isfinite(f.rss)]
-    return min(good, key=lambda f: f.rss) if good else fits[-1]
+    if not good:
+        return fits[-1]
+    best = min(good, key=lambda f: f.rss)
+    if target is not None:
+        return best
+    # stalled below the current cost: restarted around its stop, as a record model's fit
+    # (`restarted_around`; s1018: a mode's refit stopped at 76 with 74 variances promised)
+    return restarted_around(baseline, best, fit_from, ceiling=state.rss)
 
 
 def _abandon_above(state, target) -> float:
