@@ -327,10 +327,11 @@ def test_a_stalled_refit_restarts_around_its_stop_strengths_and_all(monkeypatch)
 def test_a_mode_refit_stalled_on_one_copy_of_a_record_reaches_the_same_answer(tmp_path):
     # the study's s1018 (an acceleration-driven mode at 20 kPa, noise estimated; the project's
     # SciPy generator, so self-consistency only) and its copy with every column moved by 1e-3 of
-    # its noise sd: on the copy (one kernel, an Intel Xeon) the vibration refit from zero strengths stopped "stationary" at RSS 76 with 74
-    # residual variances promised, its fold fits were not finite there, and the run ended
-    # "unexplained"; restarted around its stop (`restarted_around`) it reaches the original's
-    # optimum (RSS 2.13) in 4 steps: "explained" by `vibration` on both
+    # its noise sd: on the copy (one kernel, an Intel Xeon) the vibration refit from zero
+    # strengths stopped "stationary" at RSS 76 with 74 residual variances promised, its fold
+    # fits were not finite there, and the run ended "unexplained"; restarted around its stop
+    # (`restarted_around`) it reaches the original's optimum (RSS 2.13) in 4 steps: "explained"
+    # by `vibration` on both
     from benchmarks import discovery_study as ds
     from benchmarks import stability_study as ss
 
