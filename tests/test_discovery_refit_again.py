@@ -199,6 +199,7 @@ def _refit_with(monkeypatch, gn_rss, gn_converged=True, target=None):
             theta=x0,
             rss=gn_rss if first else 1.1 * N,
             message="",
+            gain_left=0.0,  # at a minimum: no restart around the stop (`restarted_around`)
         )
 
     monkeypatch.setattr(R, "fit_model", fit_model)
