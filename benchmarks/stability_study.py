@@ -61,6 +61,22 @@ def perturbed_copy(src: Path, dst: Path) -> None:
     shutil.copyfile(src.with_suffix(".json"), dst.with_suffix(".json"))
 
 
+def discovered_copies(label_end: str, folder: Path) -> list:
+    """The study's slip record whose label ends with `label_end` (folder/a) and its perturbed
+    copy (folder/b), each discovered as `tribojax discover` does (its baseline, the defaults):
+    the two reports (the tests' form of one record's row of this study)."""
+    import tribojax as tj
+    import tribojax.discovery as disc
+
+    spec = next(s for s in ds.all_specs() if s.label.endswith(label_end))
+    src = ds.write_record(spec, folder / "a")
+    (folder / "b").mkdir(exist_ok=True)
+    perturbed_copy(src, folder / "b" / src.name)
+    return [
+        disc.discover(disc.slip_baseline(tj.read_record(p))) for p in (src, folder / "b" / src.name)
+    ]
+
+
 def compare(reference: list, rows: list) -> dict:
     """Records whose verdict or effects differ from the reference, and the share identical."""
     ref = {r["label"]: r for r in reference}

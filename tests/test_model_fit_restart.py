@@ -332,17 +332,9 @@ def test_a_mode_refit_stalled_on_one_copy_of_a_record_reaches_the_same_answer(tm
     # fits were not finite there, and the run ended "unexplained"; restarted around its stop
     # (`restarted_around`) it reaches the original's optimum (RSS 2.13) in 4 steps: "explained"
     # by `vibration` on both
-    from benchmarks import discovery_study as ds
     from benchmarks import stability_study as ss
 
-    spec = next(s for s in ds.all_specs() if s.label.endswith("s1018"))
-    src = ds.write_record(spec, tmp_path / "a")
-    (tmp_path / "b").mkdir()
-    ss.perturbed_copy(src, tmp_path / "b" / src.name)
-    reps = [
-        disc.discover(disc.slip_baseline(tj.read_record(p)))
-        for p in (src, tmp_path / "b" / src.name)
-    ]
+    reps = ss.discovered_copies("s1018", tmp_path)
     assert [r.verdict for r in reps] == ["explained", "explained"]
     assert [list(r.effects) for r in reps] == [["vibration"]] * 2
     assert reps[0].final_fit["rss"] == pytest.approx(reps[1].final_fit["rss"], rel=1e-2)

@@ -7,8 +7,6 @@ import types
 import numpy as np
 import pytest
 
-import tribojax as tj
-import tribojax.discovery as disc
 from tribojax._model import _polish, polish
 from tribojax._model._fit import GAIN_TOL
 
@@ -65,17 +63,9 @@ def test_two_copies_a_thousandth_of_the_noise_apart_get_one_verdict(tmp_path):
     # 1e-3 of its noise sd: without `polish` the final fits (Stribeck + mode) stopped 0.55 unit
     # variances (11 noise variances) short at different points and the noise test's Fisher g
     # read p = 0.0027 and 0.0040 against its level 0.0033: "partly explained" and "explained"
-    from benchmarks import discovery_study as ds
     from benchmarks import stability_study as ss
 
-    spec = next(s for s in ds.all_specs() if s.label.endswith("s1038"))
-    src = ds.write_record(spec, tmp_path / "a")
-    (tmp_path / "b").mkdir()
-    ss.perturbed_copy(src, tmp_path / "b" / src.name)
-    reps = [
-        disc.discover(disc.slip_baseline(tj.read_record(p)))
-        for p in (src, tmp_path / "b" / src.name)
-    ]
+    reps = ss.discovered_copies("s1038", tmp_path)
     assert [r.verdict for r in reps] == ["explained", "explained"]
     assert [list(r.effects) for r in reps] == [["stribeck", "vibration"]] * 2
     assert reps[0].final_fit["rss"] == pytest.approx(reps[1].final_fit["rss"], rel=1e-3)
