@@ -29,6 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
+import tribojax as tj
+import tribojax.discovery as disc
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks import discovery_study as ds  # noqa: E402
 
@@ -65,9 +68,6 @@ def discovered_copies(label_end: str, folder: Path) -> list:
     """The study's slip record whose label ends with `label_end` (folder/a) and its perturbed
     copy (folder/b), each discovered as `tribojax discover` does (its baseline, the defaults):
     the two reports (the tests' form of one record's row of this study)."""
-    import tribojax as tj
-    import tribojax.discovery as disc
-
     spec = next(s for s in ds.all_specs() if s.label.endswith(label_end))
     src = ds.write_record(spec, folder / "a")
     (folder / "b").mkdir(exist_ok=True)
