@@ -9,7 +9,7 @@ from .._fit._engine import value_and_jacobian
 from .._limits import MAX_STEPS
 from .._parallel import in_parallel
 from .._results import RESULTS
-from ._fit import SOLVER, fit_model
+from ._fit import SOLVER, fit_model, restarted_around
 from ._residual import _padded, padded_residual
 
 FOLD_SHARE_MIN = 1e-3  # least share of a parameter's Jacobian energy in each held-out fold
@@ -72,12 +72,31 @@ def _heldout(baseline, designs, x0, y, scale, effects, max_steps):
 
 def _fold_fit(baseline, designs, x0, y, scale, effects, max_steps, weights):
     """One fold's fit, as every record-model fit: a stationary stop short of a minimum goes on
-    rescaled (`fit_model`'s restarts), and one that ran out of steps goes on once from where it
-    stopped (a fold fit left short would make the held-out verdict turn on where it stopped)."""
-    f = fit_model(baseline, designs, x0, y, scale, effects, max_steps=max_steps, weights=weights)
-    if f.result == RESULTS.nonlinear_max_steps_reached and np.all(np.isfinite(f.theta)):
-        more = fit_model(
-            baseline, designs, f.theta, y, scale, effects, max_steps=max_steps, weights=weights
+    rescaled (`fit_model`'s restarts) and then, still short of it, from the points around its
+    stop (`restarted_around`, s1085: a fold fit of the baseline left 41 residual variances
+    promised, and the held-out gate read where it stopped); one that ran out of steps goes on
+    once from where it stopped (a fold fit left short would make the held-out verdict turn on
+    where it stopped)."""
+
+    def call(theta, above=np.inf, model=baseline):
+        return lambda: fit_model(
+            model,
+            designs,
+            theta,
+            y,
+            scale,
+            effects,
+            max_steps=max_steps,
+            weights=weights,
+            abandon_above=above,
         )
+
+    f = call(x0)()
+    if f.result == RESULTS.nonlinear_max_steps_reached and np.all(np.isfinite(f.theta)):
+        more = call(f.theta)()
         f = more if np.isfinite(more.rss) else f
-    return f
+    return restarted_around(baseline, f, call, run=_in_turn)  # a fold fit runs on a worker
+
+
+def _in_turn(calls):
+    return [c() for c in calls]

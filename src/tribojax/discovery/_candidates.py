@@ -67,9 +67,26 @@ class Ranking:
     cache: dict
 
 
+# relative, on the log p-value: designs scored closer than this are a tie (moving every sample by
+# 1e-3 of its noise moves a score S of dof columns by about 2·√(S·dof)·1e-3, e.g. 0.07 at S = 560)
+SCORE_TIE = 1e-3
+
+
+def _tie_first(scored):
+    """`scored` (sorted best first) with the design that wins a tie first: among the designs
+    whose log p-value is within `SCORE_TIE` (relative) of the best, the one with the fewest
+    parameters (strengths + nuisance), then the earliest on the grid (s2035: two microslip
+    designs scored 562.53 both, and which came first decided the refit)."""
+    best = scored[0][0]
+    tied = [z for z in scored if z[0] <= best * (1.0 - SCORE_TIE)]
+    first = min(tied, key=lambda z: (z[4].k + z[4].n_nuisance, z[2]))
+    return [first, *(z for z in scored if z is not first)]
+
+
 def rank(baseline, effects, grids, state, y, scale, n_starts) -> Ranking:
     """Score every effect not yet in `state` at its grid designs that fit in `K_MAX`: the design
-    with the smallest log p-value (`chi2_logsf`: p underflows to 0 for a strong effect), refined
+    with the smallest log p-value (`chi2_logsf`: p underflows to 0 for a strong effect; a tie
+    within `SCORE_TIE` goes to `_tie_first`), refined
     by the effect (`refine`), with its further refit seeds (`_seeds`), refined likewise."""
     r = (y - state.prediction) / scale
     J_cur = state.jacobian
@@ -94,7 +111,7 @@ def rank(baseline, effects, grids, state, y, scale, n_starts) -> Ranking:
         for d in grid:
             S, dof = score_of(d)
             scored.append((chi2_logsf(S, dof) if dof else 0.0, -S, len(scored), dof, d))
-        scored.sort(key=lambda z: z[:3])
+        scored = _tie_first(sorted(scored, key=lambda z: z[:3]))
         S, dof, d = -scored[0][1], scored[0][3], scored[0][4]
         pv = chi2_sf(S, dof) if dof else 1.0
         seeds = _seeds(scored, max(n_starts, e.refit_starts))
