@@ -19,7 +19,7 @@ def drop_redundant(run, state, threshold):
     keeping it ≥ `threshold` against the model refitted without it, from the current optimum)
     is dropped, the cheapest first, while the model stays consistent with the noise. Not done
     where a misfit is left: the residual is then correlated by it, and the AR(1) inflation of
-    the ΔBIC drops real effects (the records behind both: docs/discovery.md, "Two more rules of
+    the ΔBIC drops real effects (the records behind both: docs/discovery.md, "More rules of
     the search"). Returns (state, names dropped)."""
     dropped, n, p = [], run.y.size, len(run.baseline.param_names)
     while len(state.effects) >= 2 and run.consistent(state):
