@@ -314,7 +314,7 @@ def _fit_steady(loop, cls, analysis, theta0, sigma, max_steps):
             f"{loop.source}: {args[1].shape[0]} samples are too few to fit mu_N and K_d"
         )
     return least_squares_fit(
-        _SteadyResiduals(cls),
+        _SteadyLoopResiduals(cls),
         jnp.asarray(theta0),
         args,
         names=("mu_N", "K_d"),
@@ -332,7 +332,7 @@ def _steady_args(loop, analysis, scale):
     return jnp.asarray(loop.u), jnp.asarray(loop.f), A, direction, jnp.asarray(scale)
 
 
-class _SteadyResiduals(eqx.Module):
+class _SteadyLoopResiduals(eqx.Module):
     """(steady-loop force − measured force)/σ; θ = log(μN, K_d) (wu2015 Eq 1 or 2)."""
 
     cls: type = eqx.field(static=True)
@@ -355,7 +355,7 @@ def loop_residuals(loop: HysteresisLoop, element: str, mu_N, K_d, *, model="stea
         base = loop_baseline(loop, element, (mu_N, K_d))
         return evaluate(base, theta) - np.asarray(base.record.f)
     args = _steady_args(loop, analyse_loop(loop), 1.0)
-    return np.asarray(_evaluate(_SteadyResiduals(_ELEMENTS[element]), jnp.asarray(theta), args))
+    return np.asarray(_evaluate(_SteadyLoopResiduals(_ELEMENTS[element]), jnp.asarray(theta), args))
 
 
 @cached_jit

@@ -35,7 +35,10 @@ _SOLVER = LevenbergMarquardt.noise_floor(1e-10, 1e-12)
 STEADY_NAMES = ("F_c", "F_s", "v_s", "beta", "sigma2")
 
 
-class _SteadyResiduals(eqx.Module):
+class _StribeckResiduals(eqx.Module):
+    """(steady law − measured friction)/its standard error; θ = log(F_c, F_s, v_s, β, σ2)
+    [+ T0/sd(f) when `joint`] (wang2022 Eq 25 at constant velocity)."""
+
     joint: bool = eqx.field(static=True)
 
     def __call__(self, theta, args):
@@ -102,7 +105,7 @@ def fit_steady_curve(
 
     fits = [
         least_squares_fit(
-            _SteadyResiduals(joint),
+            _StribeckResiduals(joint),
             jnp.asarray(np.append(_steady_start(np.asarray(v), np.asarray(f), b, k), T0)),
             (v, f, err),
             names=names,
