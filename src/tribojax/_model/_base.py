@@ -251,9 +251,10 @@ class AbstractBaseline(eqx.Module):
         "unit"}}, from the fitted values and standard errors; default none."""
         return {}
 
-    def more_steps(self):
-        """This model with a larger step budget for its solver (a stalled fit's restart and a
-        held-out check where a solve ran out use it); None when it has none (the default)."""
+    def more_steps(self, factor: int = 1):
+        """This model with a larger step budget for its solver (a stalled fit's restart and, with
+        `factor` times as many, a held-out check where a solve ran out use it); None when it has
+        none (the default)."""
         return None
 
     def at_bound(self, theta) -> bool:

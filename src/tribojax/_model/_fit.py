@@ -333,20 +333,18 @@ def fit_record(
     return thrown(best, throw)
 
 
-def restarted_around(baseline, fit, call, ceiling=np.inf, run=in_parallel):
+def restarted_around(baseline, fit, call, ceiling=np.inf):
     """`fit`, or where it stalled (`_stalled`) below `ceiling` − `NOISE_TOL` s² away from a
     bound of the record model, the best by `_kept` of it and the fits from the points around its
     stop (`_around`), each run by `call(θ, abandon_above, model)` (a thunk) with
-    `baseline.more_steps()`: the rule of `fit_record`, of discovery's effect refits and of the
-    held-out fold fits. `run` runs the thunks (side by side; a caller already on a worker thread
-    passes one that runs them in turn)."""
+    `baseline.more_steps()`: the rule of `fit_record` and of discovery's effect refits."""
     if not _stalled(fit) or baseline.at_bound(fit.theta[: _p(baseline)]):
         return fit
     n = np.asarray(fit.residuals).size
     if not fit.rss < ceiling - NOISE_TOL * max(fit.rss / max(n - fit.theta.size, 1), 1.0):
         return fit  # no lower than the cost the refit starts from: it failed, not stalled
     wider = baseline.more_steps() or baseline
-    more = run([call(th, fit.rss, wider) for th in _around(baseline, fit)])
+    more = in_parallel([call(th, fit.rss, wider) for th in _around(baseline, fit)])
     more = [dataclasses.replace(f, model=baseline) for f in more]
     return _kept(baseline, [fit, *more])
 
