@@ -3,7 +3,10 @@
 Several records (loops or histories at two or more band tensions, e.g. brfd files) go to the
 tension discovery instead (`tribojax.discovery.discover_tension`, history element `--model`,
 default the band brake): which components of the tension law they demand; discovery.json is
-`TensionDiscovery.as_dict` with "fitted_model" (the final law's model) and "source".
+`TensionDiscovery.as_dict` with "fitted_model" (the final law's model) and "source". Records at
+one tension from two or more folders go to the campaign discovery (each folder a campaign,
+`tribojax.discovery.discover_campaigns`): which parameters moved between them; "fitted_model"
+is then the last folder's campaign.
 
 The record (its format detected, or named by `--format`) goes to the baseline of its kind
 (`_DISCOVERY`: a slip run, a loop or history, a friction curve). Writes DIR/discovery.json
@@ -24,6 +27,7 @@ from .._predict import fitted_model, load_model, saved_if_converged
 from ..discovery import (
     curve_baseline,
     discover,
+    discover_campaigns,
     discover_tension,
     loop_baseline,
     plot_curve_discovery,
@@ -129,16 +133,27 @@ def _run_tension(args, paths) -> int:
                 )
             loops.append(record)
         model = getattr(args, "model", None) or "band_brake"
+        folders = [str(Path(p).parent) for p in paths]
+        campaigns = len({lp.band_tension for lp in loops}) < 2 and len(set(folders)) > 1
         with progress(args, "discover"):
-            report = discover_tension(loops, model, decimate=decimate_factor(args) or 1)
+            if campaigns:  # one tension, several folders: what moved between the campaigns
+                groups = {f: [lp for lp, g in zip(loops, folders) if g == f] for f in folders}
+                report = discover_campaigns(groups, model, decimate=decimate_factor(args) or 1)
+                final = report.final[folders[-1]]  # the last campaign's: the newest given
+            else:
+                report = discover_tension(loops, model, decimate=decimate_factor(args) or 1)
+                final = report.final
         data = report.as_dict()
         data["source"] = "; ".join(str(p) for p in paths)
-        saved = saved_if_converged(report.final, data["source"], loops)
+        saved = saved_if_converged(final, data["source"], loops)
         data["fitted_model"] = None if saved is None else saved.as_dict()
         write_json_atomic(target, data, exclusive=not args.force)
-    print(f"{len(loops)} records at {len(report.settings['tensions_N'])} band tensions")
+    if campaigns:
+        print(f"{len(loops)} records in {len(set(folders))} campaigns (folders)")
+    else:
+        print(f"{len(loops)} records at {len(report.settings['tensions_N'])} band tensions")
     print(report.summary())
     print(f"wrote {target}")
     if not report.converged:
-        return error(f"the final fit did not converge: {report.final.fit.message}", status=3)
+        return error(f"the final fit did not converge: {final.fit.message}", status=3)
     return 0

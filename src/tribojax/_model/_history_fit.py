@@ -91,6 +91,15 @@ class HistoryFit:
         got = {**dict(zip(self.fit.names, np.asarray(self.fit.values).tolist())), **self.fit.fixed}
         return np.asarray([got[n] for n in self.names], dtype=float)
 
+    def for_campaign(self, label: str) -> HistoryFit:
+        """This fit with campaign `label`'s own values (`fit_history`'s `per_campaign`, fitted
+        as "<name>@<label>") in place of the shared ones; the first campaign's are the shared."""
+        got = {**dict(zip(self.fit.names, np.asarray(self.fit.values).tolist())), **self.fit.fixed}
+        own = {n[: -len(label) - 1]: v for n, v in got.items() if n.endswith(f"@{label}")}
+        return dataclasses.replace(
+            self, fit=dataclasses.replace(self.fit, fixed={**self.fit.fixed, **own})
+        )
+
     def as_dict(self) -> dict:
         return {
             "model": self.model,
@@ -144,6 +153,8 @@ def fit_history(
     tension_law: str = "auto",
     fixed=None,
     band_tension=None,
+    campaigns=None,
+    per_campaign=(),
     throw: bool = True,
 ) -> HistoryFit:
     """Fit one friction element (+ a force offset f0, N) to one or several measured histories.
@@ -179,6 +190,10 @@ def fit_history(
             tension) differ by more than `JOINT_SCALE_RATIO` (100x) together; refused otherwise
             (ValueError naming both): each record is weighted by its own scale, and a record
             that far from the others is a unit error or another device.
+        campaigns, per_campaign: a label per record (its test campaign) and the parameters
+            (the element's and f0) fitted per campaign: the first label's records use the
+            shared values, each other campaign its own, fitted as "<name>@<label>"
+            (`HistoryFit.for_campaign`; `tribojax.discovery.discover_campaigns`).
         throw: raise `tribojax.FitError` when the fit does not succeed (default); False
             returns it with `.fit.result` saying so.
     Returns:
@@ -218,7 +233,10 @@ def fit_history(
         init.update({k: v for k, v in _starts(mu_N, K_d, f0, records).items() if k in init})
         for name, v in zip(jenkins.fit.names[3:], jenkins.fit.values[3:]):
             init.update({k: float(v) for k, _ in law if k.startswith(name)})
+    own, swaps = _campaign_spec(model, loops, campaigns, per_campaign, spec)
+    spec = spec + own
     init.update(start or {})
+    init.update({n: init[n.split("@")[0]] for n, _ in own if n not in (start or {})})
     for what, given in (("start", start), ("fixed", fixed)):
         unknown = set(given or {}) - {n for n, _ in spec}
         if unknown:
@@ -228,7 +246,8 @@ def fit_history(
     force_scale = float(max(abs(init["f0"]), max(r[3] for r in records)))
     scale = tuple(1.0 / max(tensions) if n.startswith("gamma") else force_scale for n, _ in spec)
     tr = _Transform(tuple(pos for _, pos in spec), scale)
-    fn = _HistoryResiduals(model, tr, law=tuple(n for n, _ in law), reference=ref, held=held)
+    law_names = tuple(n for n, _ in law)
+    fn = _HistoryResiduals(model, tr, law=law_names, reference=ref, held=held, swaps=swaps)
 
     def solve(values):
         theta = jnp.asarray(
@@ -270,6 +289,30 @@ def fit_history(
     fit = dataclasses.replace(_noise_rule(fit, records, loops, tr), fixed=dict(fixed or {}))
     t_ref = loops[0].band_tension if band_tension is None else float(band_tension)
     return HistoryFit(model, thrown(fit, throw), nrmse_all, decimate, t_ref)
+
+
+def _campaign_spec(model, loops, campaigns, per_campaign, spec) -> tuple:
+    """((name@label, positive) of each parameter fitted per campaign, after the first's; per
+    record the (shared index, own index) pairs in the full parameter vector); ValueError
+    naming what is wrong."""
+    per_campaign = tuple(per_campaign)
+    if not per_campaign:
+        return (), ()
+    allowed = dict(HISTORY_MODELS[model])
+    unknown = [n for n in per_campaign if n not in allowed]
+    if unknown or campaigns is None or len(campaigns) != len(loops):
+        raise ValueError(
+            f"per_campaign = {list(per_campaign)} needs parameters of {model!r} "
+            f"({list(allowed)}) and campaigns, one label per record ({len(loops)})"
+        )
+    labels = list(dict.fromkeys(str(c) for c in campaigns))
+    own = tuple((f"{n}@{lab}", allowed[n]) for lab in labels[1:] for n in per_campaign)
+    where = {n: i for i, (n, _) in enumerate(spec + own)}
+    swaps = tuple(
+        tuple((where[n], where[f"{n}@{c}"]) for n in per_campaign) if str(c) != labels[0] else ()
+        for c in campaigns
+    )
+    return own, swaps
 
 
 def _held(spec, fixed: dict) -> tuple:

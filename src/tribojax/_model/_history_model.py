@@ -143,6 +143,9 @@ class _HistoryResiduals(eqx.Module):
     law: tuple = eqx.field(static=True, default=())
     reference: float = eqx.field(static=True, default=1.0)
     held: tuple = eqx.field(static=True, default=())  # (index, value) of parameters not fitted
+    # per record, (index, index) pairs: the campaign's own value of a parameter (`fit_history`'s
+    # `per_campaign`, after the law's in θ) used in that parameter's place
+    swaps: tuple = eqx.field(static=True, default=())
 
     def __call__(self, theta, args):
         p = self.transform(theta)
@@ -152,10 +155,13 @@ class _HistoryResiduals(eqx.Module):
             at = dict(self.held)
             p = jnp.stack([at[i] if i in at else p[next(free)] for i in range(n_all)])
         n = len(HISTORY_MODELS[self.model])
-        f0, law = p[n - 1], dict(zip(self.law, p[n:]))
-        out = []
-        for t, u, f, scale, tension in args:
-            values = scaled_values(self.model, p[: n - 1], law, tension, self.reference)
+        law, out = dict(zip(self.law, p[n:])), []
+        for k, (t, u, f, scale, tension) in enumerate(args):
+            q = p
+            for i, j in self.swaps[k] if self.swaps else ():
+                q = q.at[i].set(p[j])
+            f0 = q[n - 1]
+            values = scaled_values(self.model, q[: n - 1], law, tension, self.reference)
             el = history_element(self.model, values)
             if self.initial == "measured":  # the state that carries the first measured force
                 force = drive(el, u, state0=el.state_for_force(f[0] - f0))

@@ -91,6 +91,9 @@ from .._model import stage_travel as stage_travel
 from ._discover import DELTA_BIC_THRESHOLD as DELTA_BIC_THRESHOLD
 from ._discover import DiscoveryReport as DiscoveryReport
 from ._discover import discover as discover
+from ._discover_campaign import CAMPAIGN_EFFECTS as CAMPAIGN_EFFECTS
+from ._discover_campaign import CampaignDiscovery as CampaignDiscovery
+from ._discover_campaign import discover_campaigns as discover_campaigns
 from ._discover_curve import discover_curve as discover_curve
 from ._discover_curve import plot_curve_discovery as plot_curve_discovery
 from ._discover_loop import discover_loop as discover_loop

@@ -56,10 +56,7 @@ class TensionDiscovery:
         """ "explained" (effects kept, the final fit consistent with the noise), "partly_explained"
         (effects kept, a misfit left), "none" (no effect, the baseline consistent) or
         "unexplained" (no effect, a misfit left)."""
-        consistent = bool(self.final.fit.noise_consistent)
-        if self.effects:
-            return "explained" if consistent else "partly_explained"
-        return "none" if consistent else "unexplained"
+        return verdict_of(self.effects, bool(self.final.fit.noise_consistent))
 
     def as_dict(self) -> dict:
         """discovery.json's dictionary (`tribojax discover` adds "source" and "fitted_model")."""
@@ -92,6 +89,13 @@ class TensionDiscovery:
         return "\n".join(lines)
 
 
+def verdict_of(effects, consistent: bool) -> str:
+    """A multi-record discovery's verdict from its effects and the final noise test."""
+    if effects:
+        return "explained" if consistent else "partly_explained"
+    return "none" if consistent else "unexplained"
+
+
 def _fit_law(loops, model, law, start, kw):
     """`fit_history` of `loops` under `law`; the proportional law leaves a record at 0 N no slip
     force (a slack band is its offset alone, `_predict`), so it is fitted to the others."""
@@ -112,6 +116,13 @@ def _scores(fit, loops) -> tuple:
     """(BIC, NRMSE of each record) of a history fit: BIC from the residuals in units of each
     record's force sd (the weighting the fit minimises, fixed by the records: the same for
     every law)."""
+    rss, n, each = misfit(fit, loops)
+    return bic(rss, n, len(fit.fit.names)), each
+
+
+def misfit(fit, loops) -> tuple:
+    """(RSS in units of each record's force sd, samples, NRMSE of each record) of a history
+    fit on `loops` (every `fit.decimate`-th sample)."""
     rss, n, each = 0.0, 0, []
     for lp in loops:
         f = np.asarray(lp.f, dtype=float)[:: fit.decimate]
@@ -119,7 +130,7 @@ def _scores(fit, loops) -> tuple:
         rss += float(np.sum((r / np.std(f)) ** 2))
         n += f.size
         each.append(nrmse(r, f))
-    return bic(rss, n, len(fit.fit.names)), each
+    return rss, n, each
 
 
 def _first_part(loops) -> tuple:
