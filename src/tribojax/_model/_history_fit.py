@@ -24,6 +24,7 @@ from ._history_model import (
     _nrmse,
     _records,
     _Transform,
+    campaign_spec,
     history_force,
     law_spec,
 )
@@ -233,7 +234,7 @@ def fit_history(
         init.update({k: v for k, v in _starts(mu_N, K_d, f0, records).items() if k in init})
         for name, v in zip(jenkins.fit.names[3:], jenkins.fit.values[3:]):
             init.update({k: float(v) for k, _ in law if k.startswith(name)})
-    own, swaps = _campaign_spec(model, loops, campaigns, per_campaign, spec)
+    own, swaps = campaign_spec(model, loops, campaigns, per_campaign, spec)
     spec = spec + own
     init.update(start or {})
     init.update({n: init[n.split("@")[0]] for n, _ in own if n not in (start or {})})
@@ -289,30 +290,6 @@ def fit_history(
     fit = dataclasses.replace(_noise_rule(fit, records, loops, tr), fixed=dict(fixed or {}))
     t_ref = loops[0].band_tension if band_tension is None else float(band_tension)
     return HistoryFit(model, thrown(fit, throw), nrmse_all, decimate, t_ref)
-
-
-def _campaign_spec(model, loops, campaigns, per_campaign, spec) -> tuple:
-    """((name@label, positive) of each parameter fitted per campaign, after the first's; per
-    record the (shared index, own index) pairs in the full parameter vector); ValueError
-    naming what is wrong."""
-    per_campaign = tuple(per_campaign)
-    if not per_campaign:
-        return (), ()
-    allowed = dict(HISTORY_MODELS[model])
-    unknown = [n for n in per_campaign if n not in allowed]
-    if unknown or campaigns is None or len(campaigns) != len(loops):
-        raise ValueError(
-            f"per_campaign = {list(per_campaign)} needs parameters of {model!r} "
-            f"({list(allowed)}) and campaigns, one label per record ({len(loops)})"
-        )
-    labels = list(dict.fromkeys(str(c) for c in campaigns))
-    own = tuple((f"{n}@{lab}", allowed[n]) for lab in labels[1:] for n in per_campaign)
-    where = {n: i for i, (n, _) in enumerate(spec + own)}
-    swaps = tuple(
-        tuple((where[n], where[f"{n}@{c}"]) for n in per_campaign) if str(c) != labels[0] else ()
-        for c in campaigns
-    )
-    return own, swaps
 
 
 def _held(spec, fixed: dict) -> tuple:

@@ -252,6 +252,30 @@ HISTORY_UNITS = {
 """Units of the history models' parameters (`HISTORY_MODELS`, `law_spec`)."""
 
 
+def campaign_spec(model, loops, campaigns, per_campaign, spec) -> tuple:
+    """((name@label, positive) of each parameter fitted per campaign, after the first's; per
+    record the (shared index, own index) pairs in the full parameter vector); ValueError
+    naming what is wrong."""
+    per_campaign = tuple(per_campaign)
+    if not per_campaign:
+        return (), ()
+    allowed = dict(HISTORY_MODELS[model])
+    unknown = [n for n in per_campaign if n not in allowed]
+    if unknown or campaigns is None or len(campaigns) != len(loops):
+        raise ValueError(
+            f"per_campaign = {list(per_campaign)} needs parameters of {model!r} "
+            f"({list(allowed)}) and campaigns, one label per record ({len(loops)})"
+        )
+    labels = list(dict.fromkeys(str(c) for c in campaigns))
+    own = tuple((f"{n}@{lab}", allowed[n]) for lab in labels[1:] for n in per_campaign)
+    where = {n: i for i, (n, _) in enumerate(spec + own)}
+    swaps = tuple(
+        tuple((where[n], where[f"{n}@{c}"]) for n in per_campaign) if str(c) != labels[0] else ()
+        for c in campaigns
+    )
+    return own, swaps
+
+
 INITIAL_STATES = ("rest", "measured")
 """How a history prediction starts: from rest, or in the state that carries the record's first
 measured force (a device left loaded by an earlier test; `MEASURED_START` models only)."""
