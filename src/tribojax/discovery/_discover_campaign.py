@@ -23,11 +23,12 @@ from .._model._history_fit import fit_history
 from .._model._history_model import HISTORY_MODELS
 from ._discover import DELTA_BIC_THRESHOLD
 from ._discover_tension import (
-    HELDOUT_SHARE,
     _first_part,
     _heldout_nrmse,
-    _refusal,
+    candidate_lines,
+    judged,
     misfit,
+    report_dict,
     verdict_of,
 )
 
@@ -103,32 +104,15 @@ class CampaignDiscovery:
         return out
 
     def as_dict(self) -> dict:
-        """discovery.json's dictionary for several campaigns."""
-        return {
-            "kind": "campaign",
-            "effect": self.effects[0] if self.effects else "none",
-            "verdict": self.verdict,
-            "effects": list(self.effects),
-            "moved": list(self.moved),
-            "shifts": self.shifts(),
-            "converged": self.converged,
-            "candidates": [dict(c) for c in self.candidates],
-            "records": [dict(r) for r in self.records],
-            "baseline_fit": self.baseline.as_dict(),
-            "final_fit": self.joint.as_dict(),
-            "settings": dict(self.settings),
-        }
+        """discovery.json's dictionary for several campaigns ("final_fit": the joint fit)."""
+        return report_dict(
+            "campaign", self, self.joint, moved=list(self.moved), shifts=self.shifts()
+        )
 
     def summary(self) -> str:
         """The lines to print: each round's best family, the verdict and what moved."""
         lines = [f"baseline: {self.settings['model']}, one parameter set for every campaign"]
-        for c in self.candidates:
-            held = c["heldout"]
-            keep = "kept" if c["accepted"] else f"not kept ({c['reason']})"
-            lines.append(
-                f"  {c['name']}: dBIC {c['delta_bic']:.4g}, last third of each record held "
-                f"out: NRMSE {held['nrmse_before']:.3g} -> {held['nrmse_after']:.3g}; {keep}"
-            )
+        lines += candidate_lines(self.candidates)
         lines.append(f"verdict: {self.verdict}; effects {list(self.effects) or 'none'}")
         for campaign, values in self.shifts().items():
             shown = ", ".join(f"{n} {v:.4g} ± {e:.2g}" for n, (v, e) in values.items())
@@ -179,15 +163,9 @@ def discover_campaigns(
             "converged": bool(fit.fit.converged),
             "delta_bic": float(delta),
             "others_delta_bic": {t[1]: float(t[0]) for t in trials if t[1] != name},
-            "heldout": {
-                "share": HELDOUT_SHARE,
-                "nrmse_before": _heldout(part, groups, cut),
-                "nrmse_after": _heldout(new_part, groups, cut),
-                "converged": [bool(part.fit.converged), bool(new_part.fit.converged)],
-            },
         }
-        reason = _refusal(row, delta_bic_threshold)
-        row.update(accepted=not reason, reason=reason)
+        before, after = _heldout(part, groups, cut), _heldout(new_part, groups, cut)
+        reason = judged(row, before, after, (part, new_part), delta_bic_threshold)
         candidates.append(row)
         if reason:
             break

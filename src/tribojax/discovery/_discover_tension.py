@@ -60,33 +60,44 @@ class TensionDiscovery:
 
     def as_dict(self) -> dict:
         """discovery.json's dictionary (`tribojax discover` adds "source" and "fitted_model")."""
-        return {
-            "kind": "tension",
-            "effect": self.effects[0] if self.effects else "none",
-            "verdict": self.verdict,
-            "effects": list(self.effects),
-            "tension_law": self.law,
-            "converged": self.converged,
-            "candidates": [dict(c) for c in self.candidates],
-            "records": [dict(r) for r in self.records],
-            "baseline_fit": self.baseline.as_dict(),
-            "final_fit": self.final.as_dict(),
-            "settings": dict(self.settings),
-        }
+        return report_dict("tension", self, self.final, tension_law=self.law)
 
     def summary(self) -> str:
         """The lines `tribojax discover` prints."""
         lines = [f"baseline: {self.settings['model']} with the proportional (capstan) law"]
-        for c in self.candidates:
-            held = c["heldout"]
-            extra = (
-                f", last third of each record held out: NRMSE {held['nrmse_before']:.3g} -> "
-                f"{held['nrmse_after']:.3g}"
-            )
-            keep = "kept" if c["accepted"] else f"not kept ({c['reason']})"
-            lines.append(f"  {c['name']}: dBIC {c['delta_bic']:.4g}{extra}; {keep}")
+        lines += candidate_lines(self.candidates)
         lines.append(f"verdict: {self.verdict}; effects {list(self.effects) or 'none'}")
         return "\n".join(lines)
+
+
+def report_dict(kind: str, report, final, **extra) -> dict:
+    """The keys of a multi-record discovery.json (`extra` after "effects")."""
+    return {
+        "kind": kind,
+        "effect": report.effects[0] if report.effects else "none",
+        "verdict": report.verdict,
+        "effects": list(report.effects),
+        **extra,
+        "converged": report.converged,
+        "candidates": [dict(c) for c in report.candidates],
+        "records": [dict(r) for r in report.records],
+        "baseline_fit": report.baseline.as_dict(),
+        "final_fit": final.as_dict(),
+        "settings": dict(report.settings),
+    }
+
+
+def candidate_lines(candidates) -> list:
+    """One printed line per candidate: ΔBIC, the held-out check and whether it was kept."""
+    lines = []
+    for c in candidates:
+        held = c["heldout"]
+        keep = "kept" if c["accepted"] else f"not kept ({c['reason']})"
+        lines.append(
+            f"  {c['name']}: dBIC {c['delta_bic']:.4g}, last third of each record held out: "
+            f"NRMSE {held['nrmse_before']:.3g} -> {held['nrmse_after']:.3g}; {keep}"
+        )
+    return lines
 
 
 def verdict_of(effects, consistent: bool) -> str:
@@ -197,14 +208,8 @@ def discover_tension(
         new_bic, new_each = _scores(fit, loops)
         new_part = _fit_law(first, model, law, _values(part), kw)
         row = _candidate_row(name, law, fit, new_bic - current_bic, model)
-        row["heldout"] = {
-            "share": HELDOUT_SHARE,
-            "nrmse_before": _heldout_nrmse(part, loops, cut),
-            "nrmse_after": _heldout_nrmse(new_part, loops, cut),
-            "converged": [bool(part.fit.converged), bool(new_part.fit.converged)],
-        }
-        reason = _refusal(row, delta_bic_threshold)
-        row.update(accepted=not reason, reason=reason)
+        before, after = _heldout_nrmse(part, loops, cut), _heldout_nrmse(new_part, loops, cut)
+        reason = judged(row, before, after, (part, new_part), delta_bic_threshold)
         candidates.append(row)
         if reason:
             break
@@ -259,6 +264,21 @@ def _candidate_row(name, law, fit, delta_bic, model) -> dict:
         "delta_bic": float(delta_bic),
         "parameters": {n: [float(v), float(e)] for n, v, e in params if n not in element},
     }
+
+
+def judged(row, before, after, parts, threshold) -> str:
+    """`row` (a candidate's figures) with its held-out check (mean NRMSE of the last thirds,
+    `before` and `after`, from the fits `parts` to the first two thirds) and whether it is
+    kept; returns why not ("" when it is)."""
+    row["heldout"] = {
+        "share": HELDOUT_SHARE,
+        "nrmse_before": float(before),
+        "nrmse_after": float(after),
+        "converged": [bool(p.fit.converged) for p in parts],
+    }
+    reason = _refusal(row, threshold)
+    row.update(accepted=not reason, reason=reason)
+    return reason
 
 
 def _refusal(row, threshold) -> str:
