@@ -89,13 +89,16 @@ class HistoryFit:
     @property
     def values(self) -> np.ndarray:
         """Every parameter's value in the order of `names` (held ones from `fit.fixed`)."""
-        got = {**dict(zip(self.fit.names, np.asarray(self.fit.values).tolist())), **self.fit.fixed}
+        got = self._every_value()
         return np.asarray([got[n] for n in self.names], dtype=float)
+
+    def _every_value(self) -> dict:
+        return {**dict(zip(self.fit.names, np.asarray(self.fit.values).tolist())), **self.fit.fixed}
 
     def for_campaign(self, label: str) -> HistoryFit:
         """This fit with campaign `label`'s own values (`fit_history`'s `per_campaign`, fitted
         as "<name>@<label>") in place of the shared ones; the first campaign's are the shared."""
-        got = {**dict(zip(self.fit.names, np.asarray(self.fit.values).tolist())), **self.fit.fixed}
+        got = self._every_value()
         own = {n[: -len(label) - 1]: v for n, v in got.items() if n.endswith(f"@{label}")}
         return dataclasses.replace(
             self, fit=dataclasses.replace(self.fit, fixed={**self.fit.fixed, **own})
